@@ -1,0 +1,43 @@
+"""The BoxToss rigid-body engine: boxes against the floor plane y = 0.
+
+Two solvers share one scene description:
+
+- ``solver="seed"``: the scheme of ``shared/reference/rigid_body_collisions.txt``, exactly
+  (``seed_solver``);
+- ``solver="robust"`` (default): the same ingredients arranged to stay right at any step,
+  stiffness, speed, spin, mass and aspect ratio (``robust_solver``).
+
+``simulate(scene, ...)`` runs a scene; ``Simulator`` runs compiled kernels on raw arrays.
+"""
+
+from . import layout, scenes
+from .geometry import face_down
+from .kernels import KernelFlags, make_kernel
+from .scene import SOLVERS, Box, Scene
+from .simulate import (
+    NonFiniteStateError,
+    SimulationResult,
+    Simulator,
+    Trajectory,
+    check_finite_stats,
+    make_settings,
+    simulate,
+)
+
+__all__ = [
+    "SOLVERS",
+    "Box",
+    "KernelFlags",
+    "NonFiniteStateError",
+    "Scene",
+    "SimulationResult",
+    "Simulator",
+    "Trajectory",
+    "check_finite_stats",
+    "face_down",
+    "layout",
+    "make_kernel",
+    "make_settings",
+    "scenes",
+    "simulate",
+]

@@ -1,0 +1,63 @@
+"""Small pieces every kernel shares: the rest test, and writing results into the output arrays."""
+
+import math
+
+import numba
+
+from . import layout
+from .geometry import lowest_face, vertex_offset
+
+FLAT_TOLERANCE = 1e-3  # [rad] a face this close to level counts as lying on the floor
+TOUCH_TOLERANCE = 1e-3  # [-] of hx + hy: a corner this close to y = 0 touches the floor
+
+
+@numba.njit(cache=True)
+def is_lying_still(y, angle, vx, vy, spin, half_length, half_width, sleep_speed):
+    """True when the box lies on a face (its lowest face level within FLAT_TOLERANCE and touching
+    the floor) and every point of it moves slower than ``sleep_speed``:
+    |v| <= s and |omega| sqrt(hx^2 + hy^2) <= s."""
+    if math.sqrt(vx * vx + vy * vy) > sleep_speed:
+        return False
+    if abs(spin) * math.sqrt(half_length * half_length + half_width * half_width) > sleep_speed:
+        return False
+    cos_a = math.cos(angle)
+    sin_a = math.sin(angle)
+    first, second = lowest_face(cos_a, sin_a, half_length, half_width)
+    rx1, ry1 = vertex_offset(first, cos_a, sin_a, half_length, half_width)
+    rx2, ry2 = vertex_offset(second, cos_a, sin_a, half_length, half_width)
+    if y + ry1 > TOUCH_TOLERANCE * (half_length + half_width):
+        return False
+    face_length = math.sqrt((rx2 - rx1) ** 2 + (ry2 - ry1) ** 2)
+    return abs(ry2 - ry1) <= FLAT_TOLERANCE * face_length
+
+
+@numba.njit(cache=True, inline="always")
+def store_state(trajectory, row, body, x, y, angle, vx, vy, spin):
+    trajectory[row, body, 0] = x
+    trajectory[row, body, 1] = y
+    trajectory[row, body, 2] = angle
+    trajectory[row, body, 3] = vx
+    trajectory[row, body, 4] = vy
+    trajectory[row, body, 5] = spin
+
+
+@numba.njit(cache=True, inline="always")
+def record_event(events, body, index, time, approach_speed, n_contacts):
+    if index < events.shape[1]:
+        events[body, index, layout.EVENT_TIME] = time
+        events[body, index, layout.EVENT_APPROACH_SPEED] = approach_speed
+        events[body, index, layout.EVENT_CONTACTS] = n_contacts
+
+
+@numba.njit(cache=True, inline="always")
+def write_stats(stats, body, first_contact, n_impacts, n_steps, max_penetration, rest_time, end_time,
+                status, fail_step, n_recorded):
+    stats[body, layout.FIRST_CONTACT_TIME] = first_contact
+    stats[body, layout.N_IMPACTS] = n_impacts
+    stats[body, layout.N_STEPS] = n_steps
+    stats[body, layout.MAX_PENETRATION] = max_penetration
+    stats[body, layout.REST_TIME] = rest_time
+    stats[body, layout.END_TIME] = end_time
+    stats[body, layout.STATUS] = status
+    stats[body, layout.FAIL_STEP] = fail_step
+    stats[body, layout.N_RECORDED] = n_recorded

@@ -1,0 +1,293 @@
+"""The robust default solver: the seed's ingredients (impulses with restitution, Coulomb
+friction, a penalty for penetration, symplectic Euler), arranged so they stay right.
+
+A box is in one of two modes.
+
+Flight: no stepping at all. The motion is the closed-form parabola with constant spin
+(``flight``), and conservative advancement finds the first time a corner reaches y = 0, so
+flights and bounces are exact whatever the time step and however fast the box moves (no
+tunnelling). At that instant an impact is resolved (``resolve_impact``): the touching corners
+together, Newton's law u_n+ = -e u_n- for corners approaching faster than the restitution
+threshold, friction clamped to mu times the normal impulse. A box that leaves the floor flies on;
+one that stays goes to
+
+Contact: time-stepping on the grid t_n = n dt (``contact_step``), the stages of one step being
+  1. integrate velocities: v += dt g;
+  2. solve contact velocities: the two corners of the face that is down together (2 x 2 LCP),
+     each may close its gap but not pass it (speculative: u_n >= -max(y_i, 0)/dt), with clamped
+     friction that never reverses sliding;
+  3. restitution: corners that hit faster than the threshold bounce with u_n = -e u_n-
+     (resting contact gets none, so it stays still);
+  4. integrate positions: x += dt v, alpha += dt omega (symplectic Euler);
+  5. penalty: penetration is removed by the implicit (backward Euler) penalty spring as a
+     pseudo-velocity, stable for every stiffness and step (``implicit_penalty_fraction``).
+A step is split into substeps when the box would turn more than MAX_ROTATION_PER_STEP.
+The box flies again when no corner is loaded or below the floor, and it is put to sleep
+(velocities set to zero, stepping stops) once it has lain still on a face for ``sleep_time``.
+
+What this fixes in the seed scheme (measured on it): corners resolved one after another make
+a flat drop spin and bounce low; restitution applied to resting contact makes a box creep;
+a friction impulse of mu |p| can reverse sliding; an explicit penalty spring blows up beyond
+omega dt = 2; time-stepped flight and impacts move the landing pose with the step size.
+"""
+
+import math
+
+import numba
+import numpy as np
+
+from . import layout
+from .contact_solver import (
+    correct_penetration,
+    delassus,
+    normal_impulses,
+    solve_contact_velocities,
+)
+from .flight import flight_state, time_to_contact
+from .geometry import lowest_face, lowest_pair, vertex_offset
+from .kernel_support import is_lying_still, record_event, store_state, write_stats
+
+MAX_ROTATION_PER_STEP = 0.05  # [rad] a contact step turning the box further is split
+MAX_SUBSTEPS = 64
+CONTACT_TOLERANCE = 1e-12  # [m per m of corner radius + 1 m] a corner this close touches
+SIMULTANEOUS_TOLERANCE = 1e-9  # [same units] corners this close hit at the same instant
+FRICTION_ITERATIONS = 4  # Gauss-Seidel sweeps over friction and the normal block
+
+
+@numba.njit(cache=True, inline="always")
+def resolve_impact(y, angle, vx, vy, spin, half_length, half_width, inv_mass, inv_inertia, restitution,
+                   friction, threshold, simultaneous, use_friction, iterations):
+    """Impulses of an impact at the instant a corner reaches the floor.
+
+    The touching corners (the lowest one, and its neighbour if within ``simultaneous`` of the
+    same height) are solved together: target u_n+ = -e u_n- where u_n- < -threshold, else 0;
+    friction clamped to mu lam_n. Returns (vx, vy, spin, corners hit, approach speed, leaves),
+    ``leaves`` being True when every touching corner separates faster than the threshold.
+    """
+    cos_a = math.cos(angle)
+    sin_a = math.sin(angle)
+    first, second = lowest_face(cos_a, sin_a, half_length, half_width)
+    rx1, ry1 = vertex_offset(first, cos_a, sin_a, half_length, half_width)
+    rx2, ry2 = vertex_offset(second, cos_a, sin_a, half_length, half_width)
+    pair = ry2 <= ry1 + simultaneous
+    u1 = vy + spin * rx1
+    u2 = vy + spin * rx2
+    approach = max(-u1, -u2) if pair else -u1
+    if approach <= 0.0:
+        return vx, vy, spin, 0, 0.0, False
+    target1 = -restitution * u1 if u1 < -threshold else 0.0
+    target2 = -restitution * u2 if u2 < -threshold else 0.0
+    vx, vy, spin, _, _ = solve_contact_velocities(vx, vy, spin, rx1, ry1, rx2, ry2, pair, target1, target2,
+                                                   friction, inv_mass, inv_inertia, use_friction, iterations)
+    leaves = vy + spin * rx1 > threshold and (not pair or vy + spin * rx2 > threshold)
+    return vx, vy, spin, 2 if pair else 1, approach, leaves
+
+
+@numba.njit(cache=True, inline="always")
+def predicted_height(k, cos_a, sin_a, half_length, half_width, y, fall, spin, h):
+    """Height of corner k after a step h at the current velocities, to first order."""
+    rx, ry = vertex_offset(k, cos_a, sin_a, half_length, half_width)
+    return y + ry + fall + h * spin * rx
+
+
+@numba.njit(cache=True, inline="always")
+def contact_step(x, y, angle, vx, vy, spin, half_length, half_width, inv_mass, inv_inertia, restitution,
+                 friction, stiffness, gravity, h, threshold, slop, use_friction, use_penalty, iterations):
+    """One contact step of length h (stages 1-5 of the module docstring). Returns the new state,
+    whether the floor still holds the box, the approach speed of a corner that hit faster than
+    the threshold during the step (0 if none) and the penetration before the penalty stage."""
+    cos_a = math.cos(angle)
+    sin_a = math.sin(angle)
+    # the face that will be down at the end of the step, from the heights the corners would reach
+    # at the current velocities: a corner swinging down is constrained before it gets there
+    fall = h * (vy + gravity * h)
+    first, second = lowest_pair(predicted_height(0, cos_a, sin_a, half_length, half_width, y, fall, spin, h),
+                                predicted_height(1, cos_a, sin_a, half_length, half_width, y, fall, spin, h),
+                                predicted_height(2, cos_a, sin_a, half_length, half_width, y, fall, spin, h),
+                                predicted_height(3, cos_a, sin_a, half_length, half_width, y, fall, spin, h))
+    rx1, ry1 = vertex_offset(first, cos_a, sin_a, half_length, half_width)
+    rx2, ry2 = vertex_offset(second, cos_a, sin_a, half_length, half_width)
+    u1_before = vy + spin * rx1
+    u2_before = vy + spin * rx2
+    # 1. integrate velocities
+    vy = vy + gravity * h
+    # 2. contact velocities, speculative targets
+    target1 = -max(y + ry1, 0.0) / h
+    target2 = -max(y + ry2, 0.0) / h
+    vx, vy, spin, lam1, lam2 = solve_contact_velocities(vx, vy, spin, rx1, ry1, rx2, ry2, True, target1,
+                                                         target2, friction, inv_mass, inv_inertia,
+                                                         use_friction, iterations)
+    # 3. restitution for corners that hit faster than the threshold; the other loaded corner is
+    #    kept from approaching, so a bounce at one corner cannot drive the other into the floor
+    bounce1 = lam1 > 0.0 and u1_before < -threshold
+    bounce2 = lam2 > 0.0 and u2_before < -threshold
+    approach = 0.0
+    if bounce1 or bounce2:
+        approach = max(-u1_before if bounce1 else 0.0, -u2_before if bounce2 else 0.0)
+        if restitution > 0.0:
+            k11, k12, k22 = delassus(rx1, rx2, inv_mass, inv_inertia)
+            new1, new2 = normal_impulses(vy + spin * rx1, vy + spin * rx2,
+                                         -restitution * u1_before if bounce1 else target1,
+                                         -restitution * u2_before if bounce2 else target2,
+                                         lam1, lam2, k11, k12, k22, lam1 > 0.0, lam2 > 0.0)
+            vy = vy + (new1 - lam1 + new2 - lam2) * inv_mass
+            spin = spin + (rx1 * (new1 - lam1) + rx2 * (new2 - lam2)) * inv_inertia
+    # 4. integrate positions
+    x = x + h * vx
+    y = y + h * vy
+    angle = angle + h * spin
+    # 5. penalty: implicit correction of what penetrates
+    cos_a = math.cos(angle)
+    sin_a = math.sin(angle)
+    first, second = lowest_face(cos_a, sin_a, half_length, half_width)
+    rx1, ry1 = vertex_offset(first, cos_a, sin_a, half_length, half_width)
+    rx2, ry2 = vertex_offset(second, cos_a, sin_a, half_length, half_width)
+    penetration = max(-(y + ry1), 0.0)
+    if use_penalty:
+        y, angle = correct_penetration(y, angle, -(y + ry1) - slop, -(y + ry2) - slop, rx1, rx2, stiffness, h,
+                                       inv_mass, inv_inertia)
+    held = lam1 > 0.0 or lam2 > 0.0 or penetration > 0.0
+    return x, y, angle, vx, vy, spin, held, approach, penetration
+
+
+@numba.njit(cache=True, inline="always")
+def is_finite_state(x, y, angle, vx, vy, spin):
+    return (math.isfinite(x) and math.isfinite(y) and math.isfinite(angle) and math.isfinite(vx)
+            and math.isfinite(vy) and math.isfinite(spin))
+
+
+def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, parallel: bool,
+                       source_digest: int):
+    """Build the robust kernel for exactly the stages a scene uses (flags are compile-time).
+
+    ``run(state, params, settings, stats, trajectory, events)`` advances every body in place up
+    to ``settings[MAX_STEPS]`` grid steps, or until it sleeps when ``settings[UNTIL_REST]``.
+    """
+    PENALTY, FRICTION, RECORD, DIGEST = use_penalty, use_friction, record, source_digest
+    ITERATIONS = FRICTION_ITERATIONS if use_friction else 1  # without friction the block is exact
+
+    @numba.njit(cache=True, parallel=parallel)
+    def run(state, params, settings, stats, trajectory, events):
+        _ = DIGEST  # the engine sources' digest: part of this kernel's on-disk cache key
+        dt = settings[layout.DT]
+        gravity = settings[layout.GRAVITY]
+        max_steps = np.int64(settings[layout.MAX_STEPS])
+        until_rest = settings[layout.UNTIL_REST] != 0.0
+        threshold = settings[layout.RESTITUTION_THRESHOLD]
+        sleep_speed = settings[layout.SLEEP_SPEED]
+        sleep_time = settings[layout.SLEEP_TIME]
+        slop = settings[layout.PENETRATION_SLOP]
+        end_time = max_steps * dt
+        for i in numba.prange(state.shape[0]):
+            x, y, angle, vx, vy, spin = (state[i, 0], state[i, 1], state[i, 2],
+                                         state[i, 3], state[i, 4], state[i, 5])
+            hx = params[i, layout.HALF_LENGTH]
+            hy = params[i, layout.HALF_WIDTH]
+            inv_mass = 1.0 / params[i, layout.MASS]
+            inv_inertia = 1.0 / params[i, layout.INERTIA]
+            restitution = params[i, layout.RESTITUTION]
+            friction = params[i, layout.FRICTION]
+            stiffness = params[i, layout.STIFFNESS]
+            radius = math.sqrt(hx * hx + hy * hy)
+            tolerance = CONTACT_TOLERANCE * (1.0 + radius)
+            simultaneous = SIMULTANEOUS_TOLERANCE * (1.0 + radius)
+            first_contact = math.nan
+            rest_time = math.nan
+            max_penetration = 0.0
+            n_impacts = 0
+            n_steps = 0
+            status = layout.STATUS_OK
+            fail_step = -1
+            still_for = 0.0
+            if RECORD:
+                store_state(trajectory, 0, i, x, y, angle, vx, vy, spin)
+            n = 0  # last grid step reached (and recorded)
+            t = 0.0
+            in_flight = True
+            while n < max_steps:
+                if in_flight:
+                    tau, touched = time_to_contact(y, angle, vy, spin, hx, hy, gravity, end_time - t, tolerance)
+                    # grid rows passed in this flight: up to the end, or to the last one before the contact
+                    last = max_steps if not touched else min(np.int64(math.floor((t + tau) / dt)), max_steps)
+                    if RECORD:
+                        for row in range(n + 1, last + 1):
+                            xr, yr, ar, vxr, vyr, wr = flight_state(x, y, angle, vx, vy, spin, gravity, row * dt - t)
+                            store_state(trajectory, row, i, xr, yr, ar, vxr, vyr, wr)
+                    x, y, angle, vx, vy, spin = flight_state(x, y, angle, vx, vy, spin, gravity, tau)
+                    if not touched:
+                        n = max_steps
+                        t = end_time
+                        if not is_finite_state(x, y, angle, vx, vy, spin):
+                            status = layout.STATUS_NONFINITE
+                            fail_step = n
+                        break
+                    t = t + tau
+                    if math.isnan(first_contact):
+                        first_contact = t
+                    vx, vy, spin, corners, approach, leaves = resolve_impact(
+                        y, angle, vx, vy, spin, hx, hy, inv_mass, inv_inertia, restitution, friction,
+                        threshold, simultaneous, FRICTION, ITERATIONS)
+                    if corners > 0 and approach > threshold:
+                        if RECORD:
+                            record_event(events, i, n_impacts, t, approach, corners)
+                        n_impacts += 1
+                    if not is_finite_state(x, y, angle, vx, vy, spin):
+                        status = layout.STATUS_NONFINITE
+                        fail_step = np.int64(math.floor(t / dt))
+                        break
+                    n = max(n, last)  # rows up to n hold the flight
+                    if leaves:
+                        continue
+                    in_flight = False
+                    if (n + 1) * dt <= t and n < max_steps:  # the contact fell on grid point n + 1
+                        n += 1
+                        if RECORD:
+                            store_state(trajectory, n, i, x, y, angle, vx, vy, spin)
+                    if n >= max_steps:
+                        t = end_time
+                        break
+                    h = (n + 1) * dt - t  # a partial step brings the box back onto the grid
+                else:
+                    h = dt
+                # one contact step on the grid, split where the box turns fast
+                n_sub = min(max(np.int64(math.ceil(abs(spin) * h / MAX_ROTATION_PER_STEP)), 1), MAX_SUBSTEPS)
+                h_sub = h / n_sub
+                held = False
+                for _ in range(n_sub):
+                    x, y, angle, vx, vy, spin, held_now, approach, penetration = contact_step(
+                        x, y, angle, vx, vy, spin, hx, hy, inv_mass, inv_inertia, restitution, friction,
+                        stiffness, gravity, h_sub, threshold, slop, FRICTION, PENALTY, ITERATIONS)
+                    held = held or held_now
+                    max_penetration = max(max_penetration, penetration)
+                    if approach > 0.0:
+                        if RECORD:
+                            record_event(events, i, n_impacts, t, approach, 1)
+                        n_impacts += 1
+                n_steps += 1
+                n += 1
+                t = n * dt
+                if RECORD:
+                    store_state(trajectory, n, i, x, y, angle, vx, vy, spin)
+                if not is_finite_state(x, y, angle, vx, vy, spin):
+                    status = layout.STATUS_NONFINITE
+                    fail_step = n
+                    break
+                if until_rest:
+                    if is_lying_still(y, angle, vx, vy, spin, hx, hy, sleep_speed):
+                        still_for += h
+                        if still_for >= sleep_time:
+                            vx, vy, spin = 0.0, 0.0, 0.0
+                            rest_time = t
+                            if RECORD:
+                                store_state(trajectory, n, i, x, y, angle, vx, vy, spin)
+                            break
+                    else:
+                        still_for = 0.0
+                if not held:
+                    in_flight = True
+            state[i, 0], state[i, 1], state[i, 2] = x, y, angle
+            state[i, 3], state[i, 4], state[i, 5] = vx, vy, spin
+            write_stats(stats, i, first_contact, n_impacts, n_steps, max_penetration, rest_time, t,
+                        status, fail_step, n + 1)
+
+    return run

@@ -1,0 +1,159 @@
+"""What a simulation contains: boxes, the floor plane y = 0, gravity, the contact material
+and the time step. Everything is validated when it is built, so kernels never see bad input.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from . import layout
+from .validation import check_finite, check_range, check_vector
+
+SOLVERS = ("robust", "seed")
+
+
+@dataclass(frozen=True)
+class Box:
+    """A rigid rectangle. ``length`` runs along the body's local x axis, ``width`` along local y.
+
+    Inertia about the centre of mass is ``m (L^2 + W^2) / 12``. ``restitution`` and ``friction``
+    override the scene's material for this box when given (domain randomisation, batches).
+    """
+
+    length: float = 2.0  # [m]
+    width: float = 1.0  # [m]
+    mass: float = 1.0  # [kg]
+    position: tuple[float, float] = (0.0, 0.0)  # centre of mass [m]
+    angle: float = 0.0  # [rad], counter-clockwise
+    velocity: tuple[float, float] = (0.0, 0.0)  # [m/s]
+    spin: float = 0.0  # [rad/s], counter-clockwise
+    restitution: float | None = None  # [-] in [0, 1]
+    friction: float | None = None  # [-] >= 0
+
+    def __post_init__(self):
+        set_ = object.__setattr__
+        set_(self, "length", check_range("length", self.length, 0.0, low_open=True))
+        set_(self, "width", check_range("width", self.width, 0.0, low_open=True))
+        set_(self, "mass", check_range("mass", self.mass, 0.0, low_open=True))
+        set_(self, "position", check_vector("position", self.position, 2))
+        set_(self, "angle", check_finite("angle", self.angle))
+        set_(self, "velocity", check_vector("velocity", self.velocity, 2))
+        set_(self, "spin", check_finite("spin", self.spin))
+        if self.restitution is not None:
+            set_(self, "restitution", check_range("restitution", self.restitution, 0.0, 1.0))
+        if self.friction is not None:
+            set_(self, "friction", check_range("friction", self.friction, 0.0))
+
+    @property
+    def inertia(self) -> float:
+        """Moment of inertia about the centre of mass [kg m^2]: m (L^2 + W^2) / 12."""
+        return self.mass * (self.length**2 + self.width**2) / 12.0
+
+
+@dataclass(frozen=True)
+class Scene:
+    """Boxes above the floor y = 0, with the contact material and the solver settings.
+
+    Defaults are the seed demo's panel (dt 0.005 s, g -9.81 m/s^2, penalty stiffness 100 N/m,
+    restitution 0.5, friction 0.02, impulses and penalty force on); ``solver`` picks the
+    robust default or the seed's explicit scheme (see ``box_toss_env.physics`` docs).
+    The last four settings belong to the robust solver: impacts slower than
+    ``restitution_threshold`` are inelastic, a box lying on a face slower than ``sleep_speed``
+    for ``sleep_time`` is put to sleep, and ``penetration_slop`` is left uncorrected.
+    """
+
+    boxes: tuple[Box, ...] = field(default_factory=lambda: (Box(position=(0.0, 5.0)),))
+    dt: float = 0.005  # [s]
+    gravity: float = -9.81  # [m/s^2] along y
+    restitution: float = 0.5  # [-]
+    friction: float = 0.02  # [-] Coulomb coefficient
+    penalty_stiffness: float = 100.0  # [N/m]
+    use_impulses: bool = True
+    use_penalty: bool = True
+    solver: str = "robust"
+    restitution_threshold: float = 0.02  # [m/s]
+    sleep_speed: float = 0.01  # [m/s]
+    sleep_time: float = 0.2  # [s]
+    penetration_slop: float = 0.0  # [m]
+
+    def __post_init__(self):
+        set_ = object.__setattr__
+        boxes = tuple(self.boxes) if not isinstance(self.boxes, Box) else (self.boxes,)
+        if not boxes:
+            raise ValueError("boxes must hold at least one Box, got none")
+        for k, box in enumerate(boxes):
+            if not isinstance(box, Box):
+                raise ValueError(f"boxes[{k}] must be a Box, got {type(box).__name__}")
+        set_(self, "boxes", boxes)
+        set_(self, "dt", check_range("dt", self.dt, 0.0, 1.0, low_open=True))
+        set_(self, "gravity", check_range("gravity", self.gravity, -1e4, 1e4))
+        set_(self, "restitution", check_range("restitution", self.restitution, 0.0, 1.0))
+        set_(self, "friction", check_range("friction", self.friction, 0.0))
+        set_(self, "penalty_stiffness", check_range("penalty_stiffness", self.penalty_stiffness, 0.0))
+        for name in ("use_impulses", "use_penalty"):
+            if not isinstance(getattr(self, name), (bool, np.bool_)):
+                raise ValueError(f"{name} must be True or False, got {getattr(self, name)!r}")
+            set_(self, name, bool(getattr(self, name)))
+        if self.solver not in SOLVERS:
+            raise ValueError(f"solver must be one of {SOLVERS}, got {self.solver!r}")
+        if self.solver == "robust" and not self.use_impulses:
+            raise ValueError(
+                "use_impulses must be True with solver='robust' (its contacts are impulses); "
+                "a penalty-only run is available with solver='seed'"
+            )
+        set_(self, "restitution_threshold",
+             check_range("restitution_threshold", self.restitution_threshold, 0.0))
+        set_(self, "sleep_speed", check_range("sleep_speed", self.sleep_speed, 0.0))
+        set_(self, "sleep_time", check_range("sleep_time", self.sleep_time, 0.0))
+        set_(self, "penetration_slop", check_range("penetration_slop", self.penetration_slop, 0.0))
+
+    # -- what the scene has: these decide which kernel stages are compiled in -------------------
+    @property
+    def n_bodies(self) -> int:
+        return len(self.boxes)
+
+    @property
+    def has_friction(self) -> bool:
+        return bool(np.any(self.body_params()[:, layout.FRICTION] > 0.0))
+
+    @property
+    def has_penalty(self) -> bool:
+        return self.use_penalty and self.penalty_stiffness > 0.0
+
+    def replace(self, **changes) -> Scene:
+        """A copy with some fields changed (validated again)."""
+        return replace(self, **changes)
+
+    # -- arrays for the kernels ---------------------------------------------------------------
+    def initial_state(self) -> np.ndarray:
+        """(n_bodies, 6) float64: x, y, angle, vx, vy, spin (see ``layout``)."""
+        state = np.empty((self.n_bodies, layout.STATE_SIZE))
+        for i, box in enumerate(self.boxes):
+            state[i] = (*box.position, box.angle, *box.velocity, box.spin)
+        return state
+
+    def body_params(self) -> np.ndarray:
+        """(n_bodies, 7) float64: half extents, mass, inertia, restitution, friction, stiffness."""
+        params = np.empty((self.n_bodies, layout.PARAM_SIZE))
+        for i, box in enumerate(self.boxes):
+            params[i] = (
+                0.5 * box.length,
+                0.5 * box.width,
+                box.mass,
+                box.inertia,
+                self.restitution if box.restitution is None else box.restitution,
+                self.friction if box.friction is None else box.friction,
+                self.penalty_stiffness,
+            )
+        return params
+
+
+def box_from_state(template: Box, state_row) -> Box:
+    """A copy of ``template`` placed at one row of a state array."""
+    x, y, angle, vx, vy, spin = (float(v) for v in state_row)
+    if not all(math.isfinite(v) for v in (x, y, angle, vx, vy, spin)):
+        raise ValueError(f"state must be finite, got {tuple(state_row)}")
+    return replace(template, position=(x, y), angle=angle, velocity=(vx, vy), spin=spin)

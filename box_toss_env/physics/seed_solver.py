@@ -1,0 +1,175 @@
+"""The seed's scheme, exactly as ``shared/reference/rigid_body_collisions.txt`` describes it.
+
+Per time step and per box:
+  1. detect contacts: every corner b_global = R b_local + x with y < 0;
+  2. for each such corner, in corner order, an impulse p = -(1 + e) u_n / (1/m + (r x n)^2 / I)
+     plus the friction impulse -mu |p| t, applied at once (v += p/m, omega += (r x p)/I) when
+     p . n > 0, so a later corner sees the velocity an earlier one produced;
+  3. for each such corner a penalty force f_n = k d n (d = -y) and its friction -mu |f_n| t,
+     summed into the force and the torque (r x f);
+  4. symplectic Euler: v += dt (f/m + g), x += dt v, omega += dt tau/I, alpha += dt omega.
+The tangent t = u_t / |u_t| is normalised only when |u_t| > 1e-4, as in the demo.
+
+This scheme is kept as it is, faults included (see ``robust_solver`` for what they are).
+"""
+
+import math
+
+import numba
+import numpy as np
+
+from . import layout
+from .geometry import vertex_offset
+from .kernel_support import is_lying_still, record_event, store_state, write_stats
+
+TANGENT_NORMALISE_MIN = 1e-4  # the demo normalises u_t only above this length
+
+
+@numba.njit(cache=True, inline="always")
+def seed_step(x, y, angle, vx, vy, spin, half_length, half_width, mass, inertia, restitution,
+              friction, stiffness, dt, gravity, use_impulses, use_penalty, use_friction):
+    """One step of the seed scheme for one box. Returns the new state, the lowest corner height
+    before the step and a bit mask of the corners that were below the floor."""
+    nx, ny = 0.0, 1.0  # floor normal
+    cos_a = math.cos(angle)
+    sin_a = math.sin(angle)
+    force_x = 0.0
+    force_y = 0.0
+    torque = 0.0
+    lowest_y = math.inf
+    below = 0
+    for k in range(4):
+        rx, ry = vertex_offset(k, cos_a, sin_a, half_length, half_width)
+        corner_y = ry + y
+        lowest_y = min(lowest_y, corner_y)
+        if corner_y >= 0.0:
+            continue
+        below |= 1 << k
+        # 2.1 point velocity u = v + omega x r, with omega x r = (-omega r_y, omega r_x)
+        ux = vx - spin * ry
+        uy = vy + spin * rx
+        # 2.2 normal and tangential parts
+        u_dot_n = ux * nx + uy * ny
+        un_x = u_dot_n * nx
+        un_y = u_dot_n * ny
+        ut_x = ux - un_x
+        ut_y = uy - un_y
+        tx = ut_x
+        ty = ut_y
+        if use_friction:
+            ut_len = math.sqrt(ut_x * ut_x + ut_y * ut_y)
+            if ut_len > TANGENT_NORMALISE_MIN:
+                tx = ut_x / ut_len
+                ty = ut_y / ut_len
+        if use_impulses:
+            # 2.3 p' = -u_n / (1/m + (r x n)^2 / I), p = (1 + e) p'
+            r_cross_n = rx * ny - ry * nx
+            inv_mass_eff = 1.0 / mass + r_cross_n * r_cross_n / inertia
+            px = (1.0 + restitution) * (-un_x / inv_mass_eff)
+            py = (1.0 + restitution) * (-un_y / inv_mass_eff)
+            if use_friction:
+                # 2.5 p_friction = -mu |p| t, added before the test of 2.4
+                p_len = math.sqrt(px * px + py * py)
+                px = px - friction * p_len * tx
+                py = py - friction * p_len * ty
+            # 2.4 apply only if the impulse pushes out of the floor
+            if px * nx + py * ny > 0.0:
+                vx = vx + px / mass
+                vy = vy + py / mass
+                spin = spin + (rx * py - ry * px) / inertia
+        if use_penalty:
+            # 3. f_n = k d n, f_friction = -mu |f_n| t, tau += r x (f_n + f_friction)
+            depth = -corner_y
+            fn_x = stiffness * depth * nx
+            fn_y = stiffness * depth * ny
+            f_x = fn_x
+            f_y = fn_y
+            if use_friction:
+                fn_len = math.sqrt(fn_x * fn_x + fn_y * fn_y)
+                f_x = fn_x - friction * fn_len * tx
+                f_y = fn_y - friction * fn_len * ty
+            force_x = force_x + f_x
+            force_y = force_y + f_y
+            torque = torque + (rx * f_y - ry * f_x)
+    # 4. symplectic Euler, gravity in the velocity update
+    vx = vx + dt * (force_x / mass)
+    vy = vy + dt * (force_y / mass + gravity)
+    spin = spin + dt * (torque / inertia)
+    x = x + dt * vx
+    y = y + dt * vy
+    angle = angle + dt * spin
+    return x, y, angle, vx, vy, spin, lowest_y, below
+
+
+def make_seed_kernel(use_impulses: bool, use_penalty: bool, use_friction: bool, record: bool,
+                     parallel: bool, source_digest: int):
+    """Build the seed kernel for exactly the stages a scene uses (flags are compile-time).
+
+    ``run(state, params, settings, stats, trajectory, events)`` advances every body in place for
+    ``settings[MAX_STEPS]`` steps, or until it lies still on a face when ``settings[UNTIL_REST]``.
+    """
+    IMPULSES, PENALTY, FRICTION, RECORD, DIGEST = use_impulses, use_penalty, use_friction, record, source_digest
+
+    @numba.njit(cache=True, parallel=parallel)
+    def run(state, params, settings, stats, trajectory, events):
+        _ = DIGEST  # the engine sources' digest: part of this kernel's on-disk cache key
+        dt = settings[layout.DT]
+        gravity = settings[layout.GRAVITY]
+        max_steps = np.int64(settings[layout.MAX_STEPS])
+        until_rest = settings[layout.UNTIL_REST] != 0.0
+        sleep_speed = settings[layout.SLEEP_SPEED]
+        sleep_time = settings[layout.SLEEP_TIME]
+        for i in numba.prange(state.shape[0]):
+            x, y, angle, vx, vy, spin = (state[i, 0], state[i, 1], state[i, 2],
+                                         state[i, 3], state[i, 4], state[i, 5])
+            hx = params[i, layout.HALF_LENGTH]
+            hy = params[i, layout.HALF_WIDTH]
+            mass = params[i, layout.MASS]
+            inertia = params[i, layout.INERTIA]
+            first_contact = math.nan
+            rest_time = math.nan
+            max_penetration = 0.0
+            n_impacts = 0
+            status = layout.STATUS_OK
+            fail_step = -1
+            still_for = 0.0
+            below_before = 0
+            if RECORD:
+                store_state(trajectory, 0, i, x, y, angle, vx, vy, spin)
+            n = 0
+            while n < max_steps:
+                x, y, angle, vx, vy, spin, lowest_y, below = seed_step(
+                    x, y, angle, vx, vy, spin, hx, hy, mass, inertia,
+                    params[i, layout.RESTITUTION], params[i, layout.FRICTION], params[i, layout.STIFFNESS],
+                    dt, gravity, IMPULSES, PENALTY, FRICTION)
+                if below != 0:
+                    if math.isnan(first_contact):
+                        first_contact = n * dt
+                    max_penetration = max(max_penetration, -lowest_y)
+                    if below & ~below_before:  # a corner newly below the floor: an impact
+                        if RECORD:
+                            record_event(events, i, n_impacts, n * dt, math.nan, 1.0)
+                        n_impacts += 1
+                below_before = below
+                n += 1
+                if RECORD:
+                    store_state(trajectory, n, i, x, y, angle, vx, vy, spin)
+                if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(angle)
+                        and math.isfinite(vx) and math.isfinite(vy) and math.isfinite(spin)):
+                    status = layout.STATUS_NONFINITE
+                    fail_step = n
+                    break
+                if until_rest:
+                    if is_lying_still(y, angle, vx, vy, spin, hx, hy, sleep_speed):
+                        still_for += dt
+                        if still_for >= sleep_time:
+                            rest_time = n * dt
+                            break
+                    else:
+                        still_for = 0.0
+            state[i, 0], state[i, 1], state[i, 2] = x, y, angle
+            state[i, 3], state[i, 4], state[i, 5] = vx, vy, spin
+            write_stats(stats, i, first_contact, n_impacts, n, max_penetration, rest_time, n * dt,
+                        status, fail_step, n + 1)
+
+    return run

@@ -1,0 +1,193 @@
+"""Running scenes: ``simulate`` for one scene, ``Simulator`` for repeated runs on raw arrays
+(the environments), both over the same compiled kernels."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+
+from . import layout
+from .kernels import KernelFlags, make_kernel
+from .scene import Scene
+from .validation import check_range
+
+
+class NonFiniteStateError(FloatingPointError):
+    """A body's state stopped being finite: the simulation diverged. Nothing is clipped."""
+
+    def __init__(self, body: int, step: int, solver: str):
+        self.body = body
+        self.step = step
+        super().__init__(
+            f"body {body} went non-finite at step {step} with solver={solver!r}; the explicit seed scheme "
+            "diverges when dt * sqrt(penalty_stiffness / effective mass) > 2: reduce dt or the stiffness, "
+            "or use solver='robust'"
+        )
+
+
+@dataclass
+class Trajectory:
+    """States on the time grid t_n = n dt: ``state[n, body] = (x, y, angle, vx, vy, spin)``.
+    A body that fell asleep before the end keeps its resting state in the later rows."""
+
+    time: np.ndarray  # (T,) [s]
+    state: np.ndarray  # (T, n_bodies, 6)
+
+    @property
+    def position(self) -> np.ndarray:  # (T, n, 2) [m]
+        return self.state[:, :, layout.X:layout.Y + 1]
+
+    @property
+    def angle(self) -> np.ndarray:  # (T, n) [rad]
+        return self.state[:, :, layout.ANGLE]
+
+    @property
+    def velocity(self) -> np.ndarray:  # (T, n, 2) [m/s]
+        return self.state[:, :, layout.VX:layout.VY + 1]
+
+    @property
+    def spin(self) -> np.ndarray:  # (T, n) [rad/s]
+        return self.state[:, :, layout.SPIN]
+
+
+@dataclass
+class SimulationResult:
+    """What a run produced, per body. Times in seconds; nan where a thing did not happen."""
+
+    final_state: np.ndarray  # (n, 6)
+    first_contact_time: np.ndarray  # (n,) flight time before the first floor contact
+    n_impacts: np.ndarray  # (n,) int
+    n_steps: np.ndarray  # (n,) int, time steps actually integrated
+    max_penetration: np.ndarray  # (n,) [m]
+    rest_time: np.ndarray  # (n,) when the body fell asleep
+    end_time: np.ndarray  # (n,) simulated time reached
+    trajectory: Trajectory | None = None
+    impacts: list[np.ndarray] | None = None  # per body: (k, 3) time, approach speed, corners
+
+    @property
+    def at_rest(self) -> np.ndarray:
+        return ~np.isnan(self.rest_time)
+
+
+class Simulator:
+    """A kernel compiled for one combination of stages, run on arrays many times.
+
+    ``run`` takes the state (n, 6) and the body parameters (n, 7) (see ``layout``) and advances
+    the state in place; it allocates nothing per step. ``parallel`` runs bodies on numba's
+    threads (``threads``, default: all of numba's).
+    """
+
+    def __init__(self, flags: KernelFlags, threads: int | None = None):
+        self.flags = flags
+        self.threads = threads
+        self.kernel = make_kernel(flags)
+        self._no_trajectory = np.zeros((0, 0, layout.STATE_SIZE))
+        self._no_events = np.zeros((0, 0, layout.EVENT_SIZE))
+
+    @classmethod
+    def for_scene(cls, scene: Scene, *, record: bool = False, parallel: bool | None = None,
+                  threads: int | None = None) -> Simulator:
+        if parallel is None:
+            parallel = scene.n_bodies > 1
+        flags = KernelFlags(solver=scene.solver, use_impulses=scene.use_impulses, use_penalty=scene.has_penalty,
+                            use_friction=scene.has_friction, record=record, parallel=parallel)
+        return cls(flags, threads)
+
+    def run(self, state: np.ndarray, params: np.ndarray, settings: np.ndarray, stats: np.ndarray,
+            trajectory: np.ndarray | None = None, events: np.ndarray | None = None) -> None:
+        """Advance ``state`` in place and fill ``stats`` (n, STATS_SIZE); with ``record`` also
+        ``trajectory`` (max_steps + 1, n, 6) and ``events`` (n, MAX_EVENTS, 3)."""
+        if self.flags.record and (trajectory is None or events is None):
+            raise ValueError("trajectory and events arrays are required when recording")
+        trajectory = self._no_trajectory if trajectory is None else trajectory
+        events = self._no_events if events is None else events
+        if self.flags.parallel and self.threads is not None:
+            previous = numba.get_num_threads()
+            numba.set_num_threads(self.threads)
+            try:
+                self.kernel(state, params, settings, stats, trajectory, events)
+            finally:
+                numba.set_num_threads(previous)
+        else:
+            self.kernel(state, params, settings, stats, trajectory, events)
+
+
+def make_settings(scene: Scene, max_steps: int, until_rest: bool) -> np.ndarray:
+    """The scene-wide settings array the kernels read (see ``layout``)."""
+    settings = np.empty(layout.SETTINGS_SIZE)
+    settings[layout.DT] = scene.dt
+    settings[layout.GRAVITY] = scene.gravity
+    settings[layout.MAX_STEPS] = max_steps
+    settings[layout.UNTIL_REST] = 1.0 if until_rest else 0.0
+    settings[layout.RESTITUTION_THRESHOLD] = scene.restitution_threshold
+    settings[layout.SLEEP_SPEED] = scene.sleep_speed
+    settings[layout.SLEEP_TIME] = scene.sleep_time
+    settings[layout.PENETRATION_SLOP] = scene.penetration_slop
+    return settings
+
+
+def steps_for(scene: Scene, steps: int | None, duration: float | None) -> int:
+    """Number of grid steps from exactly one of ``steps`` or ``duration`` [s]."""
+    if (steps is None) == (duration is None):
+        raise ValueError("give exactly one of steps (an int >= 0) or duration (seconds >= 0)")
+    if steps is not None:
+        if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 0:
+            raise ValueError(f"steps must be an integer >= 0, got {steps!r}")
+        return int(steps)
+    duration = check_range("duration", duration, 0.0)
+    return int(math.ceil(duration / scene.dt - 1e-9))
+
+
+def simulate(scene: Scene, *, steps: int | None = None, duration: float | None = None,
+             until_rest: bool = False, record: bool = False, threads: int | None = None) -> SimulationResult:
+    """Run ``scene`` for ``steps`` time steps (or ``duration`` seconds, rounded up to whole steps).
+
+    ``until_rest`` stops each body once it has lain still on a face for ``scene.sleep_time``.
+    ``record`` keeps the states on the time grid and the impacts; without it nothing per step
+    is stored. Raises ``NonFiniteStateError`` naming the body and step if a state diverges.
+    """
+    max_steps = steps_for(scene, steps, duration)
+    simulator = Simulator.for_scene(scene, record=record, threads=threads)
+    state = scene.initial_state()
+    params = scene.body_params()
+    settings = make_settings(scene, max_steps, until_rest)
+    stats = np.zeros((scene.n_bodies, layout.STATS_SIZE))
+    trajectory = events = None
+    if record:
+        trajectory = np.empty((max_steps + 1, scene.n_bodies, layout.STATE_SIZE))
+        events = np.zeros((scene.n_bodies, layout.MAX_EVENTS, layout.EVENT_SIZE))
+    simulator.run(state, params, settings, stats, trajectory, events)
+    return collect_result(scene, state, stats, trajectory, events)
+
+
+def check_finite_stats(stats: np.ndarray, solver: str) -> None:
+    """Raise NonFiniteStateError for the first body whose status says it diverged."""
+    failed = np.flatnonzero(stats[:, layout.STATUS] != layout.STATUS_OK)
+    if failed.size:
+        body = int(failed[0])
+        raise NonFiniteStateError(body, int(stats[body, layout.FAIL_STEP]), solver)
+
+
+def collect_result(scene: Scene, state, stats, trajectory, events) -> SimulationResult:
+    check_finite_stats(stats, scene.solver)
+    result = SimulationResult(
+        final_state=state,
+        first_contact_time=stats[:, layout.FIRST_CONTACT_TIME].copy(),
+        n_impacts=stats[:, layout.N_IMPACTS].astype(np.int64),
+        n_steps=stats[:, layout.N_STEPS].astype(np.int64),
+        max_penetration=stats[:, layout.MAX_PENETRATION].copy(),
+        rest_time=stats[:, layout.REST_TIME].copy(),
+        end_time=stats[:, layout.END_TIME].copy(),
+    )
+    if trajectory is not None:
+        recorded = stats[:, layout.N_RECORDED].astype(np.int64)
+        rows = int(recorded.max())
+        for body, count in enumerate(recorded):  # a body asleep early keeps its final state
+            trajectory[count:rows, body] = state[body]
+        result.trajectory = Trajectory(time=np.arange(rows) * scene.dt, state=trajectory[:rows])
+        result.impacts = [events[body, : min(n, layout.MAX_EVENTS)].copy()
+                          for body, n in enumerate(result.n_impacts)]
+    return result

@@ -1,0 +1,432 @@
+"""Draws the box-toss scene (floor, target, boxes with coloured faces, text) with pygame-ce."""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+
+from box_toss_env.rendering.camera import Camera
+from box_toss_env.rendering.dependency import import_pygame
+from box_toss_env.rendering.geometry import box_vertices
+
+RGB = tuple[int, int, int]
+
+
+@dataclass(frozen=True)
+class Palette:
+    """Colours of the scene, as (r, g, b) in 0..255."""
+
+    background: RGB = (236, 241, 246)
+    ground: RGB = (122, 108, 92)
+    floor_line: RGB = (60, 52, 44)
+    box_fill: RGB = (170, 180, 190)
+    box_outline: RGB = (30, 30, 30)
+    face_colours: tuple[RGB, RGB, RGB, RGB] = (
+        (214, 39, 40),  # face 0, local -y: red, the thick stripe
+        (31, 119, 180),  # face 1, local +x: blue
+        (255, 187, 0),  # face 2, local +y: yellow
+        (148, 103, 189),  # face 3, local -x: purple
+    )
+    target: RGB = (0, 158, 115)
+    target_pole: RGB = (70, 70, 70)
+    text: RGB = (20, 20, 20)
+
+
+MARKED_STRIPE_WIDTH_PX = 6.0
+"""Width of the coloured stripe inside the marked face (face 0 on boxes) [px]."""
+FACE_STRIPE_WIDTH_PX = 3.0
+"""Width of the coloured stripe inside each other face [px]."""
+MAX_STRIPE_FRACTION = 0.3
+"""A stripe covers at most this fraction of the box's thickness across its face."""
+PIXEL_LIMIT = 1.0e5
+"""Pixel coordinates handed to pygame are clipped to +-PIXEL_LIMIT (pygame needs them to fit in C ints)."""
+TEXT_MARGIN_PX = 6
+FLOOR_LINE_WIDTH_PX = 2
+FLOOR_TICK_LENGTH_PX = 5
+MIN_PX_PER_FLOOR_TICK = 30.0
+"""Metre ticks on the floor are drawn only when they are at least this far apart [px]."""
+
+
+class SceneRenderer:
+    """Draws boxes on the floor y = 0 into RGB frames (``render_rgb``) or a window (``show``).
+
+    The scene is given as plain arrays:
+
+    - ``position`` (n, 2) [m], ``angle`` (n,) [rad, counter-clockwise], ``half_extents`` (n, 2) [m]
+      (half length along local x, half width along local y). A single box may be given as (2,), scalar,
+      (2,); ``angle`` and ``half_extents`` broadcast over the boxes.
+    - ``target_x`` [m]: a flag and a bracket on the floor; ``target_tolerance_m`` [m] sets the bracket's
+      half-width. ``target_face`` (0..3 or None for any face) adds an icon of the box resting on that face
+      and a label.
+    - ``text_lines``: strings drawn top-left (skipped with a warning if ``pygame.font`` is unavailable).
+
+    Faces are numbered by outward normal in the body frame (0: -y, 1: +x, 2: +y, 3: -x, see
+    ``geometry``). Each face has a coloured stripe inside the box (``Palette.face_colours``: red, blue,
+    yellow, purple); face 0's stripe is twice as thick, so at angle 0 the red stripe is at the bottom and at
+    angle pi it is on top.
+
+    pygame is imported on the first draw; the drawing surface is created once and reused, the window only
+    when ``show`` is first called.
+    """
+
+    def __init__(
+        self,
+        width_px: int = 600,
+        height_px: int = 400,
+        camera: Camera | None = None,
+        palette: Palette | None = None,
+        font_size_px: int = 18,
+        window_title: str = "BoxToss",
+    ) -> None:
+        self.width_px = int(width_px)
+        self.height_px = int(height_px)
+        self.camera = (
+            camera if camera is not None else Camera.from_view(-1.0, 7.0, -1.0, 4.0, width_px, height_px)
+        )
+        self._check_camera_size(self.camera)
+        self.palette = palette if palette is not None else Palette()
+        self.font_size_px = int(font_size_px)
+        self.window_title = window_title
+        self._surface: Any = None
+        self._font: Any = None
+        self._font_loaded = False
+        self._window: Any = None
+        self._clock: Any = None
+
+    # ----- public drawing API -----
+
+    def render_rgb(
+        self,
+        position: np.ndarray,
+        angle: np.ndarray,
+        half_extents: np.ndarray,
+        *,
+        target_x: float | None = None,
+        target_face: int | None = None,
+        target_tolerance_m: float | None = None,
+        text_lines: Sequence[str] = (),
+        camera: Camera | None = None,
+    ) -> np.ndarray:
+        """Draw the scene and return it as a new (height_px, width_px, 3) uint8 array.
+
+        ``camera`` overrides ``self.camera`` for this frame and must have the renderer's image size.
+        """
+        pygame = import_pygame()
+        surface = self._draw_scene(
+            pygame,
+            position,
+            angle,
+            half_extents,
+            target_x,
+            target_face,
+            target_tolerance_m,
+            text_lines,
+            camera,
+        )
+        rgb_bytes = pygame.image.tobytes(surface, "RGB")
+        return np.frombuffer(rgb_bytes, dtype=np.uint8).reshape(self.height_px, self.width_px, 3).copy()
+
+    def show(
+        self,
+        position: np.ndarray,
+        angle: np.ndarray,
+        half_extents: np.ndarray,
+        *,
+        target_x: float | None = None,
+        target_face: int | None = None,
+        target_tolerance_m: float | None = None,
+        text_lines: Sequence[str] = (),
+        camera: Camera | None = None,
+        fps: float | None = None,
+    ) -> bool:
+        """Draw the scene into the window (opened on first call), waiting to hold ``fps`` if given.
+
+        Takes the same scene arguments as ``render_rgb``. Returns False once the user has asked to close the
+        window (the QUIT event is left in pygame's queue); the caller then calls ``close``.
+        """
+        pygame = import_pygame()
+        surface = self._draw_scene(
+            pygame,
+            position,
+            angle,
+            half_extents,
+            target_x,
+            target_face,
+            target_tolerance_m,
+            text_lines,
+            camera,
+        )
+        return self._present(pygame, surface, fps)
+
+    def show_frame(self, frame: np.ndarray, fps: float | None = None) -> bool:
+        """Show a (height_px, width_px, 3) uint8 frame, e.g. a recorded one, in the window; see ``show``."""
+        pygame = import_pygame()
+        frame = np.ascontiguousarray(frame)
+        if frame.shape != (self.height_px, self.width_px, 3) or frame.dtype != np.uint8:
+            raise ValueError(
+                f"frame must be ({self.height_px}, {self.width_px}, 3) uint8, got {frame.shape} {frame.dtype}"
+            )
+        surface = pygame.image.frombuffer(frame, (self.width_px, self.height_px), "RGB")
+        return self._present(pygame, surface, fps)
+
+    def close(self) -> None:
+        """Close the window if one is open. Safe to call more than once; ``render_rgb`` still works after."""
+        if self._window is None:
+            return
+        pygame = import_pygame()
+        pygame.display.quit()
+        self._window = None
+        self._clock = None
+
+    def __enter__(self) -> SceneRenderer:
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.close()
+
+    # ----- the drawing script -----
+
+    def _draw_scene(
+        self,
+        pygame: ModuleType,
+        position: np.ndarray,
+        angle: np.ndarray,
+        half_extents: np.ndarray,
+        target_x: float | None,
+        target_face: int | None,
+        target_tolerance_m: float | None,
+        text_lines: Sequence[str],
+        camera: Camera | None,
+    ) -> Any:
+        """Draw the whole scene onto the reused surface and return the surface."""
+        camera = self.camera if camera is None else camera
+        self._check_camera_size(camera)
+        position, angle, half_extents = as_box_arrays(position, angle, half_extents)
+        if target_face is not None and target_face not in (0, 1, 2, 3):
+            raise ValueError(f"target_face must be 0, 1, 2, 3 or None, got {target_face!r}")
+        if self._surface is None:
+            self._surface = pygame.Surface((self.width_px, self.height_px))
+        surface = self._surface
+
+        self._draw_sky_and_ground(pygame, surface, camera)
+        if target_x is not None:
+            self._draw_target(
+                pygame, surface, camera, float(target_x), target_face, target_tolerance_m, half_extents
+            )
+        corners_px = camera.world_to_pixel(box_vertices(position, angle, half_extents))
+        for box_corners_px, box_half_extents in zip(corners_px, half_extents, strict=True):
+            self._draw_box(pygame, surface, box_corners_px, 2.0 * box_half_extents * camera.pixels_per_metre)
+        if text_lines:
+            self._draw_text(pygame, surface, text_lines)
+        return surface
+
+    def _draw_sky_and_ground(self, pygame: ModuleType, surface: Any, camera: Camera) -> None:
+        """Background, the ground region below y = 0, the floor line and metre ticks."""
+        palette = self.palette
+        surface.fill(palette.background)
+        floor_row = camera.world_to_pixel(np.zeros(2))[1]
+        # rows whose pixel centre lies below y = 0 are ground
+        ground_top = int(np.clip(np.ceil(floor_row - 0.5), 0, self.height_px))
+        if ground_top >= self.height_px:
+            return
+        surface.fill(palette.ground, (0, ground_top, self.width_px, self.height_px - ground_top))
+        surface.fill(palette.floor_line, (0, ground_top - 1, self.width_px, FLOOR_LINE_WIDTH_PX))
+        if camera.pixels_per_metre < MIN_PX_PER_FLOOR_TICK or ground_top <= 0:
+            return
+        x_min, x_max, _, _ = camera.view_bounds
+        for tick_x in range(int(np.ceil(x_min)), int(np.floor(x_max)) + 1):
+            column = camera.world_to_pixel(np.array([tick_x, 0.0]))[0]
+            pygame.draw.line(
+                surface, palette.floor_line, (column, ground_top), (column, ground_top + FLOOR_TICK_LENGTH_PX)
+            )
+
+    def _draw_target(
+        self,
+        pygame: ModuleType,
+        surface: Any,
+        camera: Camera,
+        target_x: float,
+        target_face: int | None,
+        target_tolerance_m: float | None,
+        half_extents: np.ndarray,
+    ) -> None:
+        """A bracket on the floor at ``target_x``, a flag, and an icon and label for the face to land on."""
+        palette = self.palette
+        column, floor_row = _clip_px(camera.world_to_pixel(np.array([target_x, 0.0])))
+        if target_tolerance_m is None:
+            bracket_half_width = 10.0
+        else:
+            bracket_half_width = max(4.0, float(target_tolerance_m) * camera.pixels_per_metre)
+        bracket_half_width = min(bracket_half_width, PIXEL_LIMIT)
+        bracket_height = 8.0
+        bracket = [
+            (column - bracket_half_width, floor_row - bracket_height),
+            (column - bracket_half_width, floor_row),
+            (column + bracket_half_width, floor_row),
+            (column + bracket_half_width, floor_row - bracket_height),
+        ]
+        pygame.draw.lines(surface, palette.target, False, bracket, 3)
+
+        pole_height = float(np.clip(self.height_px / 6, 20, 48))
+        pole_top = floor_row - pole_height
+        flag_width, flag_height = 0.6 * pole_height, 0.35 * pole_height
+        pygame.draw.line(surface, palette.target_pole, (column, floor_row), (column, pole_top), 2)
+        flag = [
+            (column, pole_top),
+            (column + flag_width, pole_top + 0.5 * flag_height),
+            (column, pole_top + flag_height),
+        ]
+        pygame.draw.polygon(surface, palette.target, flag)
+
+        label_left = column + flag_width + 4
+        if target_face is not None:
+            icon_size = 0.7 * pole_height
+            icon_centre = np.array([label_left + 0.5 * icon_size, pole_top + 0.5 * flag_height])
+            self._draw_face_icon(pygame, surface, icon_centre, target_face, half_extents, icon_size)
+            label_left += icon_size + 6
+        font = self._get_font(pygame)
+        if font is not None:
+            label = "any face" if target_face is None else f"face {target_face} down"
+            surface.blit(font.render(label, True, palette.target), (label_left, pole_top))
+
+    def _draw_face_icon(
+        self,
+        pygame: ModuleType,
+        surface: Any,
+        centre_px: np.ndarray,
+        face: int,
+        half_extents: np.ndarray,
+        size_px: float,
+    ) -> None:
+        """A small box like the first one, resting on ``face``, whose stripe is drawn thick at the bottom."""
+        length_over_width = half_extents[0, 0] / half_extents[0, 1] if len(half_extents) else 2.0
+        aspect = float(np.clip(length_over_width, 1 / 3, 3))
+        icon_half_extents = 0.5 * size_px * np.array([[min(1.0, aspect), min(1.0, 1.0 / aspect)]])
+        angle_face_down = np.array([-0.5 * np.pi * face])  # rotates face k's outward normal onto -y
+        corners = box_vertices(np.zeros((1, 2)), angle_face_down, icon_half_extents)[0]
+        corners_px = np.column_stack([centre_px[0] + corners[:, 0], centre_px[1] - corners[:, 1]])
+        self._draw_box(pygame, surface, corners_px, 2.0 * icon_half_extents[0], marked_face=face)
+
+    def _draw_box(
+        self,
+        pygame: ModuleType,
+        surface: Any,
+        corners_px: np.ndarray,
+        size_px: np.ndarray,
+        marked_face: int = 0,
+    ) -> None:
+        """Fill one box, stripe each face in its colour (``marked_face`` last and thickest), outline it.
+
+        ``corners_px`` (4, 2) are the box corners in pixels, counter-clockwise in the world (so clockwise on
+        screen); ``size_px`` (2,) is the box's full length and width in pixels.
+        """
+        if not np.all(np.isfinite(corners_px)) or self._is_out_of_view(corners_px):
+            return
+        palette = self.palette
+        corners_px = _clip_px(corners_px)
+        pygame.draw.polygon(surface, palette.box_fill, corners_px.tolist())
+        edges = np.roll(corners_px, -1, axis=0) - corners_px
+        edge_lengths = np.hypot(edges[:, 0], edges[:, 1])
+        # world counter-clockwise is screen clockwise, so (ey, -ex) points into the box
+        inward = np.column_stack([edges[:, 1], -edges[:, 0]]) / np.maximum(edge_lengths, 1e-12)[:, None]
+        thickness_across_face = (size_px[1], size_px[0], size_px[1], size_px[0])
+        faces_in_drawing_order = [face for face in range(4) if face != marked_face] + [marked_face]
+        for face in faces_in_drawing_order:
+            if edge_lengths[face] < 1e-9:
+                continue
+            width = MARKED_STRIPE_WIDTH_PX if face == marked_face else FACE_STRIPE_WIDTH_PX
+            width = max(min(width, MAX_STRIPE_FRACTION * thickness_across_face[face]), 1.0)
+            start, end = corners_px[face], corners_px[(face + 1) % 4]
+            stripe = np.array([start, end, end + width * inward[face], start + width * inward[face]])
+            pygame.draw.polygon(surface, palette.face_colours[face], stripe.tolist())
+        pygame.draw.polygon(surface, palette.box_outline, corners_px.tolist(), width=1)
+
+    def _draw_text(self, pygame: ModuleType, surface: Any, text_lines: Sequence[str]) -> None:
+        """Text lines top-left, one per row."""
+        font = self._get_font(pygame)
+        if font is None:
+            return
+        line_height = font.get_linesize()
+        for index, line in enumerate(text_lines):
+            surface.blit(
+                font.render(str(line), True, self.palette.text),
+                (TEXT_MARGIN_PX, TEXT_MARGIN_PX + index * line_height),
+            )
+
+    # ----- helpers -----
+
+    def _present(self, pygame: ModuleType, surface: Any, fps: float | None) -> bool:
+        """Blit ``surface`` to the window (opened lazily), pump events, hold the frame rate."""
+        if self._window is None or not pygame.display.get_init():
+            pygame.display.init()
+            pygame.display.set_caption(self.window_title)
+            self._window = pygame.display.set_mode((self.width_px, self.height_px))
+            self._clock = pygame.time.Clock()
+        self._window.blit(surface, (0, 0))
+        pygame.event.pump()
+        pygame.display.flip()
+        if fps:
+            self._clock.tick(fps)
+        return not pygame.event.peek(pygame.QUIT)
+
+    def _get_font(self, pygame: ModuleType) -> Any:
+        """The text font, loaded once; None (with one warning) if this pygame build has no font module."""
+        if not self._font_loaded:
+            self._font_loaded = True
+            try:
+                pygame.font.init()
+                self._font = pygame.font.Font(None, self.font_size_px)
+            except (ImportError, NotImplementedError, OSError, pygame.error) as error:
+                warnings.warn(
+                    f"pygame.font is unavailable ({error}); text is not drawn", RuntimeWarning, stacklevel=2
+                )
+                self._font = None
+        return self._font
+
+    def _is_out_of_view(self, corners_px: np.ndarray) -> bool:
+        columns, rows = corners_px[:, 0], corners_px[:, 1]
+        return bool(
+            columns.max() < 0
+            or columns.min() > self.width_px
+            or rows.max() < 0
+            or rows.min() > self.height_px
+        )
+
+    def _check_camera_size(self, camera: Camera) -> None:
+        if (camera.width_px, camera.height_px) != (self.width_px, self.height_px):
+            raise ValueError(
+                f"camera is {camera.width_px}x{camera.height_px} px but the renderer draws "
+                f"{self.width_px}x{self.height_px} px"
+            )
+
+
+def as_box_arrays(
+    position: np.ndarray, angle: np.ndarray, half_extents: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Box state as float arrays ``position (n, 2)``, ``angle (n,)``, ``half_extents (n, 2)``.
+
+    A single box may be given as ``(2,)``, scalar, ``(2,)``; ``angle`` and ``half_extents`` broadcast over
+    the boxes.
+    """
+    position = np.atleast_2d(np.asarray(position, dtype=np.float64))
+    if position.ndim != 2 or position.shape[1] != 2:
+        raise ValueError(f"position must have shape (n, 2) or (2,), got {np.shape(position)}")
+    n_boxes = len(position)
+    try:
+        angle = np.broadcast_to(np.asarray(angle, dtype=np.float64), (n_boxes,))
+        half_extents = np.broadcast_to(np.asarray(half_extents, dtype=np.float64), (n_boxes, 2))
+    except ValueError as error:
+        raise ValueError(
+            f"angle {np.shape(angle)} and half_extents {np.shape(half_extents)} do not match "
+            f"{n_boxes} boxes (expected (n,) and (n, 2))"
+        ) from error
+    return position, angle, half_extents
+
+
+def _clip_px(pixels: np.ndarray) -> np.ndarray:
+    return np.clip(pixels, -PIXEL_LIMIT, PIXEL_LIMIT)
