@@ -5,3 +5,28 @@ Importing the package registers ``BoxToss-v0`` with Gymnasium; the physics engin
 """
 
 __version__ = "0.1.0"
+
+
+def _register_envs() -> None:
+    """Register ``BoxToss-v0`` and its variants with string entry points (nothing is imported
+    until an env is made, so ``import box_toss_env`` does not import pygame or the envs)."""
+    import gymnasium
+
+    variants = {
+        "BoxToss-v0": {},
+        "BoxToss-LongSide-v0": {"target_face": "long_side"},
+        "BoxToss-ShortEnd-v0": {"target_face": "short_end"},
+        "BoxToss-ThisSideUp-v0": {"target_face": "exact"},
+    }
+    for env_id, kwargs in variants.items():
+        if env_id in gymnasium.registry:  # importlib.reload: keep the existing registration
+            continue
+        gymnasium.register(
+            id=env_id,
+            entry_point="box_toss_env.envs.box_toss:BoxTossEnv",
+            vector_entry_point="box_toss_env.envs.box_toss_vector:BoxTossVectorEnv",
+            kwargs=kwargs,
+        )
+
+
+_register_envs()

@@ -9,14 +9,14 @@ r = (rx, ry) from the centre of mass; the floor normal is n = (0, 1), the tangen
   a tangential impulse q at corner i changes u_t there by (1/m + ry_i^2 / I) q.
 """
 
-import math
 
 import numba
 
 PAIR_CONDITION = 1e-9  # det(K) below this fraction of K11 K22: the two rows are parallel
+CONVERGED = 1e-12  # Gauss-Seidel stops when the impulses change by less than this share
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def delassus(rx1, rx2, inv_mass, inv_inertia):
     """Entries K11, K12, K22 of the normal Delassus matrix of two corners."""
     return (inv_mass + rx1 * rx1 * inv_inertia, inv_mass + rx1 * rx2 * inv_inertia,
@@ -61,13 +61,13 @@ def normal_impulses(u1, u2, b1, b2, lam1, lam2, k11, k12, k22, use1, use2):
     return lam1, lam2
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def apply_normal_impulses(vy, spin, d1, d2, rx1, rx2, inv_mass, inv_inertia):
     """v += (p1 + p2) n / m, omega += (rx1 p1 + rx2 p2) / I."""
     return vy + (d1 + d2) * inv_mass, spin + (rx1 * d1 + rx2 * d2) * inv_inertia
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def friction_impulse(vx, spin, ry, normal_impulse, accumulated, friction, inv_mass, inv_inertia):
     """Coulomb friction at one corner: the tangential impulse that would stop sliding there,
     -u_t / (1/m + ry^2 / I), added to the accumulated one and clamped to |q| <= mu lam_n.
@@ -83,33 +83,48 @@ def friction_impulse(vx, spin, ry, normal_impulse, accumulated, friction, inv_ma
     return vx + change * inv_mass, spin - ry * change * inv_inertia, total
 
 
-@numba.njit(cache=True, inline="always")
-def solve_contact_velocities(vx, vy, spin, rx1, ry1, rx2, ry2, use2, b1, b2, friction, inv_mass,
-                             inv_inertia, use_friction, iterations):
-    """Velocities after the normal impulses (targets u_n,i >= b_i) and friction impulses of the
-    lowest corner and, if ``use2``, its neighbour, solved together: projected Gauss-Seidel over
-    friction then the exact 2 x 2 normal block. Returns (vx, vy, spin, lam1, lam2)."""
+@numba.njit(cache=True)
+def solve_normal_velocities(vy, spin, rx1, rx2, use2, b1, b2, inv_mass, inv_inertia):
+    """Velocities after the normal impulses that bring u_n,i to at least b_i at the lowest corner
+    and, if ``use2``, its neighbour, solved together (exact). Returns (vy, spin, lam1, lam2)."""
     k11, k12, k22 = delassus(rx1, rx2, inv_mass, inv_inertia)
-    lam1 = 0.0
-    lam2 = 0.0
+    lam1, lam2 = normal_impulses(vy + spin * rx1, vy + spin * rx2, b1, b2, 0.0, 0.0, k11, k12, k22, True, use2)
+    vy, spin = apply_normal_impulses(vy, spin, lam1, lam2, rx1, rx2, inv_mass, inv_inertia)
+    return vy, spin, lam1, lam2
+
+
+@numba.njit(cache=True)
+def solve_contact_velocities(vx, vy, spin, rx1, ry1, rx2, ry2, use2, b1, b2, friction, inv_mass,
+                             inv_inertia, iterations):
+    """Velocities after the normal impulses (targets u_n,i >= b_i) and the friction impulses of the
+    lowest corner and, if ``use2``, its neighbour: the exact 2 x 2 normal block, then projected
+    Gauss-Seidel sweeps over friction and the normal block, until the impulses change by less than CONVERGED of the normal
+    impulse (at most ``iterations`` sweeps).
+    Returns (vx, vy, spin, lam1, lam2)."""
+    k11, k12, k22 = delassus(rx1, rx2, inv_mass, inv_inertia)
+    lam1, lam2 = normal_impulses(vy + spin * rx1, vy + spin * rx2, b1, b2, 0.0, 0.0, k11, k12, k22, True, use2)
+    vy, spin = apply_normal_impulses(vy, spin, lam1, lam2, rx1, rx2, inv_mass, inv_inertia)
     fric1 = 0.0
     fric2 = 0.0
     for _ in range(iterations):
-        if use_friction:
-            vx, spin, fric1 = friction_impulse(vx, spin, ry1, lam1, fric1, friction, inv_mass, inv_inertia)
-            if use2:
-                vx, spin, fric2 = friction_impulse(vx, spin, ry2, lam2, fric2, friction, inv_mass,
-                                                   inv_inertia)
+        before1, before2, before_fric1, before_fric2 = lam1, lam2, fric1, fric2
+        vx, spin, fric1 = friction_impulse(vx, spin, ry1, lam1, fric1, friction, inv_mass, inv_inertia)
+        if use2:
+            vx, spin, fric2 = friction_impulse(vx, spin, ry2, lam2, fric2, friction, inv_mass, inv_inertia)
         new1, new2 = normal_impulses(vy + spin * rx1, vy + spin * rx2, b1, b2, lam1, lam2,
                                      k11, k12, k22, True, use2)
         vy, spin = apply_normal_impulses(vy, spin, new1 - lam1, new2 - lam2, rx1, rx2, inv_mass,
                                          inv_inertia)
         lam1 = new1
         lam2 = new2
+        change = (abs(lam1 - before1) + abs(lam2 - before2) + abs(fric1 - before_fric1)
+                  + abs(fric2 - before_fric2))
+        if change <= CONVERGED * (lam1 + lam2):
+            break
     return vx, vy, spin, lam1, lam2
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def implicit_penalty_fraction(stiffness, k_ii, h):
     """Share of a penetration depth d removed in one step of length h by the penalty spring
     k d acting on the corner's effective mass 1/K_ii, integrated with backward Euler from rest:
@@ -123,7 +138,7 @@ def implicit_penalty_fraction(stiffness, k_ii, h):
     return stiff / (1.0 + stiff)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def correct_penetration(y, angle, depth1, depth2, rx1, rx2, stiffness, h, inv_mass, inv_inertia):
     """Push the corners out of the floor by the implicit penalty share of their depths, as a
     pseudo-velocity (split impulse): positions move, the real velocities do not, so resolving a

@@ -15,14 +15,14 @@ from .geometry import vertex_offset
 MAX_ADVANCE_ITERATIONS = 100_000  # a grazing approach past this many steps is handed to stepping
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def flight_state(x, y, angle, vx, vy, spin, gravity, tau):
     """The state a time ``tau`` after (x, y, angle, vx, vy, spin), in free flight."""
     return (x + vx * tau, y + vy * tau + 0.5 * gravity * tau * tau, angle + spin * tau,
             vx, vy + gravity * tau, spin)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def safe_flight_time(height, speed, bound):
     """Largest tau for which a corner at ``height`` >= 0 with vertical speed ``speed`` provably
     stays above the floor, given that its vertical acceleration is >= -``bound``.

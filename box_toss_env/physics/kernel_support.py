@@ -12,26 +12,31 @@ TOUCH_TOLERANCE = 1e-3  # [-] of hx + hy: a corner this close to y = 0 touches t
 
 
 @numba.njit(cache=True)
-def is_lying_still(y, angle, vx, vy, spin, half_length, half_width, sleep_speed):
-    """True when the box lies on a face (its lowest face level within FLAT_TOLERANCE and touching
+def lies_still(y, ry1, ry2, rx1, rx2, vx, vy, spin, half_length, half_width, sleep_speed):
+    """True when the box lies on a face (the face's corners level within FLAT_TOLERANCE and touching
     the floor) and every point of it moves slower than ``sleep_speed``:
     |v| <= s and |omega| sqrt(hx^2 + hy^2) <= s."""
-    if math.sqrt(vx * vx + vy * vy) > sleep_speed:
+    if vx * vx + vy * vy > sleep_speed * sleep_speed:
         return False
-    if abs(spin) * math.sqrt(half_length * half_length + half_width * half_width) > sleep_speed:
+    if spin * spin * (half_length * half_length + half_width * half_width) > sleep_speed * sleep_speed:
         return False
+    if y + min(ry1, ry2) > TOUCH_TOLERANCE * (half_length + half_width):
+        return False
+    return abs(ry2 - ry1) <= FLAT_TOLERANCE * math.sqrt((rx2 - rx1) ** 2 + (ry2 - ry1) ** 2)
+
+
+@numba.njit(cache=True)
+def is_lying_still(y, angle, vx, vy, spin, half_length, half_width, sleep_speed):
+    """``lies_still`` for a box at ``angle``."""
     cos_a = math.cos(angle)
     sin_a = math.sin(angle)
     first, second = lowest_face(cos_a, sin_a, half_length, half_width)
     rx1, ry1 = vertex_offset(first, cos_a, sin_a, half_length, half_width)
     rx2, ry2 = vertex_offset(second, cos_a, sin_a, half_length, half_width)
-    if y + ry1 > TOUCH_TOLERANCE * (half_length + half_width):
-        return False
-    face_length = math.sqrt((rx2 - rx1) ** 2 + (ry2 - ry1) ** 2)
-    return abs(ry2 - ry1) <= FLAT_TOLERANCE * face_length
+    return lies_still(y, ry1, ry2, rx1, rx2, vx, vy, spin, half_length, half_width, sleep_speed)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def store_state(trajectory, row, body, x, y, angle, vx, vy, spin):
     trajectory[row, body, 0] = x
     trajectory[row, body, 1] = y
@@ -41,7 +46,7 @@ def store_state(trajectory, row, body, x, y, angle, vx, vy, spin):
     trajectory[row, body, 5] = spin
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def record_event(events, body, index, time, approach_speed, n_contacts):
     if index < events.shape[1]:
         events[body, index, layout.EVENT_TIME] = time
@@ -49,7 +54,7 @@ def record_event(events, body, index, time, approach_speed, n_contacts):
         events[body, index, layout.EVENT_CONTACTS] = n_contacts
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def write_stats(stats, body, first_contact, n_impacts, n_steps, max_penetration, rest_time, end_time,
                 status, fail_step, n_recorded):
     stats[body, layout.FIRST_CONTACT_TIME] = first_contact

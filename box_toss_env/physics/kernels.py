@@ -39,7 +39,7 @@ def source_digest() -> int:
     return int.from_bytes(sha.digest()[:7], "little")
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def make_kernel(flags: KernelFlags):
     """The numba kernel ``run(state, params, settings, stats, trajectory, events)`` for ``flags``."""
     if flags.solver == "seed":

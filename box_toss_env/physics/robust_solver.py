@@ -42,21 +42,22 @@ from .contact_solver import (
     delassus,
     normal_impulses,
     solve_contact_velocities,
+    solve_normal_velocities,
 )
 from .flight import flight_state, time_to_contact
 from .geometry import lowest_face, lowest_pair, vertex_offset
-from .kernel_support import is_lying_still, record_event, store_state, write_stats
+from .kernel_support import lies_still, record_event, store_state, write_stats
 
 MAX_ROTATION_PER_STEP = 0.05  # [rad] a contact step turning the box further is split
 MAX_SUBSTEPS = 64
 CONTACT_TOLERANCE = 1e-12  # [m per m of corner radius + 1 m] a corner this close touches
 SIMULTANEOUS_TOLERANCE = 1e-9  # [same units] corners this close hit at the same instant
-FRICTION_ITERATIONS = 4  # Gauss-Seidel sweeps over friction and the normal block
+FRICTION_ITERATIONS = 8  # at most this many Gauss-Seidel sweeps over friction and the normal block
 
 
-@numba.njit(cache=True, inline="always")
-def resolve_impact(y, angle, vx, vy, spin, half_length, half_width, inv_mass, inv_inertia, restitution,
-                   friction, threshold, simultaneous, use_friction, iterations):
+@numba.njit(cache=True)
+def resolve_impact(y, cos_a, sin_a, vx, vy, spin, half_length, half_width, inv_mass, inv_inertia, restitution,
+                   friction, threshold, simultaneous):
     """Impulses of an impact at the instant a corner reaches the floor.
 
     The touching corners (the lowest one, and its neighbour if within ``simultaneous`` of the
@@ -64,8 +65,6 @@ def resolve_impact(y, angle, vx, vy, spin, half_length, half_width, inv_mass, in
     friction clamped to mu lam_n. Returns (vx, vy, spin, corners hit, approach speed, leaves),
     ``leaves`` being True when every touching corner separates faster than the threshold.
     """
-    cos_a = math.cos(angle)
-    sin_a = math.sin(angle)
     first, second = lowest_face(cos_a, sin_a, half_length, half_width)
     rx1, ry1 = vertex_offset(first, cos_a, sin_a, half_length, half_width)
     rx2, ry2 = vertex_offset(second, cos_a, sin_a, half_length, half_width)
@@ -77,80 +76,61 @@ def resolve_impact(y, angle, vx, vy, spin, half_length, half_width, inv_mass, in
         return vx, vy, spin, 0, 0.0, False
     target1 = -restitution * u1 if u1 < -threshold else 0.0
     target2 = -restitution * u2 if u2 < -threshold else 0.0
-    vx, vy, spin, _, _ = solve_contact_velocities(vx, vy, spin, rx1, ry1, rx2, ry2, pair, target1, target2,
-                                                   friction, inv_mass, inv_inertia, use_friction, iterations)
+    if friction > 0.0:
+        vx, vy, spin, _, _ = solve_contact_velocities(vx, vy, spin, rx1, ry1, rx2, ry2, pair, target1, target2,
+                                                       friction, inv_mass, inv_inertia, FRICTION_ITERATIONS)
+    else:
+        vy, spin, _, _ = solve_normal_velocities(vy, spin, rx1, rx2, pair, target1, target2, inv_mass,
+                                                 inv_inertia)
     leaves = vy + spin * rx1 > threshold and (not pair or vy + spin * rx2 > threshold)
     return vx, vy, spin, 2 if pair else 1, approach, leaves
 
 
-@numba.njit(cache=True, inline="always")
-def predicted_height(k, cos_a, sin_a, half_length, half_width, y, fall, spin, h):
+@numba.njit(cache=True)
+def predicted_height(k, y, cos_a, sin_a, half_length, half_width, fall, spin, h):
     """Height of corner k after a step h at the current velocities, to first order."""
     rx, ry = vertex_offset(k, cos_a, sin_a, half_length, half_width)
     return y + ry + fall + h * spin * rx
 
 
-@numba.njit(cache=True, inline="always")
-def contact_step(x, y, angle, vx, vy, spin, half_length, half_width, inv_mass, inv_inertia, restitution,
-                 friction, stiffness, gravity, h, threshold, slop, use_friction, use_penalty, iterations):
-    """One contact step of length h (stages 1-5 of the module docstring). Returns the new state,
-    whether the floor still holds the box, the approach speed of a corner that hit faster than
-    the threshold during the step (0 if none) and the penetration before the penalty stage."""
-    cos_a = math.cos(angle)
-    sin_a = math.sin(angle)
-    # the face that will be down at the end of the step, from the heights the corners would reach
-    # at the current velocities: a corner swinging down is constrained before it gets there
+@numba.njit(cache=True)
+def contact_corners(y, cos_a, sin_a, vy, spin, half_length, half_width, gravity, h):
+    """Lever arms (rx1, ry1, rx2, ry2) of the two corners that bound the face that will be down at
+    the end of a step h, judged by the heights they would reach at the current velocities, so a
+    corner swinging down is constrained before it gets there."""
     fall = h * (vy + gravity * h)
-    first, second = lowest_pair(predicted_height(0, cos_a, sin_a, half_length, half_width, y, fall, spin, h),
-                                predicted_height(1, cos_a, sin_a, half_length, half_width, y, fall, spin, h),
-                                predicted_height(2, cos_a, sin_a, half_length, half_width, y, fall, spin, h),
-                                predicted_height(3, cos_a, sin_a, half_length, half_width, y, fall, spin, h))
+    first, second = lowest_pair(predicted_height(0, y, cos_a, sin_a, half_length, half_width, fall, spin, h),
+                                predicted_height(1, y, cos_a, sin_a, half_length, half_width, fall, spin, h),
+                                predicted_height(2, y, cos_a, sin_a, half_length, half_width, fall, spin, h),
+                                predicted_height(3, y, cos_a, sin_a, half_length, half_width, fall, spin, h))
     rx1, ry1 = vertex_offset(first, cos_a, sin_a, half_length, half_width)
     rx2, ry2 = vertex_offset(second, cos_a, sin_a, half_length, half_width)
-    u1_before = vy + spin * rx1
-    u2_before = vy + spin * rx2
-    # 1. integrate velocities
-    vy = vy + gravity * h
-    # 2. contact velocities, speculative targets
-    target1 = -max(y + ry1, 0.0) / h
-    target2 = -max(y + ry2, 0.0) / h
-    vx, vy, spin, lam1, lam2 = solve_contact_velocities(vx, vy, spin, rx1, ry1, rx2, ry2, True, target1,
-                                                         target2, friction, inv_mass, inv_inertia,
-                                                         use_friction, iterations)
-    # 3. restitution for corners that hit faster than the threshold; the other loaded corner is
-    #    kept from approaching, so a bounce at one corner cannot drive the other into the floor
+    return rx1, ry1, rx2, ry2
+
+
+@numba.njit(cache=True)
+def apply_restitution(vy, spin, rx1, rx2, u1_before, u2_before, target1, target2, lam1, lam2, restitution,
+                      threshold, inv_mass, inv_inertia):
+    """Corners that hit faster than the threshold and were stopped bounce back: u_n+ = -e u_n-.
+    The other loaded corner keeps its target, so a bounce at one corner cannot drive the other into
+    the floor. Returns (vy, spin, approach speed of the fastest such corner, 0 if none)."""
     bounce1 = lam1 > 0.0 and u1_before < -threshold
     bounce2 = lam2 > 0.0 and u2_before < -threshold
-    approach = 0.0
-    if bounce1 or bounce2:
-        approach = max(-u1_before if bounce1 else 0.0, -u2_before if bounce2 else 0.0)
-        if restitution > 0.0:
-            k11, k12, k22 = delassus(rx1, rx2, inv_mass, inv_inertia)
-            new1, new2 = normal_impulses(vy + spin * rx1, vy + spin * rx2,
-                                         -restitution * u1_before if bounce1 else target1,
-                                         -restitution * u2_before if bounce2 else target2,
-                                         lam1, lam2, k11, k12, k22, lam1 > 0.0, lam2 > 0.0)
-            vy = vy + (new1 - lam1 + new2 - lam2) * inv_mass
-            spin = spin + (rx1 * (new1 - lam1) + rx2 * (new2 - lam2)) * inv_inertia
-    # 4. integrate positions
-    x = x + h * vx
-    y = y + h * vy
-    angle = angle + h * spin
-    # 5. penalty: implicit correction of what penetrates
-    cos_a = math.cos(angle)
-    sin_a = math.sin(angle)
-    first, second = lowest_face(cos_a, sin_a, half_length, half_width)
-    rx1, ry1 = vertex_offset(first, cos_a, sin_a, half_length, half_width)
-    rx2, ry2 = vertex_offset(second, cos_a, sin_a, half_length, half_width)
-    penetration = max(-(y + ry1), 0.0)
-    if use_penalty:
-        y, angle = correct_penetration(y, angle, -(y + ry1) - slop, -(y + ry2) - slop, rx1, rx2, stiffness, h,
-                                       inv_mass, inv_inertia)
-    held = lam1 > 0.0 or lam2 > 0.0 or penetration > 0.0
-    return x, y, angle, vx, vy, spin, held, approach, penetration
+    if not (bounce1 or bounce2):
+        return vy, spin, 0.0
+    approach = max(-u1_before if bounce1 else 0.0, -u2_before if bounce2 else 0.0)
+    if restitution > 0.0:
+        k11, k12, k22 = delassus(rx1, rx2, inv_mass, inv_inertia)
+        new1, new2 = normal_impulses(vy + spin * rx1, vy + spin * rx2,
+                                     -restitution * u1_before if bounce1 else target1,
+                                     -restitution * u2_before if bounce2 else target2,
+                                     lam1, lam2, k11, k12, k22, lam1 > 0.0, lam2 > 0.0)
+        vy = vy + (new1 - lam1 + new2 - lam2) * inv_mass
+        spin = spin + (rx1 * (new1 - lam1) + rx2 * (new2 - lam2)) * inv_inertia
+    return vy, spin, approach
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def is_finite_state(x, y, angle, vx, vy, spin):
     return (math.isfinite(x) and math.isfinite(y) and math.isfinite(angle) and math.isfinite(vx)
             and math.isfinite(vy) and math.isfinite(spin))
@@ -164,7 +144,6 @@ def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, para
     to ``settings[MAX_STEPS]`` grid steps, or until it sleeps when ``settings[UNTIL_REST]``.
     """
     PENALTY, FRICTION, RECORD, DIGEST = use_penalty, use_friction, record, source_digest
-    ITERATIONS = FRICTION_ITERATIONS if use_friction else 1  # without friction the block is exact
 
     @numba.njit(cache=True, parallel=parallel)
     def run(state, params, settings, stats, trajectory, events):
@@ -204,8 +183,11 @@ def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, para
             n = 0  # last grid step reached (and recorded)
             t = 0.0
             in_flight = True
+            cos_a = math.cos(angle)
+            sin_a = math.sin(angle)
             while n < max_steps:
                 if in_flight:
+                    # ---- flight: closed form up to the first contact ----
                     tau, touched = time_to_contact(y, angle, vy, spin, hx, hy, gravity, end_time - t, tolerance)
                     # grid rows passed in this flight: up to the end, or to the last one before the contact
                     last = max_steps if not touched else min(np.int64(math.floor((t + tau) / dt)), max_steps)
@@ -214,6 +196,8 @@ def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, para
                             xr, yr, ar, vxr, vyr, wr = flight_state(x, y, angle, vx, vy, spin, gravity, row * dt - t)
                             store_state(trajectory, row, i, xr, yr, ar, vxr, vyr, wr)
                     x, y, angle, vx, vy, spin = flight_state(x, y, angle, vx, vy, spin, gravity, tau)
+                    cos_a = math.cos(angle)
+                    sin_a = math.sin(angle)
                     if not touched:
                         n = max_steps
                         t = end_time
@@ -224,9 +208,10 @@ def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, para
                     t = t + tau
                     if math.isnan(first_contact):
                         first_contact = t
+                    # ---- impact at the contact instant ----
                     vx, vy, spin, corners, approach, leaves = resolve_impact(
-                        y, angle, vx, vy, spin, hx, hy, inv_mass, inv_inertia, restitution, friction,
-                        threshold, simultaneous, FRICTION, ITERATIONS)
+                        y, cos_a, sin_a, vx, vy, spin, hx, hy, inv_mass, inv_inertia, restitution, friction,
+                        threshold, simultaneous)
                     if corners > 0 and approach > threshold:
                         if RECORD:
                             record_event(events, i, n_impacts, t, approach, corners)
@@ -249,20 +234,55 @@ def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, para
                     h = (n + 1) * dt - t  # a partial step brings the box back onto the grid
                 else:
                     h = dt
-                # one contact step on the grid, split where the box turns fast
+                # ---- one contact step on the grid, split where the box turns fast ----
                 n_sub = min(max(np.int64(math.ceil(abs(spin) * h / MAX_ROTATION_PER_STEP)), 1), MAX_SUBSTEPS)
                 h_sub = h / n_sub
                 held = False
+                ry1 = ry2 = rx1 = rx2 = 0.0
                 for _ in range(n_sub):
-                    x, y, angle, vx, vy, spin, held_now, approach, penetration = contact_step(
-                        x, y, angle, vx, vy, spin, hx, hy, inv_mass, inv_inertia, restitution, friction,
-                        stiffness, gravity, h_sub, threshold, slop, FRICTION, PENALTY, ITERATIONS)
-                    held = held or held_now
-                    max_penetration = max(max_penetration, penetration)
+                    rx1, ry1, rx2, ry2 = contact_corners(y, cos_a, sin_a, vy, spin, hx, hy, gravity, h_sub)
+                    u1_before = vy + spin * rx1
+                    u2_before = vy + spin * rx2
+                    # 1. integrate velocities
+                    vy = vy + gravity * h_sub
+                    # 2. contact velocities: each corner may close its gap but not pass it
+                    target1 = -max(y + ry1, 0.0) / h_sub
+                    target2 = -max(y + ry2, 0.0) / h_sub
+                    if FRICTION:
+                        vx, vy, spin, lam1, lam2 = solve_contact_velocities(
+                            vx, vy, spin, rx1, ry1, rx2, ry2, True, target1, target2, friction, inv_mass,
+                            inv_inertia, FRICTION_ITERATIONS)
+                    else:
+                        vy, spin, lam1, lam2 = solve_normal_velocities(vy, spin, rx1, rx2, True, target1, target2,
+                                                                       inv_mass, inv_inertia)
+                    # 3. restitution
+                    vy, spin, approach = apply_restitution(vy, spin, rx1, rx2, u1_before, u2_before, target1,
+                                                           target2, lam1, lam2, restitution, threshold, inv_mass,
+                                                           inv_inertia)
                     if approach > 0.0:
                         if RECORD:
                             record_event(events, i, n_impacts, t, approach, 1)
                         n_impacts += 1
+                    # 4. integrate positions
+                    x = x + h_sub * vx
+                    y = y + h_sub * vy
+                    angle = angle + h_sub * spin
+                    cos_a = math.cos(angle)
+                    sin_a = math.sin(angle)
+                    first, second = lowest_face(cos_a, sin_a, hx, hy)
+                    rx1, ry1 = vertex_offset(first, cos_a, sin_a, hx, hy)
+                    rx2, ry2 = vertex_offset(second, cos_a, sin_a, hx, hy)
+                    penetration = -(y + ry1)
+                    max_penetration = max(max_penetration, penetration)
+                    # 5. penalty: implicit correction of what penetrates beyond the slop
+                    if PENALTY and penetration > slop + tolerance:
+                        y, angle = correct_penetration(y, angle, penetration - slop, -(y + ry2) - slop, rx1, rx2,
+                                                       stiffness, h_sub, inv_mass, inv_inertia)
+                        cos_a = math.cos(angle)
+                        sin_a = math.sin(angle)
+                        rx1, ry1 = vertex_offset(first, cos_a, sin_a, hx, hy)
+                        rx2, ry2 = vertex_offset(second, cos_a, sin_a, hx, hy)
+                    held = held or lam1 > 0.0 or lam2 > 0.0 or penetration > 0.0
                 n_steps += 1
                 n += 1
                 t = n * dt
@@ -273,7 +293,7 @@ def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, para
                     fail_step = n
                     break
                 if until_rest:
-                    if is_lying_still(y, angle, vx, vy, spin, hx, hy, sleep_speed):
+                    if lies_still(y, ry1, ry2, rx1, rx2, vx, vy, spin, hx, hy, sleep_speed):
                         still_for += h
                         if still_for >= sleep_time:
                             vx, vy, spin = 0.0, 0.0, 0.0

@@ -2,10 +2,9 @@
 
 import numpy as np
 import pytest
+from seed_reference import ReferenceBody, reference_step
 
 from box_toss_env.physics import Box, NonFiniteStateError, Scene, scenes, simulate
-
-from seed_reference import ReferenceBody, reference_step
 
 
 def run_reference(scene: Scene, steps: int) -> np.ndarray:

@@ -1,0 +1,138 @@
+"""Engine benchmark: ns per body-step for each solver on named scenes, wall time per throw, and
+numba compile time cold and cached. Prints measured figures; asserts nothing.
+
+    python -m benchmarks.engine [--quick]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+from box_toss_env.physics import Box, Scene, Simulator, layout, make_settings, scenes
+
+
+def best_time(function, repeats: int) -> float:
+    """Minimum wall time of ``repeats`` calls after one warm-up call [s]."""
+    function()
+    best = np.inf
+    for _ in range(repeats):
+        start = time.perf_counter()
+        function()
+        best = min(best, time.perf_counter() - start)
+    return best
+
+
+def runner(scene: Scene, max_steps: int, until_rest: bool, parallel: bool | None = None, threads=None):
+    """A closure running ``scene`` on preallocated arrays, and its stats array."""
+    simulator = Simulator.for_scene(scene, parallel=parallel, threads=threads)
+    initial = scene.initial_state()
+    params = scene.body_params()
+    settings = make_settings(scene, max_steps, until_rest)
+    stats = np.zeros((scene.n_bodies, layout.STATS_SIZE))
+    state = initial.copy()
+
+    def run():
+        state[:] = initial
+        simulator.run(state, params, settings, stats)
+
+    return run, stats
+
+
+def many(scene: Scene, n: int, spread: float = 1e-3) -> Scene:
+    """``n`` copies of a one-box scene, each nudged so no two are identical."""
+    box = scene.boxes[0]
+    boxes = tuple(Box(length=box.length, width=box.width, mass=box.mass,
+                      position=(box.position[0], box.position[1] + spread * k / n), angle=box.angle,
+                      velocity=box.velocity, spin=box.spin) for k in range(n))
+    return scene.replace(boxes=boxes)
+
+
+STEP_SCENES = {
+    "flight": lambda solver: scenes.free_flight(solver=solver, dt=1 / 256),
+    "resting": lambda solver: scenes.resting(solver=solver, dt=1 / 256, restitution=0.3, friction=0.5,
+                                             penalty_stiffness=1e4),
+    "toss": lambda solver: scenes.toss(solver=solver, dt=1 / 256, penalty_stiffness=1e4),
+}
+
+
+def step_costs(repeats: int, steps: int) -> list[tuple]:
+    """ns per body-step for one box and for 1,024 boxes, per solver and scene (fixed length runs)."""
+    rows = []
+    for solver in ("seed", "robust"):
+        for name, make in STEP_SCENES.items():
+            scene = make(solver)
+            one, _ = runner(scene, steps, until_rest=False)
+            batch_scene = many(scene, 1024)
+            batch, _ = runner(batch_scene, steps // 8, until_rest=False, parallel=True)
+            rows.append((solver, name, best_time(one, repeats) / steps * 1e9,
+                         best_time(batch, repeats) / (1024 * (steps // 8)) * 1e9))
+    return rows
+
+
+def throw_costs(repeats: int) -> list[tuple]:
+    """Wall time per throw, simulated until rest (at most 10 s), one box at a time."""
+    rows = []
+    for solver, dt in (("robust", 1 / 256), ("robust", 1 / 1024), ("seed", 1 / 256), ("seed", 1 / 1024)):
+        scene = scenes.toss(solver=solver, dt=dt, penalty_stiffness=1e4)
+        run, stats = runner(scene, int(10 / dt), until_rest=True)
+        seconds = best_time(run, repeats)
+        rows.append((solver, dt, seconds * 1e6, int(stats[0, layout.N_STEPS]),
+                     stats[0, layout.REST_TIME]))
+    return rows
+
+
+COMPILE_PROBE = """
+import time
+start = time.perf_counter()
+from box_toss_env.physics import scenes, simulate
+imported = time.perf_counter()
+simulate(scenes.toss(), duration=3.0, until_rest=True)
+first = time.perf_counter()
+simulate(scenes.toss(), duration=3.0, until_rest=True)
+second = time.perf_counter()
+print(imported - start, (first - imported) - (second - first))
+"""
+
+
+def compile_times() -> tuple[float, float, float]:
+    """(import s, first-call compile s with an empty cache, the same with the cache warm), each
+    in a fresh interpreter with its own numba cache directory."""
+    with tempfile.TemporaryDirectory() as cache:
+        env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+        figures = []
+        for _ in range(2):
+            out = subprocess.run([sys.executable, "-c", COMPILE_PROBE], env=env, capture_output=True, text=True,
+                                 check=True).stdout.split()
+            figures.append((float(out[0]), float(out[1])))
+    return figures[1][0], figures[0][1], figures[1][1]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--quick", action="store_true", help="fewer repeats and steps")
+    args = parser.parse_args()
+    repeats, steps = (3, 2048) if args.quick else (7, 16384)
+    import numba
+
+    print(f"numba {numba.__version__}, {numba.get_num_threads()} threads, {os.cpu_count()} cores")
+    print("\nns per body-step (fixed-length runs, dt = 1/256 s; robust flight is closed form, not stepped)")
+    print(f"{'solver':8} {'scene':8} {'1 box':>10} {'1024 boxes':>11}")
+    for solver, name, one, batch in step_costs(repeats, steps):
+        print(f"{solver:8} {name:8} {one:10.1f} {batch:11.1f}")
+    print("\nwall time per throw (typical toss, simulated until at rest, at most 10 s)")
+    print(f"{'solver':8} {'dt [s]':>10} {'us/throw':>10} {'steps':>7} {'rest at [s]':>12}")
+    for solver, dt, micros, n_steps, rest in throw_costs(repeats):
+        print(f"{solver:8} {dt:10.6f} {micros:10.1f} {n_steps:7d} {rest:12.3f}")
+    imported, cold, warm = compile_times()
+    print(f"\nimport {imported:.2f} s; compile of the robust toss kernel: {cold:.2f} s cold, {warm:.2f} s from cache")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,408 @@
+"""``BoxToss-v0``: throw a box so that it comes to rest at a target, on a chosen face."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from gymnasium.error import ResetNeeded
+
+from box_toss_env.envs import task
+from box_toss_env.physics import Box, KernelFlags, Scene, Simulator, check_finite_stats, layout, make_settings
+from box_toss_env.physics.validation import check_range
+
+RENDER_MODES = ("human", "rgb_array", "rgb_array_list")
+
+
+class BoxTossEnv(gym.Env):
+    r"""Throw a 2D box onto a floor so that it comes to rest at a target, with a chosen face down.
+
+    ## Description
+
+    A rigid box (40 x 20 cm, 2 kg by default) is in the thrower's hand, at a release point and angle
+    drawn at reset. The agent chooses one throw: the launch speed, its direction and the spin. The
+    throw is simulated by BoxToss's engine (``box_toss_env.physics``) until the box lies still on
+    the floor: it flies, hits the floor, may bounce, slide and tumble, and comes to rest. The agent is
+    rewarded for how close to the target it comes to rest and for ending on one of the target faces.
+    Each episode is a single step (a contextual bandit with continuous actions): the observation
+    after the reset is the box in the hand and the target, the one after the step the final state.
+
+    The box's faces are told apart (they are coloured in renders): numbered by their outward normal in
+    the box's own frame, face 0 is local -y (the bottom at angle 0, drawn with a thick red stripe),
+    face 1 is +x, face 2 is +y (the top at angle 0), face 3 is -x. The box's length runs along its
+    local x axis, so faces 0 and 2 are its long sides and faces 1 and 3 its short ends. The target
+    kind (``target_face``) says which faces may end down: any face, a long side, a short end, one
+    exact face drawn per episode ("this side up"), or a mix of these drawn per episode.
+
+    ## Action Space
+
+    ``Box(-1, 1, (3,), float32)``. Each component is mapped linearly onto its range; values outside
+    [-1, 1] are clipped to it (a NaN or infinite value, or a wrong shape, raises ``ValueError``).
+
+    | Num | Action                               | Min (-1)                    | Max (+1)                    | Unit  |
+    |-----|--------------------------------------|-----------------------------|-----------------------------|-------|
+    | 0   | launch speed                         | 0                           | ``max_speed`` (8)           | m/s   |
+    | 1   | launch direction above the horizontal| ``launch_angle_range[0]`` (-pi/4) | ``launch_angle_range[1]`` (pi/2) | rad |
+    | 2   | spin (counter-clockwise positive)    | -``max_spin`` (-20)         | ``max_spin`` (20)           | rad/s |
+
+    The launch velocity is ``speed * (cos(direction), sin(direction))``; positive x points towards the
+    targets.
+
+    ## Observation Space
+
+    ``Box(low, high, (12,), float32)``, or ``(15,)`` with ``observe_dynamics=True``. Before the throw
+    it holds the box in the hand (velocities 0), after it the state the throw ended in.
+
+    | Num | Observation                                   | Min                         | Max                            | Unit   |
+    |-----|-----------------------------------------------|-----------------------------|--------------------------------|--------|
+    | 0   | x of the box's centre                         | release x min - R           | release x max + R              | m      |
+    | 1   | y of the box's centre (floor at y = 0)        | -corner radius              | 2 e / g + corner radius        | m      |
+    | 2   | cos(angle)                                    | -1                          | 1                              |        |
+    | 3   | sin(angle), angle counter-clockwise           | -1                          | 1                              |        |
+    | 4   | x velocity                                    | -V                          | V                              | m/s    |
+    | 5   | y velocity                                    | -V                          | V                              | m/s    |
+    | 6   | spin                                          | -V / sqrt(I/m)              | V / sqrt(I/m)                  | rad/s  |
+    | 7   | target x (where the centre should rest)       | ``target_x_range[0]``       | ``target_x_range[1]``          | m      |
+    | 8-11| 1 if face 0, 1, 2, 3 may end down, else 0     | 0                           | 1                              |        |
+    | 12  | mass (with ``observe_dynamics``)              | ``mass_range[0]``           | ``mass_range[1]``              | kg     |
+    | 13  | friction coefficient (``observe_dynamics``)   | ``friction_range[0]``       | ``friction_range[1]``          |        |
+    | 14  | restitution (``observe_dynamics``)            | ``restitution_range[0]``    | ``restitution_range[1]``       |        |
+
+    The bounds follow from energy: a throw has at most
+    ``e = max_speed^2 / 2 + (I/m) max_spin^2 / 2 + g * release_height_range[1]`` of energy per unit mass
+    (``I/m = (L^2 + W^2) / 12``) and contacts only take energy away, so ``V = 2 sqrt(2 e)`` (twice the
+    largest possible speed) and ``R = V * max_sim_time`` bound what a throw can reach (about 20 m/s,
+    156 rad/s, 10.5 m and 200 m with the defaults). Nothing is clipped.
+
+    ## Rewards
+
+    Computed from the final pose, after the throw (``landing_reward`` returns it with its terms):
+
+        reward = reward_distance + reward_orientation + reward_success
+        reward_distance    = -distance_weight * |x - target_x|           (distance_weight = 1 per m)
+        reward_orientation = -orientation_weight * orientation_error     (orientation_weight = 0.5 per rad)
+        reward_success     = success_bonus * success                     (success_bonus = 1)
+
+    ``orientation_error`` in [0, pi] is how far the box must turn until one of its target faces lies
+    flat on the floor, ``min over target faces f of |wrap(angle + f pi/2)|`` (0 when a target face is
+    down). ``success`` is True when the box came to rest, ``|x - target_x| <= position_tolerance``
+    (0.1 m) and a target face is down. The three terms are in ``info`` under their names, and
+    ``reward`` is exactly their sum (in the order above). Rewards lie in [-(distance_weight * D +
+    orientation_weight * pi), success_bonus] with D the largest possible distance.
+
+    ## Starting State
+
+    The box is at rest in the hand: centre x uniform in ``release_x_range`` ((-0.1, 0.1) m), height
+    uniform in ``release_height_range`` ((1.2, 1.6) m), angle uniform in ``release_angle_range``
+    ((-0.3, 0.3) rad). The target x is uniform in ``target_x_range`` ((1, 4) m) and the target faces
+    follow ``target_face``. With ``mass_range``, ``friction_range`` or ``restitution_range`` given,
+    those are drawn uniformly at every reset (domain randomisation). All draws come from
+    ``self.np_random`` (one call per reset).
+
+    ## Episode End
+
+    Every episode is one step and ends with ``terminated=True`` (never ``truncated``: the end of a
+    throw is the end of the task, not a time limit, so it is not bootstrapped). The throw is simulated
+    until the box has lain still on a face for the solver's sleep time (0.2 s below 0.01 m/s), or for
+    ``max_sim_time`` (10 s) of simulated time at most; ``info["at_rest"]`` tells which. Calling
+    ``step`` again before ``reset`` raises ``gymnasium.error.ResetNeeded``. If the solver diverges
+    (possible only with ``solver="seed"`` and a too large ``dt`` for ``penalty_stiffness``), ``step``
+    raises ``box_toss_env.physics.NonFiniteStateError`` instead of returning non-finite values.
+
+    ``info`` after ``reset``: ``target_x``, ``target_faces`` (4 flags), ``release_x``, ``release_y``,
+    ``release_angle``, ``mass``, ``friction``, ``restitution`` (drawn even when hidden from the
+    observation). ``info`` after ``step``, all Python scalars: the final pose ``final_x``, ``final_y``
+    [m], ``final_angle`` [rad, wrapped to [-pi, pi)], ``face_down`` (0-3), ``at_rest``, ``success``,
+    ``distance`` [m], ``orientation_error`` [rad], ``flight_time`` [s] (release to first floor contact;
+    the whole simulated time if the box never touched the floor), ``n_impacts``, ``n_steps`` (time
+    steps integrated), ``max_penetration`` [m], ``sim_time`` [s] (simulated time to rest or to the
+    limit), the three reward terms, and ``target_x``, ``mass``, ``friction``, ``restitution``.
+
+    ## Arguments
+
+    ``gymnasium.make("BoxToss-v0", **kwargs)``; every argument is validated (a ``ValueError`` names it).
+
+    | Argument               | Default           | Meaning                                                         |
+    |------------------------|-------------------|-----------------------------------------------------------------|
+    | ``box_length``         | 0.4               | box size along its local x [m] (faces 1 and 3 are its ends)     |
+    | ``box_width``          | 0.2               | box size along its local y [m]                                  |
+    | ``mass``               | 2.0               | box mass [kg]; inertia is that of a uniform box                 |
+    | ``friction``           | 0.5               | Coulomb friction coefficient with the floor                     |
+    | ``restitution``        | 0.3               | coefficient of restitution with the floor, in [0, 1]            |
+    | ``penalty_stiffness``  | 1e5               | stiffness of the penetration correction [N/m]                   |
+    | ``gravity``            | 9.81              | gravitational acceleration, pointing down [m/s^2]               |
+    | ``release_x_range``    | (-0.1, 0.1)       | release x of the box's centre [m]                               |
+    | ``release_height_range``| (1.2, 1.6)       | release height of the centre [m], above the corner radius       |
+    | ``release_angle_range``| (-0.3, 0.3)       | release angle [rad], within [-pi, pi]                           |
+    | ``target_x_range``     | (1.0, 4.0)        | target x [m]                                                    |
+    | ``target_face``        | "any"             | "any", "long_side", "short_end", "exact" or "mixed"             |
+    | ``max_speed``          | 8.0               | launch speed at action[0] = 1 [m/s]                             |
+    | ``launch_angle_range`` | (-pi/4, pi/2)     | launch direction at action[1] = -1 and +1 [rad]                 |
+    | ``max_spin``           | 20.0              | spin at action[2] = 1 [rad/s]                                   |
+    | ``position_tolerance`` | 0.1               | success radius around the target [m]                            |
+    | ``distance_weight``    | 1.0               | weight of the distance term [1/m]                               |
+    | ``orientation_weight`` | 0.5               | weight of the orientation term [1/rad]                          |
+    | ``success_bonus``      | 1.0               | reward added on success                                         |
+    | ``mass_range``         | None              | (low, high) [kg]: draw the mass per episode (replaces ``mass``) |
+    | ``friction_range``     | None              | (low, high): draw the friction per episode                      |
+    | ``restitution_range``  | None              | (low, high) in [0, 1]: draw the restitution per episode         |
+    | ``observe_dynamics``   | False             | append mass, friction, restitution to the observation           |
+    | ``solver``             | "robust"          | "robust" (the engine's default) or "seed" (the explicit scheme) |
+    | ``dt``                 | 1/256             | solver time step [s]                                            |
+    | ``max_sim_time``       | 10.0              | simulated time after which a throw ends anyway [s]              |
+    | ``render_mode``        | None              | None, "human", "rgb_array" or "rgb_array_list"                  |
+    | ``render_fps``         | 30                | frame rate of "human" playback and "rgb_array_list" frames      |
+    | ``render_width``, ``render_height`` | 600, 400 | frame size [px]                                            |
+
+    Registered variants: ``BoxToss-LongSide-v0`` (``target_face="long_side"``),
+    ``BoxToss-ShortEnd-v0`` (``"short_end"``) and ``BoxToss-ThisSideUp-v0`` (``"exact"``).
+
+    Rendering (needs the ``render`` extra, ``pip install "box_toss_env[render]"``): ``"rgb_array"``
+    returns an (H, W, 3) uint8 frame of the current state; ``"human"`` opens a pygame window and plays
+    each throw in real time; ``"rgb_array_list"`` records each throw and ``render()`` returns the
+    frames since the last call (the box in the hand, then the whole throw at ``render_fps``), for
+    videos of whole throws (``box_toss_env.envs.record_throws`` writes them to a GIF or MP4). Only
+    the last two modes record trajectories, so training without them pays nothing for rendering.
+
+    ## Version History
+
+    * v0: initial version.
+    """
+
+    metadata = {"render_modes": list(RENDER_MODES), "render_fps": 30}
+
+    def __init__(
+        self,
+        render_mode: str | None = None,
+        *,
+        box_length: float = 0.4,
+        box_width: float = 0.2,
+        mass: float = 2.0,
+        friction: float = 0.5,
+        restitution: float = 0.3,
+        penalty_stiffness: float = 1e5,
+        gravity: float = 9.81,
+        release_x_range: tuple[float, float] = (-0.1, 0.1),
+        release_height_range: tuple[float, float] = (1.2, 1.6),
+        release_angle_range: tuple[float, float] = (-0.3, 0.3),
+        target_x_range: tuple[float, float] = (1.0, 4.0),
+        target_face: str = "any",
+        max_speed: float = 8.0,
+        launch_angle_range: tuple[float, float] = (-0.25 * math.pi, 0.5 * math.pi),
+        max_spin: float = 20.0,
+        position_tolerance: float = 0.1,
+        distance_weight: float = 1.0,
+        orientation_weight: float = 0.5,
+        success_bonus: float = 1.0,
+        mass_range: tuple[float, float] | None = None,
+        friction_range: tuple[float, float] | None = None,
+        restitution_range: tuple[float, float] | None = None,
+        observe_dynamics: bool = False,
+        solver: str = "robust",
+        dt: float = 1 / 256,
+        max_sim_time: float = 10.0,
+        render_fps: float = 30,
+        render_width: int = 600,
+        render_height: int = 400,
+    ):
+        if render_mode is not None and render_mode not in RENDER_MODES:
+            raise ValueError(f"render_mode must be None or one of {RENDER_MODES}, got {render_mode!r}")
+        self.render_mode = render_mode
+        self.config = task.make_task_config(
+            box_length=box_length, box_width=box_width, gravity=gravity, mass=mass, friction=friction,
+            restitution=restitution, penalty_stiffness=penalty_stiffness, mass_range=mass_range,
+            friction_range=friction_range, restitution_range=restitution_range,
+            release_x_range=release_x_range, release_height_range=release_height_range,
+            release_angle_range=release_angle_range, target_x_range=target_x_range, target_face=target_face,
+            max_speed=max_speed, launch_angle_range=launch_angle_range, max_spin=max_spin,
+            position_tolerance=position_tolerance, distance_weight=distance_weight,
+            orientation_weight=orientation_weight, success_bonus=success_bonus,
+            observe_dynamics=observe_dynamics, max_sim_time=max_sim_time)
+        config = self.config
+        # the engine validates the solver settings (dt, solver, material) and names what is wrong
+        scene = Scene(
+            boxes=(Box(length=box_length, width=box_width, mass=config.mass_range[1],
+                       position=(config.release_x_range[0], config.release_height_range[0])),),
+            dt=dt, gravity=-config.gravity, restitution=config.restitution_range[1],
+            friction=config.friction_range[1], penalty_stiffness=config.penalty_stiffness, solver=solver)
+        self.solver = scene.solver
+        self.dt = scene.dt
+        self.max_steps = max(1, math.ceil(config.max_sim_time / scene.dt - 1e-9))
+        self.flags = KernelFlags(solver=scene.solver, use_impulses=True, use_penalty=scene.has_penalty,
+                                 use_friction=config.friction_range[1] > 0.0, record=False, parallel=False)
+        self._settings = make_settings(scene, self.max_steps, until_rest=True)
+        self.render_fps = check_range("render_fps", render_fps, 0.0, 1000.0, low_open=True)
+        self.render_size = (_check_pixels("render_width", render_width),
+                            _check_pixels("render_height", render_height))
+        self.metadata = {**self.metadata, "render_fps": self.render_fps}
+
+        self.action_space = spaces.Box(-1.0, 1.0, shape=(task.ACTION_SIZE,), dtype=np.float32)
+        low, high = task.observation_bounds(config)
+        self.observation_space = spaces.Box(low, high, dtype=np.float32)
+
+        # per-episode arrays, allocated once: a throw only writes its six initial numbers
+        self._episodes = task.Episodes.empty(1)
+        self._params = np.zeros((1, layout.PARAM_SIZE))
+        self._state = np.zeros((1, layout.STATE_SIZE))
+        self._stats = np.zeros((1, layout.STATS_SIZE))
+        self._records = render_mode in ("human", "rgb_array_list")
+        self._trajectory = np.zeros((self.max_steps + 1, 1, layout.STATE_SIZE)) if self._records else None
+        self._events = np.zeros((1, layout.MAX_EVENTS, layout.EVENT_SIZE)) if self._records else None
+        self._needs_reset = True
+        self._renderer = None
+        self._frames: list[np.ndarray] = []
+        self._build_simulator()
+
+    def _build_simulator(self) -> None:
+        self._simulator = Simulator(dataclasses.replace(self.flags, record=self._records))
+
+    # -- the Gymnasium API ------------------------------------------------------------------------
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+        """Draw a release pose, a target and the dynamics; the box is at rest in the hand.
+        ``options`` is unused."""
+        super().reset(seed=seed)
+        episodes = task.sample_episodes(self.np_random, self.config, self._episodes)
+        task.write_body_params(self._params, episodes, self.config)
+        task.write_initial_states(self._state, episodes, None)
+        self._needs_reset = False
+        self._frames = []
+        if self.render_mode == "human":
+            self.render()
+        elif self.render_mode == "rgb_array_list":
+            self._frames.append(self._draw_state("in the hand"))
+        release = episodes.release[0]
+        mass, friction, restitution = episodes.dynamics[0]
+        info = {
+            "target_x": float(episodes.target_x[0]),
+            "target_faces": episodes.target_faces[0].astype(np.int8),
+            "release_x": float(release[0]),
+            "release_y": float(release[1]),
+            "release_angle": float(release[2]),
+            "mass": float(mass),
+            "friction": float(friction),
+            "restitution": float(restitution),
+        }
+        return task.observe(self._state, episodes, self.config)[0], info
+
+    def step(self, action):
+        """Throw the box with ``action`` and simulate until it rests (or ``max_sim_time``)."""
+        if self._needs_reset:
+            raise ResetNeeded("each BoxToss episode is a single throw: call reset() before step()")
+        actions = task.check_actions(action, self.action_space.shape)
+        velocities = task.actions_to_velocities(actions, self.config)
+        task.write_initial_states(self._state, self._episodes, velocities)
+        self._needs_reset = True
+        self._simulator.run(self._state, self._params, self._settings, self._stats, self._trajectory,
+                            self._events)
+        check_finite_stats(self._stats, self.solver)
+        stats = self._stats[0]
+        at_rest = not math.isnan(stats[layout.REST_TIME])
+        reward, terms, success, distance, orientation_error = self._landing(self._state, at_rest)
+        final = self._state[0]
+        episodes = self._episodes
+        mass, friction, restitution = episodes.dynamics[0]
+        flight_time = stats[layout.FIRST_CONTACT_TIME]
+        info = {
+            "final_x": float(final[layout.X]),
+            "final_y": float(final[layout.Y]),
+            "final_angle": float(task.wrap_angles(final[layout.ANGLE])),
+            "face_down": int(task.faces_down(final[layout.ANGLE:layout.ANGLE + 1])[0]),
+            "at_rest": at_rest,
+            "success": bool(success[0]),
+            "distance": float(distance[0]),
+            "orientation_error": float(orientation_error[0]),
+            "flight_time": float(stats[layout.END_TIME] if math.isnan(flight_time) else flight_time),
+            "n_impacts": int(stats[layout.N_IMPACTS]),
+            "n_steps": int(stats[layout.N_STEPS]),
+            "max_penetration": float(stats[layout.MAX_PENETRATION]),
+            "sim_time": float(stats[layout.END_TIME]),
+            **{name: float(value[0]) for name, value in terms.items()},
+            "target_x": float(episodes.target_x[0]),
+            "mass": float(mass),
+            "friction": float(friction),
+            "restitution": float(restitution),
+        }
+        if self.render_mode == "human":
+            self.render()
+        elif self.render_mode == "rgb_array_list":
+            self._frames += self._renderer_for_env().throw_frames(
+                self._throw_trajectory(), self.dt, float(episodes.target_x[0]), episodes.target_faces[0],
+                skip_first=True)
+        observation = task.observe(self._state, episodes, self.config)[0]
+        return observation, float(reward[0]), True, False, info
+
+    def landing_reward(self, final_state: np.ndarray, at_rest: bool) -> tuple[float, dict[str, float]]:
+        """The reward of the current episode's throw ending in ``final_state`` (x, y, angle, vx, vy,
+        spin) and its named terms (see Rewards); ``step`` returns exactly this."""
+        state = np.asarray(final_state, dtype=np.float64).reshape(1, layout.STATE_SIZE)
+        reward, terms, *_ = self._landing(state, at_rest)
+        return float(reward[0]), {name: float(value[0]) for name, value in terms.items()}
+
+    def _landing(self, states: np.ndarray, at_rest: bool):
+        return task.reward_terms(states, np.array([at_rest]), self._episodes, self.config)
+
+    # -- rendering --------------------------------------------------------------------------------
+    def render(self):
+        """See the class docstring: a frame ("rgb_array"), the frames since the last call
+        ("rgb_array_list"), or the window ("human", playing a throw that just happened)."""
+        if self.render_mode is None:
+            gym.logger.warn("render() was called without a render_mode; make the env with "
+                            'gymnasium.make("BoxToss-v0", render_mode="rgb_array") (or "human", "rgb_array_list")')
+            return None
+        if self.render_mode == "rgb_array":
+            return self._draw_state("after the throw" if self._needs_reset else "in the hand")
+        if self.render_mode == "rgb_array_list":
+            frames, self._frames = self._frames, []
+            return frames
+        renderer = self._renderer_for_env()
+        episodes = self._episodes
+        if self._needs_reset:  # a throw just happened: play it
+            renderer.play(self._throw_trajectory(), self.dt, float(episodes.target_x[0]), episodes.target_faces[0])
+        else:
+            renderer.show(self._state[0], float(episodes.target_x[0]), episodes.target_faces[0], "in the hand")
+        return None
+
+    def _draw_state(self, caption: str) -> np.ndarray:
+        episodes = self._episodes
+        return self._renderer_for_env().frame(self._state[0], float(episodes.target_x[0]),
+                                              episodes.target_faces[0], caption)
+
+    def _renderer_for_env(self):
+        if self._renderer is None:
+            from box_toss_env.envs.render import ThrowRenderer
+
+            self._renderer = ThrowRenderer(self.config, *self.render_size, fps=self.render_fps)
+        return self._renderer
+
+    def _throw_trajectory(self) -> np.ndarray:
+        """(T, 6) states of the last throw on the grid t = k dt, up to where it ended (the engine
+        writes rows up to the step where the box fell asleep; later rows are left unwritten)."""
+        recorded = int(self._stats[0, layout.N_RECORDED])
+        return self._trajectory[:recorded, 0]
+
+    def close(self):
+        """Close the window if one is open; safe to call more than once."""
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+    # -- pickling (subprocess vector envs): compiled kernels and pygame surfaces are rebuilt -------
+    def __getstate__(self):
+        state = self.__dict__.copy()
+        state["_simulator"] = None
+        state["_renderer"] = None
+        return state
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._build_simulator()
+
+
+def _check_pixels(name: str, value) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 16 <= value <= 8192:
+        raise ValueError(f"{name} must be an integer number of pixels in [16, 8192], got {value!r}")
+    return int(value)

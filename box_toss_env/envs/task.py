@@ -1,0 +1,387 @@
+"""The BoxToss task as pure, batch-first numpy functions.
+
+Every function works on a leading batch dimension ``n`` (a single environment is a batch of one),
+so the single env (``box_toss.BoxTossEnv``) and the batched vector env share this one copy of the
+task logic. The physics itself is the engine's (``box_toss_env.physics``); this module only says
+what is thrown, where it should land and how a landing is scored:
+
+1. ``sample_episodes``: draw release poses, targets and (optionally randomised) dynamics from one
+   ``np.random.Generator`` (one call per batch, so a seed fixes every episode);
+2. ``check_actions`` and ``actions_to_velocities``: validate actions in [-1, 1] and map them to the
+   launch velocity and spin; ``write_initial_states`` puts the box in the hand with that velocity;
+3. ``observe``: body state and target as float32, inside ``observation_bounds``;
+4. ``reward_terms``: the reward of a landing, its named terms and success.
+
+Faces are numbered by their outward normal in the body frame (as in ``physics.face_down`` and the
+renderer): 0 = local -y, 1 = +x, 2 = +y, 3 = -x. The box's length runs along local x, so faces 0
+and 2 are its long sides and faces 1 and 3 its short ends. Face f is down when the box's angle is
+-f pi/2 (mod 2 pi).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from box_toss_env.physics import layout
+from box_toss_env.physics.validation import check_range
+
+# -- target kinds: which faces may end down ------------------------------------------------------
+TARGET_FACE_KINDS = ("any", "long_side", "short_end", "exact", "mixed")
+"""Values of ``target_face``. "exact" draws one face per episode ("this side up"); "mixed" draws one
+of "any", "long_side", "short_end", "exact" per episode, uniformly."""
+FACE_SETS = {
+    "any": (1.0, 1.0, 1.0, 1.0),
+    "long_side": (1.0, 0.0, 1.0, 0.0),
+    "short_end": (0.0, 1.0, 0.0, 1.0),
+}
+_FACE_SET_TABLE = np.array([FACE_SETS["any"], FACE_SETS["long_side"], FACE_SETS["short_end"]])
+MIXED_KINDS = ("any", "long_side", "short_end", "exact")  # drawn uniformly by target_face="mixed"
+QUARTER_TURN = 0.5 * math.pi
+
+# -- the uniform variates one episode draws, in this order ----------------------------------------
+(U_RELEASE_X, U_RELEASE_HEIGHT, U_RELEASE_ANGLE, U_TARGET_X, U_TARGET_KIND, U_TARGET_FACE, U_MASS,
+ U_FRICTION, U_RESTITUTION) = range(9)
+N_UNIFORMS = 9  # every episode draws all of them, whatever the configuration, so streams stay aligned
+
+# -- observation columns --------------------------------------------------------------------------
+OBS_X, OBS_Y, OBS_COS, OBS_SIN, OBS_VX, OBS_VY, OBS_SPIN, OBS_TARGET_X = range(8)
+OBS_TARGET_FACES = slice(8, 12)  # 1.0 where that face may end down
+OBS_MASS, OBS_FRICTION, OBS_RESTITUTION = 12, 13, 14  # only with observe_dynamics
+OBS_SIZE = 12
+OBS_SIZE_WITH_DYNAMICS = 15
+
+# -- action columns -------------------------------------------------------------------------------
+ACT_SPEED, ACT_LAUNCH_ANGLE, ACT_SPIN = 0, 1, 2
+ACTION_SIZE = 3
+
+ENERGY_MARGIN = 2.0
+"""Observation bounds on speeds and distances are this factor above what the energy of the fastest
+throw allows (an exact solver never adds energy; the margin covers the seed scheme's small gains)."""
+
+
+@dataclass(frozen=True)
+class TaskConfig:
+    """Everything the task functions need, validated once (``make_task_config``). SI units.
+
+    Ranges are ``(low, high)`` tuples with low <= high; low == high fixes the value.
+    """
+
+    half_length: float  # [m] along the body's local x
+    half_width: float  # [m] along local y
+    gravity: float  # [m/s^2] magnitude, pointing down
+    mass_range: tuple[float, float]  # [kg]
+    friction_range: tuple[float, float]  # [-]
+    restitution_range: tuple[float, float]  # [-]
+    penalty_stiffness: float  # [N/m]
+    release_x_range: tuple[float, float]  # [m]
+    release_height_range: tuple[float, float]  # [m] of the box's centre
+    release_angle_range: tuple[float, float]  # [rad]
+    target_x_range: tuple[float, float]  # [m]
+    target_face: str
+    max_speed: float  # [m/s]
+    launch_angle_range: tuple[float, float]  # [rad] above the horizontal
+    max_spin: float  # [rad/s]
+    position_tolerance: float  # [m]
+    distance_weight: float  # [1/m]
+    orientation_weight: float  # [1/rad]
+    success_bonus: float  # [-]
+    observe_dynamics: bool
+    max_sim_time: float  # [s]
+
+    @property
+    def obs_size(self) -> int:
+        return OBS_SIZE_WITH_DYNAMICS if self.observe_dynamics else OBS_SIZE
+
+    @property
+    def corner_radius(self) -> float:
+        """Distance from the centre to a corner [m]."""
+        return math.hypot(self.half_length, self.half_width)
+
+    @property
+    def gyration_radius_squared(self) -> float:
+        """I / m = (L^2 + W^2) / 12 [m^2] for a uniform box, whatever its mass."""
+        return (self.half_length**2 + self.half_width**2) / 3.0
+
+
+@dataclass
+class Episodes:
+    """What is drawn at reset for a batch of n episodes (arrays, first axis the batch)."""
+
+    release: np.ndarray  # (n, 3): x [m], y [m], angle [rad] of the box in the hand
+    target_x: np.ndarray  # (n,) [m], where the box's centre should come to rest
+    target_faces: np.ndarray  # (n, 4) float64, 1.0 for each face that may end down
+    dynamics: np.ndarray  # (n, 3): mass [kg], friction [-], restitution [-]
+
+    @classmethod
+    def empty(cls, n: int) -> Episodes:
+        return cls(release=np.zeros((n, 3)), target_x=np.zeros(n), target_faces=np.ones((n, 4)),
+                   dynamics=np.zeros((n, 3)))
+
+
+# -- configuration ------------------------------------------------------------------------------
+def check_interval(name: str, value, low=-math.inf, high=math.inf, *, low_open=False) -> tuple[float, float]:
+    """``value`` as a (low, high) tuple of floats inside [low, high], with low <= high; else a
+    ValueError naming the parameter."""
+    try:
+        first, second = value
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a (low, high) pair of finite numbers, got {value!r}") from None
+    first = check_range(f"{name}[0]", first, low, high, low_open=low_open)
+    second = check_range(f"{name}[1]", second, low, high, low_open=low_open)
+    if first > second:
+        raise ValueError(f"{name} must have low <= high, got {value!r}")
+    return first, second
+
+
+def make_task_config(*, box_length, box_width, gravity, mass, friction, restitution, penalty_stiffness,
+                     mass_range, friction_range, restitution_range, release_x_range, release_height_range,
+                     release_angle_range, target_x_range, target_face, max_speed, launch_angle_range,
+                     max_spin, position_tolerance, distance_weight, orientation_weight, success_bonus,
+                     observe_dynamics, max_sim_time) -> TaskConfig:
+    """Validate the task's keyword arguments (ValueError naming the argument) into a TaskConfig.
+
+    The engine's own checks (``physics.Scene``) cover the material and solver settings; these
+    cover what only the task has. ``*_range=None`` fixes that quantity at its scalar argument.
+    """
+    box_length = check_range("box_length", box_length, 0.0, low_open=True)
+    box_width = check_range("box_width", box_width, 0.0, low_open=True)
+    gravity = check_range("gravity", gravity, 0.0, 1e4, low_open=True)
+    mass_range = ((check_range("mass", mass, 0.0, low_open=True),) * 2 if mass_range is None
+                  else check_interval("mass_range", mass_range, 0.0, low_open=True))
+    friction_range = ((check_range("friction", friction, 0.0),) * 2 if friction_range is None
+                      else check_interval("friction_range", friction_range, 0.0))
+    restitution_range = ((check_range("restitution", restitution, 0.0, 1.0),) * 2 if restitution_range is None
+                         else check_interval("restitution_range", restitution_range, 0.0, 1.0))
+    corner_radius = math.hypot(box_length, box_width) / 2
+    release_height_range = check_interval("release_height_range", release_height_range)
+    if release_height_range[0] <= corner_radius:
+        raise ValueError(
+            f"release_height_range must lie above the box's corner radius {corner_radius:g} m (so the box "
+            f"starts clear of the floor at any angle), got {release_height_range!r}")
+    if target_face not in TARGET_FACE_KINDS:
+        raise ValueError(f"target_face must be one of {TARGET_FACE_KINDS}, got {target_face!r}")
+    if not isinstance(observe_dynamics, (bool, np.bool_)):
+        raise ValueError(f"observe_dynamics must be True or False, got {observe_dynamics!r}")
+    return TaskConfig(
+        half_length=0.5 * box_length,
+        half_width=0.5 * box_width,
+        gravity=gravity,
+        mass_range=mass_range,
+        friction_range=friction_range,
+        restitution_range=restitution_range,
+        penalty_stiffness=check_range("penalty_stiffness", penalty_stiffness, 0.0),
+        release_x_range=check_interval("release_x_range", release_x_range, -1e3, 1e3),
+        release_height_range=release_height_range,
+        release_angle_range=check_interval("release_angle_range", release_angle_range, -math.pi, math.pi),
+        target_x_range=check_interval("target_x_range", target_x_range, -1e3, 1e3),
+        target_face=target_face,
+        max_speed=check_range("max_speed", max_speed, 0.0, 1e3, low_open=True),
+        launch_angle_range=check_interval("launch_angle_range", launch_angle_range, -math.pi, math.pi),
+        max_spin=check_range("max_spin", max_spin, 0.0, 1e4),
+        position_tolerance=check_range("position_tolerance", position_tolerance, 0.0, low_open=True),
+        distance_weight=check_range("distance_weight", distance_weight, 0.0),
+        orientation_weight=check_range("orientation_weight", orientation_weight, 0.0),
+        success_bonus=check_range("success_bonus", success_bonus, 0.0),
+        observe_dynamics=bool(observe_dynamics),
+        max_sim_time=check_range("max_sim_time", max_sim_time, 0.0, 1e4, low_open=True),
+    )
+
+
+# -- 1. sampling ---------------------------------------------------------------------------------
+def _scale(u: np.ndarray, interval: tuple[float, float]) -> np.ndarray:
+    low, high = interval
+    return low + u * (high - low)
+
+
+def sample_episodes(rng: np.random.Generator, config: TaskConfig, out: Episodes) -> Episodes:
+    """Draw ``len(out.target_x)`` episodes into ``out`` with one call to ``rng`` and return it.
+
+    Each value is uniform over its range: release x, height and angle, target x, the mass, friction
+    and restitution; the target faces follow ``config.target_face`` (see ``TARGET_FACE_KINDS``).
+    """
+    n = out.target_x.shape[0]
+    u = rng.random((n, N_UNIFORMS))
+    out.release[:, 0] = _scale(u[:, U_RELEASE_X], config.release_x_range)
+    out.release[:, 1] = _scale(u[:, U_RELEASE_HEIGHT], config.release_height_range)
+    out.release[:, 2] = _scale(u[:, U_RELEASE_ANGLE], config.release_angle_range)
+    out.target_x[:] = _scale(u[:, U_TARGET_X], config.target_x_range)
+    out.target_faces[:] = target_face_sets(config.target_face, u[:, U_TARGET_KIND], u[:, U_TARGET_FACE])
+    out.dynamics[:, 0] = _scale(u[:, U_MASS], config.mass_range)
+    out.dynamics[:, 1] = _scale(u[:, U_FRICTION], config.friction_range)
+    out.dynamics[:, 2] = _scale(u[:, U_RESTITUTION], config.restitution_range)
+    return out
+
+
+def target_face_sets(kind: str, u_kind: np.ndarray, u_face: np.ndarray) -> np.ndarray:
+    """(n, 4) masks of the faces that may end down, for the target kind ``kind``.
+
+    ``u_kind`` and ``u_face`` (n,) are uniform in [0, 1): ``u_face`` picks the face of "exact"
+    targets, ``u_kind`` the kind of "mixed" ones (``MIXED_KINDS``).
+    """
+    if kind in FACE_SETS:
+        return np.broadcast_to(np.array(FACE_SETS[kind]), (u_face.shape[0], 4))
+    one_face = np.minimum((u_face * 4).astype(np.int64), 3)
+    masks = np.zeros((u_face.shape[0], 4))
+    masks[np.arange(u_face.shape[0]), one_face] = 1.0
+    if kind == "mixed":
+        kinds = np.minimum((u_kind * len(MIXED_KINDS)).astype(np.int64), len(MIXED_KINDS) - 1)
+        is_set = kinds < len(_FACE_SET_TABLE)
+        masks[is_set] = _FACE_SET_TABLE[kinds[is_set]]
+    return masks
+
+
+def describe_target_faces(target_faces: np.ndarray) -> str:
+    """A short label for one (4,) mask: "any face", "a long side", "a short end" or "face 2"."""
+    mask = tuple(float(v) for v in target_faces)
+    for kind, label in (("any", "any face"), ("long_side", "a long side"), ("short_end", "a short end")):
+        if mask == FACE_SETS[kind]:
+            return label
+    return "face " + " or ".join(str(f) for f in range(4) if mask[f])
+
+
+def write_body_params(params: np.ndarray, episodes: Episodes, config: TaskConfig) -> np.ndarray:
+    """Fill the engine's body parameters (n, layout.PARAM_SIZE) for the drawn dynamics."""
+    mass = episodes.dynamics[:, 0]
+    params[:, layout.HALF_LENGTH] = config.half_length
+    params[:, layout.HALF_WIDTH] = config.half_width
+    params[:, layout.MASS] = mass
+    params[:, layout.INERTIA] = mass * config.gyration_radius_squared
+    params[:, layout.FRICTION] = episodes.dynamics[:, 1]
+    params[:, layout.RESTITUTION] = episodes.dynamics[:, 2]
+    params[:, layout.STIFFNESS] = config.penalty_stiffness
+    return params
+
+
+# -- 2. actions ----------------------------------------------------------------------------------
+def check_actions(actions, shape: tuple[int, ...]) -> np.ndarray:
+    """Actions as a float64 (n, 3) array clipped to [-1, 1]; a ValueError for a shape other than
+    ``shape`` ((3,) for a single env, (n, 3) for a batch) or a non-finite value (NaN, inf)."""
+    try:
+        array = np.asarray(actions, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"action must be an array of {ACTION_SIZE} finite numbers in [-1, 1] "
+                         f"(speed, launch angle, spin), got {actions!r}") from None
+    if array.shape != shape:
+        raise ValueError(f"action must have shape {shape} (speed, launch angle, spin, each in [-1, 1]), "
+                         f"got shape {array.shape}")
+    if not np.all(np.isfinite(array)):
+        raise ValueError(f"action must be finite (no NaN or inf), got {array.tolist()}")
+    return np.clip(array.reshape(-1, ACTION_SIZE), -1.0, 1.0)
+
+
+def actions_to_velocities(actions: np.ndarray, config: TaskConfig) -> np.ndarray:
+    """(n, 3) launch velocity vx, vy [m/s] and spin [rad/s] of actions (n, 3) in [-1, 1]:
+
+        speed = max_speed (a0 + 1) / 2,   theta = theta_lo + (theta_hi - theta_lo) (a1 + 1) / 2,
+        (vx, vy) = speed (cos theta, sin theta),   spin = max_spin a2.
+    """
+    speed = config.max_speed * 0.5 * (actions[:, ACT_SPEED] + 1.0)
+    low, high = config.launch_angle_range
+    theta = low + (high - low) * 0.5 * (actions[:, ACT_LAUNCH_ANGLE] + 1.0)
+    velocities = np.empty((actions.shape[0], 3))
+    velocities[:, 0] = speed * np.cos(theta)
+    velocities[:, 1] = speed * np.sin(theta)
+    velocities[:, 2] = config.max_spin * actions[:, ACT_SPIN]
+    return velocities
+
+
+def write_initial_states(states: np.ndarray, episodes: Episodes, velocities: np.ndarray | None) -> np.ndarray:
+    """The engine state (n, 6) of boxes in the hand: the release pose, moving at ``velocities``
+    (n, 3: vx, vy, spin), or at rest when None (before the throw)."""
+    states[:, layout.X] = episodes.release[:, 0]
+    states[:, layout.Y] = episodes.release[:, 1]
+    states[:, layout.ANGLE] = episodes.release[:, 2]
+    if velocities is None:
+        states[:, layout.VX:] = 0.0
+    else:
+        states[:, layout.VX:] = velocities
+    return states
+
+
+# -- 3. observations -----------------------------------------------------------------------------
+def observe(states: np.ndarray, episodes: Episodes, config: TaskConfig) -> np.ndarray:
+    """A new float32 (n, obs_size) array: x, y, cos(angle), sin(angle), vx, vy, spin, target x,
+    the four target-face flags, and with ``observe_dynamics`` the mass, friction and restitution."""
+    obs = np.empty((states.shape[0], config.obs_size), dtype=np.float32)
+    obs[:, OBS_X] = states[:, layout.X]
+    obs[:, OBS_Y] = states[:, layout.Y]
+    obs[:, OBS_COS] = np.cos(states[:, layout.ANGLE])
+    obs[:, OBS_SIN] = np.sin(states[:, layout.ANGLE])
+    obs[:, OBS_VX:OBS_SPIN + 1] = states[:, layout.VX:]
+    obs[:, OBS_TARGET_X] = episodes.target_x
+    obs[:, OBS_TARGET_FACES] = episodes.target_faces
+    if config.observe_dynamics:
+        obs[:, OBS_MASS:] = episodes.dynamics
+    return obs
+
+
+def observation_bounds(config: TaskConfig) -> tuple[np.ndarray, np.ndarray]:
+    """(low, high) float32 bounds that no observation leaves.
+
+    The energy per unit mass of a throw is at most
+        e = max_speed^2 / 2 + (I/m) max_spin^2 / 2 + g y_release_max,
+    and contacts never add energy, so every speed is below sqrt(2 e), the spin below
+    sqrt(2 e) / sqrt(I/m), the height below e / g, and the box cannot travel further than
+    sqrt(2 e) max_sim_time from where it was released. Each bound is ``ENERGY_MARGIN`` times that.
+    The centre cannot be lower than one corner radius below the floor (the whole box under it).
+    """
+    energy = (0.5 * config.max_speed**2 + 0.5 * config.gyration_radius_squared * config.max_spin**2
+              + config.gravity * config.release_height_range[1])
+    speed = ENERGY_MARGIN * math.sqrt(2.0 * energy)
+    spin = speed / math.sqrt(config.gyration_radius_squared)
+    reach = speed * config.max_sim_time
+    low = [config.release_x_range[0] - reach, -config.corner_radius, -1.0, -1.0, -speed, -speed, -spin,
+           config.target_x_range[0], 0.0, 0.0, 0.0, 0.0]
+    high = [config.release_x_range[1] + reach, ENERGY_MARGIN * energy / config.gravity + config.corner_radius,
+            1.0, 1.0, speed, speed, spin, config.target_x_range[1], 1.0, 1.0, 1.0, 1.0]
+    if config.observe_dynamics:
+        low += [config.mass_range[0], config.friction_range[0], config.restitution_range[0]]
+        high += [config.mass_range[1], config.friction_range[1], config.restitution_range[1]]
+    return np.array(low, dtype=np.float32), np.array(high, dtype=np.float32)
+
+
+# -- 4. reward -----------------------------------------------------------------------------------
+def faces_down(angles: np.ndarray) -> np.ndarray:
+    """(n,) int index of the face that points down at each angle (as ``physics.face_down``)."""
+    return np.rint(-angles / QUARTER_TURN).astype(np.int64) % 4
+
+
+def wrap_angles(angles: np.ndarray) -> np.ndarray:
+    """Angles wrapped to [-pi, pi)."""
+    return (angles + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def orientation_errors(angles: np.ndarray, target_faces: np.ndarray) -> np.ndarray:
+    """(n,) [rad] in [0, pi]: how far the box must turn until one of its target faces is flat down,
+    min over target faces f of |wrap(angle + f pi/2)|."""
+    errors = np.abs(wrap_angles(angles[:, None] + QUARTER_TURN * np.arange(4.0)))
+    return np.min(np.where(target_faces > 0.0, errors, math.pi), axis=1)
+
+
+REWARD_TERMS = ("reward_distance", "reward_orientation", "reward_success")
+
+
+def reward_terms(states: np.ndarray, at_rest: np.ndarray, episodes: Episodes, config: TaskConfig):
+    """Score landings. Returns (reward (n,), terms {name: (n,)}, success (n,) bool, distance (n,) [m],
+    orientation error (n,) [rad]), with
+
+        reward_distance    = -distance_weight    * |x - target_x|
+        reward_orientation = -orientation_weight * orientation error
+        reward_success     =  success_bonus      * success
+        reward             =  reward_distance + reward_orientation + reward_success,
+
+    success meaning at rest, |x - target_x| <= position_tolerance, and a target face down.
+    """
+    distance = np.abs(states[:, layout.X] - episodes.target_x)
+    orientation_error = orientation_errors(states[:, layout.ANGLE], episodes.target_faces)
+    success = at_rest & (distance <= config.position_tolerance) & (orientation_error < 0.5 * QUARTER_TURN)
+    terms = {
+        "reward_distance": 0.0 - config.distance_weight * distance,
+        "reward_orientation": 0.0 - config.orientation_weight * orientation_error,
+        "reward_success": config.success_bonus * success,
+    }
+    reward = terms["reward_distance"] + terms["reward_orientation"] + terms["reward_success"]
+    return reward, terms, success, distance, orientation_error
