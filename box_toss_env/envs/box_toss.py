@@ -12,10 +12,24 @@ from gymnasium import spaces
 from gymnasium.error import ResetNeeded
 
 from box_toss_env.envs import task
-from box_toss_env.physics import Box, KernelFlags, Scene, Simulator, check_finite_stats, layout, make_settings
+from box_toss_env.physics import (
+    Box,
+    KernelFlags,
+    Scene,
+    Simulator,
+    check_finite_stats,
+    face_down,
+    layout,
+    make_settings,
+)
 from box_toss_env.physics.validation import check_range
 
 RENDER_MODES = ("human", "rgb_array", "rgb_array_list")
+
+
+class EnergyGainError(FloatingPointError):
+    """A throw ended outside the observation bounds, which only a solver that creates energy can do
+    (``solver="seed"`` with a time step too large for the penalty stiffness). Nothing is clipped."""
 
 
 class BoxTossEnv(gym.Env):
@@ -109,9 +123,11 @@ class BoxTossEnv(gym.Env):
     throw is the end of the task, not a time limit, so it is not bootstrapped). The throw is simulated
     until the box has lain still on a face for the solver's sleep time (0.2 s below 0.01 m/s), or for
     ``max_sim_time`` (10 s) of simulated time at most; ``info["at_rest"]`` tells which. Calling
-    ``step`` again before ``reset`` raises ``gymnasium.error.ResetNeeded``. If the solver diverges
-    (possible only with ``solver="seed"`` and a too large ``dt`` for ``penalty_stiffness``), ``step``
-    raises ``box_toss_env.physics.NonFiniteStateError`` instead of returning non-finite values.
+    ``step`` again before ``reset`` raises ``gymnasium.error.ResetNeeded``. The explicit seed scheme
+    (``solver="seed"``) gains energy when ``dt`` is too large for ``penalty_stiffness`` (at the
+    default 1/256 s with 1e5 N/m it does; 1/1024 s is fine): ``step`` then raises
+    ``box_toss_env.envs.box_toss.EnergyGainError`` if the final state leaves the observation bounds,
+    and the engine's ``NonFiniteStateError`` if it diverges, rather than return such values.
 
     ``info`` after ``reset``: ``target_x``, ``target_faces`` (4 flags), ``release_x``, ``release_y``,
     ``release_angle``, ``mass``, ``friction``, ``restitution`` (drawn even when hidden from the
@@ -274,17 +290,16 @@ class BoxTossEnv(gym.Env):
             self.render()
         elif self.render_mode == "rgb_array_list":
             self._frames.append(self._draw_state("in the hand"))
-        release = episodes.release[0]
-        mass, friction, restitution = episodes.dynamics[0]
+        row = episodes.data[0]
         info = {
-            "target_x": float(episodes.target_x[0]),
-            "target_faces": episodes.target_faces[0].astype(np.int8),
-            "release_x": float(release[0]),
-            "release_y": float(release[1]),
-            "release_angle": float(release[2]),
-            "mass": float(mass),
-            "friction": float(friction),
-            "restitution": float(restitution),
+            "target_x": float(row[task.EP_TARGET_X]),
+            "target_faces": row[task.EP_TARGET_FACES].astype(np.int8),
+            "release_x": float(row[task.EP_RELEASE_X]),
+            "release_y": float(row[task.EP_RELEASE_Y]),
+            "release_angle": float(row[task.EP_RELEASE_ANGLE]),
+            "mass": float(row[task.EP_MASS]),
+            "friction": float(row[task.EP_FRICTION]),
+            "restitution": float(row[task.EP_RESTITUTION]),
         }
         return task.observe(self._state, episodes, self.config)[0], info
 
@@ -293,47 +308,56 @@ class BoxTossEnv(gym.Env):
         if self._needs_reset:
             raise ResetNeeded("each BoxToss episode is a single throw: call reset() before step()")
         actions = task.check_actions(action, self.action_space.shape)
-        velocities = task.actions_to_velocities(actions, self.config)
-        task.write_initial_states(self._state, self._episodes, velocities)
+        task.write_initial_states(self._state, self._episodes, task.actions_to_throws(actions, self.config))
         self._needs_reset = True
         self._simulator.run(self._state, self._params, self._settings, self._stats, self._trajectory,
                             self._events)
         check_finite_stats(self._stats, self.solver)
-        stats = self._stats[0]
-        at_rest = not math.isnan(stats[layout.REST_TIME])
+        (_, _, _, _, rest_time, end_time, _, _, _) = stats = self._stats[0].tolist()
+        at_rest = not math.isnan(rest_time)
         reward, terms, success, distance, orientation_error = self._landing(self._state, at_rest)
-        final = self._state[0]
-        episodes = self._episodes
-        mass, friction, restitution = episodes.dynamics[0]
+        x, y, angle, _, _, _ = self._state[0].tolist()
+        episode = self._episodes.data[0]
         flight_time = stats[layout.FIRST_CONTACT_TIME]
         info = {
-            "final_x": float(final[layout.X]),
-            "final_y": float(final[layout.Y]),
-            "final_angle": float(task.wrap_angles(final[layout.ANGLE])),
-            "face_down": int(task.faces_down(final[layout.ANGLE:layout.ANGLE + 1])[0]),
+            "final_x": x,
+            "final_y": y,
+            "final_angle": (angle + math.pi) % (2.0 * math.pi) - math.pi,
+            "face_down": face_down(angle),
             "at_rest": at_rest,
             "success": bool(success[0]),
             "distance": float(distance[0]),
             "orientation_error": float(orientation_error[0]),
-            "flight_time": float(stats[layout.END_TIME] if math.isnan(flight_time) else flight_time),
+            "flight_time": end_time if math.isnan(flight_time) else flight_time,
             "n_impacts": int(stats[layout.N_IMPACTS]),
             "n_steps": int(stats[layout.N_STEPS]),
-            "max_penetration": float(stats[layout.MAX_PENETRATION]),
-            "sim_time": float(stats[layout.END_TIME]),
+            "max_penetration": stats[layout.MAX_PENETRATION],
+            "sim_time": end_time,
             **{name: float(value[0]) for name, value in terms.items()},
-            "target_x": float(episodes.target_x[0]),
-            "mass": float(mass),
-            "friction": float(friction),
-            "restitution": float(restitution),
+            "target_x": float(episode[task.EP_TARGET_X]),
+            "mass": float(episode[task.EP_MASS]),
+            "friction": float(episode[task.EP_FRICTION]),
+            "restitution": float(episode[task.EP_RESTITUTION]),
         }
         if self.render_mode == "human":
             self.render()
         elif self.render_mode == "rgb_array_list":
             self._frames += self._renderer_for_env().throw_frames(
-                self._throw_trajectory(), self.dt, float(episodes.target_x[0]), episodes.target_faces[0],
+                self._throw_trajectory(), self.dt, info["target_x"], episode[task.EP_TARGET_FACES],
                 skip_first=True)
-        observation = task.observe(self._state, episodes, self.config)[0]
-        return observation, float(reward[0]), True, False, info
+        observation = task.observe(self._state, self._episodes, self.config)
+        if task.outside_bounds(observation, self.observation_space.low, self.observation_space.high)[0]:
+            raise EnergyGainError(self._bounds_message(observation[0]))
+        return observation[0], float(reward[0]), True, False, info
+
+    def _bounds_message(self, observation: np.ndarray) -> str:
+        space = self.observation_space
+        column = int(np.argmax(np.maximum(space.low - observation, observation - space.high)))
+        return (f"the throw ended with {task.OBSERVATION_NAMES[column]} = {observation[column]:g}, outside the "
+                f"observation bounds [{space.low[column]:g}, {space.high[column]:g}] that energy conservation "
+                f"guarantees: solver={self.solver!r} created energy. With the seed scheme use a smaller dt "
+                f"(dt={self.dt:g} s with penalty_stiffness={self.config.penalty_stiffness:g} N/m; e.g. 1/1024 s "
+                "for 1e5 N/m) or a softer penalty_stiffness, or solver='robust'")
 
     def landing_reward(self, final_state: np.ndarray, at_rest: bool) -> tuple[float, dict[str, float]]:
         """The reward of the current episode's throw ending in ``final_state`` (x, y, angle, vx, vy,
@@ -359,11 +383,11 @@ class BoxTossEnv(gym.Env):
             frames, self._frames = self._frames, []
             return frames
         renderer = self._renderer_for_env()
-        episodes = self._episodes
+        target_x, target_faces = float(self._episodes.target_x[0]), self._episodes.target_faces[0]
         if self._needs_reset:  # a throw just happened: play it
-            renderer.play(self._throw_trajectory(), self.dt, float(episodes.target_x[0]), episodes.target_faces[0])
+            renderer.play(self._throw_trajectory(), self.dt, target_x, target_faces)
         else:
-            renderer.show(self._state[0], float(episodes.target_x[0]), episodes.target_faces[0], "in the hand")
+            renderer.show(self._state[0], target_x, target_faces, "in the hand")
         return None
 
     def _draw_state(self, caption: str) -> np.ndarray:

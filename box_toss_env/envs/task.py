@@ -7,8 +7,8 @@ what is thrown, where it should land and how a landing is scored:
 
 1. ``sample_episodes``: draw release poses, targets and (optionally randomised) dynamics from one
    ``np.random.Generator`` (one call per batch, so a seed fixes every episode);
-2. ``check_actions`` and ``actions_to_velocities``: validate actions in [-1, 1] and map them to the
-   launch velocity and spin; ``write_initial_states`` puts the box in the hand with that velocity;
+2. ``check_actions`` and ``actions_to_throws``: validate actions in [-1, 1] and map them to the
+   launch speed, direction and spin; ``write_initial_states`` puts the box in the hand, thrown;
 3. ``observe``: body state and target as float32, inside ``observation_bounds``;
 4. ``reward_terms``: the reward of a landing, its named terms and success.
 
@@ -20,6 +20,7 @@ and 2 are its long sides and faces 1 and 3 its short ends. Face f is down when t
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -37,14 +38,20 @@ FACE_SETS = {
     "long_side": (1.0, 0.0, 1.0, 0.0),
     "short_end": (0.0, 1.0, 0.0, 1.0),
 }
-_FACE_SET_TABLE = np.array([FACE_SETS["any"], FACE_SETS["long_side"], FACE_SETS["short_end"]])
+FACE_SET_NAMES = ("any", "long_side", "short_end")
+_FACE_SET_TABLE = np.array([FACE_SETS[name] for name in FACE_SET_NAMES])
 MIXED_KINDS = ("any", "long_side", "short_end", "exact")  # drawn uniformly by target_face="mixed"
 QUARTER_TURN = 0.5 * math.pi
 
-# -- the uniform variates one episode draws, in this order ----------------------------------------
-(U_RELEASE_X, U_RELEASE_HEIGHT, U_RELEASE_ANGLE, U_TARGET_X, U_TARGET_KIND, U_TARGET_FACE, U_MASS,
- U_FRICTION, U_RESTITUTION) = range(9)
-N_UNIFORMS = 9  # every episode draws all of them, whatever the configuration, so streams stay aligned
+# -- what one episode draws: one row of ``Episodes.data`` per episode ----------------------------
+(EP_RELEASE_X, EP_RELEASE_Y, EP_RELEASE_ANGLE, EP_TARGET_X, EP_FACE_0, EP_FACE_1, EP_FACE_2, EP_FACE_3,
+ EP_MASS, EP_FRICTION, EP_RESTITUTION) = range(11)
+EPISODE_SIZE = 11
+EP_RELEASE = slice(EP_RELEASE_X, EP_RELEASE_ANGLE + 1)  # x [m], y [m], angle [rad] in the hand
+EP_TARGET_FACES = slice(EP_FACE_0, EP_FACE_3 + 1)  # 1.0 for each face that may end down
+EP_DYNAMICS = slice(EP_MASS, EP_RESTITUTION + 1)  # mass [kg], friction [-], restitution [-]
+# the uniform variates: one per column; the face columns' variates pick the target kind and face
+U_TARGET_KIND, U_TARGET_FACE = EP_FACE_0, EP_FACE_1
 
 # -- observation columns --------------------------------------------------------------------------
 OBS_X, OBS_Y, OBS_COS, OBS_SIN, OBS_VX, OBS_VY, OBS_SPIN, OBS_TARGET_X = range(8)
@@ -52,6 +59,8 @@ OBS_TARGET_FACES = slice(8, 12)  # 1.0 where that face may end down
 OBS_MASS, OBS_FRICTION, OBS_RESTITUTION = 12, 13, 14  # only with observe_dynamics
 OBS_SIZE = 12
 OBS_SIZE_WITH_DYNAMICS = 15
+# the observation's target and dynamics columns are the episode's columns from EP_TARGET_X on
+assert OBS_SIZE - OBS_TARGET_X == EP_MASS - EP_TARGET_X
 
 # -- action columns -------------------------------------------------------------------------------
 ACT_SPEED, ACT_LAUNCH_ANGLE, ACT_SPIN = 0, 1, 2
@@ -105,20 +114,53 @@ class TaskConfig:
         """I / m = (L^2 + W^2) / 12 [m^2] for a uniform box, whatever its mass."""
         return (self.half_length**2 + self.half_width**2) / 3.0
 
+    # constant arrays, computed once (the functions below run per step and stay cheap on small batches)
+    @functools.cached_property
+    def episode_low_span(self) -> tuple[np.ndarray, np.ndarray]:
+        """(EPISODE_SIZE,) low and high - low of each drawn column (0 for the face columns)."""
+        low, span = np.zeros(EPISODE_SIZE), np.zeros(EPISODE_SIZE)
+        for column, (a, b) in ((EP_RELEASE_X, self.release_x_range), (EP_RELEASE_Y, self.release_height_range),
+                               (EP_RELEASE_ANGLE, self.release_angle_range), (EP_TARGET_X, self.target_x_range),
+                               (EP_MASS, self.mass_range), (EP_FRICTION, self.friction_range),
+                               (EP_RESTITUTION, self.restitution_range)):
+            low[column], span[column] = a, b - a
+        return low, span
+
+    @functools.cached_property
+    def action_scale_offset(self) -> tuple[np.ndarray, np.ndarray]:
+        """(3,) scale and offset mapping actions in [-1, 1] to speed, launch angle and spin."""
+        low, high = self.launch_angle_range
+        scale = np.array([0.5 * self.max_speed, 0.5 * (high - low), self.max_spin])
+        offset = np.array([0.5 * self.max_speed, 0.5 * (high + low), 0.0])
+        return scale, offset
+
 
 @dataclass
 class Episodes:
-    """What is drawn at reset for a batch of n episodes (arrays, first axis the batch)."""
+    """What is drawn at reset for a batch of n episodes: one row of ``data`` (n, EPISODE_SIZE) per
+    episode, columns ``EP_*``. The properties are views of ``data``."""
 
-    release: np.ndarray  # (n, 3): x [m], y [m], angle [rad] of the box in the hand
-    target_x: np.ndarray  # (n,) [m], where the box's centre should come to rest
-    target_faces: np.ndarray  # (n, 4) float64, 1.0 for each face that may end down
-    dynamics: np.ndarray  # (n, 3): mass [kg], friction [-], restitution [-]
+    data: np.ndarray
 
     @classmethod
     def empty(cls, n: int) -> Episodes:
-        return cls(release=np.zeros((n, 3)), target_x=np.zeros(n), target_faces=np.ones((n, 4)),
-                   dynamics=np.zeros((n, 3)))
+        return cls(np.zeros((n, EPISODE_SIZE)))
+
+    @property
+    def release(self) -> np.ndarray:  # (n, 3): x [m], y [m], angle [rad] of the box in the hand
+        return self.data[:, EP_RELEASE]
+
+    @property
+    def target_x(self) -> np.ndarray:  # (n,) [m], where the box's centre should come to rest
+        return self.data[:, EP_TARGET_X]
+
+    @property
+    def target_faces(self) -> np.ndarray:  # (n, 4), 1.0 for each face that may end down
+        return self.data[:, EP_TARGET_FACES]
+
+    @property
+    def dynamics(self) -> np.ndarray:  # (n, 3): mass [kg], friction [-], restitution [-]
+        return self.data[:, EP_DYNAMICS]
 
 
 # -- configuration ------------------------------------------------------------------------------
@@ -191,27 +233,17 @@ def make_task_config(*, box_length, box_width, gravity, mass, friction, restitut
 
 
 # -- 1. sampling ---------------------------------------------------------------------------------
-def _scale(u: np.ndarray, interval: tuple[float, float]) -> np.ndarray:
-    low, high = interval
-    return low + u * (high - low)
-
-
 def sample_episodes(rng: np.random.Generator, config: TaskConfig, out: Episodes) -> Episodes:
-    """Draw ``len(out.target_x)`` episodes into ``out`` with one call to ``rng`` and return it.
+    """Draw ``len(out.data)`` episodes into ``out`` with one call to ``rng`` and return it.
 
     Each value is uniform over its range: release x, height and angle, target x, the mass, friction
     and restitution; the target faces follow ``config.target_face`` (see ``TARGET_FACE_KINDS``).
     """
-    n = out.target_x.shape[0]
-    u = rng.random((n, N_UNIFORMS))
-    out.release[:, 0] = _scale(u[:, U_RELEASE_X], config.release_x_range)
-    out.release[:, 1] = _scale(u[:, U_RELEASE_HEIGHT], config.release_height_range)
-    out.release[:, 2] = _scale(u[:, U_RELEASE_ANGLE], config.release_angle_range)
-    out.target_x[:] = _scale(u[:, U_TARGET_X], config.target_x_range)
-    out.target_faces[:] = target_face_sets(config.target_face, u[:, U_TARGET_KIND], u[:, U_TARGET_FACE])
-    out.dynamics[:, 0] = _scale(u[:, U_MASS], config.mass_range)
-    out.dynamics[:, 1] = _scale(u[:, U_FRICTION], config.friction_range)
-    out.dynamics[:, 2] = _scale(u[:, U_RESTITUTION], config.restitution_range)
+    u = rng.random(out.data.shape)
+    low, span = config.episode_low_span
+    np.multiply(u, span, out=out.data)
+    out.data += low
+    out.data[:, EP_TARGET_FACES] = target_face_sets(config.target_face, u[:, U_TARGET_KIND], u[:, U_TARGET_FACE])
     return out
 
 
@@ -222,7 +254,7 @@ def target_face_sets(kind: str, u_kind: np.ndarray, u_face: np.ndarray) -> np.nd
     targets, ``u_kind`` the kind of "mixed" ones (``MIXED_KINDS``).
     """
     if kind in FACE_SETS:
-        return np.broadcast_to(np.array(FACE_SETS[kind]), (u_face.shape[0], 4))
+        return _FACE_SET_TABLE[FACE_SET_NAMES.index(kind)]  # broadcasts over the batch
     one_face = np.minimum((u_face * 4).astype(np.int64), 3)
     masks = np.zeros((u_face.shape[0], 4))
     masks[np.arange(u_face.shape[0]), one_face] = 1.0
@@ -244,13 +276,13 @@ def describe_target_faces(target_faces: np.ndarray) -> str:
 
 def write_body_params(params: np.ndarray, episodes: Episodes, config: TaskConfig) -> np.ndarray:
     """Fill the engine's body parameters (n, layout.PARAM_SIZE) for the drawn dynamics."""
-    mass = episodes.dynamics[:, 0]
+    mass = episodes.data[:, EP_MASS]
     params[:, layout.HALF_LENGTH] = config.half_length
     params[:, layout.HALF_WIDTH] = config.half_width
     params[:, layout.MASS] = mass
-    params[:, layout.INERTIA] = mass * config.gyration_radius_squared
-    params[:, layout.FRICTION] = episodes.dynamics[:, 1]
-    params[:, layout.RESTITUTION] = episodes.dynamics[:, 2]
+    np.multiply(mass, config.gyration_radius_squared, out=params[:, layout.INERTIA])
+    params[:, layout.RESTITUTION] = episodes.data[:, EP_RESTITUTION]
+    params[:, layout.FRICTION] = episodes.data[:, EP_FRICTION]
     params[:, layout.STIFFNESS] = config.penalty_stiffness
     return params
 
@@ -267,37 +299,36 @@ def check_actions(actions, shape: tuple[int, ...]) -> np.ndarray:
     if array.shape != shape:
         raise ValueError(f"action must have shape {shape} (speed, launch angle, spin, each in [-1, 1]), "
                          f"got shape {array.shape}")
-    if not np.all(np.isfinite(array)):
+    if not np.isfinite(array).all():
         raise ValueError(f"action must be finite (no NaN or inf), got {array.tolist()}")
-    return np.clip(array.reshape(-1, ACTION_SIZE), -1.0, 1.0)
+    return np.minimum(np.maximum(array.reshape(-1, ACTION_SIZE), -1.0), 1.0)
 
 
-def actions_to_velocities(actions: np.ndarray, config: TaskConfig) -> np.ndarray:
-    """(n, 3) launch velocity vx, vy [m/s] and spin [rad/s] of actions (n, 3) in [-1, 1]:
+def actions_to_throws(actions: np.ndarray, config: TaskConfig) -> np.ndarray:
+    """(n, 3) launch speed [m/s], launch angle above the horizontal [rad] and spin [rad/s] of
+    actions (n, 3) in [-1, 1], each mapped linearly:
 
         speed = max_speed (a0 + 1) / 2,   theta = theta_lo + (theta_hi - theta_lo) (a1 + 1) / 2,
-        (vx, vy) = speed (cos theta, sin theta),   spin = max_spin a2.
+        spin = max_spin a2.
     """
-    speed = config.max_speed * 0.5 * (actions[:, ACT_SPEED] + 1.0)
-    low, high = config.launch_angle_range
-    theta = low + (high - low) * 0.5 * (actions[:, ACT_LAUNCH_ANGLE] + 1.0)
-    velocities = np.empty((actions.shape[0], 3))
-    velocities[:, 0] = speed * np.cos(theta)
-    velocities[:, 1] = speed * np.sin(theta)
-    velocities[:, 2] = config.max_spin * actions[:, ACT_SPIN]
-    return velocities
+    scale, offset = config.action_scale_offset
+    throws = actions * scale
+    throws += offset
+    return throws
 
 
-def write_initial_states(states: np.ndarray, episodes: Episodes, velocities: np.ndarray | None) -> np.ndarray:
-    """The engine state (n, 6) of boxes in the hand: the release pose, moving at ``velocities``
-    (n, 3: vx, vy, spin), or at rest when None (before the throw)."""
-    states[:, layout.X] = episodes.release[:, 0]
-    states[:, layout.Y] = episodes.release[:, 1]
-    states[:, layout.ANGLE] = episodes.release[:, 2]
-    if velocities is None:
+def write_initial_states(states: np.ndarray, episodes: Episodes, throws: np.ndarray | None) -> np.ndarray:
+    """The engine states (n, 6) of boxes in the hand at the release pose, thrown with ``throws``
+    (n, 3: speed, launch angle, spin; ``actions_to_throws``), i.e. moving at
+    speed (cos theta, sin theta) and spinning; at rest when ``throws`` is None (before the throw)."""
+    states[:, layout.X:layout.ANGLE + 1] = episodes.data[:, EP_RELEASE]
+    if throws is None:
         states[:, layout.VX:] = 0.0
-    else:
-        states[:, layout.VX:] = velocities
+        return states
+    speed, theta = throws[:, 0], throws[:, 1]
+    np.multiply(speed, np.cos(theta), out=states[:, layout.VX])
+    np.multiply(speed, np.sin(theta), out=states[:, layout.VY])
+    states[:, layout.SPIN] = throws[:, 2]
     return states
 
 
@@ -306,15 +337,11 @@ def observe(states: np.ndarray, episodes: Episodes, config: TaskConfig) -> np.nd
     """A new float32 (n, obs_size) array: x, y, cos(angle), sin(angle), vx, vy, spin, target x,
     the four target-face flags, and with ``observe_dynamics`` the mass, friction and restitution."""
     obs = np.empty((states.shape[0], config.obs_size), dtype=np.float32)
-    obs[:, OBS_X] = states[:, layout.X]
-    obs[:, OBS_Y] = states[:, layout.Y]
-    obs[:, OBS_COS] = np.cos(states[:, layout.ANGLE])
-    obs[:, OBS_SIN] = np.sin(states[:, layout.ANGLE])
+    obs[:, OBS_X:OBS_Y + 1] = states[:, layout.X:layout.Y + 1]
+    np.cos(states[:, layout.ANGLE], out=obs[:, OBS_COS])
+    np.sin(states[:, layout.ANGLE], out=obs[:, OBS_SIN])
     obs[:, OBS_VX:OBS_SPIN + 1] = states[:, layout.VX:]
-    obs[:, OBS_TARGET_X] = episodes.target_x
-    obs[:, OBS_TARGET_FACES] = episodes.target_faces
-    if config.observe_dynamics:
-        obs[:, OBS_MASS:] = episodes.dynamics
+    obs[:, OBS_TARGET_X:] = episodes.data[:, EP_TARGET_X:EP_TARGET_X + config.obs_size - OBS_TARGET_X]
     return obs
 
 
@@ -343,6 +370,15 @@ def observation_bounds(config: TaskConfig) -> tuple[np.ndarray, np.ndarray]:
     return np.array(low, dtype=np.float32), np.array(high, dtype=np.float32)
 
 
+OBSERVATION_NAMES = ("x", "y", "cos(angle)", "sin(angle)", "vx", "vy", "spin", "target x", "target face 0",
+                     "target face 1", "target face 2", "target face 3", "mass", "friction", "restitution")
+
+
+def outside_bounds(obs: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+    """(n,) bool: which observations (n, size) leave [low, high] somewhere."""
+    return ((obs < low) | (obs > high)).any(axis=1)
+
+
 # -- 4. reward -----------------------------------------------------------------------------------
 def faces_down(angles: np.ndarray) -> np.ndarray:
     """(n,) int index of the face that points down at each angle (as ``physics.face_down``)."""
@@ -354,11 +390,14 @@ def wrap_angles(angles: np.ndarray) -> np.ndarray:
     return (angles + math.pi) % (2.0 * math.pi) - math.pi
 
 
+_FACE_TURNS_PLUS_PI = QUARTER_TURN * np.arange(4.0) + math.pi
+
+
 def orientation_errors(angles: np.ndarray, target_faces: np.ndarray) -> np.ndarray:
     """(n,) [rad] in [0, pi]: how far the box must turn until one of its target faces is flat down,
     min over target faces f of |wrap(angle + f pi/2)|."""
-    errors = np.abs(wrap_angles(angles[:, None] + QUARTER_TURN * np.arange(4.0)))
-    return np.min(np.where(target_faces > 0.0, errors, math.pi), axis=1)
+    errors = np.abs((angles[:, None] + _FACE_TURNS_PLUS_PI) % (2.0 * math.pi) - math.pi)
+    return np.where(target_faces > 0.0, errors, math.pi).min(axis=1)
 
 
 REWARD_TERMS = ("reward_distance", "reward_orientation", "reward_success")
@@ -375,8 +414,8 @@ def reward_terms(states: np.ndarray, at_rest: np.ndarray, episodes: Episodes, co
 
     success meaning at rest, |x - target_x| <= position_tolerance, and a target face down.
     """
-    distance = np.abs(states[:, layout.X] - episodes.target_x)
-    orientation_error = orientation_errors(states[:, layout.ANGLE], episodes.target_faces)
+    distance = np.abs(states[:, layout.X] - episodes.data[:, EP_TARGET_X])
+    orientation_error = orientation_errors(states[:, layout.ANGLE], episodes.data[:, EP_TARGET_FACES])
     success = at_rest & (distance <= config.position_tolerance) & (orientation_error < 0.5 * QUARTER_TURN)
     terms = {
         "reward_distance": 0.0 - config.distance_weight * distance,
