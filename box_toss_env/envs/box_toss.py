@@ -90,7 +90,8 @@ class BoxTossEnv(gym.Env):
     ``e = max_speed^2 / 2 + (I/m) max_spin^2 / 2 + g * release_height_range[1]`` of energy per unit mass
     (``I/m = (L^2 + W^2) / 12``) and contacts only take energy away, so ``V = 2 sqrt(2 e)`` (twice the
     largest possible speed) and ``R = V * max_sim_time`` bound what a throw can reach (about 20 m/s,
-    156 rad/s, 10.5 m and 200 m with the defaults). Nothing is clipped.
+    156 rad/s, 10.6 m and 200 m with the defaults). Nothing is clipped: a throw ending outside the
+    bounds raises ``EnergyGainError`` (see Episode End).
 
     ## Rewards
 
