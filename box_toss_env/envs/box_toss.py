@@ -57,11 +57,12 @@ class BoxTossEnv(gym.Env):
     ``Box(-1, 1, (3,), float32)``. Each component is mapped linearly onto its range; values outside
     [-1, 1] are clipped to it (a NaN or infinite value, or a wrong shape, raises ``ValueError``).
 
-    | Num | Action                               | Min (-1)                    | Max (+1)                    | Unit  |
-    |-----|--------------------------------------|-----------------------------|-----------------------------|-------|
-    | 0   | launch speed                         | 0                           | ``max_speed`` (8)           | m/s   |
-    | 1   | launch direction above the horizontal| ``launch_angle_range[0]`` (-pi/4) | ``launch_angle_range[1]`` (pi/2) | rad |
-    | 2   | spin (counter-clockwise positive)    | -``max_spin`` (-20)         | ``max_spin`` (20)           | rad/s |
+    | Num | Action                                 | Min (at -1)                  | Max (at +1)                | Unit  |
+    |-----|----------------------------------------|------------------------------|----------------------------|-------|
+    | 0   | launch speed                           | 0                            | ``max_speed`` (8)          | m/s   |
+    | 1   | launch direction above the horizontal  | ``launch_angle_range[0]``    | ``launch_angle_range[1]``  | rad   |
+    |     |                                        | (-pi/4)                      | (pi/2)                     |       |
+    | 2   | spin, counter-clockwise positive       | -``max_spin`` (-20)          | ``max_spin`` (20)          | rad/s |
 
     The launch velocity is ``speed * (cos(direction), sin(direction))``; positive x points towards the
     targets.
@@ -71,20 +72,20 @@ class BoxTossEnv(gym.Env):
     ``Box(low, high, (12,), float32)``, or ``(15,)`` with ``observe_dynamics=True``. Before the throw
     it holds the box in the hand (velocities 0), after it the state the throw ended in.
 
-    | Num | Observation                                   | Min                         | Max                            | Unit   |
-    |-----|-----------------------------------------------|-----------------------------|--------------------------------|--------|
-    | 0   | x of the box's centre                         | release x min - R           | release x max + R              | m      |
-    | 1   | y of the box's centre (floor at y = 0)        | -corner radius              | 2 e / g + corner radius        | m      |
-    | 2   | cos(angle)                                    | -1                          | 1                              |        |
-    | 3   | sin(angle), angle counter-clockwise           | -1                          | 1                              |        |
-    | 4   | x velocity                                    | -V                          | V                              | m/s    |
-    | 5   | y velocity                                    | -V                          | V                              | m/s    |
-    | 6   | spin                                          | -V / sqrt(I/m)              | V / sqrt(I/m)                  | rad/s  |
-    | 7   | target x (where the centre should rest)       | ``target_x_range[0]``       | ``target_x_range[1]``          | m      |
-    | 8-11| 1 if face 0, 1, 2, 3 may end down, else 0     | 0                           | 1                              |        |
-    | 12  | mass (with ``observe_dynamics``)              | ``mass_range[0]``           | ``mass_range[1]``              | kg     |
-    | 13  | friction coefficient (``observe_dynamics``)   | ``friction_range[0]``       | ``friction_range[1]``          |        |
-    | 14  | restitution (``observe_dynamics``)            | ``restitution_range[0]``    | ``restitution_range[1]``       |        |
+    | Num  | Observation                               | Min                      | Max                       | Unit  |
+    |------|-------------------------------------------|--------------------------|---------------------------|-------|
+    | 0    | x of the box's centre                     | release x min - R        | release x max + R         | m     |
+    | 1    | y of the box's centre (floor at y = 0)    | -corner radius           | 2 e / g + corner radius   | m     |
+    | 2    | cos(angle)                                | -1                       | 1                         |       |
+    | 3    | sin(angle), angle counter-clockwise       | -1                       | 1                         |       |
+    | 4    | x velocity                                | -V                       | V                         | m/s   |
+    | 5    | y velocity                                | -V                       | V                         | m/s   |
+    | 6    | spin                                      | -V / sqrt(I/m)           | V / sqrt(I/m)             | rad/s |
+    | 7    | target x (where the centre should rest)   | ``target_x_range[0]``    | ``target_x_range[1]``     | m     |
+    | 8-11 | 1 if face 0, 1, 2, 3 may end down, else 0 | 0                        | 1                         |       |
+    | 12   | mass (only with ``observe_dynamics``)     | ``mass_range[0]``        | ``mass_range[1]``         | kg    |
+    | 13   | friction coefficient (idem)               | ``friction_range[0]``    | ``friction_range[1]``     |       |
+    | 14   | restitution (idem)                        | ``restitution_range[0]`` | ``restitution_range[1]``  |       |
 
     The bounds follow from energy: a throw has at most
     ``e = max_speed^2 / 2 + (I/m) max_spin^2 / 2 + g * release_height_range[1]`` of energy per unit mass

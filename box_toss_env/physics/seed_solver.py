@@ -109,10 +109,13 @@ def make_seed_kernel(use_impulses: bool, use_penalty: bool, use_friction: bool, 
     ``settings[MAX_STEPS]`` steps, or until it lies still on a face when ``settings[UNTIL_REST]``.
     """
     IMPULSES, PENALTY, FRICTION, RECORD, DIGEST = use_impulses, use_penalty, use_friction, record, source_digest
+    PARALLEL = parallel
 
     @numba.njit(cache=True, parallel=parallel)
     def run(state, params, settings, stats, trajectory, events):
-        _ = DIGEST  # the engine sources' digest: part of this kernel's on-disk cache key
+        # numba keys its on-disk cache on closure values, not on jit options: the sources' digest and
+        # the parallel flag must be closure values, or a stale or serial kernel would be loaded
+        _ = (DIGEST, PARALLEL)
         dt = settings[layout.DT]
         gravity = settings[layout.GRAVITY]
         max_steps = np.int64(settings[layout.MAX_STEPS])
