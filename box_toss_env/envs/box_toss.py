@@ -107,8 +107,7 @@ class BoxTossEnv(gym.Env):
     flat on the floor, ``min over target faces f of |wrap(angle + f pi/2)|`` (0 when a target face is
     down). ``success`` is True when the box came to rest, ``|x - target_x| <= position_tolerance``
     (0.1 m) and a target face is down. The three terms are in ``info`` under their names, and
-    ``reward`` is exactly their sum (in the order above). Rewards lie in [-(distance_weight * D +
-    orientation_weight * pi), success_bonus] with D the largest possible distance.
+    ``reward`` is exactly their sum (in the order above).
 
     ## Starting State
 
@@ -154,7 +153,7 @@ class BoxTossEnv(gym.Env):
     | ``penalty_stiffness``  | 1e5               | stiffness of the penetration correction [N/m]                   |
     | ``gravity``            | 9.81              | gravitational acceleration, pointing down [m/s^2]               |
     | ``release_x_range``    | (-0.1, 0.1)       | release x of the box's centre [m]                               |
-    | ``release_height_range``| (1.2, 1.6)       | release height of the centre [m], above the corner radius       |
+    | ``release_height_range`` | (1.2, 1.6)      | release height of the centre [m], above the corner radius       |
     | ``release_angle_range``| (-0.3, 0.3)       | release angle [rad], within [-pi, pi]                           |
     | ``target_x_range``     | (1.0, 4.0)        | target x [m]                                                    |
     | ``target_face``        | "any"             | "any", "long_side", "short_end", "exact" or "mixed"             |
@@ -183,8 +182,9 @@ class BoxTossEnv(gym.Env):
     returns an (H, W, 3) uint8 frame of the current state; ``"human"`` opens a pygame window and plays
     each throw in real time; ``"rgb_array_list"`` records each throw and ``render()`` returns the
     frames since the last call (the box in the hand, then the whole throw at ``render_fps``), for
-    videos of whole throws (``box_toss_env.envs.record_throws`` writes them to a GIF or MP4). Only
-    the last two modes record trajectories, so training without them pays nothing for rendering.
+    videos of whole throws (``box_toss_env.envs.record_throws`` writes them to a GIF or MP4;
+    Gymnasium's ``RecordVideo`` keeps only one frame per step). Only the last two modes record
+    trajectories, so training without them pays nothing for rendering.
 
     ## Version History
 
@@ -271,6 +271,7 @@ class BoxTossEnv(gym.Env):
         self._trajectory = np.zeros((self.max_steps + 1, 1, layout.STATE_SIZE)) if self._records else None
         self._events = np.zeros((1, layout.MAX_EVENTS, layout.EVENT_SIZE)) if self._records else None
         self._needs_reset = True
+        self._params_stale = True  # body parameters are written at the first reset, then per reset if drawn
         self._renderer = None
         self._frames: list[np.ndarray] = []
         self._build_simulator()
@@ -284,7 +285,9 @@ class BoxTossEnv(gym.Env):
         ``options`` is unused."""
         super().reset(seed=seed)
         episodes = task.sample_episodes(self.np_random, self.config, self._episodes)
-        task.write_body_params(self._params, episodes, self.config)
+        if self._params_stale or self.config.randomises_dynamics:
+            task.write_body_params(self._params, episodes, self.config)
+            self._params_stale = False
         task.write_initial_states(self._state, episodes, None)
         self._needs_reset = False
         self._frames = []
@@ -292,16 +295,16 @@ class BoxTossEnv(gym.Env):
             self.render()
         elif self.render_mode == "rgb_array_list":
             self._frames.append(self._draw_state("in the hand"))
-        row = episodes.data[0]
+        row = episodes.data[0].tolist()
         info = {
-            "target_x": float(row[task.EP_TARGET_X]),
-            "target_faces": row[task.EP_TARGET_FACES].astype(np.int8),
-            "release_x": float(row[task.EP_RELEASE_X]),
-            "release_y": float(row[task.EP_RELEASE_Y]),
-            "release_angle": float(row[task.EP_RELEASE_ANGLE]),
-            "mass": float(row[task.EP_MASS]),
-            "friction": float(row[task.EP_FRICTION]),
-            "restitution": float(row[task.EP_RESTITUTION]),
+            "target_x": row[task.EP_TARGET_X],
+            "target_faces": episodes.data[0, task.EP_TARGET_FACES].astype(np.int8),
+            "release_x": row[task.EP_RELEASE_X],
+            "release_y": row[task.EP_RELEASE_Y],
+            "release_angle": row[task.EP_RELEASE_ANGLE],
+            "mass": row[task.EP_MASS],
+            "friction": row[task.EP_FRICTION],
+            "restitution": row[task.EP_RESTITUTION],
         }
         return task.observe(self._state, episodes, self.config)[0], info
 
@@ -314,12 +317,14 @@ class BoxTossEnv(gym.Env):
         self._needs_reset = True
         self._simulator.run(self._state, self._params, self._settings, self._stats, self._trajectory,
                             self._events)
-        check_finite_stats(self._stats, self.solver)
-        (_, _, _, _, rest_time, end_time, _, _, _) = stats = self._stats[0].tolist()
+        stats = self._stats[0].tolist()
+        if stats[layout.STATUS] != layout.STATUS_OK:
+            check_finite_stats(self._stats, self.solver)  # raises NonFiniteStateError
+        rest_time, end_time = stats[layout.REST_TIME], stats[layout.END_TIME]
         at_rest = not math.isnan(rest_time)
         reward, terms, success, distance, orientation_error = self._landing(self._state, at_rest)
         x, y, angle, _, _, _ = self._state[0].tolist()
-        episode = self._episodes.data[0]
+        episode = self._episodes.data[0].tolist()
         flight_time = stats[layout.FIRST_CONTACT_TIME]
         info = {
             "final_x": x,
@@ -336,16 +341,16 @@ class BoxTossEnv(gym.Env):
             "max_penetration": stats[layout.MAX_PENETRATION],
             "sim_time": end_time,
             **{name: float(value[0]) for name, value in terms.items()},
-            "target_x": float(episode[task.EP_TARGET_X]),
-            "mass": float(episode[task.EP_MASS]),
-            "friction": float(episode[task.EP_FRICTION]),
-            "restitution": float(episode[task.EP_RESTITUTION]),
+            "target_x": episode[task.EP_TARGET_X],
+            "mass": episode[task.EP_MASS],
+            "friction": episode[task.EP_FRICTION],
+            "restitution": episode[task.EP_RESTITUTION],
         }
         if self.render_mode == "human":
             self.render()
         elif self.render_mode == "rgb_array_list":
             self._frames += self._renderer_for_env().throw_frames(
-                self._throw_trajectory(), self.dt, info["target_x"], episode[task.EP_TARGET_FACES],
+                self._throw_trajectory(), self.dt, info["target_x"], self._episodes.target_faces[0],
                 skip_first=True)
         observation = task.observe(self._state, self._episodes, self.config)
         if task.outside_bounds(observation, self.observation_space.low, self.observation_space.high)[0]:
@@ -380,7 +385,7 @@ class BoxTossEnv(gym.Env):
                             'gymnasium.make("BoxToss-v0", render_mode="rgb_array") (or "human", "rgb_array_list")')
             return None
         if self.render_mode == "rgb_array":
-            return self._draw_state("after the throw" if self._needs_reset else "in the hand")
+            return self._draw_state(self._caption())
         if self.render_mode == "rgb_array_list":
             frames, self._frames = self._frames, []
             return frames
@@ -391,6 +396,12 @@ class BoxTossEnv(gym.Env):
         else:
             renderer.show(self._state[0], target_x, target_faces, "in the hand")
         return None
+
+    def _caption(self) -> str:
+        if not self._needs_reset:
+            return "in the hand"
+        at_rest = not math.isnan(self._stats[0, layout.REST_TIME])
+        return f"after the throw ({'at rest' if at_rest else 'max_sim_time reached'})"
 
     def _draw_state(self, caption: str) -> np.ndarray:
         episodes = self._episodes

@@ -16,7 +16,9 @@ from box_toss_env.envs import task
 from box_toss_env.physics import layout
 
 VIEW_MARGIN_M = 0.6
-"""Free space around the release and target ranges in the default view [m]."""
+"""Free space behind the release points and in front of the targets in the view [m]."""
+VIEW_OVERSHOOT_M = 1.0
+"""Extra space beyond the farthest target, where long throws come to rest [m]."""
 VIEW_HEADROOM_M = 1.0
 """Space above the highest release point [m]."""
 
@@ -44,7 +46,7 @@ class ThrowRenderer:
         from box_toss_env.rendering import Camera, SceneRenderer
 
         x_min = min(config.release_x_range[0], config.target_x_range[0]) - VIEW_MARGIN_M
-        x_max = max(config.release_x_range[1], config.target_x_range[1]) + VIEW_MARGIN_M
+        x_max = max(config.release_x_range[1], config.target_x_range[1]) + VIEW_MARGIN_M + VIEW_OVERSHOOT_M
         y_max = config.release_height_range[1] + VIEW_HEADROOM_M
         camera = Camera.from_view(x_min, x_max, -0.3, y_max, width_px, height_px)
         self.renderer = SceneRenderer(width_px, height_px, camera=camera)

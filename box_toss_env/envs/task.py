@@ -100,6 +100,11 @@ class TaskConfig:
     observe_dynamics: bool
     max_sim_time: float  # [s]
 
+    @functools.cached_property
+    def randomises_dynamics(self) -> bool:
+        """Whether mass, friction or restitution are drawn per episode."""
+        return any(low != high for low, high in (self.mass_range, self.friction_range, self.restitution_range))
+
     @property
     def obs_size(self) -> int:
         return OBS_SIZE_WITH_DYNAMICS if self.observe_dynamics else OBS_SIZE
@@ -336,13 +341,10 @@ def write_initial_states(states: np.ndarray, episodes: Episodes, throws: np.ndar
 def observe(states: np.ndarray, episodes: Episodes, config: TaskConfig) -> np.ndarray:
     """A new float32 (n, obs_size) array: x, y, cos(angle), sin(angle), vx, vy, spin, target x,
     the four target-face flags, and with ``observe_dynamics`` the mass, friction and restitution."""
-    obs = np.empty((states.shape[0], config.obs_size), dtype=np.float32)
-    obs[:, OBS_X:OBS_Y + 1] = states[:, layout.X:layout.Y + 1]
-    np.cos(states[:, layout.ANGLE], out=obs[:, OBS_COS])
-    np.sin(states[:, layout.ANGLE], out=obs[:, OBS_SIN])
-    obs[:, OBS_VX:OBS_SPIN + 1] = states[:, layout.VX:]
-    obs[:, OBS_TARGET_X:] = episodes.data[:, EP_TARGET_X:EP_TARGET_X + config.obs_size - OBS_TARGET_X]
-    return obs
+    angles = states[:, layout.ANGLE:layout.ANGLE + 1]
+    return np.concatenate((states[:, layout.X:layout.Y + 1], np.cos(angles), np.sin(angles), states[:, layout.VX:],
+                           episodes.data[:, EP_TARGET_X:EP_TARGET_X + config.obs_size - OBS_TARGET_X]),
+                          axis=1, dtype=np.float32)
 
 
 def observation_bounds(config: TaskConfig) -> tuple[np.ndarray, np.ndarray]:
