@@ -274,10 +274,11 @@ class BoxTossEnv(gym.Env):
         self._params_stale = True  # body parameters are written at the first reset, then per reset if drawn
         self._renderer = None
         self._frames: list[np.ndarray] = []
-        self._build_simulator()
+        self._simulator = None  # built at the first throw: making an env compiles nothing
 
-    def _build_simulator(self) -> None:
+    def _build_simulator(self) -> Simulator:
         self._simulator = Simulator(dataclasses.replace(self.flags, record=self._records))
+        return self._simulator
 
     # -- the Gymnasium API ------------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
@@ -315,8 +316,8 @@ class BoxTossEnv(gym.Env):
         actions = task.check_actions(action, self.action_space.shape)
         task.write_initial_states(self._state, self._episodes, task.actions_to_throws(actions, self.config))
         self._needs_reset = True
-        self._simulator.run(self._state, self._params, self._settings, self._stats, self._trajectory,
-                            self._events)
+        simulator = self._simulator or self._build_simulator()
+        simulator.run(self._state, self._params, self._settings, self._stats, self._trajectory, self._events)
         stats = self._stats[0].tolist()
         if stats[layout.STATUS] != layout.STATUS_OK:
             check_finite_stats(self._stats, self.solver)  # raises NonFiniteStateError
@@ -436,7 +437,6 @@ class BoxTossEnv(gym.Env):
 
     def __setstate__(self, state):
         self.__dict__.update(state)
-        self._build_simulator()
 
 
 def _check_pixels(name: str, value) -> int:

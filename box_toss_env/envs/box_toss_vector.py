@@ -1,30 +1,223 @@
-"""The ``vector_entry_point`` of ``BoxToss-v0``: for now N ``BoxTossEnv`` stepped in turn.
+"""The native batched ``BoxToss-v0``: ``num_envs`` throws simulated in one parallel engine call.
 
-A native batched env (all N throws in one engine call, reusing ``task``'s batch-first functions)
-replaces this class in a later version without changing how it is made::
+    envs = gymnasium.make_vec("BoxToss-v0", num_envs=256)            # this class (vector_entry_point)
+    envs = gymnasium.make_vec("BoxToss-v0", num_envs=256, threads=1)  # one engine thread
 
-    envs = gymnasium.make_vec("BoxToss-v0", num_envs=8)  # vectorization_mode="vector_entry_point"
+Env i behaves exactly like a single ``BoxToss-v0`` seeded the same way: it owns its own random
+generator (``reset(seed=s)`` seeds env i with s + i, as Gymnasium's vector envs do) and draws its
+episodes with the same batch-first task functions (``task``), and all throws go through the same
+engine kernel, run over the batch on ``threads`` threads (default: numba's, i.e. the cores
+available); results do not depend on the thread count. The task logic, the reward and the drawing
+are the single env's, not a copy.
 
-Episodes are one step long, so sub-envs reset in the same step as they end
-(``AutoresetMode.SAME_STEP``: the returned observation is the next episode's first one, and the
-final observation and info are in ``info["final_obs"]`` and ``info["final_info"]``); with
-Gymnasium's default ``NEXT_STEP`` every other step of a vector env would be an empty reset step.
+Episodes are one step long, so envs reset in the step they end (``AutoresetMode.SAME_STEP``): the
+observation returned by ``step`` is the next episode's first one, and the final observation and info
+are in ``info["final_obs"]`` and ``info["final_info"]`` (with their ``_final_obs``/``_final_info``
+masks). With Gymnasium's default ``NEXT_STEP`` every other step would be an empty reset step.
+For Stable-Baselines3 wrap it in ``box_toss_env.vector.sb3_adapter.SB3VecEnvAdapter``.
 """
 
 from __future__ import annotations
 
-import functools
+import dataclasses
+import math
+from typing import Any
 
-from gymnasium.vector import AutoresetMode, SyncVectorEnv
+import numpy as np
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
 
-from box_toss_env.envs.box_toss import BoxTossEnv
+from box_toss_env.envs import task
+from box_toss_env.envs.box_toss import BoxTossEnv, EnergyGainError
+from box_toss_env.physics import Simulator, check_finite_stats, layout
+
+INFO_TERMS = task.REWARD_TERMS
 
 
-class BoxTossVectorEnv(SyncVectorEnv):
-    """``num_envs`` copies of ``BoxTossEnv(**kwargs)`` in one process, resetting on the step they end."""
+class BoxTossVectorEnv(VectorEnv):
+    """``num_envs`` BoxToss envs stepped together; keyword arguments are ``BoxTossEnv``'s.
 
-    def __init__(self, num_envs: int = 1, **kwargs):
-        if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
+    Args:
+        num_envs: number of envs (>= 1).
+        threads: engine threads for the batch (>= 1; default: numba's thread count, the cores
+            available). It changes the speed, never the results.
+        render_mode: None or "rgb_array" (``render()`` returns one frame per env).
+        **kwargs: the single env's arguments (see ``BoxTossEnv``), validated the same way.
+    """
+
+    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": ["rgb_array"], "render_fps": 30}
+
+    def __init__(self, num_envs: int = 1, *, threads: int | None = None, render_mode: str | None = None, **kwargs):
+        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
             raise ValueError(f"num_envs must be an integer >= 1, got {num_envs!r}")
-        super().__init__([functools.partial(BoxTossEnv, **kwargs) for _ in range(num_envs)],
-                         autoreset_mode=AutoresetMode.SAME_STEP)
+        if threads is not None and (isinstance(threads, bool) or not isinstance(threads, (int, np.integer))
+                                    or threads < 1):
+            raise ValueError(f"threads must be None or an integer >= 1, got {threads!r}")
+        if render_mode not in (None, "rgb_array"):
+            raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+        self.render_mode = render_mode
+        # the definition of one env: its validated arguments, spaces, solver settings and drawing
+        self.env = BoxTossEnv(render_mode="rgb_array" if render_mode else None, **kwargs)
+        self.config = self.env.config
+        self.num_envs = int(num_envs)
+        self.threads = threads
+        self.single_observation_space = self.env.observation_space
+        self.single_action_space = self.env.action_space
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self.metadata = {**self.metadata, "render_fps": self.env.render_fps}
+
+        n = self.num_envs
+        self._episodes = task.Episodes.empty(n)
+        self._drawn = task.Episodes.empty(1)  # each env's episode is drawn here, then copied to its row
+        self._params = np.zeros((n, layout.PARAM_SIZE))
+        self._state = np.zeros((n, layout.STATE_SIZE))
+        self._stats = np.zeros((n, layout.STATS_SIZE))
+        self._rngs: list[np.random.Generator | None] = [None] * n
+        self._params_stale = True
+        self._needs_reset = True
+        self._simulator: Simulator | None = None
+
+    @property
+    def simulator(self) -> Simulator:
+        """The engine kernel for the whole batch, built (compiled or loaded) at first use."""
+        if self._simulator is None:
+            self._simulator = Simulator(dataclasses.replace(self.env.flags, parallel=True), threads=self.threads)
+        return self._simulator
+
+    @property
+    def np_random(self) -> list[np.random.Generator | None]:
+        """Each env's random generator."""
+        return self._rngs
+
+    # -- episodes ---------------------------------------------------------------------------------
+    def _seed(self, seed: int | list[int | None] | None) -> None:
+        if seed is None:
+            seeds = [None] * self.num_envs
+        elif isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
+            seeds = [int(seed) + i for i in range(self.num_envs)]
+        else:
+            seeds = list(seed)
+            if len(seeds) != self.num_envs:
+                raise ValueError(f"seed must be None, an int or a list of {self.num_envs} seeds, got {seed!r}")
+        for i, value in enumerate(seeds):
+            if value is not None or self._rngs[i] is None:
+                self._rngs[i], _ = seeding.np_random(value)
+
+    def _new_episodes(self) -> dict[str, np.ndarray]:
+        """Draw every env's next episode (each from its own generator); the boxes are in the hand."""
+        episodes, drawn = self._episodes, self._drawn
+        for i, rng in enumerate(self._rngs):
+            episodes.data[i] = task.sample_episodes(rng, self.config, drawn).data[0]
+        if self._params_stale or self.config.randomises_dynamics:
+            task.write_body_params(self._params, episodes, self.config)
+            self._params_stale = False
+        task.write_initial_states(self._state, episodes, None)
+        data = episodes.data
+        return {
+            "target_x": data[:, task.EP_TARGET_X].copy(),
+            "target_faces": data[:, task.EP_TARGET_FACES].astype(np.int8),
+            "release_x": data[:, task.EP_RELEASE_X].copy(),
+            "release_y": data[:, task.EP_RELEASE_Y].copy(),
+            "release_angle": data[:, task.EP_RELEASE_ANGLE].copy(),
+            "mass": data[:, task.EP_MASS].copy(),
+            "friction": data[:, task.EP_FRICTION].copy(),
+            "restitution": data[:, task.EP_RESTITUTION].copy(),
+        }
+
+    # -- the Gymnasium API ------------------------------------------------------------------------
+    def reset(self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None):
+        """Draw every env's release pose, target and dynamics. ``options`` is unused."""
+        self._seed(seed)
+        info = self._new_episodes()
+        self._needs_reset = False
+        return task.observe(self._state, self._episodes, self.config), with_masks(info, self.num_envs)
+
+    def step(self, actions):
+        """Throw every box, simulate all throws together until each rests (or ``max_sim_time``),
+        then start every env's next episode (all episodes end in this step)."""
+        if self._needs_reset:
+            raise RuntimeError("call reset() before step()")
+        actions = task.check_actions(actions, self.action_space.shape)
+        episodes = self._episodes
+        task.write_initial_states(self._state, episodes, task.actions_to_throws(actions, self.config))
+        self.simulator.run(self._state, self._params, self.env._settings, self._stats)
+        stats = self._stats
+        if np.any(stats[:, layout.STATUS] != layout.STATUS_OK):
+            check_finite_stats(stats, self.env.solver)
+        final_obs = task.observe(self._state, episodes, self.config)
+        outside = task.outside_bounds(final_obs, self.single_observation_space.low, self.single_observation_space.high)
+        if outside.any():
+            i = int(np.argmax(outside))
+            raise EnergyGainError(f"env {i}: {self.env._bounds_message(final_obs[i])}")
+        final_info = self._landing_info(stats)
+        reward = final_info.pop("reward")
+        # every episode ended: start the next ones
+        info = self._new_episodes()
+        observations = task.observe(self._state, episodes, self.config)
+        n = self.num_envs
+        info = with_masks(info, n)
+        info["final_obs"] = final_obs
+        info["_final_obs"] = np.ones(n, dtype=bool)
+        info["final_info"] = with_masks(final_info, n)
+        info["_final_info"] = np.ones(n, dtype=bool)
+        return observations, reward, np.ones(n, dtype=bool), np.zeros(n, dtype=bool), info
+
+    def _landing_info(self, stats: np.ndarray) -> dict[str, np.ndarray]:
+        """The single env's step ``info``, one array per key, plus the reward."""
+        state = self._state
+        rest_time = stats[:, layout.REST_TIME]
+        at_rest = ~np.isnan(rest_time)
+        reward, terms, success, distance, orientation_error = task.reward_terms(state, at_rest, self._episodes,
+                                                                                self.config)
+        angle = state[:, layout.ANGLE]
+        flight_time = stats[:, layout.FIRST_CONTACT_TIME]
+        end_time = stats[:, layout.END_TIME].copy()
+        data = self._episodes.data
+        return {
+            "reward": reward,
+            "final_x": state[:, layout.X].copy(),
+            "final_y": state[:, layout.Y].copy(),
+            "final_angle": (angle + math.pi) % (2.0 * math.pi) - math.pi,
+            "face_down": task.faces_down(angle),
+            "at_rest": at_rest,
+            "success": success,
+            "distance": distance,
+            "orientation_error": orientation_error,
+            "flight_time": np.where(np.isnan(flight_time), end_time, flight_time),
+            "n_impacts": stats[:, layout.N_IMPACTS].astype(np.int64),
+            "n_steps": stats[:, layout.N_STEPS].astype(np.int64),
+            "max_penetration": stats[:, layout.MAX_PENETRATION].copy(),
+            "sim_time": end_time,
+            **terms,
+            "target_x": data[:, task.EP_TARGET_X].copy(),
+            "mass": data[:, task.EP_MASS].copy(),
+            "friction": data[:, task.EP_FRICTION].copy(),
+            "restitution": data[:, task.EP_RESTITUTION].copy(),
+        }
+
+    def render(self) -> tuple[np.ndarray, ...] | None:
+        """One frame per env of its current state (the box in the hand after a step, since envs
+        reset in the step they end)."""
+        if self.render_mode is None:
+            return None
+        renderer = self.env._renderer_for_env()
+        return tuple(renderer.frame(self._state[i], float(self._episodes.target_x[i]),
+                                    self._episodes.target_faces[i], f"env {i}") for i in range(self.num_envs))
+
+    def close_extras(self, **kwargs) -> None:
+        self.env.close()
+
+    def __getstate__(self):
+        state = self.__dict__.copy()
+        state["_simulator"] = None  # compiled kernels are rebuilt (loaded from numba's cache) after unpickling
+        return state
+
+
+def with_masks(info: dict[str, np.ndarray], num_envs: int) -> dict[str, np.ndarray]:
+    """Gymnasium's vector info layout: each key's array of values next to a ``_key`` mask of the
+    envs that set it (here every env sets every key)."""
+    mask = np.ones(num_envs, dtype=bool)
+    return {**info, **{f"_{key}": mask for key in info}}
+

@@ -98,8 +98,8 @@ def solve_contact_velocities(vx, vy, spin, rx1, ry1, rx2, ry2, use2, b1, b2, fri
                              inv_inertia, iterations):
     """Velocities after the normal impulses (targets u_n,i >= b_i) and the friction impulses of the
     lowest corner and, if ``use2``, its neighbour: the exact 2 x 2 normal block, then projected
-    Gauss-Seidel sweeps over friction and the normal block, until the impulses change by less than CONVERGED of the normal
-    impulse (at most ``iterations`` sweeps).
+    Gauss-Seidel sweeps over friction and the normal block, until the impulses change by less than
+    CONVERGED of the normal impulse (at most ``iterations`` sweeps).
     Returns (vx, vy, spin, lam1, lam2)."""
     k11, k12, k22 = delassus(rx1, rx2, inv_mass, inv_inertia)
     lam1, lam2 = normal_impulses(vy + spin * rx1, vy + spin * rx2, b1, b2, 0.0, 0.0, k11, k12, k22, True, use2)

@@ -188,6 +188,7 @@ class ViewerWindow:
         self.button_rects: dict[str, Any] = {}
         self.show_help = True
         self.panning = False
+        self.mouse = (0, 0)  # the last cursor position seen, for the wheel
 
     # -- drawing ----------------------------------------------------------------------------------------
     def draw(self) -> None:
@@ -249,6 +250,7 @@ class ViewerWindow:
         if event.type == pygame.KEYDOWN:
             return self._key(event)
         if event.type == pygame.MOUSEBUTTONDOWN:
+            self.mouse = event.pos
             if event.button == 1:
                 if not self._click_panel(event.pos):
                     controller.grab(event.pos)
@@ -260,14 +262,14 @@ class ViewerWindow:
             elif event.button in (2, 3):
                 self.panning = False
         elif event.type == pygame.MOUSEMOTION:
+            self.mouse = event.pos
             if controller.grab_lane is not None:
                 controller.drag_to(event.pos)
             if self.panning:
                 controller.pan(*event.rel)
         elif event.type == pygame.MOUSEWHEEL:
-            position = pygame.mouse.get_pos()
-            if controller.lane_at(position[0]) is not None:
-                controller.zoom(ZOOM_STEP ** event.y, position)
+            if controller.lane_at(self.mouse[0]) is not None:
+                controller.zoom(ZOOM_STEP ** event.y, self.mouse)
         return True
 
     def _click_panel(self, position) -> bool:

@@ -1,0 +1,295 @@
+"""Headless, deterministic evaluation on a fixed set of seeded targets.
+
+    python -m agents.evaluate runs/NAME                                   # 1,024 targets, seeds 10000...
+    python -m agents.evaluate runs/NAME --env-kwargs solver=seed dt=0.0009765625 --tag seed-1024
+    python -m agents.evaluate runs/NAME --video 4                         # also a GIF of 4 throws
+
+Target i is what ``gymnasium.make(env_id, **env_kwargs).reset(seed=first_seed + i)`` draws (the
+release pose, the target x and faces), so every agent is scored on the same throws whatever env
+settings it was trained with. The policy sees all observations first and answers with all actions
+(a batch), then each target is reset again with its seed and thrown once through the env itself.
+A throw that the env refuses to finish (``EnergyGainError`` or ``NonFiniteStateError``, possible
+only with the seed solver at a large step) counts as a failure and is reported as such.
+
+Scores (``summarize``): the success rate (at rest within the tolerance on a target face), the
+mean and median landing distance |x - target x|, the face accuracy (a target face ended down,
+wherever the box landed), broken down by target distance and by target face kind.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Protocol
+
+import gymnasium as gym
+import numpy as np
+
+import box_toss_env  # noqa: F401  (registers the BoxToss envs)
+from agents.config import load_yaml, parse_override
+from box_toss_env.envs import task
+from box_toss_env.envs.box_toss import EnergyGainError
+from box_toss_env.physics import NonFiniteStateError
+
+TEST_FIRST_SEED, TEST_TARGETS = 10_000, 1_024  # the report's targets
+VALIDATION_FIRST_SEED = 20_000  # periodic evaluation during training: other targets than the report's
+DISTANCE_BINS = 6
+
+
+class Policy(Protocol):
+    """Answers a batch of first observations (n, obs) and their reset infos with actions (n, 3).
+    ``env`` is the env the throws will be made in (a planner may simulate with it)."""
+
+    def act(self, observations: np.ndarray, reset_infos: list[dict[str, Any]], env: gym.Env) -> np.ndarray: ...
+
+
+@dataclass
+class Throws:
+    """One row per target of an evaluation (all arrays (n,) unless noted)."""
+
+    seeds: np.ndarray
+    target_x: np.ndarray  # [m]
+    target_faces: np.ndarray  # (n, 4) 1 where that face may end down
+    actions: np.ndarray  # (n, 3) in [-1, 1]
+    final_x: np.ndarray  # [m], nan where the throw failed
+    face_down: np.ndarray  # 0-3, -1 where the throw failed
+    at_rest: np.ndarray
+    success: np.ndarray
+    reward: np.ndarray  # nan where the throw failed
+    failure: list[str] = field(default_factory=list)  # "" or why the env refused the throw
+
+    @property
+    def distance(self) -> np.ndarray:  # [m]
+        return np.abs(self.final_x - self.target_x)
+
+    @property
+    def face_ok(self) -> np.ndarray:
+        """A target face ended down (wherever the box landed)."""
+        ok = self.target_faces[np.arange(len(self.seeds)), np.maximum(self.face_down, 0)] > 0
+        return ok & (self.face_down >= 0)
+
+    def save(self, path: Path) -> None:
+        arrays = {name: getattr(self, name) for name in ("seeds", "target_x", "target_faces", "actions", "final_x",
+                                                         "face_down", "at_rest", "success", "reward")}
+        np.savez_compressed(path, failure=np.array(self.failure, dtype=str), **arrays)
+
+    @classmethod
+    def load(cls, path: Path) -> Throws:
+        with np.load(path) as data:
+            arrays = {name: data[name] for name in data.files if name != "failure"}
+            return cls(**arrays, failure=[str(v) for v in data["failure"]])
+
+
+def test_seeds(n: int = TEST_TARGETS, first: int = TEST_FIRST_SEED) -> np.ndarray:
+    return np.arange(first, first + n)
+
+
+def draw_targets(env: gym.Env, seeds) -> tuple[np.ndarray, list[dict[str, Any]]]:
+    """The first observations (n, obs) and reset infos of ``env`` for each seed."""
+    observations, infos = [], []
+    for seed in seeds:
+        obs, info = env.reset(seed=int(seed))
+        observations.append(obs)
+        infos.append(info)
+    return np.stack(observations).astype(np.float32), infos
+
+
+def throw(env: gym.Env, seeds, actions: np.ndarray, reset_infos: list[dict[str, Any]]) -> Throws:
+    """Reset ``env`` with each seed and throw the matching action once."""
+    n = len(seeds)
+    final_x, reward = np.full(n, np.nan), np.full(n, np.nan)
+    face_down = np.full(n, -1, dtype=np.int64)
+    at_rest, success = np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
+    failure = [""] * n
+    for i, seed in enumerate(seeds):
+        env.reset(seed=int(seed))
+        try:
+            _, r, _, _, info = env.step(actions[i])
+        except EnergyGainError:
+            failure[i] = "energy gain"
+            continue
+        except NonFiniteStateError:
+            failure[i] = "non-finite state"
+            continue
+        final_x[i], reward[i], face_down[i] = info["final_x"], r, info["face_down"]
+        at_rest[i], success[i] = info["at_rest"], info["success"]
+    return Throws(seeds=np.asarray(seeds), target_x=np.array([info["target_x"] for info in reset_infos]),
+                  target_faces=np.array([info["target_faces"] for info in reset_infos], dtype=np.int8),
+                  actions=np.asarray(actions, dtype=np.float64), final_x=final_x, face_down=face_down,
+                  at_rest=at_rest, success=success, reward=reward, failure=failure)
+
+
+def evaluate(policy: Policy, env_id: str, env_kwargs: dict[str, Any] | None = None, seeds=None) -> tuple[Throws, float]:
+    """Throw once per seed (default: the 1,024 test targets) with ``policy``'s deterministic
+    actions. Returns the throws and the seconds the policy took to answer (a planner's planning)."""
+    seeds = test_seeds() if seeds is None else np.asarray(seeds)
+    env = gym.make(env_id, **(env_kwargs or {}))
+    try:
+        observations, infos = draw_targets(env, seeds)
+        start = time.perf_counter()
+        actions = np.asarray(policy.act(observations, infos, env), dtype=np.float64).reshape(len(seeds), -1)
+        act_seconds = time.perf_counter() - start
+        return throw(env, seeds, actions, infos), act_seconds
+    finally:
+        env.close()
+
+
+# -- scores --------------------------------------------------------------------------------------
+def scores(throws: Throws, mask: np.ndarray | None = None) -> dict[str, Any]:
+    """Success rate, landing distance (mean, median, over throws that finished), face accuracy,
+    mean reward and failures, over the throws selected by ``mask``."""
+    mask = np.ones(len(throws.seeds), dtype=bool) if mask is None else mask
+    finished = mask & np.isfinite(throws.final_x)
+    distance = throws.distance[finished]
+    n = int(mask.sum())
+    return {
+        "n": n,
+        "success_rate": float(throws.success[mask].mean()) if n else math.nan,
+        "mean_distance": float(distance.mean()) if distance.size else math.nan,
+        "median_distance": float(np.median(distance)) if distance.size else math.nan,
+        "face_accuracy": float(throws.face_ok[mask].mean()) if n else math.nan,
+        "mean_reward": float(throws.reward[finished].mean()) if distance.size else math.nan,
+        "failures": int(n - finished.sum()),
+    }
+
+
+def distance_bins(target_x_range: tuple[float, float], n_bins: int = DISTANCE_BINS) -> np.ndarray:
+    low, high = target_x_range
+    return np.linspace(low, high, n_bins + 1)
+
+
+def summarize(throws: Throws, target_x_range: tuple[float, float]) -> dict[str, Any]:
+    """``scores`` over all throws, by target distance bin and by target face kind."""
+    edges = distance_bins(target_x_range)
+    which = np.clip(np.searchsorted(edges, throws.target_x, side="right") - 1, 0, len(edges) - 2)
+    by_distance = [{"bin": f"{edges[k]:.2f}-{edges[k + 1]:.2f} m", **scores(throws, which == k)}
+                   for k in range(len(edges) - 1)]
+    kinds = np.array([task.describe_target_faces(mask) for mask in throws.target_faces])
+    by_face = [{"kind": kind, **scores(throws, kinds == kind)} for kind in dict.fromkeys(kinds.tolist())]
+    reasons = sorted({reason for reason in throws.failure if reason})
+    return {**scores(throws), "by_distance": by_distance, "by_face": by_face,
+            "failure_reasons": {reason: throws.failure.count(reason) for reason in reasons}}
+
+
+def format_table(rows: list[dict[str, Any]], label: str = "agent") -> str:
+    """A plain-text table of scores (one row per dict with a ``label`` key)."""
+    header = f"{label:<24} {'targets':>7} {'success':>8} {'mean dist':>10} {'median dist':>12} {'face acc':>9}"
+    lines = [header, "-" * len(header)]
+    for row in rows:
+        failures = f"  ({row['failures']} failed)" if row.get("failures") else ""
+        lines.append(f"{row[label]:<24} {row['n']:>7d} {row['success_rate']:>7.1%} {row['mean_distance']:>8.3f} m "
+                     f"{row['median_distance']:>10.3f} m {row['face_accuracy']:>8.1%}{failures}")
+    return "\n".join(lines)
+
+
+def format_summary(name: str, summary: dict[str, Any]) -> str:
+    text = [format_table([{"agent": name, **summary}]), "", "by target distance:",
+            format_table(summary["by_distance"], "bin"), "", "by target face:", format_table(summary["by_face"], "kind")]
+    if summary["failure_reasons"]:
+        text += ["", "throws the env refused to finish (counted as failures): "
+                 + ", ".join(f"{n} x {reason}" for reason, n in summary["failure_reasons"].items())]
+    return "\n".join(text)
+
+
+# -- runs ----------------------------------------------------------------------------------------
+def load_policy(run_dir: Path, model: str = "final") -> tuple[Policy, dict[str, Any]]:
+    """The policy saved in a run folder and the run's ``config.yml``."""
+    config = load_yaml(run_dir / "config.yml")
+    algo = config["algo"]
+    if algo == "ppo":
+        from agents.train import TrainedPolicy
+
+        return TrainedPolicy.load(run_dir, model), config
+    if algo in ("random", "oracle", "constant"):
+        from agents.baselines import make_baseline
+
+        return make_baseline(algo, config.get("baseline", {})), config
+    raise ValueError(f"{run_dir / 'config.yml'} has an unknown algo {algo!r}")
+
+
+def evaluate_run(run_dir: Path, *, model: str = "final", env_kwargs: dict[str, Any] | None = None,
+                 tag: str | None = None, n_targets: int = TEST_TARGETS, first_seed: int = TEST_FIRST_SEED,
+                 quiet: bool = False) -> dict[str, Any]:
+    """Evaluate the run's policy on the test targets, under the env settings it was trained with,
+    updated with ``env_kwargs``; write ``RUN/eval/TAG/`` (results.json, throws.npz) and return the
+    results."""
+    run_dir = Path(run_dir)
+    policy, config = load_policy(run_dir, model)
+    env_id = config["env_id"]
+    kwargs = {**config.get("env_kwargs", {}), **(env_kwargs or {})}
+    seeds = test_seeds(n_targets, first_seed)
+    start = time.perf_counter()
+    throws, act_seconds = evaluate(policy, env_id, kwargs, seeds)
+    wall = time.perf_counter() - start
+    target_x_range = gym.make(env_id, **kwargs).unwrapped.config.target_x_range
+    summary = summarize(throws, target_x_range)
+    tag = tag or default_tag(env_kwargs, model)
+    out = run_dir / "eval" / tag
+    out.mkdir(parents=True, exist_ok=True)
+    results = {"run": run_dir.name, "algo": config["algo"], "model": model, "env_id": env_id, "env_kwargs": kwargs,
+               "seeds": [int(seeds[0]), int(seeds[-1])], "act_seconds": act_seconds, "eval_seconds": wall,
+               **summary}
+    (out / "results.json").write_text(json.dumps(results, indent=2))
+    throws.save(out / "throws.npz")
+    if not quiet:
+        print(f"{run_dir.name} ({config['algo']}, {model} model) on {env_id} {kwargs or ''}, "
+              f"targets of seeds {seeds[0]}-{seeds[-1]}:")
+        print(format_summary(run_dir.name, summary))
+        print(f"results in {out}")
+    return results
+
+
+def default_tag(env_kwargs: dict[str, Any] | None, model: str = "final") -> str:
+    parts = [] if model == "final" else [model]
+    for key, value in sorted((env_kwargs or {}).items()):
+        parts.append(f"{key}={value:.6g}" if isinstance(value, float) else f"{key}={value}")
+    return "-".join(parts) or "default"
+
+
+def parse_kwargs(items: list[str] | None) -> dict[str, Any]:
+    """``["solver=seed", "dt=0.001"]`` as a dict (values read with yaml.safe_load)."""
+    kwargs = {}
+    for item in items or ():
+        keys, value = parse_override(item)
+        kwargs[".".join(keys)] = value
+    return kwargs
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("run", type=Path, help="run folder (runs/NAME)")
+    parser.add_argument("--model", default="final", choices=("final", "best"),
+                        help="the model at the end of training, or the one with the best validation success")
+    parser.add_argument("--env-kwargs", nargs="*", default=[], metavar="KEY=VALUE",
+                        help="change env settings for the evaluation, e.g. solver=seed dt=0.0009765625")
+    parser.add_argument("--tag", help="name of the results folder RUN/eval/TAG (default: from the env kwargs)")
+    parser.add_argument("--targets", type=int, default=TEST_TARGETS, help="number of test targets")
+    parser.add_argument("--first-seed", type=int, default=TEST_FIRST_SEED)
+    parser.add_argument("--video", type=int, default=0, metavar="N", help="also write a GIF of N throws")
+    parser.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    args = parser.parse_args(argv)
+    if not (args.run / "config.yml").exists():
+        sys.exit(f"{args.run} is not a run folder (no config.yml)")
+    results = evaluate_run(args.run, model=args.model, env_kwargs=parse_kwargs(args.env_kwargs), tag=args.tag,
+                           n_targets=args.targets, first_seed=args.first_seed)
+    out = args.run / "eval" / (args.tag or default_tag(parse_kwargs(args.env_kwargs), args.model))
+    if not args.no_plots:
+        from agents import report
+
+        for path in report.plot_run(args.run, out):
+            print(f"figure: {path}")
+    if args.video:
+        from agents import report
+
+        path = report.record_video(args.run, out / "throws.gif", args.video, model=args.model,
+                                   env_kwargs=results["env_kwargs"])
+        print(f"video: {path}")
+
+
+if __name__ == "__main__":
+    main()

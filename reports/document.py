@@ -1,0 +1,98 @@
+"""Writing the reports: number formatting, Markdown tables, figures and the README section.
+
+The README holds one section between ``<!-- reports:start -->`` and ``<!-- reports:end -->``; each
+report command rewrites only its own block inside it (``<!-- reports:NAME:start -->`` ...), so the
+two commands can run in either order and every figure in the section comes from a command.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import platform
+import re
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+REPO = Path(__file__).resolve().parent.parent
+DOCS = REPO / "docs"
+QUICK_OUT = REPO / "build" / "reports"  # --quick writes here (ignored by git), never into docs/
+README = REPO / "README.md"
+SECTION_START, SECTION_END = "<!-- reports:start -->", "<!-- reports:end -->"
+SECTION_TITLE = "## Precision and stability reports"
+
+
+def sci(value: float, digits: int = 2) -> str:
+    """A number in compact scientific notation, e.g. 1.2e-03; 0 as 0; nan as '-'."""
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return "-"
+    if value == 0:
+        return "0"
+    if math.isinf(value):
+        return "inf"
+    return f"{value:.{digits - 1}e}"
+
+
+def seconds(value: float) -> str:
+    """A duration with a unit that keeps three significant digits: 12.3 us, 4.56 ms, 7.89 s."""
+    if value is None or math.isnan(value):
+        return "-"
+    for unit, scale in (("s", 1.0), ("ms", 1e-3), ("us", 1e-6)):
+        if value >= scale:
+            return f"{value / scale:.3g} {unit}"
+    return f"{value * 1e9:.3g} ns"
+
+
+def percent(value: float) -> str:
+    return "-" if value is None or math.isnan(value) else f"{100 * value:.1f}%"
+
+
+def dt_label(exponent: int) -> str:
+    return f"2^-{exponent}"
+
+
+def table(header: list[str], rows: list[list[str]]) -> str:
+    """A Markdown table."""
+    lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
+    lines += ["| " + " | ".join(str(cell) for cell in row) + " |" for row in rows]
+    return "\n".join(lines)
+
+
+def machine() -> str:
+    """One line saying where the figures were measured."""
+    import numba
+    import numpy
+
+    return (f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
+            f"numpy {numpy.__version__}, numba {numba.__version__}")
+
+
+def save_figure(figure, path: Path) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(path, dpi=110, bbox_inches="tight", metadata={"Software": None})
+    import matplotlib.pyplot as plt
+
+    plt.close(figure)
+
+
+def update_readme(name: str, body: str, readme: Path = README) -> None:
+    """Replace the block ``<!-- reports:NAME:start -->`` ... ``end`` inside the reports section of
+    ``readme`` with ``body``; create the section (at the end of the file) and the block if absent."""
+    text = readme.read_text()
+    if SECTION_START not in text or SECTION_END not in text:
+        text = text.rstrip("\n") + f"\n\n{SECTION_START}\n{SECTION_TITLE}\n{SECTION_END}\n"
+    start, end = text.index(SECTION_START), text.index(SECTION_END)
+    section = text[start + len(SECTION_START):end]
+    block_start, block_end = f"<!-- reports:{name}:start -->", f"<!-- reports:{name}:end -->"
+    block = f"{block_start}\n{body.strip()}\n{block_end}"
+    if block_start in section and block_end in section:
+        section = re.sub(re.escape(block_start) + ".*?" + re.escape(block_end), lambda _: block, section,
+                         flags=re.DOTALL)
+    else:
+        section = section.rstrip("\n") + "\n" + block + "\n"
+    if not section.startswith("\n"):
+        section = "\n" + section
+    readme.write_text(text[:start + len(SECTION_START)] + section + text[end:])
