@@ -11,7 +11,8 @@ together, Newton's law u_n+ = -e u_n- for corners approaching faster than the re
 threshold, friction clamped to mu times the normal impulse. A box that leaves the floor flies on;
 one that stays goes to
 
-Contact: time-stepping on the grid t_n = n dt (``contact_step``), the stages of one step being
+Contact: time-stepping on the grid t_n = n dt (the stage script in ``make_robust_kernel``), the
+stages of one step being
   1. integrate velocities: v += dt g;
   2. solve contact velocities: the two corners of the face that is down together (2 x 2 LCP),
      each may close its gap but not pass it (speculative: u_n >= -max(y_i, 0)/dt), with clamped
