@@ -476,6 +476,11 @@ class ViewerController:
             "-- ms / step" if math.isnan(mean_ms) else f"{mean_ms:.3g} ms / step",
             f"{lane.scene.n_bodies} bodies",
         ]
+        x_min, x_max, y_min, y_max = self.lane_camera(lane_index).view_bounds
+        x, y = lane.state[:, layout.X], lane.state[:, layout.Y]
+        out_of_view = ~((x >= x_min) & (x <= x_max) & (y >= y_min) & (y <= y_max))
+        if lane.diverged is None and out_of_view.any():
+            lines.append(f"{int(out_of_view.sum())} out of view (highest y = {y.max():.3g} m): zoom out")
         if lane.diverged is not None:
             lines.append(f"DIVERGED at step {lane.diverged.step} (body {lane.diverged.body}): R restarts")
         elif self.paused:

@@ -153,8 +153,7 @@ class Panel:
 
     def keys(self, bindings: Sequence[tuple[str, str]]) -> None:
         for key, action in bindings:
-            self.line(key, PANEL_DIM, value=None)
-            self.top -= self.line_height
+            self.canvas.text(key, (self.left, self.top), PANEL_DIM)
             self.canvas.text(action, (self.left + 110, self.top), PANEL_DIM)
             self.top += self.line_height
 
@@ -537,8 +536,8 @@ class PlayWindow:
 
     def write_frames(self, n_frames: int, out: str | Path, throw: Sequence[float] | None = None) -> list[Path]:
         """Headless: the aim (a scripted drag giving ``throw`` = (vx, vy, spin), if given), then the
-        throw's frames with the result on the last; ``n_frames`` of them, evenly spread, the last always
-        included."""
+        throw's frames with the result on the last; ``n_frames`` of them, evenly spread from the aim to
+        the result (a single frame is the result)."""
         controller = self.controller
         if throw is None:
             self.draw()
@@ -555,9 +554,10 @@ class PlayWindow:
             shots = [lambda: aim]
             shots += [lambda k=k: self._drawn(k) for k in range(len(result.frames) - 1)]
             shots.append(lambda: self._drawn(None))
-        if n_frames < len(shots):
-            picks = np.unique(np.rint(np.linspace(0, len(shots) - 1, max(n_frames, 1))).astype(int))
-            shots = [shots[k] for k in picks]
+        if n_frames == 1:
+            shots = shots[-1:]
+        elif n_frames < len(shots):
+            shots = [shots[k] for k in np.unique(np.rint(np.linspace(0, len(shots) - 1, n_frames)).astype(int))]
         paths = output_paths(out, len(shots))
         for shot, path in zip(shots, paths, strict=True):
             self.pygame.image.save(shot(), str(path))

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from box_toss_env.physics import Box, Scene, layout, scenes, simulate
+from box_toss_env.physics import Box, Scene, Simulator, layout, make_settings, scenes, simulate
 from box_toss_env.rendering import box_vertices
 from box_toss_env.viewer import PARAMETERS, ROWS, STEPS_PER_FRAME, StepTimer, ViewerController
 from box_toss_env.viewer.controller import PARAMETER_BY_NAME, TIMING_WINDOW_STEPS, view_points
@@ -174,10 +174,11 @@ def test_switching_solver_goes_on_from_the_same_state(demo):
     np.testing.assert_array_equal(lane.state, state)
     assert demo.readouts(0)[0] == "robust solver"
     run_frames(demo, 1)
-    robust = simulate(scenes.seed_demo(solver="robust").replace(
-        boxes=tuple(Box(length=2.0, width=1.0, position=s[:2], angle=s[2], velocity=s[3:5], spin=s[5])
-                    for s in state)), steps=STEPS_PER_FRAME)
-    np.testing.assert_array_equal(lane.state, robust.final_state)
+    robust = scenes.seed_demo(solver="robust")
+    Simulator.for_scene(robust, parallel=False).run(state, robust.body_params(),
+                                                    make_settings(robust, STEPS_PER_FRAME, until_rest=False),
+                                                    np.zeros((5, layout.STATS_SIZE)))
+    np.testing.assert_array_equal(lane.state, state)
     assert demo.switch_solver() and demo.scene.solver == "seed"
 
 
@@ -290,13 +291,16 @@ def test_a_diverging_run_stops_and_says_so():
 def test_the_seed_scheme_throws_a_stiff_box_into_the_air_and_the_robust_solver_does_not():
     controller = ViewerController(scenes.stiff(solver="seed"))
     controller.toggle_compare()
-    heights = []
+    heights, told = [], []
     for _ in range(50):
         controller.advance_frame()
         heights.append([lane.state[0, layout.Y] for lane in controller.lanes])
+        told.append([any("1 out of view" in line for line in controller.readouts(k)) for k in (0, 1)])
     seed_height, robust_height = np.array(heights).T
     assert seed_height.max() > 2.0  # the explicit penalty force turns 1 cm of penetration into a 2 m jump
     np.testing.assert_allclose(robust_height, 0.5, atol=1e-3)
+    y_max = controller.lane_camera(0).view_bounds[3]
+    np.testing.assert_array_equal(np.array(told), np.column_stack([seed_height > y_max, robust_height > y_max]))
 
 
 @pytest.mark.parametrize("name", sorted(scenes.SCENES))
