@@ -322,6 +322,14 @@ def actions_to_throws(actions: np.ndarray, config: TaskConfig) -> np.ndarray:
     return throws
 
 
+def throws_to_actions(throws: np.ndarray, config: TaskConfig) -> np.ndarray:
+    """The inverse of ``actions_to_throws``: actions (n, 3) a = (throw - offset) / scale for throws
+    (n, 3) of speed, launch angle and spin (a range of zero width maps to 0). Not clipped."""
+    scale, offset = config.action_scale_offset
+    throws = np.asarray(throws, dtype=np.float64)
+    return np.divide(throws - offset, scale, out=np.zeros(throws.shape), where=scale > 0.0)
+
+
 def write_initial_states(states: np.ndarray, episodes: Episodes, throws: np.ndarray | None) -> np.ndarray:
     """The engine states (n, 6) of boxes in the hand at the release pose, thrown with ``throws``
     (n, 3: speed, launch angle, spin; ``actions_to_throws``), i.e. moving at

@@ -22,9 +22,9 @@ class NonFiniteStateError(FloatingPointError):
         self.body = body
         self.step = step
         super().__init__(
-            f"body {body} went non-finite at step {step} with solver={solver!r}; the explicit seed scheme "
-            "diverges when dt * sqrt(penalty_stiffness / effective mass) > 2: reduce dt or the stiffness, "
-            "or use solver='robust'"
+            f"body {body} went non-finite at step {step} with solver={solver!r}. Nothing was clipped: check the "
+            "scene's values; the explicit seed scheme gains energy where dt * sqrt(penalty_stiffness / effective "
+            "mass) > 2 (reduce dt or the stiffness, or use solver='robust')"
         )
 
 

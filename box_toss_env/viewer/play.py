@@ -44,17 +44,15 @@ def throw_to_action(velocity, spin: float, config: task.TaskConfig) -> tuple[np.
     """The action in [-1, 1]^3 that throws at ``velocity`` (vx, vy) [m/s] spinning at ``spin`` [rad/s],
     and whether it had to be clipped into the action space.
 
-    Inverts ``task.actions_to_throws``: speed = |v|, launch angle = atan2(vy, vx) (clipped to
-    ``launch_angle_range``), then a = (throw - offset) / scale with the env's own scale and offset.
+    speed = |v|, launch angle = atan2(vy, vx) (clipped to ``launch_angle_range``), then the env's own
+    inverse mapping ``task.throws_to_actions``.
     """
     vx, vy = (float(v) for v in velocity)
     speed = math.hypot(vx, vy)
     low, high = config.launch_angle_range
     theta = math.atan2(vy, vx) if speed > 0.0 else 0.5 * (low + high)
     clipped_theta = clip_launch_angle(theta, low, high)
-    scale, offset = config.action_scale_offset
-    throw = np.array([speed, clipped_theta, float(spin)])
-    action = np.divide(throw - offset, scale, out=np.zeros(task.ACTION_SIZE), where=scale > 0.0)
+    action = task.throws_to_actions(np.array([[speed, clipped_theta, float(spin)]]), config)[0]
     clipped = bool(np.any(np.abs(action) > 1.0 + 1e-12) or clipped_theta != theta)
     return np.clip(action, -1.0, 1.0), clipped
 

@@ -120,3 +120,10 @@ def test_check_actions():
         task.check_actions([np.nan, 0.0, 0.0], (3,))
     with pytest.raises(ValueError, match=r"shape \(4, 3\)"):
         task.check_actions(np.zeros((3, 3)), (4, 3))
+
+
+def test_throws_to_actions_inverts_actions_to_throws():
+    config = BoxTossEnv().config
+    actions = np.random.default_rng(4).uniform(-1, 1, (50, 3))
+    np.testing.assert_allclose(task.throws_to_actions(task.actions_to_throws(actions, config), config), actions,
+                               atol=1e-12)
