@@ -163,6 +163,18 @@ def new_run_dir(runs: Path, name: str | None, env_id: str) -> Path:
     return run_dir
 
 
+def warm_up_engine(env_id: str, config: dict[str, Any]) -> None:
+    """Load the env's compiled kernel with one throw in a throwaway env, so that compiling (or
+    loading from numba's cache) is not counted as env time. It also starts numba's OpenMP threads,
+    which resets the OpenMP thread count that torch reads: set torch's threads after this."""
+    from agents.envs import make_vector_env
+
+    venv = make_vector_env(env_id, 1, config["env_kwargs"], config.get("vec_env_kwargs"))
+    venv.reset()
+    venv.step(np.zeros((1, *venv.action_space.shape), dtype=np.float32))
+    venv.close()
+
+
 def train(run_dir: Path, config: dict[str, Any], env_id: str, seed: int, *, resume: bool = False,
           progress_bar: bool = True, final_eval: bool = True) -> dict[str, Any]:
     """Train (or continue) the run in ``run_dir`` up to ``config["n_timesteps"]``; returns the timing."""
@@ -172,7 +184,8 @@ def train(run_dir: Path, config: dict[str, Any], env_id: str, seed: int, *, resu
 
     from agents.envs import TimedVecEnv, find_wrapper, make_training_env, normalizer_of
 
-    torch.set_num_threads(int(config.get("torch_threads", 1)))
+    warm_up_engine(env_id, config)
+    torch.set_num_threads(int(config.get("torch_threads", 1)))  # after the engine's threads started (see above)
     checkpoint = latest_checkpoint(run_dir) if resume else None
     venv = make_training_env(env_id, config["n_envs"], seed=seed, env_kwargs=config["env_kwargs"],
                              vec_env_kwargs=config.get("vec_env_kwargs"), normalize=config.get("normalize", True),
