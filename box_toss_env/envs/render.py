@@ -63,6 +63,7 @@ class ThrowRenderer:
             target_x=target_x,
             target_face=int(faces[0]) if faces.size == 1 else None,
             target_tolerance_m=self.tolerance,
+            target_label=f"{task.describe_target_faces(target_faces)} down",
             text_lines=(f"target: {task.describe_target_faces(target_faces)} down at x = {target_x:.2f} m",
                         caption),
         )

@@ -109,6 +109,7 @@ class SceneRenderer:
         target_x: float | None = None,
         target_face: int | None = None,
         target_tolerance_m: float | None = None,
+        target_label: str | None = None,
         text_lines: Sequence[str] = (),
         camera: Camera | None = None,
     ) -> np.ndarray:
@@ -125,6 +126,7 @@ class SceneRenderer:
             target_x,
             target_face,
             target_tolerance_m,
+            target_label,
             text_lines,
             camera,
         )
@@ -140,6 +142,7 @@ class SceneRenderer:
         target_x: float | None = None,
         target_face: int | None = None,
         target_tolerance_m: float | None = None,
+        target_label: str | None = None,
         text_lines: Sequence[str] = (),
         camera: Camera | None = None,
         fps: float | None = None,
@@ -158,6 +161,7 @@ class SceneRenderer:
             target_x,
             target_face,
             target_tolerance_m,
+            target_label,
             text_lines,
             camera,
         )
@@ -200,6 +204,7 @@ class SceneRenderer:
         target_x: float | None,
         target_face: int | None,
         target_tolerance_m: float | None,
+        target_label: str | None,
         text_lines: Sequence[str],
         camera: Camera | None,
     ) -> Any:
@@ -216,7 +221,7 @@ class SceneRenderer:
         self._draw_sky_and_ground(pygame, surface, camera)
         if target_x is not None:
             self._draw_target(
-                pygame, surface, camera, float(target_x), target_face, target_tolerance_m, half_extents
+                pygame, surface, camera, float(target_x), target_face, target_tolerance_m, target_label, half_extents
             )
         corners_px = camera.world_to_pixel(box_vertices(position, angle, half_extents))
         for box_corners_px, box_half_extents in zip(corners_px, half_extents, strict=True):
@@ -253,9 +258,11 @@ class SceneRenderer:
         target_x: float,
         target_face: int | None,
         target_tolerance_m: float | None,
+        target_label: str | None,
         half_extents: np.ndarray,
     ) -> None:
-        """A bracket on the floor at ``target_x``, a flag, and an icon and label for the face to land on."""
+        """A bracket on the floor at ``target_x``, a flag, and an icon and label for the face to land on
+        (``target_label`` replaces the label's text, e.g. "a long side down")."""
         palette = self.palette
         column, floor_row = _clip_px(camera.world_to_pixel(np.array([target_x, 0.0])))
         if target_tolerance_m is None:
@@ -291,7 +298,7 @@ class SceneRenderer:
             label_left += icon_size + 6
         font = self._get_font(pygame)
         if font is not None:
-            label = "any face" if target_face is None else f"face {target_face} down"
+            label = target_label or ("any face" if target_face is None else f"face {target_face} down")
             surface.blit(font.render(label, True, palette.target), (label_left, pole_top))
 
     def _draw_face_icon(

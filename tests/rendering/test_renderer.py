@@ -280,3 +280,11 @@ def test_importing_the_package_does_not_import_pygame():
         "PYTHONPATH": os.pathsep.join([str(repo_root), os.environ.get("PYTHONPATH", "")]),
     }
     subprocess.run([sys.executable, "-c", code], check=True, env=environment, cwd=repo_root)
+
+
+def test_target_label_replaces_the_default_text(renderer):
+    default = renderer.render_rgb(CENTRE, [0.0], HALF_EXTENTS, target_x=2.0)
+    labelled = renderer.render_rgb(CENTRE, [0.0], HALF_EXTENTS, target_x=2.0, target_label="a long side down")
+    again = renderer.render_rgb(CENTRE, [0.0], HALF_EXTENTS, target_x=2.0, target_label="a long side down")
+    assert not np.array_equal(default, labelled)
+    np.testing.assert_array_equal(labelled, again)
