@@ -7,8 +7,10 @@ Flight: no stepping at all. The motion is the closed-form parabola with constant
 (``flight``), and conservative advancement finds the first time a corner reaches y = 0, so
 flights and bounces are exact whatever the time step and however fast the box moves (no
 tunnelling). At that instant an impact is resolved (``resolve_impact``): the touching corners
-together, Newton's law u_n+ = -e u_n- for corners approaching faster than the restitution
-threshold, friction clamped to mu times the normal impulse. A box that leaves the floor flies on;
+together, compression then restitution (Poisson: e times the compression impulse, which is
+Newton's u_n+ = -e u_n- for one frictionless corner and never creates energy with friction) for
+corners approaching faster than the restitution threshold, friction clamped to mu times the
+normal impulse. A box that leaves the floor flies on;
 one that stays goes to
 
 Contact: time-stepping on the grid t_n = n dt (the stage script in ``make_robust_kernel``), the
@@ -17,11 +19,12 @@ stages of one step being
   2. solve contact velocities: the two corners of the face that is down together (2 x 2 LCP),
      each may close its gap but not pass it (speculative: u_n >= -max(y_i, 0)/dt), with clamped
      friction that never reverses sliding;
-  3. restitution: corners that hit faster than the threshold bounce with u_n = -e u_n-
-     (resting contact gets none, so it stays still);
+  3. restitution: corners that hit faster than the threshold bounce back with e times the
+     impulse that stopped them (Poisson; resting contact gets none, so it stays still);
   4. integrate positions: x += dt v, alpha += dt omega (symplectic Euler);
-  5. penalty: penetration is removed by the implicit (backward Euler) penalty spring as a
-     pseudo-velocity, stable for every stiffness and step (``implicit_penalty_fraction``).
+  5. penalty: penetration is removed by the critically damped penalty spring integrated with
+     backward Euler, as a pseudo-velocity, stable for every stiffness and step
+     (``penalty_correction_share``).
 A step is split into substeps when the box would turn more than MAX_ROTATION_PER_STEP.
 The box flies again when no corner is loaded or below the floor, and it is put to sleep
 (velocities set to zero, stepping stops) once it has lain still on a face for ``sleep_time``.
@@ -39,8 +42,10 @@ import numpy as np
 
 from . import layout
 from .contact_solver import (
+    apply_normal_impulses,
     correct_penetration,
     delassus,
+    friction_impulse,
     normal_impulses,
     solve_contact_velocities,
     solve_normal_velocities,
@@ -62,9 +67,16 @@ def resolve_impact(y, cos_a, sin_a, vx, vy, spin, half_length, half_width, inv_m
     """Impulses of an impact at the instant a corner reaches the floor.
 
     The touching corners (the lowest one, and its neighbour if within ``simultaneous`` of the
-    same height) are solved together: target u_n+ = -e u_n- where u_n- < -threshold, else 0;
-    friction clamped to mu lam_n. Returns (vx, vy, spin, corners hit, approach speed, leaves),
-    ``leaves`` being True when every touching corner separates faster than the threshold.
+    same height) are solved together, in Poisson's two phases:
+      compression: the impulses lam_c that stop every approaching corner (u_n+ = 0), with friction
+        clamped to mu lam_c;
+      restitution: each corner that hit faster than the threshold gets e lam_c more along the
+        normal, with friction clamped to mu e lam_c.
+    For a frictionless single corner this is Newton's law u_n+ = -e u_n-; unlike Newton's law with
+    friction, it never creates energy: compression removes 1/2 lam_c^T K lam_c and restitution
+    returns e^2 of it, and clamped friction only removes energy.
+    Returns (vx, vy, spin, corners hit, approach speed, leaves), ``leaves`` being True when every
+    touching corner separates faster than the threshold.
     """
     first, second = lowest_face(cos_a, sin_a, half_length, half_width)
     rx1, ry1 = vertex_offset(first, cos_a, sin_a, half_length, half_width)
@@ -75,16 +87,39 @@ def resolve_impact(y, cos_a, sin_a, vx, vy, spin, half_length, half_width, inv_m
     approach = max(-u1, -u2) if pair else -u1
     if approach <= 0.0:
         return vx, vy, spin, 0, 0.0, False
-    target1 = -restitution * u1 if u1 < -threshold else 0.0
-    target2 = -restitution * u2 if u2 < -threshold else 0.0
+    # compression
     if friction > 0.0:
-        vx, vy, spin, _, _ = solve_contact_velocities(vx, vy, spin, rx1, ry1, rx2, ry2, pair, target1, target2,
-                                                       friction, inv_mass, inv_inertia, FRICTION_ITERATIONS)
+        vx, vy, spin, lam1, lam2 = solve_contact_velocities(vx, vy, spin, rx1, ry1, rx2, ry2, pair, 0.0, 0.0,
+                                                            friction, inv_mass, inv_inertia, FRICTION_ITERATIONS)
     else:
-        vy, spin, _, _ = solve_normal_velocities(vy, spin, rx1, rx2, pair, target1, target2, inv_mass,
-                                                 inv_inertia)
+        vy, spin, lam1, lam2 = solve_normal_velocities(vy, spin, rx1, rx2, pair, 0.0, 0.0, inv_mass, inv_inertia)
+    # restitution
+    vx, vy, spin = restitution_impulses(vx, vy, spin, rx1, ry1, rx2, ry2, pair, lam1 if u1 < -threshold else 0.0,
+                                        lam2 if u2 < -threshold else 0.0, 0.0, 0.0, restitution, friction,
+                                        inv_mass, inv_inertia)
     leaves = vy + spin * rx1 > threshold and (not pair or vy + spin * rx2 > threshold)
     return vx, vy, spin, 2 if pair else 1, approach, leaves
+
+
+@numba.njit(cache=True)
+def restitution_impulses(vx, vy, spin, rx1, ry1, rx2, ry2, use2, compression1, compression2, target1, target2,
+                         restitution, friction, inv_mass, inv_inertia):
+    """Poisson's restitution phase: corner i gets the normal impulse e * compression_i, with friction
+    clamped to mu e compression_i (it can stop the slip there, never reverse it); then a corner pushed
+    towards the floor by the other's bounce is held at its target velocity (u_n >= target_i).
+    Returns (vx, vy, spin)."""
+    bounce1 = restitution * compression1
+    bounce2 = restitution * compression2
+    vy, spin = apply_normal_impulses(vy, spin, bounce1, bounce2, rx1, rx2, inv_mass, inv_inertia)
+    if friction > 0.0:
+        vx, spin, _ = friction_impulse(vx, spin, ry1, bounce1, 0.0, friction, inv_mass, inv_inertia)
+        if use2:
+            vx, spin, _ = friction_impulse(vx, spin, ry2, bounce2, 0.0, friction, inv_mass, inv_inertia)
+    k11, k12, k22 = delassus(rx1, rx2, inv_mass, inv_inertia)
+    hold1, hold2 = normal_impulses(vy + spin * rx1, vy + spin * rx2, target1, target2, 0.0, 0.0, k11, k12, k22,
+                                   True, use2)
+    vy, spin = apply_normal_impulses(vy, spin, hold1, hold2, rx1, rx2, inv_mass, inv_inertia)
+    return vx, vy, spin
 
 
 @numba.njit(cache=True)
@@ -110,25 +145,26 @@ def contact_corners(y, cos_a, sin_a, vy, spin, half_length, half_width, gravity,
 
 
 @numba.njit(cache=True)
-def apply_restitution(vy, spin, rx1, rx2, u1_before, u2_before, target1, target2, lam1, lam2, restitution,
-                      threshold, inv_mass, inv_inertia):
-    """Corners that hit faster than the threshold and were stopped bounce back: u_n+ = -e u_n-.
-    The other loaded corner keeps its target, so a bounce at one corner cannot drive the other into
-    the floor. Returns (vy, spin, approach speed of the fastest such corner, 0 if none)."""
+def apply_restitution(vx, vy, spin, rx1, ry1, rx2, ry2, u1_before, u2_before, target1, target2, lam1, lam2,
+                      restitution, friction, threshold, inv_mass, inv_inertia):
+    """Corners that hit faster than the threshold and were stopped by the contact solve bounce back
+    with e times the impulse that stopped their approach (Poisson, ``restitution_impulses``);
+    resting contact gets none, so it stays still. Returns (vx, vy, spin, approach speed of the fastest such corner,
+    0 if none)."""
     bounce1 = lam1 > 0.0 and u1_before < -threshold
     bounce2 = lam2 > 0.0 and u2_before < -threshold
     if not (bounce1 or bounce2):
-        return vy, spin, 0.0
+        return vx, vy, spin, 0.0
     approach = max(-u1_before if bounce1 else 0.0, -u2_before if bounce2 else 0.0)
     if restitution > 0.0:
-        k11, k12, k22 = delassus(rx1, rx2, inv_mass, inv_inertia)
-        new1, new2 = normal_impulses(vy + spin * rx1, vy + spin * rx2,
-                                     -restitution * u1_before if bounce1 else target1,
-                                     -restitution * u2_before if bounce2 else target2,
-                                     lam1, lam2, k11, k12, k22, lam1 > 0.0, lam2 > 0.0)
-        vy = vy + (new1 - lam1 + new2 - lam2) * inv_mass
-        spin = spin + (rx1 * (new1 - lam1) + rx2 * (new2 - lam2)) * inv_inertia
-    return vy, spin, approach
+        # the compression impulse is what stopped the approach, -u_n- K_ii^-1, not the part of lam that
+        # carried the weight during the step (bouncing that back would pump energy into a resting box)
+        k11, _, k22 = delassus(rx1, rx2, inv_mass, inv_inertia)
+        compression1 = min(lam1, -u1_before / k11) if bounce1 else 0.0
+        compression2 = min(lam2, -u2_before / k22) if bounce2 else 0.0
+        vx, vy, spin = restitution_impulses(vx, vy, spin, rx1, ry1, rx2, ry2, True, compression1, compression2,
+                                            target1, target2, restitution, friction, inv_mass, inv_inertia)
+    return vx, vy, spin, approach
 
 
 @numba.njit(cache=True)
@@ -260,9 +296,9 @@ def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, para
                         vy, spin, lam1, lam2 = solve_normal_velocities(vy, spin, rx1, rx2, True, target1, target2,
                                                                        inv_mass, inv_inertia)
                     # 3. restitution
-                    vy, spin, approach = apply_restitution(vy, spin, rx1, rx2, u1_before, u2_before, target1,
-                                                           target2, lam1, lam2, restitution, threshold, inv_mass,
-                                                           inv_inertia)
+                    vx, vy, spin, approach = apply_restitution(vx, vy, spin, rx1, ry1, rx2, ry2, u1_before, u2_before,
+                                                               target1, target2, lam1, lam2, restitution, friction,
+                                                               threshold, inv_mass, inv_inertia)
                     if approach > 0.0:
                         if RECORD:
                             record_event(events, i, n_impacts, t, approach, 1)
