@@ -4,8 +4,9 @@
     envs = gymnasium.make_vec("BoxToss-v0", num_envs=256, threads=1)  # one engine thread
 
 Env i behaves exactly like a single ``BoxToss-v0`` seeded the same way: it owns its own random
-generator (``reset(seed=s)`` seeds env i with s + i, as Gymnasium's vector envs do) and draws its
-episodes with the same batch-first task functions (``task``), and all throws go through the same
+stream (``reset(seed=s)`` seeds env i with s + i, as Gymnasium's vector envs do; ``random_streams``
+keeps all of them in one array) and draws its episodes with the same batch-first task functions
+(``task``), and all throws go through the same
 engine kernel, run over the batch on ``threads`` threads (default: numba's, i.e. the cores
 available); results do not depend on the thread count. The task logic, the reward and the drawing
 are the single env's, not a copy.
@@ -24,12 +25,12 @@ import math
 from typing import Any
 
 import numpy as np
-from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from box_toss_env.envs import task
 from box_toss_env.envs.box_toss import BoxTossEnv, EnergyGainError
+from box_toss_env.envs.random_streams import RandomStreams
 from box_toss_env.physics import Simulator, check_finite_stats, layout
 
 INFO_TERMS = task.REWARD_TERMS
@@ -70,11 +71,11 @@ class BoxTossVectorEnv(VectorEnv):
 
         n = self.num_envs
         self._episodes = task.Episodes.empty(n)
-        self._drawn = task.Episodes.empty(1)  # each env's episode is drawn here, then copied to its row
+        self._uniforms = np.zeros((n, task.EPISODE_SIZE))  # the variates each episode is drawn from
         self._params = np.zeros((n, layout.PARAM_SIZE))
         self._state = np.zeros((n, layout.STATE_SIZE))
         self._stats = np.zeros((n, layout.STATS_SIZE))
-        self._rngs: list[np.random.Generator | None] = [None] * n
+        self._streams = RandomStreams(n)  # env i's random stream: np_random of a single env
         self._params_stale = True
         self._needs_reset = True
         self._simulator: Simulator | None = None
@@ -87,9 +88,10 @@ class BoxTossVectorEnv(VectorEnv):
         return self._simulator
 
     @property
-    def np_random(self) -> list[np.random.Generator | None]:
-        """Each env's random generator."""
-        return self._rngs
+    def np_random(self) -> list[np.random.Generator]:
+        """Each env's random generator, at its current position (copies: drawing from them does not
+        advance the envs' streams)."""
+        return [self._streams.generator(i) for i in range(self.num_envs)]
 
     # -- episodes ---------------------------------------------------------------------------------
     def _seed(self, seed: int | list[int | None] | None) -> None:
@@ -102,14 +104,13 @@ class BoxTossVectorEnv(VectorEnv):
             if len(seeds) != self.num_envs:
                 raise ValueError(f"seed must be None, an int or a list of {self.num_envs} seeds, got {seed!r}")
         for i, value in enumerate(seeds):
-            if value is not None or self._rngs[i] is None:
-                self._rngs[i], _ = seeding.np_random(value)
+            if value is not None or not self._streams.seeded[i]:
+                self._streams.seed(i, value)
 
     def _new_episodes(self) -> dict[str, np.ndarray]:
-        """Draw every env's next episode (each from its own generator); the boxes are in the hand."""
-        episodes, drawn = self._episodes, self._drawn
-        for i, rng in enumerate(self._rngs):
-            episodes.data[i] = task.sample_episodes(rng, self.config, drawn).data[0]
+        """Draw every env's next episode (each from its own stream); the boxes are in the hand."""
+        episodes = task.episodes_from_uniforms(self._streams.fill_uniform(self._uniforms), self.config,
+                                               self._episodes)
         if self._params_stale or self.config.randomises_dynamics:
             task.write_body_params(self._params, episodes, self.config)
             self._params_stale = False

@@ -239,12 +239,16 @@ def make_task_config(*, box_length, box_width, gravity, mass, friction, restitut
 
 # -- 1. sampling ---------------------------------------------------------------------------------
 def sample_episodes(rng: np.random.Generator, config: TaskConfig, out: Episodes) -> Episodes:
-    """Draw ``len(out.data)`` episodes into ``out`` with one call to ``rng`` and return it.
+    """Draw ``len(out.data)`` episodes into ``out`` with one call to ``rng`` and return it
+    (``episodes_from_uniforms`` of ``rng.random(out.data.shape)``)."""
+    return episodes_from_uniforms(rng.random(out.data.shape), config, out)
 
-    Each value is uniform over its range: release x, height and angle, target x, the mass, friction
-    and restitution; the target faces follow ``config.target_face`` (see ``TARGET_FACE_KINDS``).
-    """
-    u = rng.random(out.data.shape)
+
+def episodes_from_uniforms(u: np.ndarray, config: TaskConfig, out: Episodes) -> Episodes:
+    """The episodes (written into ``out`` and returned) that the uniform variates ``u`` (n,
+    EPISODE_SIZE) in [0, 1) stand for: each value is uniform over its range (release x, height and
+    angle, target x, mass, friction, restitution); the target faces follow ``config.target_face``
+    (see ``TARGET_FACE_KINDS``)."""
     low, span = config.episode_low_span
     np.multiply(u, span, out=out.data)
     out.data += low
