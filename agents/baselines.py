@@ -97,12 +97,12 @@ class OracleSettings:
     ``iterations`` rounds of ``population`` candidates drawn around the ``elite`` best so far; a
     target stops once it has a success within ``settle`` times the position tolerance."""
 
-    initial: int = 256
-    population: int = 64
+    initial: int = 128
+    population: int = 32
     elite: int = 8
-    iterations: int = 6
+    iterations: int = 12
     min_std: float = 0.005
-    settle: float = 0.5
+    settle: float = 0.05
     seed: int = 0
     threads: int | None = None
 
@@ -147,7 +147,8 @@ class OraclePlanner:
         repeated = task.Episodes(np.repeat(episodes.data[rows], k, axis=0))
         reward, success, distance = simulator.rewards(repeated, candidates.reshape(-1, task.ACTION_SIZE))
         scores = reward.reshape(len(rows), k)
-        settled = (success & (distance <= self.settings.settle * simulator.config.position_tolerance)).reshape(scores.shape)
+        tolerance = self.settings.settle * simulator.config.position_tolerance
+        settled = (success & (distance <= tolerance)).reshape(scores.shape)
         if incumbents is not None:
             candidates = np.concatenate((incumbents[0], candidates), axis=1)
             scores = np.concatenate((incumbents[1], scores), axis=1)
@@ -192,7 +193,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("algo", choices=("random", "oracle"))
     parser.add_argument("--env", default="BoxToss-v0")
     parser.add_argument("--env-kwargs", nargs="*", default=[], metavar="KEY=VALUE")
-    parser.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE", dest="settings",
+    parser.add_argument("--set", nargs="*", default=[], action="extend", metavar="KEY=VALUE", dest="settings",
                         help="baseline settings, e.g. seed=1 (random) or population=128 iterations=8 (oracle)")
     parser.add_argument("--name", help="run folder name (default: the baseline's name)")
     parser.add_argument("--runs-dir", type=Path, default=RUNS)

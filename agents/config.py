@@ -39,7 +39,18 @@ def load_hyperparams(env_id: str, path: str | Path = HYPERPARAMS) -> dict[str, A
         table = yaml.safe_load(file) or {}
     if env_id not in table:
         raise KeyError(f"{path} has no entry for {env_id!r}; it has {sorted(table)}")
-    return copy.deepcopy(table[env_id])
+    return coerce_numbers(copy.deepcopy(table[env_id]))
+
+
+def coerce_numbers(value: Any) -> Any:
+    """``value`` with every string that reads as a number (``1e-3``) made that number, recursively."""
+    if isinstance(value, dict):
+        return {key: coerce_numbers(item) for key, item in value.items()}
+    if isinstance(value, list):
+        return [coerce_numbers(item) for item in value]
+    if isinstance(value, str):
+        return read_value(value)
+    return value
 
 
 def parse_override(text: str) -> tuple[list[str], Any]:
@@ -47,7 +58,20 @@ def parse_override(text: str) -> tuple[list[str], Any]:
     key, sep, value = text.partition("=")
     if not sep or not key.strip():
         raise ValueError(f"an override must look like key=value (e.g. n_timesteps=100000), got {text!r}")
-    return key.strip().split("."), yaml.safe_load(value)
+    return key.strip().split("."), read_value(value)
+
+
+def read_value(text: str) -> Any:
+    """``yaml.safe_load(text)``, except that numbers YAML 1.1 reads as strings (``1e-3``, ``3E5``)
+    are numbers."""
+    value = yaml.safe_load(text)
+    if isinstance(value, str):
+        try:
+            number = float(value)
+        except ValueError:
+            return value
+        return int(number) if number.is_integer() and "." not in value and "e-" not in value.lower() else number
+    return value
 
 
 def apply_overrides(config: dict[str, Any], overrides: list[str] | None) -> dict[str, Any]:
@@ -92,7 +116,34 @@ def ppo_kwargs(config: dict[str, Any]) -> dict[str, Any]:
     classes = {"tanh": torch.nn.Tanh, "relu": torch.nn.ReLU, "elu": torch.nn.ELU, "leaky_relu": torch.nn.LeakyReLU,
                "gelu": torch.nn.GELU, "silu": torch.nn.SiLU}
     policy_kwargs["activation_fn"] = classes[name]
+    for key in ("learning_rate", "clip_range"):
+        if isinstance(kwargs.get(key), str):
+            kwargs[key] = schedule(key, kwargs[key])
     return kwargs
+
+
+def schedule(name: str, text: str):
+    """``"lin_X"``: a value decaying linearly from X at the start of training to 0 at its end
+    (SB3 calls schedules with the fraction of training remaining, 1 -> 0, and below 0 in the last
+    rollout when the budget is not a multiple of the rollout size)."""
+    prefix, _, value = text.partition("_")
+    start = read_value(value)
+    if prefix != "lin" or not isinstance(start, (int, float)):
+        raise ValueError(f"{name} must be a number or 'lin_<number>' (linear decay to 0), got {text!r}")
+    return LinearSchedule(float(start))
+
+
+class LinearSchedule:
+    """X * (fraction of training remaining); a class rather than a lambda, so saved models load anywhere."""
+
+    def __init__(self, start: float):
+        self.start = start
+
+    def __call__(self, progress_remaining: float) -> float:
+        return self.start * max(progress_remaining, 0.0)  # SB3 may overshoot the budget by part of a rollout
+
+    def __repr__(self) -> str:
+        return f"lin_{self.start:g}"
 
 
 def save_yaml(data: Any, path: str | Path) -> None:

@@ -85,7 +85,7 @@ class Throws:
             return cls(**arrays, failure=[str(v) for v in data["failure"]])
 
 
-def test_seeds(n: int = TEST_TARGETS, first: int = TEST_FIRST_SEED) -> np.ndarray:
+def target_seeds(n: int = TEST_TARGETS, first: int = TEST_FIRST_SEED) -> np.ndarray:
     return np.arange(first, first + n)
 
 
@@ -127,7 +127,7 @@ def throw(env: gym.Env, seeds, actions: np.ndarray, reset_infos: list[dict[str, 
 def evaluate(policy: Policy, env_id: str, env_kwargs: dict[str, Any] | None = None, seeds=None) -> tuple[Throws, float]:
     """Throw once per seed (default: the 1,024 test targets) with ``policy``'s deterministic
     actions. Returns the throws and the seconds the policy took to answer (a planner's planning)."""
-    seeds = test_seeds() if seeds is None else np.asarray(seeds)
+    seeds = target_seeds() if seeds is None else np.asarray(seeds)
     env = gym.make(env_id, **(env_kwargs or {}))
     try:
         observations, infos = draw_targets(env, seeds)
@@ -178,18 +178,20 @@ def summarize(throws: Throws, target_x_range: tuple[float, float]) -> dict[str, 
 
 def format_table(rows: list[dict[str, Any]], label: str = "agent") -> str:
     """A plain-text table of scores (one row per dict with a ``label`` key)."""
-    header = f"{label:<24} {'targets':>7} {'success':>8} {'mean dist':>10} {'median dist':>12} {'face acc':>9}"
+    width = max([24] + [len(str(row[label])) for row in rows])
+    header = f"{label:<{width}} {'targets':>7} {'success':>8} {'mean dist':>10} {'median dist':>12} {'face acc':>9}"
     lines = [header, "-" * len(header)]
     for row in rows:
         failures = f"  ({row['failures']} failed)" if row.get("failures") else ""
-        lines.append(f"{row[label]:<24} {row['n']:>7d} {row['success_rate']:>7.1%} {row['mean_distance']:>8.3f} m "
+        lines.append(f"{row[label]:<{width}} {row['n']:>7d} {row['success_rate']:>7.1%} {row['mean_distance']:>8.3f} m "
                      f"{row['median_distance']:>10.3f} m {row['face_accuracy']:>8.1%}{failures}")
     return "\n".join(lines)
 
 
 def format_summary(name: str, summary: dict[str, Any]) -> str:
     text = [format_table([{"agent": name, **summary}]), "", "by target distance:",
-            format_table(summary["by_distance"], "bin"), "", "by target face:", format_table(summary["by_face"], "kind")]
+            format_table(summary["by_distance"], "bin"), "", "by target face:",
+            format_table(summary["by_face"], "kind")]
     if summary["failure_reasons"]:
         text += ["", "throws the env refused to finish (counted as failures): "
                  + ", ".join(f"{n} x {reason}" for reason, n in summary["failure_reasons"].items())]
@@ -222,7 +224,7 @@ def evaluate_run(run_dir: Path, *, model: str = "final", env_kwargs: dict[str, A
     policy, config = load_policy(run_dir, model)
     env_id = config["env_id"]
     kwargs = {**config.get("env_kwargs", {}), **(env_kwargs or {})}
-    seeds = test_seeds(n_targets, first_seed)
+    seeds = target_seeds(n_targets, first_seed)
     start = time.perf_counter()
     throws, act_seconds = evaluate(policy, env_id, kwargs, seeds)
     wall = time.perf_counter() - start
@@ -237,7 +239,8 @@ def evaluate_run(run_dir: Path, *, model: str = "final", env_kwargs: dict[str, A
     (out / "results.json").write_text(json.dumps(results, indent=2))
     throws.save(out / "throws.npz")
     if not quiet:
-        print(f"{run_dir.name} ({config['algo']}, {model} model) on {env_id} {kwargs or ''}, "
+        which = f", {model} model" if config["algo"] == "ppo" else ""
+        print(f"{run_dir.name} ({config['algo']}{which}) on {env_id}{' ' + str(kwargs) if kwargs else ''}, "
               f"targets of seeds {seeds[0]}-{seeds[-1]}:")
         print(format_summary(run_dir.name, summary))
         print(f"results in {out}")

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from agents import config as configuration
-from agents.evaluate import VALIDATION_FIRST_SEED, evaluate, scores, test_seeds
+from agents.evaluate import VALIDATION_FIRST_SEED, evaluate, scores, target_seeds
 
 RUNS = Path("runs")
 EVAL_COLUMNS = ("timesteps", "wall_seconds", "success_rate", "mean_distance", "median_distance", "face_accuracy",
@@ -76,7 +76,7 @@ def make_callbacks(run_dir: Path, config: dict[str, Any], env_id: str):
         def __init__(self):
             super().__init__()
             self.every = int(config["eval_freq"])
-            self.seeds = test_seeds(int(config["eval_targets"]), VALIDATION_FIRST_SEED)
+            self.seeds = target_seeds(int(config["eval_targets"]), VALIDATION_FIRST_SEED)
             self.path = run_dir / "evaluations.csv"
             self.best = -1.0
             self.last = 0
@@ -118,7 +118,8 @@ def make_callbacks(run_dir: Path, config: dict[str, Any], env_id: str):
             for key in ("success_rate", "mean_distance", "face_accuracy", "mean_reward"):
                 self.logger.record(f"eval/{key}", result[key])
             with open(self.path, "a", newline="") as file:
-                csv.writer(file).writerow([self.num_timesteps, f"{wall:.2f}"] + [result[key] for key in EVAL_COLUMNS[2:]])
+                row = [self.num_timesteps, f"{wall:.2f}"] + [result[key] for key in EVAL_COLUMNS[2:]]
+                csv.writer(file).writerow(row)
             if result["success_rate"] > self.best:
                 self.best = result["success_rate"]
                 self.model.save(run_dir / "best_model.zip")
@@ -187,7 +188,9 @@ def train(run_dir: Path, config: dict[str, Any], env_id: str, seed: int, *, resu
     warm_up_engine(env_id, config)
     torch.set_num_threads(int(config.get("torch_threads", 1)))  # after the engine's threads started (see above)
     checkpoint = latest_checkpoint(run_dir) if resume else None
-    venv = make_training_env(env_id, config["n_envs"], seed=seed, env_kwargs=config["env_kwargs"],
+    # a resumed run draws new episodes (seeded after the steps already taken), not the first ones again
+    env_seed = seed + (checkpoint[2] if checkpoint else 0)
+    venv = make_training_env(env_id, config["n_envs"], seed=env_seed, env_kwargs=config["env_kwargs"],
                              vec_env_kwargs=config.get("vec_env_kwargs"), normalize=config.get("normalize", True),
                              normalize_path=str(checkpoint[1]) if checkpoint and checkpoint[1] else None)
     if checkpoint:
@@ -232,7 +235,7 @@ def main(argv: list[str] | None = None) -> Path:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--env", default="BoxToss-v0", help="env id (a key of the hyperparameter file)")
     parser.add_argument("--hyperparams", type=Path, default=configuration.HYPERPARAMS, help="YAML keyed by env id")
-    parser.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE", dest="overrides",
+    parser.add_argument("--set", nargs="*", default=[], action="extend", metavar="KEY=VALUE", dest="overrides",
                         help="override hyperparameters, e.g. n_timesteps=100000 policy_kwargs.net_arch=[64,64]")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--name", help="run folder name (default: env id and time)")
