@@ -29,19 +29,33 @@ from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices
 
 def split_info(info: dict[str, Any], num_envs: int) -> list[dict[str, Any]]:
     """Gymnasium's vector ``info`` (a dict of per-env arrays with ``_key`` masks) as one dict per
-    env, keeping only the entries each env actually set."""
-    per_env: list[dict[str, Any]] = [{} for _ in range(num_envs)]
+    env, keeping only the entries each env actually set. Per-env scalars become Python scalars (as
+    a single env returns them), rows of 2-D arrays stay arrays."""
+    everywhere_keys, everywhere_columns, partial = [], [], []
+    mask_is_full: dict[int, bool] = {}  # vector envs often share one mask array between keys
     for key, value in info.items():
         if key.startswith("_"):
             continue
-        mask = info.get(f"_{key}", np.ones(num_envs, dtype=bool))
         if isinstance(value, dict):
-            nested = split_info(value, num_envs)
-            for i in np.flatnonzero(mask):
-                per_env[i][key] = nested[i]
+            values = split_info(value, num_envs)
+        elif isinstance(value, np.ndarray) and value.ndim == 1:
+            values = value.tolist()
         else:
-            for i in np.flatnonzero(mask):
-                per_env[i][key] = value[i]
+            values = list(value)
+        mask = info.get(f"_{key}")
+        if mask is not None and id(mask) not in mask_is_full:
+            mask_is_full[id(mask)] = bool(mask.all())
+        if mask is None or mask_is_full[id(mask)]:
+            everywhere_keys.append(key)
+            everywhere_columns.append(values)
+        else:
+            partial.append((key, values, np.flatnonzero(mask)))
+    per_env = [dict(zip(everywhere_keys, row, strict=True)) for row in zip(*everywhere_columns, strict=True)]
+    if not per_env:
+        per_env = [{} for _ in range(num_envs)]
+    for key, values, envs in partial:
+        for i in envs:
+            per_env[i][key] = values[i]
     return per_env
 
 
