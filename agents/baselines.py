@@ -67,7 +67,7 @@ class ThrowSimulator:
     def __init__(self, env: gym.Env, threads: int | None = None):
         unwrapped = env.unwrapped
         self.config = unwrapped.config
-        self.settings = unwrapped._settings  # the env's solver settings (dt, sleep, ...): throws as the env's
+        self.settings = unwrapped.engine_settings  # the env's solver settings (dt, sleep, ...): throws as the env's
         self.simulator = Simulator(dataclasses.replace(unwrapped.flags, parallel=True, record=False), threads=threads)
         self.low, self.high = unwrapped.observation_space.low, unwrapped.observation_space.high
 

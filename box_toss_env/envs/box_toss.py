@@ -276,6 +276,12 @@ class BoxTossEnv(gym.Env):
         self._frames: list[np.ndarray] = []
         self._simulator = None  # built at the first throw: making an env compiles nothing
 
+    @property
+    def engine_settings(self) -> np.ndarray:
+        """The engine's settings array for this env's throws (dt, gravity, sleep, ...; see
+        ``physics.layout``), for running the same throws on the engine directly (a copy)."""
+        return self._settings.copy()
+
     def _build_simulator(self) -> Simulator:
         self._simulator = Simulator(dataclasses.replace(self.flags, record=self._records))
         return self._simulator

@@ -16,6 +16,10 @@ observation returned by ``step`` is the next episode's first one, and the final 
 are in ``info["final_obs"]`` and ``info["final_info"]`` (with their ``_final_obs``/``_final_info``
 masks). With Gymnasium's default ``NEXT_STEP`` every other step would be an empty reset step.
 For Stable-Baselines3 wrap it in ``box_toss_env.vector.sb3_adapter.SB3VecEnvAdapter``.
+
+With PyTorch in the same process: numba's OpenMP threading layer shares the OpenMP runtime with
+torch, and its first parallel call sets that runtime's thread count to numba's. Call
+``torch.set_num_threads`` after the first ``step`` (``agents.train`` does), or pass ``threads``.
 """
 
 from __future__ import annotations
@@ -76,6 +80,7 @@ class BoxTossVectorEnv(VectorEnv):
         self._state = np.zeros((n, layout.STATE_SIZE))
         self._stats = np.zeros((n, layout.STATS_SIZE))
         self._streams = RandomStreams(n)  # env i's random stream: np_random of a single env
+        self._settings = self.env.engine_settings
         self._params_stale = True
         self._needs_reset = True
         self._simulator: Simulator | None = None
@@ -143,7 +148,7 @@ class BoxTossVectorEnv(VectorEnv):
         actions = task.check_actions(actions, self.action_space.shape)
         episodes = self._episodes
         task.write_initial_states(self._state, episodes, task.actions_to_throws(actions, self.config))
-        self.simulator.run(self._state, self._params, self.env._settings, self._stats)
+        self.simulator.run(self._state, self._params, self._settings, self._stats)
         stats = self._stats
         if np.any(stats[:, layout.STATUS] != layout.STATUS_OK):
             check_finite_stats(stats, self.env.solver)
