@@ -247,7 +247,8 @@ def exact_cases() -> tuple[ExactCase, ...]:
                    "pose error |dx| + R |da| at t = 1 s [m]", scenes.free_flight(**k), 1.0),
         corner,
         FlatDrop("flat_drop", "Flat drop", "a level drop from h = 1 m rebounds to the apex e^2 h (e = 0.5), no spin",
-                 "apex error |apex - e^2 h| [m], read at the apex time", drop, FlatDrop.apex_time(1.0, 0.5, drop.gravity)),
+                 "apex error |apex - e^2 h| [m], read at the apex time", drop,
+                 FlatDrop.apex_time(1.0, 0.5, drop.gravity)),
         Slide("slide", "Sliding to rest", "a box sliding at 2 m/s with mu = 0.3 stops after v0^2 / (2 mu g)",
               "stopping distance error [m] at t = 1.5 s", scenes.slide(speed=2.0, friction=0.3, **k), 1.5),
         Resting("resting", "Resting 10 s", "a box lying on the floor does not move (e = 0.5, mu = 0.02)",
@@ -274,7 +275,8 @@ class Throws:
 
     def scene(self, solver: str, dt: float) -> Scene:
         """The env's scene settings (thresholds, sleep) for ``solver`` and ``dt``."""
-        return Scene(dt=dt, solver=solver, gravity=-self.config.gravity, penalty_stiffness=self.config.penalty_stiffness)
+        return Scene(dt=dt, solver=solver, gravity=-self.config.gravity,
+                     penalty_stiffness=self.config.penalty_stiffness)
 
     def max_steps(self, dt: float) -> int:
         return max(1, math.ceil(self.config.max_sim_time / dt - 1e-9))
@@ -371,3 +373,13 @@ def friction_corner_hit(friction: float, restitution: float, angle: float = 0.4,
     energy can only fall."""
     return scenes.corner_impact(angle=angle, velocity=velocity, spin=spin, restitution=restitution,
                                 **{"friction": friction, "penalty_stiffness": STIFFNESS, **scene})
+
+
+def tipping_box(restitution: float, friction: float, **scene) -> Scene:
+    """The toss box standing still on one corner (angle 0.3) and sliding at 1 m/s: it tips over, and its other
+    corner slams down while the first one is held, an impact that happens in the robust solver's contact mode."""
+    base = scenes.toss(restitution=restitution, friction=friction, penalty_stiffness=STIFFNESS, **scene)
+    box = base.boxes[0]
+    angle = 0.3
+    reach = 0.5 * box.length * math.sin(angle) + 0.5 * box.width * math.cos(angle)  # centre above the lowest corner
+    return with_box(base, position=(0.0, reach), angle=angle, velocity=(1.0, 0.0), spin=0.0)

@@ -66,8 +66,8 @@ def machine() -> str:
     import numba
     import numpy
 
-    return (f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
-            f"numpy {numpy.__version__}, numba {numba.__version__}")
+    return (f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+            f"Python {platform.python_version()}, numpy {numpy.__version__}, numba {numba.__version__}")
 
 
 def save_figure(figure, path: Path) -> None:
@@ -78,21 +78,21 @@ def save_figure(figure, path: Path) -> None:
     plt.close(figure)
 
 
+BLOCK_ORDER = ("precision", "stability")
+
+
 def update_readme(name: str, body: str, readme: Path = README) -> None:
-    """Replace the block ``<!-- reports:NAME:start -->`` ... ``end`` inside the reports section of
-    ``readme`` with ``body``; create the section (at the end of the file) and the block if absent."""
+    """Set the block ``<!-- reports:NAME:start -->`` ... ``end`` inside the reports section of ``readme`` to
+    ``body``, keeping the other blocks (in ``BLOCK_ORDER``); create the section at the end of the file if absent.
+    Nothing outside the section changes."""
     text = readme.read_text()
     if SECTION_START not in text or SECTION_END not in text:
-        text = text.rstrip("\n") + f"\n\n{SECTION_START}\n{SECTION_TITLE}\n{SECTION_END}\n"
+        text = text.rstrip("\n") + f"\n\n{SECTION_START}\n{SECTION_END}\n"
     start, end = text.index(SECTION_START), text.index(SECTION_END)
     section = text[start + len(SECTION_START):end]
-    block_start, block_end = f"<!-- reports:{name}:start -->", f"<!-- reports:{name}:end -->"
-    block = f"{block_start}\n{body.strip()}\n{block_end}"
-    if block_start in section and block_end in section:
-        section = re.sub(re.escape(block_start) + ".*?" + re.escape(block_end), lambda _: block, section,
-                         flags=re.DOTALL)
-    else:
-        section = section.rstrip("\n") + "\n" + block + "\n"
-    if not section.startswith("\n"):
-        section = "\n" + section
-    readme.write_text(text[:start + len(SECTION_START)] + section + text[end:])
+    blocks = {match[0]: match[1] for match in
+              re.findall(r"<!-- reports:(\w+):start -->\n(.*?)\n<!-- reports:\1:end -->", section, flags=re.DOTALL)}
+    blocks[name] = body.strip()
+    names = [n for n in BLOCK_ORDER if n in blocks] + sorted(n for n in blocks if n not in BLOCK_ORDER)
+    inner = "\n".join(f"<!-- reports:{n}:start -->\n{blocks[n]}\n<!-- reports:{n}:end -->" for n in names)
+    readme.write_text(f"{text[:start]}{SECTION_START}\n{SECTION_TITLE}\n\n{inner}\n{text[end:]}")
