@@ -25,7 +25,7 @@ SEED_DT = 1 / 1024  # a step at which the seed scheme keeps its energy at the de
 # (run, tag, env kwargs, label) of the physics-fidelity evaluations
 FIDELITY_SETTINGS = [
     ("full", "robust-dt1024", {"dt": SEED_DT}, "robust solver, dt = 1/1024 s"),
-    ("full", "seed-dt256", {"solver": "seed"}, "seed scheme, dt = 1/256 s"),
+    ("full", "seed-default-dt", {"solver": "seed"}, "seed scheme, the default dt = 1/128 s"),
     ("full", "seed-dt1024", {"solver": "seed", "dt": SEED_DT}, "seed scheme, dt = 1/1024 s"),
     ("oracle", "seed-dt1024", {"solver": "seed", "dt": SEED_DT}, "seed scheme, dt = 1/1024 s"),
 ]

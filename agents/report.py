@@ -301,7 +301,7 @@ def readme_section(runs: dict[str, Path], fidelity: list[tuple[str, str, str]], 
                 f"{failures} |")
     if fidelity_rows:
         lines += ["Physics fidelity: the same policies evaluated on the same targets under another solver or step "
-                  "(PPO trained on the default, robust solver at dt = 1/256 s; the oracle plans again with the "
+                  "(PPO trained on the default, robust solver at dt = 1/128 s; the oracle plans again with the "
                   "physics it is evaluated under). Throws the seed scheme blows up (`EnergyGainError`) count as "
                   "failures.", "",
                   "| agent | physics | success | mean distance error | throws refused |", "|---|---|---:|---:|---:|",

@@ -2,7 +2,7 @@
 included), each throw being ``reset()`` + ``step(action)`` with random actions. Prints measured
 figures; asserts nothing.
 
-    python -m benchmarks.env_throughput [--throws 5000] [--repeats 5] [--solver robust] [--dt 0.00390625]
+    python -m benchmarks.env_throughput [--throws 5000] [--repeats 5] [--solver robust] [--dt 0.0078125]
 
 The actions are drawn before timing; a warm-up pass first loads the compiled kernel and fills the
 caches. Reported: the median over repeats, with the spread, and the part spent in the engine
@@ -53,7 +53,7 @@ def main() -> None:
     parser.add_argument("--throws", type=int, default=5000)
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--solver", default="robust")
-    parser.add_argument("--dt", type=float, default=1 / 256)
+    parser.add_argument("--dt", type=float, default=1 / 128)
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
 

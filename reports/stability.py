@@ -691,7 +691,7 @@ def readme_block(report: StabilityReport) -> str:
     return "\n".join([
         f"**Stability on stiff and extreme cases** (`docs/stability.md`): `python -m reports.stability` "
         f"({report.run_seconds / 60:.1f} min on {document.machine().split(',')[1].strip()}; `--quick` for the "
-        "reduced version the tests run; both commands need the `test` extra). Rows inside the robust default's "
+        "reduced version the tests run; both need the `reports` extra). Rows inside the robust default's "
         f"declared range ({', '.join(f'{k} {v}' for k, v in list(DECLARED_RANGE.items())[:6])}):",
         "",
         table(["row", "robust", "seed"], [[r.title, r.verdict("robust", limit=1), r.verdict("seed", limit=1)]

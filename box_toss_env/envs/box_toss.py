@@ -126,7 +126,7 @@ class BoxTossEnv(gym.Env):
     ``max_sim_time`` (10 s) of simulated time at most; ``info["at_rest"]`` tells which. Calling
     ``step`` again before ``reset`` raises ``gymnasium.error.ResetNeeded``. The explicit seed scheme
     (``solver="seed"``) gains energy when ``dt`` is too large for ``penalty_stiffness`` (at the
-    default 1/256 s with 1e5 N/m it does; 1/1024 s is fine): ``step`` then raises
+    default 1/128 s with 1e5 N/m it does; 1/1024 s is fine): ``step`` then raises
     ``box_toss_env.envs.box_toss.EnergyGainError`` if the final state leaves the observation bounds,
     and the engine's ``NonFiniteStateError`` if it diverges, rather than return such values.
 
@@ -169,7 +169,7 @@ class BoxTossEnv(gym.Env):
     | ``restitution_range``  | None              | (low, high) in [0, 1]: draw the restitution per episode         |
     | ``observe_dynamics``   | False             | append mass, friction, restitution to the observation           |
     | ``solver``             | "robust"          | "robust" (the engine's default) or "seed" (the explicit scheme) |
-    | ``dt``                 | 1/256             | solver time step [s]                                            |
+    | ``dt``                 | 1/128             | solver time step [s] (docs/precision.md: the cheapest accurate one) |
     | ``max_sim_time``       | 10.0              | simulated time after which a throw ends anyway [s]              |
     | ``render_mode``        | None              | None, "human", "rgb_array" or "rgb_array_list"                  |
     | ``render_fps``         | 30                | frame rate of "human" playback and "rgb_array_list" frames      |
@@ -221,7 +221,7 @@ class BoxTossEnv(gym.Env):
         restitution_range: tuple[float, float] | None = None,
         observe_dynamics: bool = False,
         solver: str = "robust",
-        dt: float = 1 / 256,
+        dt: float = 1 / 128,
         max_sim_time: float = 10.0,
         render_fps: float = 30,
         render_width: int = 600,

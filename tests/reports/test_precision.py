@@ -106,7 +106,7 @@ def test_the_report_and_its_figures_are_written(report, tmp_path):
     for name in ("precision_work.png", "precision_order.png", "precision_faces.png"):
         assert (tmp_path / "figures" / name).stat().st_size > 10_000
         assert f"figures/{name}" in text
-    assert "## The env's default setting" in text and "dt=0.00390625" in text
+    assert "## The env's default setting" in text and "dt=0.0078125" in text
     for case in cases.exact_cases():
         assert f"### {case.title}" in text
     assert "FAIL: blow-up" in text
