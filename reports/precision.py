@@ -684,8 +684,8 @@ def readme_block(report: PrecisionReport) -> str:
     return "\n".join([
         f"**Error against run time** (`docs/precision.md`): `python -m reports.precision` "
         f"({report.run_seconds / 60:.1f} min on {document.machine().split(',')[1].strip()}; "
-        "`--quick` for the reduced version the tests run; both need the `reports` extra (`pip install -e ".[reports]"`: "
-        "matplotlib, hypothesis and the other engines). Landing pose of "
+        "`--quick` for the reduced version the tests run; both need the `reports` extra, "
+        "`pip install -e '.[reports]'`: matplotlib, hypothesis and the other engines). Landing pose of "
         f"{report.throws.n} seeded BoxToss-v0 throws against each solver's reference 16 times finer, over the throws "
         "whose reference moves less than a tenth of the criterion's thresholds when its step is halved (errors: "
         "those landing on the reference's face):",
