@@ -3,6 +3,7 @@
 import math
 
 import numba
+import numpy as np
 
 from . import layout
 from .geometry import lowest_face, vertex_offset
@@ -34,6 +35,15 @@ def is_lying_still(y, angle, vx, vy, spin, half_length, half_width, sleep_speed)
     rx1, ry1 = vertex_offset(first, cos_a, sin_a, half_length, half_width)
     rx2, ry2 = vertex_offset(second, cos_a, sin_a, half_length, half_width)
     return lies_still(y, ry1, ry2, rx1, rx2, vx, vy, spin, half_length, half_width, sleep_speed)
+
+
+@numba.njit(cache=True)
+def read_settings(settings):
+    """The scene-wide settings array as (dt, gravity, max_steps, until_rest, restitution_threshold,
+    sleep_speed, sleep_time, penetration_slop)."""
+    return (settings[layout.DT], settings[layout.GRAVITY], np.int64(settings[layout.MAX_STEPS]),
+            settings[layout.UNTIL_REST] != 0.0, settings[layout.RESTITUTION_THRESHOLD], settings[layout.SLEEP_SPEED],
+            settings[layout.SLEEP_TIME], settings[layout.PENETRATION_SLOP])
 
 
 @numba.njit(cache=True)

@@ -52,7 +52,7 @@ from .contact_solver import (
 )
 from .flight import flight_state, time_to_contact
 from .geometry import lowest_face, lowest_pair, vertex_offset
-from .kernel_support import lies_still, record_event, store_state, write_stats
+from .kernel_support import lies_still, read_settings, record_event, store_state, write_stats
 
 MAX_ROTATION_PER_STEP = 0.05  # [rad] a contact step turning the box further is split
 MAX_SUBSTEPS = 64
@@ -188,14 +188,7 @@ def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, para
         # numba keys its on-disk cache on closure values, not on jit options: the sources' digest and
         # the parallel flag must be closure values, or a stale or serial kernel would be loaded
         _ = (DIGEST, PARALLEL)
-        dt = settings[layout.DT]
-        gravity = settings[layout.GRAVITY]
-        max_steps = np.int64(settings[layout.MAX_STEPS])
-        until_rest = settings[layout.UNTIL_REST] != 0.0
-        threshold = settings[layout.RESTITUTION_THRESHOLD]
-        sleep_speed = settings[layout.SLEEP_SPEED]
-        sleep_time = settings[layout.SLEEP_TIME]
-        slop = settings[layout.PENETRATION_SLOP]
+        dt, gravity, max_steps, until_rest, threshold, sleep_speed, sleep_time, slop = read_settings(settings)
         end_time = max_steps * dt
         for i in numba.prange(state.shape[0]):
             x, y, angle, vx, vy, spin = (state[i, 0], state[i, 1], state[i, 2],

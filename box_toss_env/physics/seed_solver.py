@@ -16,11 +16,10 @@ This scheme is kept as it is, faults included (see ``robust_solver`` for what th
 import math
 
 import numba
-import numpy as np
 
 from . import layout
 from .geometry import vertex_offset
-from .kernel_support import is_lying_still, record_event, store_state, write_stats
+from .kernel_support import is_lying_still, read_settings, record_event, store_state, write_stats
 
 TANGENT_NORMALISE_MIN = 1e-4  # the demo normalises u_t only above this length
 
@@ -116,12 +115,7 @@ def make_seed_kernel(use_impulses: bool, use_penalty: bool, use_friction: bool, 
         # numba keys its on-disk cache on closure values, not on jit options: the sources' digest and
         # the parallel flag must be closure values, or a stale or serial kernel would be loaded
         _ = (DIGEST, PARALLEL)
-        dt = settings[layout.DT]
-        gravity = settings[layout.GRAVITY]
-        max_steps = np.int64(settings[layout.MAX_STEPS])
-        until_rest = settings[layout.UNTIL_REST] != 0.0
-        sleep_speed = settings[layout.SLEEP_SPEED]
-        sleep_time = settings[layout.SLEEP_TIME]
+        dt, gravity, max_steps, until_rest, _, sleep_speed, sleep_time, _ = read_settings(settings)
         for i in numba.prange(state.shape[0]):
             x, y, angle, vx, vy, spin = (state[i, 0], state[i, 1], state[i, 2],
                                          state[i, 3], state[i, 4], state[i, 5])
