@@ -7,6 +7,7 @@ two commands can run in either order and every figure in the section comes from 
 
 from __future__ import annotations
 
+import argparse
 import math
 import os
 import platform
@@ -96,3 +97,19 @@ def update_readme(name: str, body: str, readme: Path = README) -> None:
     names = [n for n in BLOCK_ORDER if n in blocks] + sorted(n for n in blocks if n not in BLOCK_ORDER)
     inner = "\n".join(f"<!-- reports:{n}:start -->\n{blocks[n]}\n<!-- reports:{n}:end -->" for n in names)
     readme.write_text(f"{text[:start]}{SECTION_START}\n{SECTION_TITLE}\n\n{inner}\n{text[end:]}")
+
+
+def report_command(name: str, doc: str, run, write_report, argv=None) -> int:
+    """The command line of ``python -m reports.NAME``: run the report (``--quick``: a few points, as the
+    tests do) and write it to docs/ (and the README's section) or to ``--out``."""
+    parser = argparse.ArgumentParser(prog=f"python -m reports.{name}", description=doc.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="a few points of each part (what the tests run)")
+    parser.add_argument("--out", type=Path, default=None,
+                        help=f"output folder (default: docs/, or {QUICK_OUT.relative_to(REPO)} with --quick); the "
+                             "README's reports section is rewritten only for the full report written to docs/")
+    args = parser.parse_args(argv)
+    out = args.out or (QUICK_OUT if args.quick else DOCS)
+    report = run(quick=args.quick)
+    path = write_report(report, out, README if not args.quick and out.resolve() == DOCS else None)
+    print(f"wrote {path} in {report.run_seconds:.0f} s")
+    return 0

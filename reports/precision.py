@@ -19,7 +19,6 @@ kept in the tables and plots (never dropped).
 
 from __future__ import annotations
 
-import argparse
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -834,19 +833,7 @@ def plot_faces(report: PrecisionReport, path: Path) -> None:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m reports.precision", description=__doc__.split("\n\n")[0])
-    parser.add_argument("--quick", action="store_true", help="a few points of each part (what the tests run)")
-    parser.add_argument("--out", type=Path, default=None,
-                        help=f"output folder (default: docs/, or {document.QUICK_OUT.relative_to(document.REPO)} "
-                             "with --quick); the README's reports section is rewritten only for the full report "
-                             "written to docs/")
-    args = parser.parse_args(argv)
-    out = args.out or (document.QUICK_OUT if args.quick else document.DOCS)
-    report = run(quick=args.quick)
-    readme = document.README if not args.quick and out.resolve() == document.DOCS else None
-    path = write_report(report, out, readme)
-    print(f"wrote {path} in {report.run_seconds:.0f} s")
-    return 0
+    return document.report_command("precision", __doc__, run, write_report, argv)
 
 
 if __name__ == "__main__":

@@ -12,7 +12,6 @@ not, the row says FAIL and names the points. The seed scheme is run on the same 
 
 from __future__ import annotations
 
-import argparse
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -711,18 +710,7 @@ def write_report(report: StabilityReport, out: Path, readme: Path | None = None)
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m reports.stability", description=__doc__.split("\n\n")[0])
-    parser.add_argument("--quick", action="store_true", help="a few points of each row (what the tests run)")
-    parser.add_argument("--out", type=Path, default=None,
-                        help=f"output folder (default: docs/, or {document.QUICK_OUT.relative_to(document.REPO)} "
-                             "with --quick); the README's reports section is rewritten only for the full report "
-                             "written to docs/")
-    args = parser.parse_args(argv)
-    out = args.out or (document.QUICK_OUT if args.quick else document.DOCS)
-    report = run(quick=args.quick)
-    path = write_report(report, out, document.README if not args.quick and out.resolve() == document.DOCS else None)
-    print(f"wrote {path} in {report.run_seconds:.0f} s")
-    return 0
+    return document.report_command("stability", __doc__, run, write_report, argv)
 
 
 if __name__ == "__main__":
