@@ -37,8 +37,6 @@ from box_toss_env.envs.box_toss import BoxTossEnv, EnergyGainError
 from box_toss_env.envs.random_streams import RandomStreams
 from box_toss_env.physics import Simulator, check_finite_stats, layout
 
-INFO_TERMS = task.REWARD_TERMS
-
 
 class BoxTossVectorEnv(VectorEnv):
     """``num_envs`` BoxToss envs stepped together; keyword arguments are ``BoxTossEnv``'s.
