@@ -122,7 +122,7 @@ class BoxTossEnv(gym.Env):
 
     Every episode is one step and ends with ``terminated=True`` (never ``truncated``: the end of a
     throw is the end of the task, not a time limit, so it is not bootstrapped). The throw is simulated
-    until the box has lain still on a face for the solver's sleep time (0.2 s below 0.01 m/s), or for
+    until the box has lain still on a face for the solver's sleep time (0.1 s below 0.01 m/s), or for
     ``max_sim_time`` (10 s) of simulated time at most; ``info["at_rest"]`` tells which. Calling
     ``step`` again before ``reset`` raises ``gymnasium.error.ResetNeeded``. The explicit seed scheme
     (``solver="seed"``) gains energy when ``dt`` is too large for ``penalty_stiffness`` (at the

@@ -76,7 +76,7 @@ class Scene:
     solver: str = "robust"
     restitution_threshold: float = 0.02  # [m/s]
     sleep_speed: float = 0.01  # [m/s]
-    sleep_time: float = 0.2  # [s]
+    sleep_time: float = 0.1  # [s]
     penetration_slop: float = 0.0  # [m]
 
     def __post_init__(self):
