@@ -44,7 +44,7 @@ def kernel_seconds_per_throw(env: gym.Env, actions: np.ndarray) -> float:
     stats = unwrapped._stats.copy()
     start = time.perf_counter()
     for state, params in states:
-        unwrapped._simulator.run(state, params, unwrapped._settings, stats)
+        unwrapped._simulator.run(state, params, unwrapped.engine_settings, stats)
     return (time.perf_counter() - start) / len(states)
 
 
