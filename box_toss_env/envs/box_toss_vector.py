@@ -29,22 +29,28 @@ import math
 from typing import Any
 
 import numpy as np
+from gymnasium.error import ResetNeeded
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from box_toss_env.envs import task
-from box_toss_env.envs.box_toss import BoxTossEnv, EnergyGainError
+from box_toss_env.envs.box_toss import BoxTossEnv, EnergyGainError, check_render_mode_type
 from box_toss_env.envs.random_streams import RandomStreams
 from box_toss_env.physics import Simulator, check_finite_stats, layout
+from box_toss_env.physics.simulate import check_threads
+from box_toss_env.physics.validation import check_integer
+
+MAX_NUM_ENVS = 2**20
+"""The most envs one batch may hold: about 2 KB each (state, episodes, info arrays), so 2 GB at most."""
 
 
 class BoxTossVectorEnv(VectorEnv):
     """``num_envs`` BoxToss envs stepped together; keyword arguments are ``BoxTossEnv``'s.
 
     Args:
-        num_envs: number of envs (>= 1).
-        threads: engine threads for the batch (>= 1; default: numba's thread count, the cores
-            available). It changes the speed, never the results.
+        num_envs: number of envs, in [1, MAX_NUM_ENVS].
+        threads: engine threads for the batch, in [1, numba.config.NUMBA_NUM_THREADS] (default:
+            numba's thread count, the cores available). It changes the speed, never the results.
         render_mode: None or "rgb_array" (``render()`` returns one frame per env).
         **kwargs: the single env's arguments (see ``BoxTossEnv``), validated the same way.
     """
@@ -52,11 +58,9 @@ class BoxTossVectorEnv(VectorEnv):
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": ["rgb_array"], "render_fps": 30}
 
     def __init__(self, num_envs: int = 1, *, threads: int | None = None, render_mode: str | None = None, **kwargs):
-        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
-            raise ValueError(f"num_envs must be an integer >= 1, got {num_envs!r}")
-        if threads is not None and (isinstance(threads, bool) or not isinstance(threads, (int, np.integer))
-                                    or threads < 1):
-            raise ValueError(f"threads must be None or an integer >= 1, got {threads!r}")
+        num_envs = check_integer("num_envs", num_envs, 1, MAX_NUM_ENVS)
+        threads = None if threads is None else check_threads(threads)
+        check_render_mode_type(render_mode)
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         self.render_mode = render_mode
@@ -98,14 +102,21 @@ class BoxTossVectorEnv(VectorEnv):
 
     # -- episodes ---------------------------------------------------------------------------------
     def _seed(self, seed: int | list[int | None] | None) -> None:
+        expected = f"seed must be None, an int or a list of {self.num_envs} ints or Nones"
         if seed is None:
             seeds = [None] * self.num_envs
-        elif isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
+        elif isinstance(seed, (int, np.integer)) and not isinstance(seed, (bool, np.bool_)):
             seeds = [int(seed) + i for i in range(self.num_envs)]
-        else:
+        elif isinstance(seed, (list, tuple, np.ndarray)):
             seeds = list(seed)
             if len(seeds) != self.num_envs:
-                raise ValueError(f"seed must be None, an int or a list of {self.num_envs} seeds, got {seed!r}")
+                raise ValueError(f"{expected}, got {len(seeds)} seeds")
+            for value in seeds:
+                if value is not None and (isinstance(value, (bool, np.bool_))
+                                          or not isinstance(value, (int, np.integer))):
+                    raise TypeError(f"{expected}, got {type(value).__name__} {value!r} in {seed!r}")
+        else:
+            raise TypeError(f"{expected}, got {type(seed).__name__} {seed!r}")
         for i, value in enumerate(seeds):
             if value is not None or not self._streams.seeded[i]:
                 self._streams.seed(i, value)
@@ -142,7 +153,7 @@ class BoxTossVectorEnv(VectorEnv):
         """Throw every box, simulate all throws together until each rests (or ``max_sim_time``),
         then start every env's next episode (all episodes end in this step)."""
         if self._needs_reset:
-            raise RuntimeError("call reset() before step()")
+            raise ResetNeeded("call reset() before the first step()")
         actions = task.check_actions(actions, self.action_space.shape)
         episodes = self._episodes
         task.write_initial_states(self._state, episodes, task.actions_to_throws(actions, self.config))

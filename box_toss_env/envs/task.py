@@ -27,7 +27,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from box_toss_env.physics import layout
-from box_toss_env.physics.validation import check_range
+from box_toss_env.physics.ranges import ENGINE_RANGES, Range
+from box_toss_env.physics.validation import check_bool, check_choice
 
 # -- target kinds: which faces may end down ------------------------------------------------------
 TARGET_FACE_KINDS = ("any", "long_side", "short_end", "exact", "mixed")
@@ -169,18 +170,54 @@ class Episodes:
 
 
 # -- configuration ------------------------------------------------------------------------------
-def check_interval(name: str, value, low=-math.inf, high=math.inf, *, low_open=False) -> tuple[float, float]:
-    """``value`` as a (low, high) tuple of floats inside [low, high], with low <= high; else a
-    ValueError naming the parameter."""
+ENV_RANGES = {
+    "box_length": ENGINE_RANGES["length"],
+    "box_width": ENGINE_RANGES["width"],
+    "mass": ENGINE_RANGES["mass"],  # and each end of mass_range
+    "friction": ENGINE_RANGES["friction"],  # and friction_range
+    "restitution": ENGINE_RANGES["restitution"],  # and restitution_range
+    "penalty_stiffness": ENGINE_RANGES["penalty_stiffness"],
+    "gravity": Range(1e-3, 1e4, "m/s^2"),
+    "release_x_range": Range(-1e3, 1e3, "m"),
+    "release_height_range": Range(0.0, 1e4, "m", low_open=True),  # and above the box's corner radius
+    "release_angle_range": Range(-math.pi, math.pi, "rad"),
+    "target_x_range": Range(-1e3, 1e3, "m"),
+    "max_speed": Range(0.0, 1e3, "m/s", low_open=True),
+    "launch_angle_range": Range(-math.pi, math.pi, "rad"),
+    "max_spin": Range(0.0, 1e4, "rad/s"),
+    "position_tolerance": Range(0.0, 1e3, "m", low_open=True),
+    "distance_weight": Range(0.0, 1e6, "1/m"),
+    "orientation_weight": Range(0.0, 1e6, "1/rad"),
+    "success_bonus": Range(0.0, 1e6),
+    "dt": ENGINE_RANGES["dt"],
+    "max_sim_time": Range(0.0, 1e4, "s", low_open=True),  # and max_sim_time / dt <= ranges.MAX_STEPS
+    "render_fps": Range(0.0, 1e3, "1/s", low_open=True),
+}
+"""The env's arguments and their allowed ranges (docs/ranges.md): every observation stays finite in
+float32 and every throw is simulated, at every combination of them."""
+
+
+def check_interval(name: str, value, allowed: Range) -> tuple[float, float]:
+    """``value`` as a (low, high) tuple of floats inside ``allowed``, with low <= high; a TypeError
+    if it is not a pair of real numbers, a ValueError naming the parameter and the range otherwise."""
+    if isinstance(value, (str, bytes)):
+        raise TypeError(f"{name} must be a (low, high) pair of real numbers, got {type(value).__name__} {value!r}")
     try:
         first, second = value
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a (low, high) pair of finite numbers, got {value!r}") from None
-    first = check_range(f"{name}[0]", first, low, high, low_open=low_open)
-    second = check_range(f"{name}[1]", second, low, high, low_open=low_open)
+        raise TypeError(f"{name} must be a (low, high) pair of real numbers, got {value!r}") from None
+    first = allowed.check(f"{name}[0]", first)
+    second = allowed.check(f"{name}[1]", second)
     if first > second:
         raise ValueError(f"{name} must have low <= high, got {value!r}")
     return first, second
+
+
+def check_scalar_or_interval(name: str, value, interval, allowed: Range) -> tuple[float, float]:
+    """``(value, value)``, or the (low, high) ``interval`` (named ``name_range``) when it is given."""
+    if interval is None:
+        return (allowed.check(name, value),) * 2
+    return check_interval(f"{name}_range", interval, allowed)
 
 
 def make_task_config(*, box_length, box_width, gravity, mass, friction, restitution, penalty_stiffness,
@@ -188,52 +225,35 @@ def make_task_config(*, box_length, box_width, gravity, mass, friction, restitut
                      release_angle_range, target_x_range, target_face, max_speed, launch_angle_range,
                      max_spin, position_tolerance, distance_weight, orientation_weight, success_bonus,
                      observe_dynamics, max_sim_time) -> TaskConfig:
-    """Validate the task's keyword arguments (ValueError naming the argument) into a TaskConfig.
-
-    The engine's own checks (``physics.Scene``) cover the material and solver settings; these
-    cover what only the task has. ``*_range=None`` fixes that quantity at its scalar argument.
-    """
-    box_length = check_range("box_length", box_length, 0.0, low_open=True)
-    box_width = check_range("box_width", box_width, 0.0, low_open=True)
-    gravity = check_range("gravity", gravity, 0.0, 1e4, low_open=True)
-    mass_range = ((check_range("mass", mass, 0.0, low_open=True),) * 2 if mass_range is None
-                  else check_interval("mass_range", mass_range, 0.0, low_open=True))
-    friction_range = ((check_range("friction", friction, 0.0),) * 2 if friction_range is None
-                      else check_interval("friction_range", friction_range, 0.0))
-    restitution_range = ((check_range("restitution", restitution, 0.0, 1.0),) * 2 if restitution_range is None
-                         else check_interval("restitution_range", restitution_range, 0.0, 1.0))
-    corner_radius = math.hypot(box_length, box_width) / 2
-    release_height_range = check_interval("release_height_range", release_height_range)
-    if release_height_range[0] <= corner_radius:
+    """Validate the task's keyword arguments into a TaskConfig: a TypeError names an argument of the
+    wrong type, a ValueError one outside its range (``ENV_RANGES``). ``*_range=None`` fixes that
+    quantity at its scalar argument."""
+    scalar = {name: ENV_RANGES[name].check(name, value) for name, value in (
+        ("box_length", box_length), ("box_width", box_width), ("gravity", gravity),
+        ("penalty_stiffness", penalty_stiffness), ("max_speed", max_speed), ("max_spin", max_spin),
+        ("position_tolerance", position_tolerance), ("distance_weight", distance_weight),
+        ("orientation_weight", orientation_weight), ("success_bonus", success_bonus),
+        ("max_sim_time", max_sim_time))}
+    pairs = {name: check_interval(name, value, ENV_RANGES[name]) for name, value in (
+        ("release_x_range", release_x_range), ("release_height_range", release_height_range),
+        ("release_angle_range", release_angle_range), ("target_x_range", target_x_range),
+        ("launch_angle_range", launch_angle_range))}
+    corner_radius = math.hypot(scalar["box_length"], scalar["box_width"]) / 2
+    if pairs["release_height_range"][0] <= corner_radius:
         raise ValueError(
             f"release_height_range must lie above the box's corner radius {corner_radius:g} m (so the box "
             f"starts clear of the floor at any angle), got {release_height_range!r}")
-    if target_face not in TARGET_FACE_KINDS:
-        raise ValueError(f"target_face must be one of {TARGET_FACE_KINDS}, got {target_face!r}")
-    if not isinstance(observe_dynamics, (bool, np.bool_)):
-        raise ValueError(f"observe_dynamics must be True or False, got {observe_dynamics!r}")
     return TaskConfig(
-        half_length=0.5 * box_length,
-        half_width=0.5 * box_width,
-        gravity=gravity,
-        mass_range=mass_range,
-        friction_range=friction_range,
-        restitution_range=restitution_range,
-        penalty_stiffness=check_range("penalty_stiffness", penalty_stiffness, 0.0),
-        release_x_range=check_interval("release_x_range", release_x_range, -1e3, 1e3),
-        release_height_range=release_height_range,
-        release_angle_range=check_interval("release_angle_range", release_angle_range, -math.pi, math.pi),
-        target_x_range=check_interval("target_x_range", target_x_range, -1e3, 1e3),
-        target_face=target_face,
-        max_speed=check_range("max_speed", max_speed, 0.0, 1e3, low_open=True),
-        launch_angle_range=check_interval("launch_angle_range", launch_angle_range, -math.pi, math.pi),
-        max_spin=check_range("max_spin", max_spin, 0.0, 1e4),
-        position_tolerance=check_range("position_tolerance", position_tolerance, 0.0, low_open=True),
-        distance_weight=check_range("distance_weight", distance_weight, 0.0),
-        orientation_weight=check_range("orientation_weight", orientation_weight, 0.0),
-        success_bonus=check_range("success_bonus", success_bonus, 0.0),
-        observe_dynamics=bool(observe_dynamics),
-        max_sim_time=check_range("max_sim_time", max_sim_time, 0.0, 1e4, low_open=True),
+        half_length=0.5 * scalar.pop("box_length"),
+        half_width=0.5 * scalar.pop("box_width"),
+        mass_range=check_scalar_or_interval("mass", mass, mass_range, ENV_RANGES["mass"]),
+        friction_range=check_scalar_or_interval("friction", friction, friction_range, ENV_RANGES["friction"]),
+        restitution_range=check_scalar_or_interval("restitution", restitution, restitution_range,
+                                                   ENV_RANGES["restitution"]),
+        target_face=check_choice("target_face", target_face, TARGET_FACE_KINDS),
+        observe_dynamics=check_bool("observe_dynamics", observe_dynamics),
+        **scalar,
+        **pairs,
     )
 
 
@@ -298,13 +318,17 @@ def write_body_params(params: np.ndarray, episodes: Episodes, config: TaskConfig
 
 # -- 2. actions ----------------------------------------------------------------------------------
 def check_actions(actions, shape: tuple[int, ...]) -> np.ndarray:
-    """Actions as a float64 (n, 3) array clipped to [-1, 1]; a ValueError for a shape other than
-    ``shape`` ((3,) for a single env, (n, 3) for a batch) or a non-finite value (NaN, inf)."""
+    """Actions as a float64 (n, 3) array clipped to [-1, 1]; a TypeError for values that are not real
+    numbers (strings, booleans, complex numbers), a ValueError for a shape other than ``shape`` ((3,)
+    for a single env, (n, 3) for a batch) or a non-finite value (NaN, inf)."""
     try:
-        array = np.asarray(actions, dtype=np.float64)
+        array = np.asarray(actions)
     except (TypeError, ValueError):
         raise ValueError(f"action must be an array of {ACTION_SIZE} finite numbers in [-1, 1] "
                          f"(speed, launch angle, spin), got {actions!r}") from None
+    if array.dtype.kind not in "iuf":
+        raise TypeError(f"action must hold real numbers (int or float), got an array of {array.dtype}: {actions!r}")
+    array = array.astype(np.float64, copy=False)
     if array.shape != shape:
         raise ValueError(f"action must have shape {shape} (speed, launch angle, spin, each in [-1, 1]), "
                          f"got shape {array.shape}")
@@ -368,6 +392,7 @@ def observation_bounds(config: TaskConfig) -> tuple[np.ndarray, np.ndarray]:
     sqrt(2 e) / sqrt(I/m), the height below e / g, and the box cannot travel further than
     sqrt(2 e) max_sim_time from where it was released. Each bound is ``ENERGY_MARGIN`` times that.
     The centre cannot be lower than one corner radius below the floor (the whole box under it).
+    A column whose value is fixed (low == high) gets bounds one float32 step either side of it.
     """
     energy = (0.5 * config.max_speed**2 + 0.5 * config.gyration_radius_squared * config.max_spin**2
               + config.gravity * config.release_height_range[1])
@@ -381,7 +406,13 @@ def observation_bounds(config: TaskConfig) -> tuple[np.ndarray, np.ndarray]:
     if config.observe_dynamics:
         low += [config.mass_range[0], config.friction_range[0], config.restitution_range[0]]
         high += [config.mass_range[1], config.friction_range[1], config.restitution_range[1]]
-    return np.array(low, dtype=np.float32), np.array(high, dtype=np.float32)
+    low, high = np.array(low, dtype=np.float32), np.array(high, dtype=np.float32)
+    # a fixed quantity (target x, mass, friction or restitution not drawn) would have equal bounds, which
+    # Gymnasium's checker flags as a degenerate space: its bounds are one float32 step either side instead
+    fixed = low == high
+    low[fixed] = np.nextafter(low[fixed], np.float32(-np.inf))
+    high[fixed] = np.nextafter(high[fixed], np.float32(np.inf))
+    return low, high
 
 
 OBSERVATION_NAMES = ("x", "y", "cos(angle)", "sin(angle)", "vx", "vy", "spin", "target x", "target face 0",

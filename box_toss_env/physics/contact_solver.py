@@ -140,6 +140,8 @@ def penalty_correction_share(stiffness, k_ii, h):
     never overshoots (the seed scheme's explicit spring needs h omega < 2), and for small h it
     removes the depth at the rate omega / 2 per second whatever the step, as the spring would."""
     omega_h = h * math.sqrt(stiffness * k_ii)
+    if omega_h == math.inf:  # k K_ii beyond float64 (any finite stiffness is allowed): the limit, all of it
+        return 1.0
     return omega_h / (omega_h + 2.0 * PENALTY_DAMPING_RATIO)
 
 

@@ -33,6 +33,12 @@ EVENT_TIME, EVENT_APPROACH_SPEED, EVENT_CONTACTS = 0, 1, 2  # [s], [m/s], points
 EVENT_SIZE = 3
 MAX_EVENTS = 64
 
-# local vertex order (counter-clockwise from the -x,-y corner): b_k = (SIGN_X[k] hx, SIGN_Y[k] hy)
+# local vertex order (counter-clockwise from the -x,-y corner): b_k = (SIGN_X[k] hx, SIGN_Y[k] hy).
+# The robust solver, the rest test and the face numbering use it (adjacent corners bound a face).
 SIGN_X = (-1.0, 1.0, 1.0, -1.0)
 SIGN_Y = (-1.0, -1.0, 1.0, 1.0)
+
+# the seed demo's vertex order, (-L/2, -W/2), (-L/2, +W/2), (+L/2, +W/2), (+L/2, -W/2): the seed scheme
+# resolves corners one after another, so the order changes its results and must be the demo's
+SEED_SIGN_X = (-1.0, -1.0, 1.0, 1.0)
+SEED_SIGN_Y = (-1.0, 1.0, 1.0, -1.0)

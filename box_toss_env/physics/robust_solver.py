@@ -30,7 +30,8 @@ The box flies again when no corner is loaded or below the floor, and it is put t
 (velocities set to zero, stepping stops) once it has lain still on a face for ``sleep_time``.
 
 What this fixes in the seed scheme (measured on it): corners resolved one after another make
-a flat drop spin and bounce low; restitution applied to resting contact makes a box creep;
+a flat drop spin and bounce low; friction applied corner after corner makes a resting box creep
+(13 cm in 10 s with mu = 0.5, none with mu = 0);
 a friction impulse of mu |p| can reverse sliding; an explicit penalty spring blows up beyond
 omega dt = 2; time-stepped flight and impacts move the landing pose with the step size.
 """

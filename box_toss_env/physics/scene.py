@@ -1,5 +1,6 @@
 """What a simulation contains: boxes, the floor plane y = 0, gravity, the contact material
-and the time step. Everything is validated when it is built, so kernels never see bad input.
+and the time step. Everything is validated when it is built, so kernels never see bad input:
+a wrong type is a TypeError, a value outside its range (``ranges``, docs/ranges.md) a ValueError.
 """
 
 from __future__ import annotations
@@ -10,7 +11,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from . import layout
-from .validation import check_finite, check_range, check_vector
+from .ranges import ENGINE_RANGES
+from .validation import check_bool, check_choice, check_finite, check_vector
 
 SOLVERS = ("robust", "seed")
 
@@ -35,17 +37,15 @@ class Box:
 
     def __post_init__(self):
         set_ = object.__setattr__
-        set_(self, "length", check_range("length", self.length, 0.0, low_open=True))
-        set_(self, "width", check_range("width", self.width, 0.0, low_open=True))
-        set_(self, "mass", check_range("mass", self.mass, 0.0, low_open=True))
+        for name in ("length", "width", "mass"):
+            set_(self, name, ENGINE_RANGES[name].check(name, getattr(self, name)))
         set_(self, "position", check_vector("position", self.position, 2))
         set_(self, "angle", check_finite("angle", self.angle))
         set_(self, "velocity", check_vector("velocity", self.velocity, 2))
         set_(self, "spin", check_finite("spin", self.spin))
-        if self.restitution is not None:
-            set_(self, "restitution", check_range("restitution", self.restitution, 0.0, 1.0))
-        if self.friction is not None:
-            set_(self, "friction", check_range("friction", self.friction, 0.0))
+        for name in ("restitution", "friction"):
+            if getattr(self, name) is not None:
+                set_(self, name, ENGINE_RANGES[name].check(name, getattr(self, name)))
 
     @property
     def inertia(self) -> float:
@@ -86,29 +86,19 @@ class Scene:
             raise ValueError("boxes must hold at least one Box, got none")
         for k, box in enumerate(boxes):
             if not isinstance(box, Box):
-                raise ValueError(f"boxes[{k}] must be a Box, got {type(box).__name__}")
+                raise TypeError(f"boxes[{k}] must be a Box, got {type(box).__name__}")
         set_(self, "boxes", boxes)
-        set_(self, "dt", check_range("dt", self.dt, 0.0, 1.0, low_open=True))
-        set_(self, "gravity", check_range("gravity", self.gravity, -1e4, 1e4))
-        set_(self, "restitution", check_range("restitution", self.restitution, 0.0, 1.0))
-        set_(self, "friction", check_range("friction", self.friction, 0.0))
-        set_(self, "penalty_stiffness", check_range("penalty_stiffness", self.penalty_stiffness, 0.0))
+        for name in ("dt", "gravity", "restitution", "friction", "penalty_stiffness", "restitution_threshold",
+                     "sleep_speed", "sleep_time", "penetration_slop"):
+            set_(self, name, ENGINE_RANGES[name].check(name, getattr(self, name)))
         for name in ("use_impulses", "use_penalty"):
-            if not isinstance(getattr(self, name), (bool, np.bool_)):
-                raise ValueError(f"{name} must be True or False, got {getattr(self, name)!r}")
-            set_(self, name, bool(getattr(self, name)))
-        if self.solver not in SOLVERS:
-            raise ValueError(f"solver must be one of {SOLVERS}, got {self.solver!r}")
+            set_(self, name, check_bool(name, getattr(self, name)))
+        check_choice("solver", self.solver, SOLVERS)
         if self.solver == "robust" and not self.use_impulses:
             raise ValueError(
                 "use_impulses must be True with solver='robust' (its contacts are impulses); "
                 "a penalty-only run is available with solver='seed'"
             )
-        set_(self, "restitution_threshold",
-             check_range("restitution_threshold", self.restitution_threshold, 0.0))
-        set_(self, "sleep_speed", check_range("sleep_speed", self.sleep_speed, 0.0))
-        set_(self, "sleep_time", check_range("sleep_time", self.sleep_time, 0.0))
-        set_(self, "penetration_slop", check_range("penetration_slop", self.penetration_slop, 0.0))
 
     # -- what the scene has: these decide which kernel stages are compiled in -------------------
     @property

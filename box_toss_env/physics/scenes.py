@@ -59,7 +59,7 @@ def slide(speed: float = 2.0, friction: float = 0.3, **scene) -> Scene:
 
 
 def resting(**scene) -> Scene:
-    """A 2 x 1 m box lying still on the floor (restitution 0.5, the case where the seed creeps)."""
+    """A 2 x 1 m box lying still on the floor (with friction, the case where the seed scheme creeps)."""
     box = Box(length=2.0, width=1.0, mass=1.0, position=(0.0, 0.5))
     return Scene(boxes=(box,), **scene)
 

@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numba
@@ -11,8 +10,9 @@ import numpy as np
 
 from . import layout
 from .kernels import KernelFlags, make_kernel
+from .ranges import MAX_STEPS, check_step_count
 from .scene import Scene
-from .validation import check_range
+from .validation import check_integer, check_range
 
 
 class NonFiniteStateError(FloatingPointError):
@@ -21,11 +21,18 @@ class NonFiniteStateError(FloatingPointError):
     def __init__(self, body: int, step: int, solver: str):
         self.body = body
         self.step = step
-        super().__init__(
-            f"body {body} went non-finite at step {step} with solver={solver!r}. Nothing was clipped: check the "
-            "scene's values; the explicit seed scheme gains energy where dt * sqrt(penalty_stiffness / effective "
-            "mass) > 2 (reduce dt or the stiffness, or use solver='robust')"
-        )
+        self.solver = solver
+        super().__init__(f"body {body} went non-finite at step {step} with solver={solver!r}. Nothing was "
+                         f"clipped: {DIVERGENCE_CAUSES.get(solver, DIVERGENCE_CAUSES['robust'])}")
+
+
+DIVERGENCE_CAUSES = {
+    "seed": "the explicit seed scheme gains energy where dt * sqrt(penalty_stiffness / effective mass) > 2 "
+            "(reduce dt or the stiffness, or use solver='robust')",
+    "robust": "the robust solver overflowed on this scene's values, which it should not do inside the ranges "
+              "of docs/ranges.md: please report the scene",
+}
+"""What makes each solver's state non-finite, as its ``NonFiniteStateError`` says."""
 
 
 @dataclass
@@ -77,12 +84,12 @@ class Simulator:
 
     ``run`` takes the state (n, 6) and the body parameters (n, 7) (see ``layout``) and advances
     the state in place; it allocates nothing per step. ``parallel`` runs bodies on numba's
-    threads (``threads``, default: all of numba's).
+    threads (``threads`` in [1, numba.config.NUMBA_NUM_THREADS], default: all of numba's).
     """
 
     def __init__(self, flags: KernelFlags, threads: int | None = None):
         self.flags = flags
-        self.threads = threads
+        self.threads = None if threads is None else check_threads(threads)
         self.kernel = make_kernel(flags)
         self._no_trajectory = np.zeros((0, 0, layout.STATE_SIZE))
         self._no_events = np.zeros((0, 0, layout.EVENT_SIZE))
@@ -115,6 +122,12 @@ class Simulator:
             self.kernel(state, params, settings, stats, trajectory, events)
 
 
+def check_threads(threads) -> int:
+    """``threads`` as an int in [1, numba's thread count] (``numba.config.NUMBA_NUM_THREADS``, the
+    most numba can run), else a TypeError or ValueError naming it."""
+    return check_integer("threads", threads, 1, numba.config.NUMBA_NUM_THREADS)
+
+
 def make_settings(scene: Scene, max_steps: int, until_rest: bool) -> np.ndarray:
     """The scene-wide settings array the kernels read (see ``layout``)."""
     settings = np.empty(layout.SETTINGS_SIZE)
@@ -134,11 +147,9 @@ def steps_for(scene: Scene, steps: int | None, duration: float | None) -> int:
     if (steps is None) == (duration is None):
         raise ValueError("give exactly one of steps (an int >= 0) or duration (seconds >= 0)")
     if steps is not None:
-        if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 0:
-            raise ValueError(f"steps must be an integer >= 0, got {steps!r}")
-        return int(steps)
-    duration = check_range("duration", duration, 0.0)
-    return int(math.ceil(duration / scene.dt - 1e-9))
+        return check_integer("steps", steps, 0, MAX_STEPS)
+    duration = check_range("duration", duration, 0.0, unit="s")
+    return check_step_count("duration", duration, scene.dt)
 
 
 def simulate(scene: Scene, *, steps: int | None = None, duration: float | None = None,

@@ -1,6 +1,7 @@
 """The batch-first task functions: a batch of n is n batches of one, and each piece against its formula."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -127,3 +128,10 @@ def test_throws_to_actions_inverts_actions_to_throws():
     actions = np.random.default_rng(4).uniform(-1, 1, (50, 3))
     np.testing.assert_allclose(task.throws_to_actions(task.actions_to_throws(actions, config), config), actions,
                                atol=1e-12)
+
+
+def test_the_ranges_page_lists_the_env_ranges():
+    """docs/ranges.md is the one place the ranges are written down; it agrees with the code."""
+    text = (Path(__file__).parents[2] / "docs" / "ranges.md").read_text()
+    for name, allowed in task.ENV_RANGES.items():
+        assert f"| `{name}` | {allowed} |" in text, name

@@ -7,7 +7,9 @@ normal n = (0, 1) kept general.
 
 import math
 
-CORNERS = ((-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0))  # local corners, counter-clockwise
+# local corners in the demo's order: (-L/2, -W/2), (-L/2, +W/2), (+L/2, +W/2), (+L/2, -W/2) (read off its
+# page source; the text does not say). Corners are resolved one after another, so the order matters.
+CORNERS = ((-1.0, -1.0), (-1.0, 1.0), (1.0, 1.0), (1.0, -1.0))
 
 
 def dot(a, b):

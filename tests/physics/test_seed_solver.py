@@ -2,9 +2,10 @@
 
 import numpy as np
 import pytest
+import seed_reference
 from seed_reference import ReferenceBody, reference_step
 
-from box_toss_env.physics import Box, NonFiniteStateError, Scene, scenes, simulate
+from box_toss_env.physics import Box, NonFiniteStateError, Scene, layout, scenes, simulate
 
 
 def run_reference(scene: Scene, steps: int) -> np.ndarray:
@@ -41,6 +42,36 @@ def test_seed_demo_agrees_with_the_text_for_five_boxes():
     steps = 2000
     kernel = simulate(scene, steps=steps, record=True).trajectory.state
     np.testing.assert_allclose(kernel, run_reference(scene, steps), rtol=0, atol=1e-12)
+
+
+DEMO_CORNER_ORDER = [(-1.0, -1.0), (-1.0, 1.0), (1.0, 1.0), (1.0, -1.0)]  # (-L/2, -W/2), (-L/2, +W/2), ...
+
+
+def test_corners_are_visited_in_the_demos_order(monkeypatch):
+    """The demo visits (-L/2, -W/2), (-L/2, +W/2), (+L/2, +W/2), (+L/2, -W/2). Corners below the floor
+    are resolved one after another, so a box landing upside down on its two +W/2 corners in one step
+    (visited -L/2 first in the demo's order, +L/2 first counter-clockwise) ends elsewhere in the other
+    order; the kernel follows the demo's."""
+    assert list(zip(layout.SEED_SIGN_X, layout.SEED_SIGN_Y, strict=True)) == DEMO_CORNER_ORDER
+    assert list(seed_reference.CORNERS) == DEMO_CORNER_ORDER
+    upside_down = Box(length=2.0, width=1.0, position=(0.0, 1.5), angle=np.pi, velocity=(1.0, 0.0))
+    scene = Scene(boxes=(upside_down,), solver="seed", friction=0.3)
+    kernel = simulate(scene, steps=400).final_state[0]
+    np.testing.assert_allclose(kernel, run_reference(scene, 400)[-1, 0], rtol=0, atol=1e-12)
+    monkeypatch.setattr(seed_reference, "CORNERS", ((-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)))
+    counter_clockwise = run_reference(scene, 400)[-1, 0]
+    assert np.abs(kernel - counter_clockwise).max() > 0.1  # the order matters (0.94 m), and it is the demo's
+
+
+def test_a_resting_box_creeps_with_friction_not_restitution():
+    """The seed scheme's creep of a resting box (10 s at dt 0.005 s) is driven by friction: none with mu = 0
+    (whatever e), centimetres with mu = 0.5 (with e = 0 too)."""
+    def creep(restitution, friction):
+        scene = scenes.resting(solver="seed", restitution=restitution, friction=friction)
+        return abs(simulate(scene, duration=10.0).final_state[0, layout.X])
+
+    assert creep(0.5, 0.0) == 0.0 and creep(0.0, 0.0) == 0.0
+    assert 0.1 < creep(0.5, 0.5) < 0.2 and 0.1 < creep(0.0, 0.5) < 0.2
 
 
 def test_seed_demo_has_the_panel_defaults():

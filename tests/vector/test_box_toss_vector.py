@@ -3,8 +3,10 @@
 import pickle
 
 import gymnasium as gym
+import numba
 import numpy as np
 import pytest
+from gymnasium.error import ResetNeeded
 from gymnasium.vector import AutoresetMode
 
 import box_toss_env  # noqa: F401  (registers BoxToss-v0)
@@ -76,15 +78,53 @@ def test_gymnasiums_own_vector_envs_still_work():
         envs.close()
 
 
+THREADS = numba.config.NUMBA_NUM_THREADS
+
+
 @pytest.mark.parametrize("kwargs, message", [
-    (dict(num_envs=0), "num_envs must be an integer >= 1"),
-    (dict(num_envs=2, threads=0), "threads must be None or an integer >= 1"),
+    (dict(num_envs=0), r"num_envs must be an integer in \[1, 1048576\]"),
+    (dict(num_envs=10**8), r"num_envs must be an integer in \[1, 1048576\]"),  # refused before allocating
+    (dict(num_envs=2, threads=0), rf"threads must be an integer in \[1, {THREADS}\]"),
+    (dict(num_envs=2, threads=THREADS + 1), rf"threads must be an integer in \[1, {THREADS}\]"),
     (dict(num_envs=2, render_mode="human"), "render_mode must be None or 'rgb_array'"),
-    (dict(num_envs=2, dt=-1.0), r"dt must be in \(0, 1\]"),
+    (dict(num_envs=2, dt=-1.0), r"dt must be in \[1e-7, 1\] s"),
 ])
 def test_bad_arguments_are_refused(kwargs, message):
     with pytest.raises(ValueError, match=message):
         BoxTossVectorEnv(**kwargs)
+    with pytest.raises(ValueError, match=message):
+        gym.make_vec("BoxToss-v0", **kwargs)
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    (dict(num_envs=2.0), "num_envs"), (dict(num_envs=True), "num_envs"), (dict(num_envs=2, threads="1"), "threads"),
+    (dict(num_envs=2, render_mode=1), "render_mode"), (dict(num_envs=2, mass="2"), "mass"),
+])
+def test_arguments_of_the_wrong_type_are_type_errors(kwargs, name):
+    with pytest.raises(TypeError, match=rf"^{name} must be"):
+        BoxTossVectorEnv(**kwargs)
+
+
+@pytest.mark.parametrize("seed, error", [
+    (1.5, TypeError), ("1", TypeError), (True, TypeError), ([0, 1.5], TypeError), ([0, True], TypeError),
+    ([0, 1, 2], ValueError),
+])
+def test_bad_seeds_are_refused_naming_seed(seed, error):
+    with pytest.raises(error, match="seed must be None, an int or a list of 2 ints or Nones"):
+        BoxTossVectorEnv(2).reset(seed=seed)
+
+
+def test_seeds_may_be_numpy_ints_or_none():
+    envs = BoxTossVectorEnv(2)
+    first, _ = envs.reset(seed=np.int64(4))
+    again, _ = envs.reset(seed=[4, 5])
+    np.testing.assert_array_equal(first, again)
+    envs.reset(seed=[None, 7])
+
+
+def test_a_step_before_reset_raises_reset_needed_like_the_single_env():
+    with pytest.raises(ResetNeeded):
+        BoxTossVectorEnv(2).step(np.zeros((2, 3)))
 
 
 def test_bad_actions_are_refused():

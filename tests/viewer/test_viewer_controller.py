@@ -92,7 +92,7 @@ def test_a_change_of_compile_time_flags_rebuilds_the_simulator(demo, change, fla
 
 @pytest.mark.parametrize(("name", "value", "reason"), [
     ("restitution", 1.5, "restitution must be in [0, 1], got 1.5"),
-    ("dt", 0.0, "dt must be in (0, 1], got 0.0"),
+    ("dt", 0.0, "dt must be in [1e-7, 1] s, got 0.0"),
     ("friction", "abc", "friction must be a number, got 'abc'"),
 ])
 def test_an_invalid_value_is_shown_and_changes_nothing(demo, name, value, reason):
