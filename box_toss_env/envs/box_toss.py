@@ -22,14 +22,32 @@ from box_toss_env.physics import (
     layout,
     make_settings,
 )
-from box_toss_env.physics.validation import check_range
+from box_toss_env.physics.ranges import check_step_count
+from box_toss_env.physics.validation import check_integer
 
 RENDER_MODES = ("human", "rgb_array", "rgb_array_list")
 
 
+class RenderModes(list):
+    """``metadata["render_modes"]``: a list whose ``in`` test raises a TypeError naming ``render_mode``
+    for a value that is neither None nor a string (``gymnasium.make`` tests ``render_mode in
+    render_modes`` before it makes the env, and would fail on such a value with an AttributeError)."""
+
+    def __contains__(self, mode) -> bool:
+        check_render_mode_type(mode)
+        return super().__contains__(mode)
+
+
+def check_render_mode_type(render_mode) -> None:
+    if render_mode is not None and not isinstance(render_mode, str):
+        raise TypeError(f"render_mode must be None or one of {RENDER_MODES}, got {type(render_mode).__name__} "
+                        f"{render_mode!r}")
+
+
 class EnergyGainError(FloatingPointError):
-    """A throw ended outside the observation bounds, which only a solver that creates energy can do
-    (``solver="seed"`` with a time step too large for the penalty stiffness). Nothing is clipped."""
+    """A throw ended outside the observation bounds: the solver created energy or let the box sink
+    through the floor (``solver="seed"`` with a time step too large for the penalty stiffness, or no
+    penalty at all). The message says which. Nothing is clipped."""
 
 
 class BoxTossEnv(gym.Env):
@@ -92,7 +110,9 @@ class BoxTossEnv(gym.Env):
     (``I/m = (L^2 + W^2) / 12``) and contacts only take energy away, so ``V = 2 sqrt(2 e)`` (twice the
     largest possible speed) and ``R = V * max_sim_time`` bound what a throw can reach (about 20 m/s,
     156 rad/s, 10.6 m and 200 m with the defaults). Nothing is clipped: a throw ending outside the
-    bounds raises ``EnergyGainError`` (see Episode End).
+    bounds raises ``EnergyGainError`` (see Episode End). A column whose value is fixed (``target_x_range``,
+    or a dynamics quantity that is not drawn) has bounds one float32 step either side of its value, so
+    no bound pair is degenerate.
 
     ## Rewards
 
@@ -141,7 +161,10 @@ class BoxTossEnv(gym.Env):
 
     ## Arguments
 
-    ``gymnasium.make("BoxToss-v0", **kwargs)``; every argument is validated (a ``ValueError`` names it).
+    ``gymnasium.make("BoxToss-v0", **kwargs)``; every argument is validated when the env is made: a
+    ``TypeError`` names an argument of the wrong type (a string, a bool or a complex number for a number),
+    a ``ValueError`` names one outside its allowed range. The ranges are in docs/ranges.md
+    (``task.ENV_RANGES``).
 
     | Argument               | Default           | Meaning                                                         |
     |------------------------|-------------------|-----------------------------------------------------------------|
@@ -181,17 +204,19 @@ class BoxTossEnv(gym.Env):
     Rendering (needs the ``render`` extra, ``pip install "box_toss_env[render]"``): ``"rgb_array"``
     returns an (H, W, 3) uint8 frame of the current state; ``"human"`` opens a pygame window and plays
     each throw in real time; ``"rgb_array_list"`` records each throw and ``render()`` returns the
-    frames since the last call (the box in the hand, then the whole throw at ``render_fps``), for
-    videos of whole throws (``box_toss_env.envs.record_throws`` writes them to a GIF or MP4;
-    Gymnasium's ``RecordVideo`` keeps only one frame per step). Only the last two modes record
-    trajectories, so training without them pays nothing for rendering.
+    frames since the last call (the box in the hand, then the whole throw at ``render_fps``, then its
+    result held for a second), for videos of whole throws (``box_toss_env.envs.record_throws`` writes
+    them to a GIF or MP4; Gymnasium's ``RecordVideo`` keeps only one frame per step). A throw that
+    leaves the home view (release points and targets) is zoomed out to keep the box in frame: one camera
+    fitted to the whole throw in recordings, a following camera in the window (``envs.render``). Only
+    the last two modes record trajectories, so training without them pays nothing for rendering.
 
     ## Version History
 
     * v0: initial version.
     """
 
-    metadata = {"render_modes": list(RENDER_MODES), "render_fps": 30}
+    metadata = {"render_modes": RenderModes(RENDER_MODES), "render_fps": 30}
 
     def __init__(
         self,
@@ -227,6 +252,7 @@ class BoxTossEnv(gym.Env):
         render_width: int = 600,
         render_height: int = 400,
     ):
+        check_render_mode_type(render_mode)
         if render_mode is not None and render_mode not in RENDER_MODES:
             raise ValueError(f"render_mode must be None or one of {RENDER_MODES}, got {render_mode!r}")
         self.render_mode = render_mode
@@ -249,11 +275,11 @@ class BoxTossEnv(gym.Env):
             friction=config.friction_range[1], penalty_stiffness=config.penalty_stiffness, solver=solver)
         self.solver = scene.solver
         self.dt = scene.dt
-        self.max_steps = max(1, math.ceil(config.max_sim_time / scene.dt - 1e-9))
+        self.max_steps = max(1, check_step_count("max_sim_time", config.max_sim_time, scene.dt))
         self.flags = KernelFlags(solver=scene.solver, use_impulses=True, use_penalty=scene.has_penalty,
                                  use_friction=config.friction_range[1] > 0.0, record=False, parallel=False)
         self._settings = make_settings(scene, self.max_steps, until_rest=True)
-        self.render_fps = check_range("render_fps", render_fps, 0.0, 1000.0, low_open=True)
+        self.render_fps = task.ENV_RANGES["render_fps"].check("render_fps", render_fps)
         self.render_size = (_check_pixels("render_width", render_width),
                             _check_pixels("render_height", render_height))
         self.metadata = {**self.metadata, "render_fps": self.render_fps}
@@ -273,7 +299,9 @@ class BoxTossEnv(gym.Env):
         self._needs_reset = True
         self._params_stale = True  # body parameters are written at the first reset, then per reset if drawn
         self._renderer = None
-        self._frames: list[np.ndarray] = []
+        # "rgb_array_list" draws when render() asks: the hand and the throw not returned yet, and the result
+        self._hand_unseen = self._throw_unseen = False
+        self._outcome = None
         self._simulator = None  # built at the first throw: making an env compiles nothing
 
     @property
@@ -297,11 +325,9 @@ class BoxTossEnv(gym.Env):
             self._params_stale = False
         task.write_initial_states(self._state, episodes, None)
         self._needs_reset = False
-        self._frames = []
+        self._hand_unseen, self._throw_unseen, self._outcome = self.render_mode == "rgb_array_list", False, None
         if self.render_mode == "human":
             self.render()
-        elif self.render_mode == "rgb_array_list":
-            self._frames.append(self._draw_state("in the hand"))
         row = episodes.data[0].tolist()
         info = {
             "target_x": row[task.EP_TARGET_X],
@@ -353,25 +379,41 @@ class BoxTossEnv(gym.Env):
             "friction": episode[task.EP_FRICTION],
             "restitution": episode[task.EP_RESTITUTION],
         }
-        if self.render_mode == "human":
-            self.render()
-        elif self.render_mode == "rgb_array_list":
-            self._frames += self._renderer_for_env().throw_frames(
-                self._throw_trajectory(), self.dt, info["target_x"], self._episodes.target_faces[0],
-                skip_first=True)
+        if self.render_mode is not None:
+            from box_toss_env.envs.render import ThrowOutcome
+
+            self._outcome = ThrowOutcome.from_step(float(reward[0]), info, self._episodes.target_faces[0])
+            self._throw_unseen = self.render_mode == "rgb_array_list"
+            if self.render_mode == "human":
+                self.render()
         observation = task.observe(self._state, self._episodes, self.config)
         if task.outside_bounds(observation, self.observation_space.low, self.observation_space.high)[0]:
             raise EnergyGainError(self._bounds_message(observation[0]))
         return observation[0], float(reward[0]), True, False, info
 
     def _bounds_message(self, observation: np.ndarray) -> str:
+        """What the throw that ended in ``observation`` (outside the bounds) did, for the solver that ran."""
         space = self.observation_space
         column = int(np.argmax(np.maximum(space.low - observation, observation - space.high)))
-        return (f"the throw ended with {task.OBSERVATION_NAMES[column]} = {observation[column]:g}, outside the "
-                f"observation bounds [{space.low[column]:g}, {space.high[column]:g}] that energy conservation "
-                f"guarantees: solver={self.solver!r} created energy. With the seed scheme use a smaller dt "
-                f"(dt={self.dt:g} s with penalty_stiffness={self.config.penalty_stiffness:g} N/m; e.g. 1/1024 s "
-                "for 1e5 N/m) or a softer penalty_stiffness, or solver='robust'")
+        where = (f"the throw ended with {task.OBSERVATION_NAMES[column]} = {observation[column]:g}, outside the "
+                 f"observation bounds [{space.low[column]:g}, {space.high[column]:g}]")
+        stiffness = self.config.penalty_stiffness
+        if column == task.OBS_Y and observation[column] < space.low[column]:
+            what = (f"{where}: the box sank through the floor (its centre more than a corner radius below it) "
+                    f"with solver={self.solver!r}. ")
+            if self.solver == "robust":
+                return what + "The robust solver should never let a box through: please report these arguments"
+            if stiffness == 0.0:
+                return what + ("With penalty_stiffness=0 the seed scheme has nothing that pushes a corner back out "
+                               "of the floor: give penalty_stiffness > 0, or use solver='robust'")
+            return what + (f"The seed scheme's penalty spring (penalty_stiffness={stiffness:g} N/m) was too soft to "
+                           "hold it: use a stiffer one (with a dt small enough for it), or solver='robust'")
+        what = f"{where} that energy conservation guarantees: solver={self.solver!r} created energy. "
+        if self.solver == "robust":
+            return what + "The robust solver should never create energy: please report these arguments"
+        return what + (f"The seed scheme's explicit penalty spring gains energy when dt is too large for its "
+                       f"stiffness (dt={self.dt:g} s with penalty_stiffness={stiffness:g} N/m): use a smaller dt "
+                       "(e.g. 1/1024 s for 1e5 N/m), a softer penalty_stiffness, or solver='robust'")
 
     def landing_reward(self, final_state: np.ndarray, at_rest: bool) -> tuple[float, dict[str, float]]:
         """The reward of the current episode's throw ending in ``final_state`` (x, y, angle, vx, vy,
@@ -394,12 +436,11 @@ class BoxTossEnv(gym.Env):
         if self.render_mode == "rgb_array":
             return self._draw_state(self._caption())
         if self.render_mode == "rgb_array_list":
-            frames, self._frames = self._frames, []
-            return frames
+            return self._unseen_frames()
         renderer = self._renderer_for_env()
         target_x, target_faces = float(self._episodes.target_x[0]), self._episodes.target_faces[0]
         if self._needs_reset:  # a throw just happened: play it
-            renderer.play(self._throw_trajectory(), self.dt, target_x, target_faces)
+            renderer.play(self._throw_trajectory(), self.dt, target_x, target_faces, self._outcome)
         else:
             renderer.show(self._state[0], target_x, target_faces, "in the hand")
         return None
@@ -413,7 +454,18 @@ class BoxTossEnv(gym.Env):
     def _draw_state(self, caption: str) -> np.ndarray:
         episodes = self._episodes
         return self._renderer_for_env().frame(self._state[0], float(episodes.target_x[0]),
-                                              episodes.target_faces[0], caption)
+                                              episodes.target_faces[0], caption, self._outcome)
+
+    def _unseen_frames(self) -> list[np.ndarray]:
+        """"rgb_array_list": the frames since the last call, drawn now. A throw is drawn whole, with one
+        camera fitted to it (from the hand on, unless the hand was returned already) and its result."""
+        hand, throw = self._hand_unseen, self._throw_unseen
+        self._hand_unseen = self._throw_unseen = False
+        if throw:
+            return self._renderer_for_env().throw_frames(
+                self._throw_trajectory(), self.dt, float(self._episodes.target_x[0]),
+                self._episodes.target_faces[0], self._outcome, skip_first=not hand)
+        return [self._draw_state("in the hand")] if hand else []
 
     def _renderer_for_env(self):
         if self._renderer is None:
@@ -446,6 +498,4 @@ class BoxTossEnv(gym.Env):
 
 
 def _check_pixels(name: str, value) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 16 <= value <= 8192:
-        raise ValueError(f"{name} must be an integer number of pixels in [16, 8192], got {value!r}")
-    return int(value)
+    return check_integer(name, value, 16, 8192)

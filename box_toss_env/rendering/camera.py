@@ -35,18 +35,34 @@ class Camera:
 
     @classmethod
     def from_view(
-        cls, x_min: float, x_max: float, y_min: float, y_max: float, width_px: int, height_px: int
+        cls,
+        x_min: float,
+        x_max: float,
+        y_min: float,
+        y_max: float,
+        width_px: int,
+        height_px: int,
+        *,
+        padding_px: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0),
     ) -> Camera:
         """The largest-scale camera whose image contains ``[x_min, x_max] x [y_min, y_max]`` [m].
 
-        The rectangle is centred; the image shows more than it along one axis when the aspect ratios differ.
+        ``padding_px`` = (left, right, top, bottom) keeps bands of the image free (for text, floor labels):
+        the rectangle is fitted into the image less those bands, centred there; the image shows more than
+        the rectangle along one axis when the aspect ratios differ.
         """
         if not (x_max > x_min and y_max > y_min):
             raise ValueError(f"empty view rectangle x [{x_min}, {x_max}], y [{y_min}, {y_max}]")
-        pixels_per_metre = min(width_px / (x_max - x_min), height_px / (y_max - y_min))
+        left, right, top, bottom = (float(p) for p in padding_px)
+        inner_width_px, inner_height_px = width_px - left - right, height_px - top - bottom
+        if not (inner_width_px > 0 and inner_height_px > 0):
+            raise ValueError(f"padding {padding_px} px leaves no room in a {width_px}x{height_px} px image")
+        pixels_per_metre = min(inner_width_px / (x_max - x_min), inner_height_px / (y_max - y_min))
+        # the rectangle's centre goes to the centre of the padded region, which is off the image centre
+        # by ((left - right) / 2, (top - bottom) / 2) px
         return cls(
-            center_x=0.5 * (x_min + x_max),
-            center_y=0.5 * (y_min + y_max),
+            center_x=0.5 * (x_min + x_max) - 0.5 * (left - right) / pixels_per_metre,
+            center_y=0.5 * (y_min + y_max) + 0.5 * (top - bottom) / pixels_per_metre,
             pixels_per_metre=float(pixels_per_metre),
             width_px=int(width_px),
             height_px=int(height_px),
@@ -121,3 +137,48 @@ class Camera:
         """
         column, row = np.floor(self.world_to_pixel(np.asarray(point, dtype=np.float64).reshape(2)))
         return int(row), int(column)
+
+
+def bounds_of_boxes(corners: np.ndarray) -> np.ndarray:
+    """(..., 4) bounds ``(x_min, x_max, y_min, y_max)`` [m] of box corners (..., 4, 2) [m]."""
+    corners = np.asarray(corners, dtype=np.float64)
+    return np.stack(
+        [corners[..., 0].min(-1), corners[..., 0].max(-1), corners[..., 1].min(-1), corners[..., 1].max(-1)],
+        axis=-1,
+    )
+
+
+def union_bounds(*bounds: np.ndarray) -> np.ndarray:
+    """The smallest bounds containing all of the given ones; each is (..., 4) ``(x_min, x_max, y_min, y_max)``
+    and they broadcast (e.g. per-frame bounds with one fixed rectangle)."""
+    stacked = np.broadcast_arrays(*(np.asarray(b, dtype=np.float64) for b in bounds))
+    lows, highs = np.minimum.reduce(stacked), np.maximum.reduce(stacked)
+    return np.stack([lows[..., 0], highs[..., 1], lows[..., 2], highs[..., 3]], axis=-1)
+
+
+def follow_bounds(bounds: np.ndarray, radius: int) -> np.ndarray:
+    """Smoothly moving view bounds (n, 4) that contain per-frame bounds (n, 4), for a camera following them.
+
+    Two sliding windows of ``radius`` frames either side (shortened at the ends):
+
+        held[k]   = union of bounds[j]  for |j - k| <= radius   (looks ahead: the view opens before it is needed)
+        result[k] = mean of held[j]     for |j - k| <= radius   (eases every edge in and out)
+
+    Every ``held[j]`` averaged into ``result[k]`` contains ``bounds[k]`` (|j - k| <= radius), and an edge-wise
+    mean of rectangles that all contain a rectangle contains it too: the box is in view in every frame by
+    construction, while each edge moves at most ``1 / (2 radius + 1)`` of its total travel per frame.
+    """
+    bounds = np.asarray(bounds, dtype=np.float64).reshape(-1, 4)
+    n_frames, radius = len(bounds), int(radius)
+    if radius <= 0 or n_frames <= 1:
+        return bounds.copy()
+    padded = np.pad(bounds, ((radius, radius), (0, 0)), mode="edge")
+    windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * radius + 1, axis=0)  # (n, 4, window)
+    held = np.stack(
+        [windows[:, 0].min(-1), windows[:, 1].max(-1), windows[:, 2].min(-1), windows[:, 3].max(-1)], axis=-1
+    )
+    # repeating the end frames (edge padding) leaves each union as it was; the mean is over frames that exist
+    cumulative = np.concatenate([np.zeros((1, 4)), np.cumsum(held, axis=0)])
+    frames = np.arange(n_frames)
+    low, high = np.maximum(frames - radius, 0), np.minimum(frames + radius, n_frames - 1) + 1
+    return (cumulative[high] - cumulative[low]) / (high - low)[:, None]

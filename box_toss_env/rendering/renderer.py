@@ -35,6 +35,15 @@ class Palette:
     target: RGB = (0, 158, 115)
     target_pole: RGB = (70, 70, 70)
     text: RGB = (20, 20, 20)
+    floor_label: RGB = (246, 240, 230)
+    trace: RGB = (110, 130, 165)
+    result_background: RGB = (255, 255, 255)
+    success: RGB = (0, 135, 90)
+    failure: RGB = (200, 40, 40)
+
+
+FACE_COLOUR_NAMES = ("red", "blue", "yellow", "purple")
+"""Names of ``Palette().face_colours``, for text that refers to a face by its colour."""
 
 
 MARKED_STRIPE_WIDTH_PX = 6.0
@@ -49,7 +58,13 @@ TEXT_MARGIN_PX = 6
 FLOOR_LINE_WIDTH_PX = 2
 FLOOR_TICK_LENGTH_PX = 5
 MIN_PX_PER_FLOOR_TICK = 30.0
-"""Metre ticks on the floor are drawn only when they are at least this far apart [px]."""
+"""Floor ticks are at least this far apart [px]: every 1, 2, 5, 10, 20, ... m, the first step that fits."""
+FLOOR_LABEL_GAP_PX = 10
+"""Floor tick labels ("3 m") are at least this far apart [px]."""
+RESULT_PADDING_PX = 6
+HEADLINE_SCALE = 1.4
+"""The result's first line (its headline) is drawn this much larger than other text."""
+TRACE_WIDTH_PX = 2
 
 
 class SceneRenderer:
@@ -64,6 +79,13 @@ class SceneRenderer:
       half-width. ``target_face`` (0..3 or None for any face) adds an icon of the box resting on that face
       and a label.
     - ``text_lines``: strings drawn top-left (skipped with a warning if ``pygame.font`` is unavailable).
+    - ``result_lines``: a box of text top-right, its first line a headline coloured by ``result_success``
+      (green True, red False, plain None): how a throw ended.
+    - ``trace``: (k, 2) points [m] joined by a thin line under the boxes, e.g. the path a box's centre took.
+
+    The floor has ticks labelled in metres, every 1, 2, 5, 10, ... m, the first step whose labels do not
+    crowd. ``drawn_text`` holds the text of the last frame drawn, by where it went (``"lines"``,
+    ``"result"``, ``"floor"``, ``"target"``), so callers and tests can read what a frame says.
 
     Faces are numbered by outward normal in the body frame (0: -y, 1: +x, 2: +y, 3: -x, see
     ``geometry``). Each face has a coloured stripe inside the box (``Palette.face_colours``: red, blue,
@@ -94,7 +116,10 @@ class SceneRenderer:
         self.window_title = window_title
         self._surface: Any = None
         self._font: Any = None
+        self._headline_font: Any = None
         self._font_loaded = False
+        self.drawn_text: dict[str, list[str]] = {}
+        """The text of the last frame drawn, by where it went: "lines", "result", "floor", "target"."""
         self._window: Any = None
         self._clock: Any = None
 
@@ -111,6 +136,9 @@ class SceneRenderer:
         target_tolerance_m: float | None = None,
         target_label: str | None = None,
         text_lines: Sequence[str] = (),
+        result_lines: Sequence[str] = (),
+        result_success: bool | None = None,
+        trace: np.ndarray | None = None,
         camera: Camera | None = None,
     ) -> np.ndarray:
         """Draw the scene and return it as a new (height_px, width_px, 3) uint8 array.
@@ -129,6 +157,9 @@ class SceneRenderer:
             target_label,
             text_lines,
             camera,
+            result_lines=result_lines,
+            result_success=result_success,
+            trace=trace,
         )
         rgb_bytes = pygame.image.tobytes(surface, "RGB")
         return np.frombuffer(rgb_bytes, dtype=np.uint8).reshape(self.height_px, self.width_px, 3).copy()
@@ -144,6 +175,9 @@ class SceneRenderer:
         target_tolerance_m: float | None = None,
         target_label: str | None = None,
         text_lines: Sequence[str] = (),
+        result_lines: Sequence[str] = (),
+        result_success: bool | None = None,
+        trace: np.ndarray | None = None,
         camera: Camera | None = None,
         fps: float | None = None,
     ) -> bool:
@@ -164,6 +198,9 @@ class SceneRenderer:
             target_label,
             text_lines,
             camera,
+            result_lines=result_lines,
+            result_success=result_success,
+            trace=trace,
         )
         return self._present(pygame, surface, fps)
 
@@ -207,6 +244,10 @@ class SceneRenderer:
         target_label: str | None,
         text_lines: Sequence[str],
         camera: Camera | None,
+        *,
+        result_lines: Sequence[str] = (),
+        result_success: bool | None = None,
+        trace: np.ndarray | None = None,
     ) -> Any:
         """Draw the whole scene onto the reused surface and return the surface."""
         camera = self.camera if camera is None else camera
@@ -217,21 +258,26 @@ class SceneRenderer:
         if self._surface is None:
             self._surface = pygame.Surface((self.width_px, self.height_px))
         surface = self._surface
+        self.drawn_text = {"lines": [], "result": [], "floor": [], "target": []}
 
         self._draw_sky_and_ground(pygame, surface, camera)
         if target_x is not None:
             self._draw_target(
                 pygame, surface, camera, float(target_x), target_face, target_tolerance_m, target_label, half_extents
             )
+        if trace is not None:
+            self._draw_trace(pygame, surface, camera, trace)
         corners_px = camera.world_to_pixel(box_vertices(position, angle, half_extents))
         for box_corners_px, box_half_extents in zip(corners_px, half_extents, strict=True):
             self._draw_box(pygame, surface, box_corners_px, 2.0 * box_half_extents * camera.pixels_per_metre)
         if text_lines:
             self._draw_text(pygame, surface, text_lines)
+        if result_lines:
+            self._draw_result(pygame, surface, result_lines, result_success)
         return surface
 
     def _draw_sky_and_ground(self, pygame: ModuleType, surface: Any, camera: Camera) -> None:
-        """Background, the ground region below y = 0, the floor line and metre ticks."""
+        """Background, the ground region below y = 0, the floor line, and ticks labelled in metres."""
         palette = self.palette
         surface.fill(palette.background)
         floor_row = camera.world_to_pixel(np.zeros(2))[1]
@@ -241,14 +287,26 @@ class SceneRenderer:
             return
         surface.fill(palette.ground, (0, ground_top, self.width_px, self.height_px - ground_top))
         surface.fill(palette.floor_line, (0, ground_top - 1, self.width_px, FLOOR_LINE_WIDTH_PX))
-        if camera.pixels_per_metre < MIN_PX_PER_FLOOR_TICK or ground_top <= 0:
+        if ground_top <= 0:
             return
         x_min, x_max, _, _ = camera.view_bounds
-        for tick_x in range(int(np.ceil(x_min)), int(np.floor(x_max)) + 1):
+        font = self._get_font(pygame)
+        step_m = floor_tick_step(camera.pixels_per_metre, x_min, x_max, font)
+        label_top = ground_top + FLOOR_TICK_LENGTH_PX + 1
+        for tick_x in floor_ticks(x_min, x_max, step_m):
             column = camera.world_to_pixel(np.array([tick_x, 0.0]))[0]
             pygame.draw.line(
                 surface, palette.floor_line, (column, ground_top), (column, ground_top + FLOOR_TICK_LENGTH_PX)
             )
+            if font is None:
+                continue
+            label = floor_label(tick_x)
+            width, height = font.size(label)
+            left = int(round(column - 0.5 * width))
+            if left < 0 or left + width > self.width_px or label_top + height > self.height_px:
+                continue  # a label cut by the image's edge reads as another number
+            surface.blit(font.render(label, True, palette.floor_label), (left, label_top))
+            self.drawn_text["floor"].append(label)
 
     def _draw_target(
         self,
@@ -299,7 +357,11 @@ class SceneRenderer:
         font = self._get_font(pygame)
         if font is not None:
             label = target_label or ("any face" if target_face is None else f"face {target_face} down")
+            label_width = font.size(label)[0]
+            if label_left + label_width > self.width_px and column - 4 - label_width >= 0:
+                label_left = column - 4 - label_width  # no room right of the flag: write it on the left
             surface.blit(font.render(label, True, palette.target), (label_left, pole_top))
+            self.drawn_text["target"].append(label)
 
     def _draw_face_icon(
         self,
@@ -364,6 +426,40 @@ class SceneRenderer:
                 font.render(str(line), True, self.palette.text),
                 (TEXT_MARGIN_PX, TEXT_MARGIN_PX + index * line_height),
             )
+            self.drawn_text["lines"].append(str(line))
+
+    def _draw_result(
+        self, pygame: ModuleType, surface: Any, result_lines: Sequence[str], success: bool | None
+    ) -> None:
+        """A box top-right: the first line large, in green (success) or red (not), the others below it."""
+        font = self._get_font(pygame)
+        if font is None:
+            return
+        palette = self.palette
+        colour = palette.text if success is None else (palette.success if success else palette.failure)
+        lines = [str(line) for line in result_lines]
+        rendered = [self._headline_font.render(lines[0], True, colour)]
+        rendered += [font.render(line, True, palette.text) for line in lines[1:]]
+        width = max(image.get_width() for image in rendered) + 2 * RESULT_PADDING_PX
+        height = sum(image.get_height() for image in rendered) + 2 * RESULT_PADDING_PX
+        left = max(self.width_px - TEXT_MARGIN_PX - width, 0)
+        box = pygame.Rect(left, TEXT_MARGIN_PX, width, height)
+        surface.fill(palette.result_background, box)
+        pygame.draw.rect(surface, colour, box, 2)
+        top = TEXT_MARGIN_PX + RESULT_PADDING_PX
+        for image in rendered:
+            surface.blit(image, (left + RESULT_PADDING_PX, top))
+            top += image.get_height()
+        self.drawn_text["result"] = lines
+
+    def _draw_trace(self, pygame: ModuleType, surface: Any, camera: Camera, trace: np.ndarray) -> None:
+        """The points of ``trace`` (k, 2) [m] joined by a thin line."""
+        points = np.asarray(trace, dtype=np.float64).reshape(-1, 2)
+        points = points[np.all(np.isfinite(points), axis=1)]
+        if len(points) < 2:
+            return
+        pixels = _clip_px(camera.world_to_pixel(points))
+        pygame.draw.lines(surface, self.palette.trace, False, pixels.tolist(), TRACE_WIDTH_PX)
 
     # ----- helpers -----
 
@@ -388,11 +484,13 @@ class SceneRenderer:
             try:
                 pygame.font.init()
                 self._font = pygame.font.Font(None, self.font_size_px)
+                self._headline_font = pygame.font.Font(None, round(HEADLINE_SCALE * self.font_size_px))
+                self._headline_font.set_bold(True)
             except (ImportError, NotImplementedError, OSError, pygame.error) as error:
                 warnings.warn(
                     f"pygame.font is unavailable ({error}); text is not drawn", RuntimeWarning, stacklevel=2
                 )
-                self._font = None
+                self._font = self._headline_font = None
         return self._font
 
     def _is_out_of_view(self, corners_px: np.ndarray) -> bool:
@@ -437,3 +535,33 @@ def as_box_arrays(
 
 def _clip_px(pixels: np.ndarray) -> np.ndarray:
     return np.clip(pixels, -PIXEL_LIMIT, PIXEL_LIMIT)
+
+
+FLOOR_TICK_STEPS_M = tuple(m * 10.0**e for e in range(0, 6) for m in (1.0, 2.0, 5.0))
+"""Distances between floor ticks to choose from [m]."""
+
+
+def floor_label(tick_x: float) -> str:
+    """The label of the floor tick at ``tick_x`` [m]: "0", "2 m", "-1 m"."""
+    return "0" if tick_x == 0 else f"{tick_x:g} m"
+
+
+def floor_tick_step(pixels_per_metre: float, x_min: float, x_max: float, font: Any = None) -> float:
+    """The first of 1, 2, 5, 10, 20, ... m whose ticks are ``MIN_PX_PER_FLOOR_TICK`` apart and, with a
+    ``font``, whose widest label fits between neighbours with ``FLOOR_LABEL_GAP_PX`` to spare."""
+    for step_m in FLOOR_TICK_STEPS_M:
+        spacing_px = step_m * pixels_per_metre
+        if spacing_px < MIN_PX_PER_FLOOR_TICK:
+            continue
+        if font is None:
+            return step_m
+        ticks = floor_ticks(x_min, x_max, step_m)
+        widest = max((font.size(floor_label(x))[0] for x in ticks[[0, -1]]), default=0) if len(ticks) else 0
+        if spacing_px >= widest + FLOOR_LABEL_GAP_PX:
+            return step_m
+    return FLOOR_TICK_STEPS_M[-1]
+
+
+def floor_ticks(x_min: float, x_max: float, step_m: float) -> np.ndarray:
+    """Multiples of ``step_m`` in [x_min, x_max] [m]."""
+    return step_m * np.arange(np.ceil(x_min / step_m), np.floor(x_max / step_m) + 1)

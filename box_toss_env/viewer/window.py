@@ -381,7 +381,7 @@ class PlayWindow:
         width, height = env.render_size
         self.fps = float(env.metadata["render_fps"])
         # the env draws with a ThrowRenderer for its config and frame size: the same camera maps the mouse
-        self.camera = ThrowRenderer(controller.config, width, height, self.fps).renderer.camera
+        self.camera = ThrowRenderer(controller.config, width, height, self.fps).home_camera
         self.width_px, self.height_px = width, height
         self.canvas = Canvas((width + PANEL_WIDTH_PX, height), headless=headless, title="BoxToss: play")
         self.pygame = self.canvas.pygame

@@ -82,10 +82,13 @@ def test_importing_the_package_imports_neither_pygame_nor_the_envs():
     subprocess.run([sys.executable, "-c", code], check=True, timeout=60)
 
 
-def test_gymnasium_check_env_without_warnings():
+@pytest.mark.parametrize("kwargs", [{}, {"observe_dynamics": True}, {"target_x_range": (2.0, 2.0)}])
+def test_gymnasium_check_env_without_warnings(kwargs):
+    """Also with fixed quantities in the observation (dynamics not drawn, one target x): their bounds are
+    one float32 step either side of the value, never equal (which the checker warns about)."""
     from gymnasium.utils.env_checker import check_env
 
-    env = gym.make(ENV_ID)
+    env = gym.make(ENV_ID, **kwargs)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         check_env(env.unwrapped)  # includes every render mode (headless) and close twice
@@ -165,12 +168,20 @@ def test_vector_entry_point_placeholder():
     ([0.0, 0.0, -np.inf], "finite"),
     ([0.0, 0.0], r"shape \(3,\)"),
     ([[0.0, 0.0, 0.0]], r"shape \(3,\)"),
-    ("fast", "finite numbers"),
 ])
 def test_bad_actions_raise_clear_value_errors(action, message):
     env = BoxTossEnv()
     env.reset(seed=0)
     with pytest.raises(ValueError, match=message):
+        env.step(action)
+
+
+@pytest.mark.parametrize("action", ["fast", "000", ["0", "0", "0"], np.array([1j, 0.0, 0.0]), [True, False, True],
+                                    [0.0, None, 0.0]])
+def test_actions_that_are_not_real_numbers_are_type_errors(action):
+    env = BoxTossEnv()
+    env.reset(seed=0)
+    with pytest.raises(TypeError, match="action must hold real numbers"):
         env.step(action)
 
 
@@ -203,28 +214,78 @@ def test_step_needs_a_reset():
     ({"release_height_range": (0.1, 1.0)}, "release_height_range"),
     ({"release_x_range": (1.0, 0.0)}, "release_x_range"),
     ({"release_angle_range": (0.0, 4.0)}, "release_angle_range"),
-    ({"target_x_range": 3.0}, "target_x_range"),
     ({"target_face": "top"}, "target_face"),
     ({"max_speed": 0.0}, "max_speed"),
     ({"launch_angle_range": (0.0, np.inf)}, "launch_angle_range"),
     ({"max_spin": -2.0}, "max_spin"),
     ({"position_tolerance": 0.0}, "position_tolerance"),
     ({"distance_weight": -1.0}, "distance_weight"),
-    ({"orientation_weight": "x"}, "orientation_weight"),
     ({"success_bonus": -1.0}, "success_bonus"),
     ({"mass_range": (0.0, 1.0)}, "mass_range"),
     ({"friction_range": (-1.0, 1.0)}, "friction_range"),
     ({"restitution_range": (0.5, 1.2)}, "restitution_range"),
-    ({"observe_dynamics": "yes"}, "observe_dynamics"),
     ({"solver": "rk4"}, "solver"),
     ({"dt": 0.0}, "dt"),
     ({"max_sim_time": 0.0}, "max_sim_time"),
     ({"render_fps": 0}, "render_fps"),
     ({"render_width": 5}, "render_width"),
+    # what the engine and the env cannot honour (docs/ranges.md)
+    ({"mass": 1e300}, r"mass must be in \[1e-6, 1e6\] kg"),
+    ({"mass": 1e-300}, r"mass must be in \[1e-6, 1e6\] kg"),
+    ({"dt": 1e-300}, r"dt must be in \[1e-7, 1\] s"),
+    ({"dt": 1e-12}, r"dt must be in \[1e-7, 1\] s"),
+    ({"dt": 1e-7, "max_sim_time": 20.0}, r"max_sim_time / dt must be at most 1e8 steps"),
+    ({"box_width": 1e-300}, r"box_width must be in \[0.0001, 1000\] m"),
+    ({"box_length": 1e-160}, r"box_length must be in \[0.0001, 1000\] m"),
+    ({"release_height_range": (1e39, 1e39)}, r"release_height_range\[0\] must be in \(0, 10000\] m"),
+    ({"mass_range": (1.0, 1e39)}, r"mass_range\[1\] must be in \[1e-6, 1e6\] kg"),
+    ({"friction_range": (0.0, 1e39)}, r"friction_range\[1\] must be in \[0, 10\]"),
+    ({"friction": 1e39}, r"friction must be in \[0, 10\]"),
+    ({"gravity": 1e-300}, r"gravity must be in \[0.001, 10000\] m/s\^2"),
+    ({"distance_weight": 1e308}, r"distance_weight must be in \[0, 1e6\] 1/m"),
 ])
 def test_bad_kwargs_raise_value_errors_naming_them(kwargs, name):
     with pytest.raises(ValueError, match=name):
         gym.make(ENV_ID, **kwargs)
+
+
+@pytest.mark.parametrize(("kwargs", "name"), [
+    ({"mass": "2"}, "mass"),
+    ({"restitution": True}, "restitution"),
+    ({"release_x_range": "01"}, "release_x_range"),
+    ({"release_x_range": ("0", "1")}, r"release_x_range\[0\]"),
+    ({"target_x_range": 3.0}, "target_x_range"),
+    ({"orientation_weight": "x"}, "orientation_weight"),
+    ({"max_speed": 8 + 0j}, "max_speed"),
+    ({"mass_range": (1, True)}, r"mass_range\[1\]"),
+    ({"observe_dynamics": "yes"}, "observe_dynamics"),
+    ({"target_face": 1}, "target_face"),
+    ({"solver": None}, "solver"),
+    ({"dt": "0.01"}, "dt"),
+    ({"render_fps": "30"}, "render_fps"),
+    ({"render_width": 600.0}, "render_width"),
+    ({"render_mode": 1}, "render_mode"),
+])
+def test_kwargs_of_the_wrong_type_raise_type_errors_naming_them(kwargs, name):
+    with pytest.raises(TypeError, match=rf"^{name} must be"):
+        BoxTossEnv(**kwargs)
+    with pytest.raises(TypeError, match=name):
+        gym.make(ENV_ID, **kwargs)
+
+
+def test_numpy_numbers_are_accepted():
+    env = gym.make(ENV_ID, mass=np.float32(3.0), max_speed=np.int64(5), release_x_range=np.array([-0.1, 0.1]))
+    assert env.unwrapped.config.mass_range == (3.0, 3.0) and env.unwrapped.config.max_speed == 5.0
+
+
+def test_observation_bounds_are_finite_at_the_ends_of_every_range():
+    """The widest corners of the declared ranges still give finite float32 bounds (no inf in observations)."""
+    extreme = dict(box_length=1e3, box_width=1e-4, gravity=1e-3, release_height_range=(600.0, 1e4),
+                   release_x_range=(-1e3, 1e3), target_x_range=(-1e3, 1e3), max_speed=1e3, max_spin=1e4,
+                   max_sim_time=1e4, dt=0.1, mass_range=(1e-6, 1e6), friction_range=(0.0, 10.0),
+                   observe_dynamics=True)
+    space = gym.make(ENV_ID, **extreme).observation_space
+    assert np.isfinite(space.low).all() and np.isfinite(space.high).all() and (space.low < space.high).all()
 
 
 def test_unknown_render_mode():
@@ -300,6 +361,30 @@ def test_max_sim_time_ends_a_throw_that_has_not_come_to_rest():
     assert terminated and not truncated and not info["at_rest"] and not info["success"]
     assert info["sim_time"] == pytest.approx(0.3, abs=env.unwrapped.dt) and info["flight_time"] == info["sim_time"]
     assert env.observation_space.contains(obs) and math.isfinite(reward)
+
+
+def test_a_box_sinking_through_the_floor_is_reported_as_such():
+    """The seed scheme with penalty_stiffness=0 lets a box sink: the error says so, not "energy created"."""
+    env = gym.make(ENV_ID, solver="seed", penalty_stiffness=0.0)
+    env.reset(seed=0)
+    with pytest.raises(EnergyGainError, match="sank through the floor") as caught:
+        env.step(np.zeros(3))
+    assert "created energy" not in str(caught.value) and "penalty_stiffness > 0" in str(caught.value)
+
+
+def test_the_robust_solvers_errors_speak_of_the_robust_solver():
+    """Neither message blames the seed scheme or advises solver='robust' to a robust run."""
+    from box_toss_env.physics import NonFiniteStateError
+
+    env = BoxTossEnv()
+    sunk, fast = env.observation_space.low.copy(), env.observation_space.high.copy()
+    sunk[task.OBS_Y] -= 1.0
+    fast[task.OBS_VX] *= 2.0
+    messages = [env._bounds_message(sunk), env._bounds_message(fast), str(NonFiniteStateError(0, 3, "robust"))]
+    assert "sank through the floor" in messages[0] and "created energy" in messages[1]
+    for message in messages:
+        assert "solver='robust'" in message and "seed" not in message and "use solver" not in message
+    assert "seed scheme" in str(NonFiniteStateError(0, 3, "seed"))
 
 
 def test_the_seed_solver_is_selectable_and_its_energy_gain_is_reported():

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from box_toss_env.rendering import Camera
+from box_toss_env.rendering import Camera, bounds_of_boxes, follow_bounds, union_bounds
 
 
 def test_world_to_pixel_puts_centre_mid_image_and_y_up():
@@ -64,3 +64,43 @@ def test_invalid_camera_raises(kwargs):
 def test_empty_view_rectangle_raises():
     with pytest.raises(ValueError, match="empty view"):
         Camera.from_view(1.0, 1.0, 0.0, 1.0, 10, 10)
+
+
+def test_from_view_with_padding_fits_the_rectangle_into_the_padded_region():
+    padding = (10, 30, 40, 20)  # left, right, top, bottom [px]
+    camera = Camera.from_view(-1.0, 7.0, 0.0, 3.0, 600, 400, padding_px=padding)
+    corners = camera.world_to_pixel(np.array([[-1.0, 0.0], [7.0, 3.0]]))
+    assert corners[:, 0].min() >= 10 - 1e-9 and corners[:, 0].max() <= 600 - 30 + 1e-9
+    assert corners[:, 1].min() >= 40 - 1e-9 and corners[:, 1].max() <= 400 - 20 + 1e-9
+    # the rectangle fills the padded region along x (the tighter axis here) and is centred in it along y
+    assert corners[0, 0] == pytest.approx(10) and corners[1, 0] == pytest.approx(570)
+    assert 0.5 * (corners[0, 1] + corners[1, 1]) == pytest.approx(40 + 0.5 * (400 - 60))
+    with pytest.raises(ValueError, match="padding"):
+        Camera.from_view(0.0, 1.0, 0.0, 1.0, 100, 100, padding_px=(60, 40, 0, 0))
+
+
+def test_bounds_and_their_union():
+    corners = np.array([[[0.0, 1.0], [2.0, 1.0], [2.0, 3.0], [0.0, 3.0]]])
+    np.testing.assert_array_equal(bounds_of_boxes(corners), [[0.0, 2.0, 1.0, 3.0]])
+    np.testing.assert_array_equal(union_bounds([[0.0, 2.0, 1.0, 3.0], [5.0, 6.0, -1.0, 0.0]], [1.0, 1.5, 0.0, 4.0]),
+                                  [[0.0, 2.0, 0.0, 4.0], [1.0, 6.0, -1.0, 4.0]])
+
+
+@pytest.mark.parametrize("radius", [0, 1, 7, 15])
+def test_follow_bounds_contain_every_frame_and_move_gradually(radius):
+    rng = np.random.default_rng(radius)
+    centres = np.cumsum(rng.normal(scale=0.3, size=(200, 2)), axis=0)
+    centres[120] += 8.0  # a jump: the view must still hold it, opening before it comes
+    bounds = np.column_stack([centres[:, 0] - 0.2, centres[:, 0] + 0.2, centres[:, 1] - 0.1, centres[:, 1] + 0.1])
+    followed = follow_bounds(bounds, radius)
+    assert followed.shape == bounds.shape
+    assert np.all(followed[:, [0, 2]] <= bounds[:, [0, 2]] + 1e-12)
+    assert np.all(followed[:, [1, 3]] >= bounds[:, [1, 3]] - 1e-12)
+    if radius:
+        # away from the ends (shorter windows), an edge moves at most 1 / (2 radius + 1) of the range of
+        # that edge in the input per frame: a jump is spread over 2 radius + 1 frames
+        input_range = bounds.max(axis=0) - bounds.min(axis=0)
+        steps = np.abs(np.diff(followed[radius:-radius], axis=0)).max(axis=0)
+        assert np.all(steps <= input_range / (2 * radius + 1) + 1e-9)
+    else:
+        np.testing.assert_array_equal(followed, bounds)

@@ -12,6 +12,7 @@ from gymnasium.error import DependencyNotInstalled
 
 import box_toss_env.rendering
 from box_toss_env.rendering import RENDER_INSTALL_HINT, Camera, Palette, SceneRenderer
+from box_toss_env.rendering.renderer import floor_tick_step
 
 # Headless window. SDL reads this when pygame.display is initialised (the first `show`), and nothing above
 # imports pygame: the renderer imports it on its first draw.
@@ -288,3 +289,46 @@ def test_target_label_replaces_the_default_text(renderer):
     again = renderer.render_rgb(CENTRE, [0.0], HALF_EXTENTS, target_x=2.0, target_label="a long side down")
     assert not np.array_equal(default, labelled)
     np.testing.assert_array_equal(labelled, again)
+
+
+def test_floor_ticks_are_labelled_in_metres(renderer):
+    frame = renderer.render_rgb(CENTRE, [0.0], HALF_EXTENTS)
+    assert renderer.drawn_text["floor"] == ["0", "1 m", "2 m", "3 m", "4 m"]  # -1 m and 5 m would be cut
+    blank = SceneRenderer(WIDTH_PX, HEIGHT_PX, camera=CAMERA, palette=Palette(floor_label=PALETTE.ground))
+    rows, columns = np.nonzero(np.any(frame != blank.render_rgb(CENTRE, [0.0], HALF_EXTENTS), axis=-1))
+    floor_row = CAMERA.world_to_pixel([0.0, 0.0])[1]
+    assert len(rows) > 0 and rows.min() > floor_row  # the labels are in the ground, under the ticks
+    for x in range(5):
+        assert np.any(np.abs(columns - CAMERA.world_to_pixel([x, 0.0])[0]) < 4)
+
+
+def test_floor_tick_step_grows_when_zoomed_out():
+    assert floor_tick_step(100.0, 0.0, 6.0) == 1.0
+    assert floor_tick_step(20.0, 0.0, 30.0) == 2.0
+    assert floor_tick_step(5.0, 0.0, 100.0) == 10.0
+
+
+def test_result_lines_are_drawn_top_right_in_a_box(renderer):
+    without = renderer.render_rgb(CENTRE, [0.0], HALF_EXTENTS)
+    lines = ["success: yes", "distance to target: 0.04 m"]
+    with_result = renderer.render_rgb(CENTRE, [0.0], HALF_EXTENTS, result_lines=lines, result_success=True)
+    assert renderer.drawn_text["result"] == lines
+    rows, columns = np.nonzero(np.any(with_result != without, axis=-1))
+    assert rows.max() < HEIGHT_PX // 2 and columns.min() > WIDTH_PX // 3 and columns.max() >= WIDTH_PX - 10
+    assert np.any(has_colour(with_result, PALETTE.success))
+
+
+def test_trace_is_drawn_under_the_box(renderer):
+    trace = np.array([[0.0, 1.0], [1.0, 2.0], [2.0, 1.5]])
+    frame = renderer.render_rgb(CENTRE, [0.0], HALF_EXTENTS, trace=trace)
+    assert colour_at(frame, [0.5, 1.5]) == PALETTE.trace
+    assert colour_at(frame, CENTRE[0]) == PALETTE.box_fill  # the box covers the end of its trace
+
+
+def test_target_label_moves_left_of_the_flag_at_the_right_edge(renderer):
+    no_boxes = (np.zeros((0, 2)), np.zeros(0), np.zeros((0, 2)))
+    frame = renderer.render_rgb(*no_boxes, target_x=4.6, target_label="a long side down")
+    assert renderer.drawn_text["target"] == ["a long side down"]
+    target_column = CAMERA.world_to_pixel([4.6, 0.0])[0]
+    columns = np.nonzero(has_colour(frame, PALETTE.target))[1]
+    assert columns.min() < target_column - 40  # the label, on the left
