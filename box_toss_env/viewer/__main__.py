@@ -12,6 +12,7 @@ from gymnasium.error import DependencyNotInstalled
 from box_toss_env.physics.scene import SOLVERS
 from box_toss_env.physics.scenes import SCENES
 from box_toss_env.viewer.controller import STEPS_PER_FRAME, ViewerController
+from box_toss_env.viewer.kernels import KernelLoader
 
 PARAMETER_FLAGS = (("dt", "dt", "time step size [s]"), ("gravity", "gravity", "gravity along y [m/s^2]"),
                    ("stiffness", "penalty_stiffness", "penalty stiffness [N/m]"),
@@ -82,10 +83,12 @@ def run_viewer(parser: argparse.ArgumentParser, args) -> int:
         changes["use_impulses"] = False
     if args.no_penalty:
         changes["use_penalty"] = False
+    # in a window, kernels load on a background thread after the first frame (headless: at the first step)
+    loader = KernelLoader() if args.frames is None else None
     try:
         scene = SCENES[args.scene]().replace(**changes)
         controller = ViewerController(scene, width_px=args.width or 900, height_px=args.height or 560,
-                                      steps_per_frame=args.steps_per_frame)
+                                      steps_per_frame=args.steps_per_frame, loader=loader)
     except ValueError as error:
         parser.error(str(error))
     if args.compare and not controller.toggle_compare():
@@ -125,7 +128,9 @@ def run_play(parser: argparse.ArgumentParser, args) -> int:
     except (ValueError, gym.error.Error) as error:
         parser.error(str(error))
     try:
-        window = PlayWindow(PlayController(env, seed=args.seed), headless=args.frames is not None)
+        headless = args.frames is not None
+        window = PlayWindow(PlayController(env, seed=args.seed), headless=headless,
+                            loader=None if headless else KernelLoader())
         if args.frames is None:
             window.run()
             return 0

@@ -9,6 +9,10 @@ front end (``window``) only turns events into calls here and draws what it reads
 Stepping follows the demo: each drawn frame runs ``STEPS_PER_FRAME`` (8) time steps through a
 ``Simulator`` built for the scene's compile-time flags (rebuilt only when those change), and the
 wall time per step is averaged over the last ``TIMING_WINDOW_STEPS`` (50) steps.
+
+With a ``KernelLoader`` (the window's), a lane's kernel is loaded or compiled on a background thread:
+until every lane's kernel is ready the scene holds still and ``notices`` says which one is compiling.
+Without one, the first step compiles it where it runs.
 """
 
 from __future__ import annotations
@@ -31,6 +35,7 @@ from box_toss_env.physics import (
     make_settings,
 )
 from box_toss_env.rendering import Camera, box_vertices
+from box_toss_env.viewer.kernels import KernelJob, KernelLoader, zero_step_args
 
 STEPS_PER_FRAME = 8
 """Simulation steps per drawn frame, as in the seed demo."""
@@ -137,7 +142,9 @@ class Lane:
     scene: Scene
     steps_per_frame: int = STEPS_PER_FRAME
     clock: Callable[[], float] = time.perf_counter
+    loader: KernelLoader | None = None
     simulator: Simulator = field(init=False)
+    job: KernelJob | None = field(init=False, default=None)  # the kernel's load, while it is queued or running
     state: np.ndarray = field(init=False)
     params: np.ndarray = field(init=False)
     settings: np.ndarray = field(init=False)
@@ -149,7 +156,7 @@ class Lane:
     grab: Grab | None = field(init=False, default=None)
 
     def __post_init__(self):
-        self.simulator = self._make_simulator(self.scene)
+        self._use_simulator(self._make_simulator(self.scene), self.scene)
         self.set_scene(self.scene)
         self.restart()
 
@@ -157,6 +164,25 @@ class Lane:
     def _make_simulator(scene: Scene) -> Simulator:
         # a handful of boxes: numba's threads would cost more than they save
         return Simulator.for_scene(scene, parallel=False)
+
+    def _use_simulator(self, simulator: Simulator, scene: Scene) -> None:
+        """Take ``simulator``; with a loader, queue its kernel's first call (nothing if compiled already)."""
+        self.simulator = simulator
+        if self.loader is not None:
+            args = zero_step_args(scene.initial_state(), scene.body_params(),
+                                  make_settings(scene, 0, until_rest=False),
+                                  np.zeros((scene.n_bodies, layout.STATS_SIZE)))
+            self.job = self.loader.prepare(simulator.kernel, args, scene.solver)
+
+    @property
+    def ready(self) -> bool:
+        """The kernel can run now (always, without a loader: the first run compiles it)."""
+        return self.job is None or self.job.ready
+
+    @property
+    def notice(self) -> str | None:
+        """What the lane waits for ("compiling the seed kernel... (first use only)"), or None."""
+        return None if self.ready else self.job.notice
 
     @property
     def solver(self) -> str:
@@ -167,7 +193,7 @@ class Lane:
         when the compile-time flags change (solver, impulses, penalty, friction on or off)."""
         simulator = self._make_simulator(scene)
         if simulator.flags != self.simulator.flags:
-            self.simulator = simulator
+            self._use_simulator(simulator, scene)
         self.scene = scene
         self.params = scene.body_params()
         self.settings = make_settings(scene, self.steps_per_frame, until_rest=False)
@@ -184,7 +210,7 @@ class Lane:
 
     def step_frame(self) -> None:
         """Run one frame's steps (applying the drag first); a divergence stops the lane."""
-        if self.diverged is not None:
+        if self.diverged is not None or not self.ready:
             return
         if self.grab is not None:
             self._pull_grabbed_box()
@@ -290,11 +316,12 @@ class ViewerController:
     ``width_px`` and ``height_px`` are the size of the scene area (the panel is extra); in compare
     mode it is split into two lanes side by side. Parameter changes build a new ``Scene`` through
     ``Scene.replace`` (which validates); a rejected change leaves everything as it was and puts the
-    reason in ``message``.
+    reason in ``message``. With a ``loader`` kernels are loaded off the caller's thread (see ``loading``).
     """
 
     def __init__(self, scene: Scene, *, width_px: int = 900, height_px: int = 560,
-                 steps_per_frame: int = STEPS_PER_FRAME, clock: Callable[[], float] = time.perf_counter):
+                 steps_per_frame: int = STEPS_PER_FRAME, clock: Callable[[], float] = time.perf_counter,
+                 loader: KernelLoader | None = None):
         if steps_per_frame < 1:
             raise ValueError(f"steps_per_frame must be >= 1, got {steps_per_frame}")
         self.scene = scene
@@ -302,6 +329,7 @@ class ViewerController:
         self.height_px = int(height_px)
         self.steps_per_frame = int(steps_per_frame)
         self.clock = clock
+        self.loader = loader
         self.lanes = [self._make_lane(scene)]
         self.compare = False
         self.paused = False
@@ -312,14 +340,29 @@ class ViewerController:
         self.view = fit_view(scene, self.lane_width_px, self.height_px)
 
     def _make_lane(self, scene: Scene) -> Lane:
-        return Lane(scene, self.steps_per_frame, self.clock)
+        return Lane(scene, self.steps_per_frame, self.clock, self.loader)
+
+    # -- kernels ------------------------------------------------------------------------------------------
+    @property
+    def loading(self) -> bool:
+        """A lane's kernel is still loading or compiling: nothing steps until all are ready."""
+        return not all(lane.ready for lane in self.lanes)
+
+    def notices(self) -> list[str | None]:
+        """Per lane, what it waits for ("compiling the seed kernel... (first use only)"), or None."""
+        return [lane.notice for lane in self.lanes]
+
+    def wait_for_kernels(self, timeout: float | None = None) -> bool:
+        """Block until every lane's kernel is ready (starting the loader); False on timeout."""
+        return True if self.loader is None else self.loader.wait(timeout)
 
     # -- stepping -------------------------------------------------------------------------------------
     def advance_frame(self, *, force: bool = False) -> None:
         """One drawn frame: ``steps_per_frame`` steps in every lane, unless paused (``force``
         steps anyway: the single-step key). A lane that diverges stops; with one lane, so does
-        the viewer (paused, "diverged" in the panel) until a restart."""
-        if self.paused and not force:
+        the viewer (paused, "diverged" in the panel) until a restart. While a kernel loads
+        (``loading``) nothing steps, so that the lanes start together."""
+        if (self.paused and not force) or self.loading:
             return
         for index, lane in enumerate(self.lanes):
             was_fine = lane.diverged is None

@@ -3,10 +3,15 @@ plus a text panel on the right. The same drawing serves the window and the headl
 
 pygame is imported when a window or a frame surface is made (``rendering.import_pygame``), so a
 missing ``render`` extra raises ``DependencyNotInstalled`` naming ``box_toss_env[render]``.
+
+The windows show their first frame before any kernel runs: with a ``KernelLoader`` the kernels load
+or compile on a background thread started after that frame, and a notice is drawn over the scene
+(``Canvas.notice``) until they are ready.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import textwrap
 import time
@@ -16,9 +21,10 @@ from typing import Any
 
 import numpy as np
 
-from box_toss_env.physics import layout
+from box_toss_env.physics import Simulator, layout
 from box_toss_env.rendering import SceneRenderer, import_pygame
 from box_toss_env.viewer.controller import PARAMETER_BY_NAME, ROW_LABELS, ROWS, ZOOM_STEP, ViewerController
+from box_toss_env.viewer.kernels import KernelJob, KernelLoader, zero_step_args
 from box_toss_env.viewer.play import THROW_GAIN, PlayController
 
 PANEL_WIDTH_PX = 340
@@ -40,6 +46,11 @@ DRAG_LINE = (200, 40, 40)
 AIM_ARROW = (200, 40, 40)
 AIM_RAW = (150, 150, 150)
 AIM_PATH = (90, 90, 90)
+NOTICE_BACKGROUND = (255, 244, 200)
+NOTICE_BORDER = (200, 150, 30)
+NOTICE_TEXT = (60, 40, 0)
+NOTICE_TOP_PX = 96
+"""The notice's top edge [px]: below a lane's read-outs."""
 
 VIEWER_KEYS = (
     ("Space", "pause / run"),
@@ -110,6 +121,21 @@ class Canvas:
         """Draw one line; returns its rect."""
         return self.surface.blit(self.font.render(line, True, colour), position)
 
+    def notice(self, lines: Sequence[str], left: int, width: int) -> Any:
+        """A boxed notice centred near the top of the columns [left, left + width); returns its rect."""
+        pygame = self.pygame
+        pad = 8
+        line_height = self.font.get_linesize() + 2
+        text_width = max(self.font.size(line)[0] for line in lines)
+        rect = pygame.Rect(0, 0, min(text_width + 2 * pad, width - 8), len(lines) * line_height + 2 * pad)
+        rect.midtop = (left + width // 2, NOTICE_TOP_PX)
+        self.surface.fill(NOTICE_BACKGROUND, rect)
+        pygame.draw.rect(self.surface, NOTICE_BORDER, rect, 2)
+        for index, line in enumerate(lines):
+            self.text(line, (rect.left + pad, rect.top + pad + index * line_height),
+                      NOTICE_TEXT if index == 0 else PANEL_DIM)
+        return rect
+
     def save(self, path: Path) -> None:
         self.pygame.image.save(self.surface, str(path))
 
@@ -120,6 +146,11 @@ class Canvas:
     def close(self) -> None:
         if not self.headless:
             self.pygame.display.quit()
+
+
+def notice_lines(job: KernelJob, then: str) -> list[str]:
+    """The notice for a kernel being loaded or compiled: what, how long so far, and what follows."""
+    return [job.notice, f"{job.elapsed():.1f} s; {then}"]
 
 
 class Panel:
@@ -211,6 +242,9 @@ class ViewerWindow:
                 end = camera.world_to_pixel(lane.grab.target) + (left, 0)
                 self.pygame.draw.line(self.canvas.surface, DRAG_LINE, start, end, 2)
                 self.pygame.draw.circle(self.canvas.surface, DRAG_LINE, end, 4)
+            if lane.notice is not None:
+                self.canvas.notice(notice_lines(lane.job, "the boxes move when it is ready"), left,
+                                   controller.lane_width_px)
         self._draw_panel()
 
     def _draw_panel(self) -> None:
@@ -231,9 +265,11 @@ class ViewerWindow:
                                              value=value)
         panel.gap()
         status = "paused" if controller.paused else "running"
+        if controller.loading:
+            status = "held until the kernel" + ("s are" if len(controller.lanes) > 1 else " is") + " ready"
         if controller.compare:
             status += ", comparing seed | robust"
-        panel.line(status, PANEL_DIM)
+        panel.wrapped(status, PANEL_DIM)
         if controller.message:
             panel.wrapped(controller.message, PANEL_ALERT)
         if self.show_help:
@@ -337,10 +373,15 @@ class ViewerWindow:
 
     # -- loops ----------------------------------------------------------------------------------------------
     def run(self, max_frames: int | None = None) -> None:
-        """The interactive loop: events, one frame of steps, draw, at ``FRAME_RATE``."""
+        """The interactive loop: events, one frame of steps, draw, at ``FRAME_RATE``. The scene at its
+        start is shown first, then the controller's kernel loader (if any) starts."""
         clock = self.pygame.time.Clock()
         frame = 0
         try:
+            self.draw()
+            self.canvas.present()
+            if self.controller.loader is not None:
+                self.controller.loader.start()
             while max_frames is None or frame < max_frames:
                 if not all(self.handle(event) for event in self.pygame.event.get()):
                     break
@@ -354,7 +395,9 @@ class ViewerWindow:
 
     def write_frames(self, n_frames: int, out: str | Path, skip: int = 0) -> tuple[list[Path], np.ndarray]:
         """Headless: step ``skip`` frames, then draw and save ``n_frames`` frames, stepping one frame
-        between them. Returns the paths and the states drawn, (n_frames, lanes, bodies, 6)."""
+        between them (once the kernels are ready). Returns the paths and the states drawn,
+        (n_frames, lanes, bodies, 6)."""
+        self.controller.wait_for_kernels()
         for _ in range(skip):
             self.controller.advance_frame()
         paths = output_paths(out, n_frames)
@@ -373,7 +416,7 @@ class PlayWindow:
     """Draws a ``PlayController``: the env's own frames (target, box, throw), the aim drawn over them,
     and a panel with the aim, the reward and its terms."""
 
-    def __init__(self, controller: PlayController, *, headless: bool = False):
+    def __init__(self, controller: PlayController, *, headless: bool = False, loader: KernelLoader | None = None):
         from box_toss_env.envs.render import ThrowRenderer
 
         self.controller = controller
@@ -386,6 +429,23 @@ class PlayWindow:
         self.canvas = Canvas((width + PANEL_WIDTH_PX, height), headless=headless, title="BoxToss: play")
         self.pygame = self.canvas.pygame
         self.playback_start: float | None = None
+        self.loader = loader
+        self.job = None if loader is None else loader.prepare(*throw_kernel_call(controller.env), env.solver)
+        self.throw_pending = False  # released before the kernel was ready: thrown when it is
+
+    @property
+    def ready(self) -> bool:
+        """The env's kernel can throw now (always, without a loader: the first throw compiles it)."""
+        return self.job is None or self.job.ready
+
+    def release_throw(self) -> None:
+        """Throw the aimed drag now, or as soon as the kernel is ready."""
+        if self.ready:
+            self.throw_pending = False
+            if self.controller.end_drag() is not None:
+                self.start_playback()
+        else:
+            self.throw_pending = True
 
     def start_playback(self) -> None:
         self.playback_start = time.perf_counter()
@@ -414,6 +474,8 @@ class PlayWindow:
         self.canvas.blit_rgb(frame, 0)
         if result is None:
             self._draw_aim()
+        if not self.ready:
+            self.canvas.notice(notice_lines(self.job, "throws wait until it is ready"), 0, self.width_px)
         self._draw_panel(done=result is not None and playback_index is None)
 
     def _px(self, point) -> tuple[float, float]:
@@ -475,6 +537,8 @@ class PlayWindow:
             panel.line("face down", value=f"{info['face_down']}")
             panel.line("at rest", value="yes" if info["at_rest"] else "no")
             panel.line("flight, impacts", value=f"{info['flight_time']:.2f} s, {info['n_impacts']}")
+        elif self.throw_pending:
+            panel.line("throwing when the kernel is ready ...", PANEL_DIM)
         elif result is not None:
             panel.line("throwing ...", PANEL_DIM)
         else:
@@ -487,6 +551,8 @@ class PlayWindow:
         pygame, controller = self.pygame, self.controller
         if event.type == pygame.QUIT:
             return False
+        if self.throw_pending:  # released, waiting for the kernel: only Esc (quit) is taken until it is thrown
+            return not (event.type == pygame.KEYDOWN and event.key == pygame.K_ESCAPE)
         if event.type == pygame.KEYDOWN:
             key = event.key
             if key == pygame.K_ESCAPE:
@@ -514,8 +580,7 @@ class PlayWindow:
             controller.drag_to(self.camera.pixel_to_world(np.asarray(event.pos, dtype=np.float64)))
         elif event.type == pygame.MOUSEBUTTONUP and event.button == 1 and controller.aiming:
             controller.drag_to(self.camera.pixel_to_world(np.asarray(event.pos, dtype=np.float64)))
-            controller.end_drag()
-            self.start_playback()
+            self.release_throw()
         elif event.type == pygame.MOUSEWHEEL:
             controller.change_spin(int(event.y))
         return True
@@ -524,9 +589,15 @@ class PlayWindow:
         clock = self.pygame.time.Clock()
         frame = 0
         try:
+            self.draw()
+            self.canvas.present()
+            if self.loader is not None:
+                self.loader.start()
             while max_frames is None or frame < max_frames:
                 if not all(self.handle(event) for event in self.pygame.event.get()):
                     break
+                if self.throw_pending and self.ready:
+                    self.release_throw()
                 self.draw(self.playback_index())
                 self.canvas.present()
                 clock.tick(FRAME_RATE)
@@ -539,6 +610,8 @@ class PlayWindow:
         throw's frames with the result on the last; ``n_frames`` of them, evenly spread from the aim to
         the result (a single frame is the result)."""
         controller = self.controller
+        if self.loader is not None:
+            self.loader.wait()
         if throw is None:
             self.draw()
             shots: list[Callable[[], Any]] = [self.canvas.surface.copy]
@@ -566,6 +639,17 @@ class PlayWindow:
     def _drawn(self, playback_index: int | None) -> Any:
         self.draw(playback_index)
         return self.canvas.surface
+
+
+def throw_kernel_call(env) -> tuple[Any, tuple]:
+    """(kernel, zero-step arguments) of the kernel ``env`` (a BoxToss env) throws with: the kernel of
+    the env's flags, recording when the env draws (kernels are cached per flags, so it is the env's)."""
+    env = env.unwrapped
+    flags = dataclasses.replace(env.flags, record=env.render_mode in ("human", "rgb_array_list"))
+    n = 1
+    args = zero_step_args(np.zeros((n, layout.STATE_SIZE)), np.zeros((n, layout.PARAM_SIZE)), env.engine_settings,
+                          np.zeros((n, layout.STATS_SIZE)))
+    return Simulator(flags).kernel, args
 
 
 def _arrow(pygame, surface, start, end, colour) -> None:
