@@ -1,45 +1,138 @@
-"""Training configuration: hyperparameters from a YAML file keyed by env id, command-line overrides.
+"""Training configuration: RL Baselines3 Zoo hyperparameter files, our own settings, overrides.
 
-A configuration is a plain dict (what ``config.yml`` in a run folder holds). Overrides are
-``key=value`` strings; the key may be dotted (``policy_kwargs.net_arch=[64, 64]``) and the value is
-read with ``yaml.safe_load`` (numbers, lists, dicts, booleans, strings), never evaluated as code.
+Two files, both keyed by env id:
+
+- ``agents/hyperparams/<algo>.yml`` is in RL Zoo's format and loads unchanged with
+  ``python -m rl_zoo3.train --algo <algo> --env <id> --gym-packages box_toss_env --conf-file ...``:
+  the algorithm's constructor arguments plus Zoo's own keys (``n_timesteps``, ``n_envs``,
+  ``normalize``, ``env_kwargs``, ``noise_type``, ``noise_std``); ``policy_kwargs`` and a dict
+  ``normalize`` are Python expressions in strings (``"dict(net_arch=[64, 64], activation_fn=nn.Tanh)"``).
+- ``agents/hyperparams/project.yml`` holds what only our scripts use (engine threads, torch threads,
+  validation and checkpoint frequency): ``defaults`` for every run, then per algorithm and env id.
+
+A configuration is one plain dict of both (what ``config.yml`` in a run folder holds), with Zoo's
+expression strings read into dicts (``activation_fn: nn.Tanh`` stays a name). Expressions are read
+with ``ast``, never evaluated: only ``dict(...)``, literals and ``nn.<Name>`` are accepted.
+Overrides are ``key=value`` strings; the key may be dotted (``policy_kwargs.net_arch=[64, 64]``) and
+the value is read with ``yaml.safe_load``.
 """
 
 from __future__ import annotations
 
+import ast
 import copy
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+import torch.nn
 import yaml
+from stable_baselines3.common.noise import NormalActionNoise
 
-HYPERPARAMS = Path(__file__).parent / "hyperparams" / "ppo.yml"
+from agents import algorithms
 
-# keys of a configuration that are not PPO constructor arguments
-RUN_KEYS = {
+HYPERPARAMS = Path(__file__).parent / "hyperparams"
+PROJECT_FILE = "project.yml"
+
+ZOO_KEYS = {
     "n_timesteps": "env steps (throws) to train for",
     "n_envs": "envs stepped together",
-    "normalize": "VecNormalize kwargs, or false",
+    "normalize": "VecNormalize kwargs (a dict, or true), or false",
     "env_kwargs": "kwargs of gymnasium.make_vec and gymnasium.make",
-    "vec_env_kwargs": "kwargs of gymnasium.make_vec only",
+    "noise_type": "action noise of off-policy algorithms: 'normal'",
+    "noise_std": "standard deviation of that noise, in action units",
+}
+PROJECT_KEYS = {
+    "vec_env_kwargs": "kwargs of gymnasium.make_vec only (engine threads)",
     "torch_threads": "torch.set_num_threads",
     "eval_freq": "env steps between evaluations (0: never)",
     "eval_targets": "validation targets per evaluation",
     "checkpoint_freq": "env steps between checkpoints (0: never)",
 }
-PPO_KEYS = {"policy", "learning_rate", "n_steps", "batch_size", "n_epochs", "gamma", "gae_lambda", "clip_range",
-            "clip_range_vf", "normalize_advantage", "ent_coef", "vf_coef", "max_grad_norm", "use_sde",
-            "sde_sample_freq", "target_kl", "policy_kwargs", "stats_window_size"}
-ACTIVATIONS = ("tanh", "relu", "elu", "leaky_relu", "gelu", "silu")
+EXPRESSION_KEYS = ("policy_kwargs", "normalize", "replay_buffer_kwargs")  # Zoo evaluates these strings
 
 
-def load_hyperparams(env_id: str, path: str | Path = HYPERPARAMS) -> dict[str, Any]:
-    """The hyperparameters of ``env_id`` in the YAML file ``path`` (a deep copy)."""
-    with open(path) as file:
-        table = yaml.safe_load(file) or {}
+class ConfigError(ValueError):
+    """A configuration that cannot run; the message names the key and what is allowed."""
+
+
+# -- reading files -------------------------------------------------------------------------------
+def hyperparams_path(algo: str, directory: str | Path = HYPERPARAMS) -> Path:
+    algorithms.algorithm_class(algo)  # a ValueError for an unknown name
+    return Path(directory) / f"{algo}.yml"
+
+
+def load_hyperparams(algo: str, env_id: str, directory: str | Path = HYPERPARAMS) -> dict[str, Any]:
+    """The configuration of ``algo`` on ``env_id``: its entry in ``<algo>.yml`` (Zoo format, read
+    into plain values) with our settings from ``project.yml``."""
+    path = hyperparams_path(algo, directory)
+    table = read_mapping(path)
     if env_id not in table:
-        raise KeyError(f"{path} has no entry for {env_id!r}; it has {sorted(table)}")
-    return coerce_numbers(copy.deepcopy(table[env_id]))
+        raise ConfigError(f"{path} has no entry for {env_id!r}; it has {sorted(table)}")
+    config = read_zoo_entry(table[env_id], f"{path}: {env_id}")
+    config.update(project_settings(algo, env_id, Path(directory) / PROJECT_FILE))
+    return config
+
+
+def read_mapping(path: Path) -> dict[str, Any]:
+    """A YAML file that must hold a mapping (a ConfigError naming the file otherwise)."""
+    try:
+        with open(path) as file:
+            data = yaml.safe_load(file)
+    except FileNotFoundError:
+        raise ConfigError(f"no hyperparameter file {path}") from None
+    except yaml.YAMLError as error:
+        raise ConfigError(f"{path} is not valid YAML: {error}") from None
+    if data is None:
+        return {}
+    if not isinstance(data, dict):
+        raise ConfigError(f"{path} must hold a mapping of env ids to hyperparameters, got a {type(data).__name__}")
+    return data
+
+
+def project_settings(algo: str, env_id: str, path: Path) -> dict[str, Any]:
+    """``defaults`` of project.yml, updated by its ``<algo>: <env_id>:`` entry if any."""
+    table = read_mapping(path) if path.exists() else {}
+    settings = copy.deepcopy(table.get("defaults") or {})
+    settings.update(copy.deepcopy((table.get(algo) or {}).get(env_id) or {}))
+    return settings
+
+
+def read_zoo_entry(entry: Any, where: str) -> dict[str, Any]:
+    """A Zoo hyperparameter entry with its expression strings read into plain values."""
+    if not isinstance(entry, dict):
+        raise ConfigError(f"{where} must be a mapping of hyperparameters, got {entry!r}")
+    config = {key: coerce_numbers(value) for key, value in copy.deepcopy(entry).items()}
+    for key in EXPRESSION_KEYS:
+        if isinstance(config.get(key), str):
+            config[key] = read_expression(config[key], key)
+    return config
+
+
+def read_expression(text: str, key: str) -> Any:
+    """Zoo's Python expression ``text`` (``"dict(net_arch=[64], activation_fn=nn.Tanh)"``) as plain
+    values, read with ``ast`` and never evaluated: ``nn.Tanh`` becomes the string "nn.Tanh"."""
+
+    def value(node: ast.AST) -> Any:
+        if isinstance(node, ast.Constant):
+            return node.value
+        if isinstance(node, (ast.List, ast.Tuple)):
+            return [value(item) for item in node.elts]
+        if isinstance(node, ast.Dict) and all(k is not None for k in node.keys):
+            return {value(k): value(v) for k, v in zip(node.keys, node.values, strict=True)}
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "dict" and not node.args:
+            return {item.arg: value(item.value) for item in node.keywords}
+        if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id == "nn":
+            return f"nn.{node.attr}"
+        if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub):
+            return -value(node.operand)
+        raise ConfigError(f"{key}: {text!r} may hold only dict(...), numbers, strings, lists and nn.<Name>")
+
+    try:
+        tree = ast.parse(text, mode="eval")
+    except SyntaxError:
+        raise ConfigError(f"{key}: {text!r} is not a Python expression") from None
+    return value(tree.body)
 
 
 def coerce_numbers(value: Any) -> Any:
@@ -51,14 +144,6 @@ def coerce_numbers(value: Any) -> Any:
     if isinstance(value, str):
         return read_value(value)
     return value
-
-
-def parse_override(text: str) -> tuple[list[str], Any]:
-    """``"a.b=value"`` as (["a", "b"], yaml.safe_load("value"))."""
-    key, sep, value = text.partition("=")
-    if not sep or not key.strip():
-        raise ValueError(f"an override must look like key=value (e.g. n_timesteps=100000), got {text!r}")
-    return key.strip().split("."), read_value(value)
 
 
 def read_value(text: str) -> Any:
@@ -74,15 +159,59 @@ def read_value(text: str) -> Any:
     return value
 
 
-def apply_overrides(config: dict[str, Any], overrides: list[str] | None) -> dict[str, Any]:
+# -- writing files -------------------------------------------------------------------------------
+def zoo_entry(config: dict[str, Any]) -> dict[str, Any]:
+    """The Zoo-format part of ``config`` (what ``<algo>.yml`` holds for one env id): our own
+    settings left out, dicts of expression keys written as Zoo's strings."""
+    entry = {key: copy.deepcopy(value) for key, value in config.items() if key not in PROJECT_KEYS}
+    for key in EXPRESSION_KEYS:
+        if isinstance(entry.get(key), dict):
+            entry[key] = expression(entry[key])
+    return entry
+
+
+def expression(value: Any) -> str:
+    """The Python expression Zoo reads back as ``value`` (inverse of ``read_expression``)."""
+    if isinstance(value, dict):
+        return "dict(" + ", ".join(f"{key}={expression(item)}" for key, item in value.items()) + ")"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(expression(item) for item in value) + "]"
+    if isinstance(value, str) and value.startswith("nn."):
+        return value
+    return repr(value)
+
+
+def save_yaml(data: Any, path: str | Path) -> None:
+    with open(path, "w") as file:
+        yaml.safe_dump(data, file, sort_keys=False)
+
+
+def load_yaml(path: str | Path) -> Any:
+    with open(path) as file:
+        return yaml.safe_load(file)
+
+
+# -- overrides and checks ------------------------------------------------------------------------
+def known_keys(algo: str) -> list[str]:
+    return sorted(set(ZOO_KEYS) | set(PROJECT_KEYS) | algorithms.constructor_keys(algo))
+
+
+def parse_override(text: str) -> tuple[list[str], Any]:
+    """``"a.b=value"`` as (["a", "b"], yaml.safe_load("value"))."""
+    key, sep, value = text.partition("=")
+    if not sep or not key.strip():
+        raise ConfigError(f"an override must look like key=value (e.g. n_timesteps=100000), got {text!r}")
+    return key.strip().split("."), read_value(value)
+
+
+def apply_overrides(config: dict[str, Any], overrides: list[str] | None, algo: str = "ppo") -> dict[str, Any]:
     """A copy of ``config`` with each ``key=value`` override applied (dotted keys reach into dicts).
-    Unknown top-level keys raise a ValueError naming them, so a typo does not pass silently."""
+    Unknown top-level keys raise a ConfigError naming them, so a typo does not pass silently."""
     config = copy.deepcopy(config)
     for text in overrides or ():
         keys, value = parse_override(text)
-        if keys[0] not in RUN_KEYS and keys[0] not in PPO_KEYS:
-            raise ValueError(f"unknown hyperparameter {keys[0]!r} in {text!r}; known: "
-                             f"{sorted(RUN_KEYS) + sorted(PPO_KEYS)}")
+        if keys[0] not in known_keys(algo):
+            raise ConfigError(f"unknown hyperparameter {keys[0]!r} in {text!r} for {algo}; known: {known_keys(algo)}")
         node = config
         for key in keys[:-1]:
             child = node.get(key)
@@ -93,43 +222,61 @@ def apply_overrides(config: dict[str, Any], overrides: list[str] | None) -> dict
     return config
 
 
-def check_config(config: dict[str, Any]) -> None:
-    """A ValueError naming the first key that is unknown or out of range."""
+def check_config(config: dict[str, Any], algo: str = "ppo") -> None:
+    """A ConfigError naming the first key that is unknown, missing or out of range."""
+    if not isinstance(config, dict):
+        raise ConfigError(f"a configuration must be a mapping, got {config!r}")
     for key in config:
-        if key not in RUN_KEYS and key not in PPO_KEYS:
-            raise ValueError(f"unknown hyperparameter {key!r}; known: {sorted(RUN_KEYS) + sorted(PPO_KEYS)}")
+        if key not in known_keys(algo):
+            raise ConfigError(f"unknown hyperparameter {key!r} for {algo}; known: {known_keys(algo)}")
+    if not isinstance(config.get("policy"), str):
+        raise ConfigError(f"policy must be given, e.g. policy: MlpPolicy (got {config.get('policy')!r})")
     for key in ("n_timesteps", "n_envs"):
-        if not isinstance(config.get(key), int) or config[key] < 1:
-            raise ValueError(f"{key} must be an integer >= 1, got {config.get(key)!r}")
-    activation = config.get("policy_kwargs", {}).get("activation_fn", "tanh")
-    if activation not in ACTIVATIONS:
-        raise ValueError(f"policy_kwargs.activation_fn must be one of {ACTIVATIONS}, got {activation!r}")
+        if not isinstance(config.get(key), int) or isinstance(config.get(key), bool) or config[key] < 1:
+            raise ConfigError(f"{key} must be an integer >= 1, got {config.get(key)!r}")
+    policy_kwargs = config.get("policy_kwargs", {})
+    if not isinstance(policy_kwargs, dict):
+        raise ConfigError(f"policy_kwargs must be a mapping, got {policy_kwargs!r}")
+    activation = policy_kwargs.get("activation_fn", "nn.Tanh")
+    if not (isinstance(activation, str) and activation.startswith("nn.")
+            and isinstance(getattr(torch.nn, activation[3:], None), type)):
+        raise ConfigError(f"policy_kwargs.activation_fn must name a torch.nn activation (nn.Tanh, nn.ReLU, ...), "
+                          f"got {activation!r}")
+    if config.get("noise_type") not in (None, "normal"):
+        raise ConfigError(f"noise_type must be 'normal' (or absent), got {config['noise_type']!r}")
+    for key in ("learning_rate", "clip_range"):
+        if isinstance(config.get(key), str):
+            schedule(key, config[key])
 
 
-def ppo_kwargs(config: dict[str, Any]) -> dict[str, Any]:
-    """The PPO constructor arguments of ``config``, with the activation's name made a torch class."""
-    import torch.nn
-
-    kwargs = {key: copy.deepcopy(value) for key, value in config.items() if key in PPO_KEYS}
+# -- constructor arguments -------------------------------------------------------------------------
+def algorithm_kwargs(config: dict[str, Any], algo: str, action_size: int = 3) -> dict[str, Any]:
+    """The constructor arguments of ``algo`` from ``config``: activation names made torch classes,
+    ``lin_<x>`` made schedules, a ``train_freq`` list a tuple, ``noise_type`` an action noise."""
+    keys = algorithms.constructor_keys(algo)
+    kwargs = {key: copy.deepcopy(value) for key, value in config.items() if key in keys}
     policy_kwargs = kwargs.setdefault("policy_kwargs", {})
-    name = policy_kwargs.get("activation_fn", "tanh")
-    classes = {"tanh": torch.nn.Tanh, "relu": torch.nn.ReLU, "elu": torch.nn.ELU, "leaky_relu": torch.nn.LeakyReLU,
-               "gelu": torch.nn.GELU, "silu": torch.nn.SiLU}
-    policy_kwargs["activation_fn"] = classes[name]
+    if "activation_fn" in policy_kwargs:
+        policy_kwargs["activation_fn"] = getattr(torch.nn, policy_kwargs["activation_fn"][3:])
     for key in ("learning_rate", "clip_range"):
         if isinstance(kwargs.get(key), str):
             kwargs[key] = schedule(key, kwargs[key])
+    if isinstance(kwargs.get("train_freq"), list):
+        kwargs["train_freq"] = tuple(kwargs["train_freq"])
+    if config.get("noise_type") == "normal":
+        sigma = float(config["noise_std"]) * np.ones(action_size)
+        kwargs["action_noise"] = NormalActionNoise(np.zeros(action_size), sigma)
     return kwargs
 
 
 def schedule(name: str, text: str):
-    """``"lin_X"``: a value decaying linearly from X at the start of training to 0 at its end
-    (SB3 calls schedules with the fraction of training remaining, 1 -> 0, and below 0 in the last
-    rollout when the budget is not a multiple of the rollout size)."""
+    """``"lin_X"`` (Zoo's notation): a value decaying linearly from X at the start of training to 0
+    at its end (SB3 calls schedules with the fraction of training remaining, 1 -> 0, and below 0 in
+    the last rollout when the budget is not a multiple of the rollout size)."""
     prefix, _, value = text.partition("_")
     start = read_value(value)
     if prefix != "lin" or not isinstance(start, (int, float)):
-        raise ValueError(f"{name} must be a number or 'lin_<number>' (linear decay to 0), got {text!r}")
+        raise ConfigError(f"{name} must be a number or 'lin_<number>' (linear decay to 0), got {text!r}")
     return LinearSchedule(float(start))
 
 
@@ -144,13 +291,3 @@ class LinearSchedule:
 
     def __repr__(self) -> str:
         return f"lin_{self.start:g}"
-
-
-def save_yaml(data: Any, path: str | Path) -> None:
-    with open(path, "w") as file:
-        yaml.safe_dump(data, file, sort_keys=False)
-
-
-def load_yaml(path: str | Path) -> Any:
-    with open(path) as file:
-        return yaml.safe_load(file)

@@ -1,8 +1,4 @@
-"""Headless, deterministic evaluation on a fixed set of seeded targets.
-
-    python -m agents.evaluate runs/NAME                                   # 1,024 targets, seeds 10000...
-    python -m agents.evaluate runs/NAME --env-kwargs solver=seed dt=0.0009765625 --tag seed-1024
-    python -m agents.evaluate runs/NAME --video 4                         # also a GIF of 4 throws
+"""Headless, deterministic evaluation on a fixed set of seeded targets (command: ``agents.evaluate``).
 
 Target i is what ``gymnasium.make(env_id, **env_kwargs).reset(seed=first_seed + i)`` draws (the
 release pose, the target x and faces), so every agent is scored on the same throws whatever env
@@ -18,20 +14,20 @@ wherever the box landed), broken down by target distance and by target face kind
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
-import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
 import box_toss_env  # noqa: F401  (registers the BoxToss envs)
-from agents.config import load_yaml, parse_override
+from agents import oracle
+from agents.config import load_yaml, parse_override, save_yaml
+from agents.policies import ConstantPolicy, Policy, RandomPolicy, TrainedPolicy
 from box_toss_env.envs import task
 from box_toss_env.envs.box_toss import EnergyGainError
 from box_toss_env.physics import NonFiniteStateError
@@ -39,13 +35,6 @@ from box_toss_env.physics import NonFiniteStateError
 TEST_FIRST_SEED, TEST_TARGETS = 10_000, 1_024  # the report's targets
 VALIDATION_FIRST_SEED = 20_000  # periodic evaluation during training: other targets than the report's
 DISTANCE_BINS = 6
-
-
-class Policy(Protocol):
-    """Answers a batch of first observations (n, obs) and their reset infos with actions (n, 3).
-    ``env`` is the env the throws will be made in (a planner may simulate with it)."""
-
-    def act(self, observations: np.ndarray, reset_infos: list[dict[str, Any]], env: gym.Env) -> np.ndarray: ...
 
 
 @dataclass
@@ -199,19 +188,39 @@ def format_summary(name: str, summary: dict[str, Any]) -> str:
 
 
 # -- runs ----------------------------------------------------------------------------------------
+BASELINES = ("random", "oracle", "constant")
+
+
+def make_baseline(algo: str, settings: dict[str, Any] | None = None) -> Policy:
+    """The baseline policy named ``algo`` ("random", "oracle" or "constant") with its settings."""
+    settings = settings or {}
+    if algo == "random":
+        return RandomPolicy(**settings)
+    if algo == "oracle":
+        return oracle.OraclePlanner(oracle.OracleSettings(**settings))
+    if algo == "constant":
+        return ConstantPolicy(**settings)
+    raise ValueError(f"unknown baseline {algo!r}; choose one of {BASELINES}")
+
+
+def make_baseline_run(algo: str, run_dir: Path, env_id: str = "BoxToss-v0", env_kwargs: dict[str, Any] | None = None,
+                      settings: dict[str, Any] | None = None, command: str | None = None) -> Path:
+    """A run folder for a baseline (config.yml, command.txt), evaluated like any run."""
+    run_dir.mkdir(parents=True, exist_ok=True)
+    save_yaml({"algo": algo, "env_id": env_id, "env_kwargs": env_kwargs or {}, "baseline": settings or {}},
+              run_dir / "config.yml")
+    if command:
+        (run_dir / "command.txt").write_text(command + "\n")
+    return run_dir
+
+
 def load_policy(run_dir: Path, model: str = "final") -> tuple[Policy, dict[str, Any]]:
     """The policy saved in a run folder and the run's ``config.yml``."""
     config = load_yaml(run_dir / "config.yml")
     algo = config["algo"]
-    if algo == "ppo":
-        from agents.train import TrainedPolicy
-
-        return TrainedPolicy.load(run_dir, model), config
-    if algo in ("random", "oracle", "constant"):
-        from agents.baselines import make_baseline
-
+    if algo in BASELINES:
         return make_baseline(algo, config.get("baseline", {})), config
-    raise ValueError(f"{run_dir / 'config.yml'} has an unknown algo {algo!r}")
+    return TrainedPolicy.load(run_dir, algo, model), config
 
 
 def evaluate_run(run_dir: Path, *, model: str = "final", env_kwargs: dict[str, Any] | None = None,
@@ -239,7 +248,7 @@ def evaluate_run(run_dir: Path, *, model: str = "final", env_kwargs: dict[str, A
     (out / "results.json").write_text(json.dumps(results, indent=2))
     throws.save(out / "throws.npz")
     if not quiet:
-        which = f", {model} model" if config["algo"] == "ppo" else ""
+        which = "" if config["algo"] in BASELINES else f", {model} model"
         print(f"{run_dir.name} ({config['algo']}{which}) on {env_id}{' ' + str(kwargs) if kwargs else ''}, "
               f"targets of seeds {seeds[0]}-{seeds[-1]}:")
         print(format_summary(run_dir.name, summary))
@@ -261,38 +270,3 @@ def parse_kwargs(items: list[str] | None) -> dict[str, Any]:
         keys, value = parse_override(item)
         kwargs[".".join(keys)] = value
     return kwargs
-
-
-def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("run", type=Path, help="run folder (runs/NAME)")
-    parser.add_argument("--model", default="final", choices=("final", "best"),
-                        help="the model at the end of training, or the one with the best validation success")
-    parser.add_argument("--env-kwargs", nargs="*", default=[], metavar="KEY=VALUE",
-                        help="change env settings for the evaluation, e.g. solver=seed dt=0.0009765625")
-    parser.add_argument("--tag", help="name of the results folder RUN/eval/TAG (default: from the env kwargs)")
-    parser.add_argument("--targets", type=int, default=TEST_TARGETS, help="number of test targets")
-    parser.add_argument("--first-seed", type=int, default=TEST_FIRST_SEED)
-    parser.add_argument("--video", type=int, default=0, metavar="N", help="also write a GIF of N throws")
-    parser.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
-    args = parser.parse_args(argv)
-    if not (args.run / "config.yml").exists():
-        sys.exit(f"{args.run} is not a run folder (no config.yml)")
-    results = evaluate_run(args.run, model=args.model, env_kwargs=parse_kwargs(args.env_kwargs), tag=args.tag,
-                           n_targets=args.targets, first_seed=args.first_seed)
-    out = args.run / "eval" / (args.tag or default_tag(parse_kwargs(args.env_kwargs), args.model))
-    if not args.no_plots:
-        from agents import report
-
-        for path in report.plot_run(args.run, out):
-            print(f"figure: {path}")
-    if args.video:
-        from agents import report
-
-        path = report.record_video(args.run, out / "throws.gif", args.video, model=args.model,
-                                   env_kwargs=results["env_kwargs"])
-        print(f"video: {path}")
-
-
-if __name__ == "__main__":
-    main()

@@ -1,11 +1,12 @@
-"""Train PPO on BoxToss-v0 on a short budget, evaluate it next to the baselines, print the table.
+"""Train PPO on a task where the landing face counts, evaluate it next to the baselines, print the table.
 
-    python -m agents.main                   # short PPO run (runs/short), random and oracle baselines
+    python -m agents.main                   # short PPO run on BoxToss-ThisSideUp-v0 (runs/short), random and oracle
     python -m agents.main --full --readme   # also the full run and the physics-fidelity evaluations,
                                             # then rewrite the README's agents section and docs/agents/
 
 Everything is evaluated on the same 1,024 fixed test targets (``agents.evaluate``). To train longer,
-change ``n_timesteps`` in ``agents/hyperparams/ppo.yml`` and run ``python -m agents.train``.
+change ``n_timesteps`` in ``agents/hyperparams/ppo.yml`` and run ``python -m agents.train``; for every
+variant and algorithm, ``python -m agents.benchmark``.
 """
 
 from __future__ import annotations
@@ -16,9 +17,10 @@ import sys
 import time
 from pathlib import Path
 
-from agents import baselines, evaluate, report, train
+from agents import evaluation, report, train
+from agents.training import RUNS
 
-ENV_ID = "BoxToss-v0"
+ENV_ID = "BoxToss-ThisSideUp-v0"  # one face drawn per episode must end down: the pose counts
 SHORT_TIMESTEPS = 100_000  # the default run; the full run uses n_timesteps of agents/hyperparams/ppo.yml
 README_RUNS = {"random": "random", "short": "short", "full": "full", "oracle": "oracle"}
 SEED_DT = 1 / 1024  # a step at which the seed scheme keeps its energy at the default stiffness
@@ -32,16 +34,6 @@ FIDELITY_SETTINGS = [
 FIDELITY = [(run, tag, label) for run, tag, _, label in FIDELITY_SETTINGS]
 
 
-def write_readme(section: str) -> None:
-    from benchmarks.readme_section import README, replace_section
-
-    if "<!-- agents:start -->" not in README.read_text():
-        with open(README, "a") as file:
-            file.write("\n<!-- agents:start -->\n<!-- agents:end -->\n")
-    replace_section("agents", section)
-    print(f"wrote the agents section of {README}")
-
-
 def free_name(runs_dir: Path, name: str) -> str:
     """``name``, or ``name-<time>`` if ``runs_dir/name`` already holds a run."""
     return name if not (runs_dir / name / "config.yml").exists() else f"{name}-{time.strftime('%Y%m%d-%H%M%S')}"
@@ -51,15 +43,15 @@ def baseline(algo: str, runs_dir: Path, *, replan: bool = True) -> Path:
     """Evaluate a baseline into ``runs_dir/algo`` (kept if already evaluated and not ``replan``)."""
     run_dir = runs_dir / algo
     if replan or report.read_results(run_dir) is None:
-        print(f"evaluating the {algo} baseline on {evaluate.TEST_TARGETS:,} test targets ...")
-        baselines.make_baseline_run(algo, run_dir, ENV_ID, command=f"python -m agents.baselines {algo}")
-        evaluate.evaluate_run(run_dir, quiet=True)
+        print(f"evaluating the {algo} baseline on {evaluation.TEST_TARGETS:,} test targets ...")
+        evaluation.make_baseline_run(algo, run_dir, ENV_ID, command=f"python -m agents.baselines {algo} --env {ENV_ID}")
+        evaluation.evaluate_run(run_dir, quiet=True)
     return run_dir
 
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--runs-dir", type=Path, default=train.RUNS)
+    parser.add_argument("--runs-dir", type=Path, default=RUNS)
     parser.add_argument("--timesteps", type=int, default=SHORT_TIMESTEPS, help="budget of the short run")
     parser.add_argument("--full", action="store_true", help="also train the full run and evaluate physics fidelity")
     parser.add_argument("--readme", action="store_true", help="write the results into README.md and docs/agents/")
@@ -89,17 +81,17 @@ def main(argv: list[str] | None = None) -> None:
         for name, tag, kwargs, label in FIDELITY_SETTINGS:
             if name in rows:
                 print(f"evaluating {name} under {label} ...")
-                results = evaluate.evaluate_run(rows[name], env_kwargs=kwargs, tag=tag, quiet=True)
+                results = evaluation.evaluate_run(rows[name], env_kwargs=kwargs, tag=tag, quiet=True)
                 fidelity.append({"agent": f"{name}: {label}", **results})
 
     table = [row for name, run in rows.items() if (row := report.summary_row(name, run)) is not None]
     print()
-    print(f"{ENV_ID}: {evaluate.TEST_TARGETS:,} fixed test targets (seeds {evaluate.TEST_FIRST_SEED}-"
-          f"{evaluate.TEST_FIRST_SEED + evaluate.TEST_TARGETS - 1}), deterministic policies")
+    print(f"{ENV_ID}: {evaluation.TEST_TARGETS:,} fixed test targets (seeds {evaluation.TEST_FIRST_SEED}-"
+          f"{evaluation.TEST_FIRST_SEED + evaluation.TEST_TARGETS - 1}), deterministic policies")
     print(report.text_table(table))
     if fidelity:
         print("\nphysics fidelity (the same targets under another solver or step; failures: throws the env refused)")
-        print(evaluate.format_table(fidelity))
+        print(evaluation.format_table(fidelity))
     ppo = report.summary_row("short", rows["short"])
     print(f"\nPPO: the env took {ppo['env_share']:.0%} of the training loop's wall time; the run is in {rows['short']} "
           f"(python -m agents.evaluate {rows['short']} --video 4 for plots and a GIF; "

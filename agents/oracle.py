@@ -1,8 +1,4 @@
-"""Baselines on the same targets as PPO: random throws, and an oracle that plans with the simulator.
-
-    python -m agents.baselines random            # runs/random: uniform actions
-    python -m agents.baselines oracle            # runs/oracle: cross-entropy search per target
-    python -m agents.evaluate runs/oracle --env-kwargs solver=seed dt=0.0009765625   # as any run
+"""The oracle: a policy that plans each throw with the simulator (the ceiling agents are measured against).
 
 The oracle knows everything the env draws at reset (release pose, target, dynamics) and simulates
 candidate throws with the env's own engine kernel and settings before it throws once, so it bounds
@@ -13,11 +9,8 @@ every iteration simulates all candidates of all unsolved targets in one engine c
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
-import sys
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
@@ -25,28 +18,6 @@ import numpy as np
 
 from box_toss_env.envs import task
 from box_toss_env.physics import Simulator, layout
-
-RUNS = Path("runs")
-
-
-class RandomPolicy:
-    """Uniform actions in [-1, 1]^3 from a seeded generator (the same throws on every evaluation)."""
-
-    def __init__(self, seed: int = 0):
-        self.seed = seed
-
-    def act(self, observations: np.ndarray, reset_infos, env: gym.Env) -> np.ndarray:
-        return np.random.default_rng(self.seed).uniform(-1.0, 1.0, (len(observations), task.ACTION_SIZE))
-
-
-class ConstantPolicy:
-    """The same action for every target (e.g. [-1, 0, 0]: zero speed, the box drops from the hand)."""
-
-    def __init__(self, action=(-1.0, 0.0, 0.0)):
-        self.action = np.asarray(action, dtype=np.float64)
-
-    def act(self, observations: np.ndarray, reset_infos, env: gym.Env) -> np.ndarray:
-        return np.tile(self.action, (len(observations), 1))
 
 
 def episodes_from_infos(reset_infos: list[dict[str, Any]]) -> task.Episodes:
@@ -156,55 +127,3 @@ class OraclePlanner:
         order = np.argsort(-scores, axis=1, kind="stable")[:, :keep]
         return (np.take_along_axis(candidates, order[..., None], axis=1), np.take_along_axis(scores, order, axis=1),
                 np.take_along_axis(settled, order, axis=1))
-
-
-def make_baseline(algo: str, settings: dict[str, Any] | None = None):
-    """The baseline policy named ``algo`` ("random", "oracle" or "constant") with its settings."""
-    settings = settings or {}
-    if algo == "random":
-        return RandomPolicy(**settings)
-    if algo == "oracle":
-        return OraclePlanner(OracleSettings(**settings))
-    if algo == "constant":
-        return ConstantPolicy(**settings)
-    raise ValueError(f"unknown baseline {algo!r}; choose random, oracle or constant")
-
-
-def make_baseline_run(algo: str, run_dir: Path, env_id: str = "BoxToss-v0", env_kwargs: dict[str, Any] | None = None,
-                      settings: dict[str, Any] | None = None, command: str | None = None) -> Path:
-    """A run folder for a baseline (config.yml, command.txt), evaluated like any run."""
-    from agents.config import save_yaml
-
-    run_dir.mkdir(parents=True, exist_ok=True)
-    save_yaml({"algo": algo, "env_id": env_id, "env_kwargs": env_kwargs or {}, "baseline": settings or {}},
-              run_dir / "config.yml")
-    if command:
-        (run_dir / "command.txt").write_text(command + "\n")
-    return run_dir
-
-
-def main(argv: list[str] | None = None) -> None:
-    import shlex
-
-    from agents.evaluate import TEST_TARGETS, evaluate_run, parse_kwargs
-
-    argv = sys.argv[1:] if argv is None else list(argv)
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("algo", choices=("random", "oracle"))
-    parser.add_argument("--env", default="BoxToss-v0")
-    parser.add_argument("--env-kwargs", nargs="*", default=[], metavar="KEY=VALUE")
-    parser.add_argument("--set", nargs="*", default=[], action="extend", metavar="KEY=VALUE", dest="settings",
-                        help="baseline settings, e.g. seed=1 (random) or population=128 iterations=8 (oracle)")
-    parser.add_argument("--name", help="run folder name (default: the baseline's name)")
-    parser.add_argument("--runs-dir", type=Path, default=RUNS)
-    parser.add_argument("--targets", type=int, default=TEST_TARGETS)
-    args = parser.parse_args(argv)
-    run_dir = make_baseline_run(args.algo, args.runs_dir / (args.name or args.algo), args.env,
-                                parse_kwargs(args.env_kwargs), parse_kwargs(args.settings),
-                                shlex.join(["python", "-m", "agents.baselines", *argv]))
-    results = evaluate_run(run_dir, n_targets=args.targets)
-    print(f"{args.algo}: acted on {args.targets} targets in {results['act_seconds']:.1f} s")
-
-
-if __name__ == "__main__":
-    main()

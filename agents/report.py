@@ -8,16 +8,20 @@ Every figure in the README's agents section is written here from the runs' ``res
 
 from __future__ import annotations
 
-import argparse
 import csv
 import json
 from pathlib import Path
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
+from gymnasium import error as gym_error
 
-from agents.baselines import OracleSettings
-from agents.evaluate import TEST_FIRST_SEED, TEST_TARGETS, VALIDATION_FIRST_SEED, Throws
+from agents.config import load_yaml
+from agents.evaluation import TEST_FIRST_SEED, TEST_TARGETS, VALIDATION_FIRST_SEED, Throws, load_policy
+from agents.oracle import OracleSettings
+from benchmarks.readme_section import README, replace_section
+from box_toss_env.rendering import write_video
 
 RUNS = Path("runs")
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "agents"  # figures the README shows
@@ -106,7 +110,7 @@ def breakdown_table(rows: list[dict[str, Any]]) -> str:
 
 
 # -- figures -------------------------------------------------------------------------------------
-def _pyplot():
+def pyplot():
     import matplotlib
 
     matplotlib.use("Agg")
@@ -119,7 +123,7 @@ def plot_learning_curves(curves: dict[str, dict[str, np.ndarray]], path: Path,
                          levels: dict[str, float] | None = None) -> Path:
     """Validation success rate and mean landing distance against env steps (one line per run),
     with the baselines' success rates as horizontal lines."""
-    plt = _pyplot()
+    plt = pyplot()
     fig, (ax_success, ax_distance) = plt.subplots(1, 2, figsize=(10, 3.8))
     for name, curve in curves.items():
         colour = COLOURS.get(name)
@@ -146,7 +150,7 @@ def plot_landing_errors(throws: dict[str, Throws], path: Path, target_x_range: t
                         tolerance: float = 0.1) -> Path:
     """Left: the distribution of landing distances |x - target x| (the fraction of throws landing
     closer than d, log d). Right: the signed landing error against the target's x, per agent."""
-    plt = _pyplot()
+    plt = pyplot()
     fig, (ax_cdf, ax_error) = plt.subplots(1, 2, figsize=(10, 3.8))
     for name, t in throws.items():
         distance = np.sort(np.where(np.isfinite(t.final_x), t.distance, np.inf))
@@ -177,8 +181,6 @@ def plot_landing_errors(throws: dict[str, Throws], path: Path, target_x_range: t
 
 def plot_run(run_dir: Path, eval_dir: Path) -> list[Path]:
     """The learning curve of a run (if it trained) and the landing errors of one evaluation."""
-    import gymnasium as gym
-
     paths = []
     curve = read_evaluations(run_dir)
     if curve is not None:
@@ -194,11 +196,6 @@ def record_video(run_dir: Path, path: Path, n_throws: int, *, model: str = "fina
                  env_kwargs: dict[str, Any] | None = None, first_seed: int = 10_000) -> Path:
     """A GIF (or MP4) of the run's policy throwing at the first ``n_throws`` test targets
     (needs the ``render`` extra)."""
-    import gymnasium as gym
-
-    from agents.evaluate import load_policy
-    from box_toss_env.rendering import write_video
-
     policy, config = load_policy(run_dir, model)
     kwargs = {**config.get("env_kwargs", {}), **(env_kwargs or {})}
     env = gym.make(config["env_id"], render_mode="rgb_array_list", **kwargs)
@@ -250,8 +247,6 @@ test targets; PPO's is its training time (seed 0, on the shared 2-core machine t
 
 def validation_targets(runs: dict[str, Path]) -> int | str:
     """The number of validation targets of the PPO runs (from their config.yml)."""
-    from agents.config import load_yaml
-
     counts = {load_yaml(run / "config.yml")["hyperparams"]["eval_targets"] for run in runs.values()
               if (run / "config.yml").exists() and load_yaml(run / "config.yml")["algo"] == "ppo"}
     return counts.pop() if len(counts) == 1 else "/".join(str(c) for c in sorted(counts)) or "-"
@@ -260,8 +255,6 @@ def validation_targets(runs: dict[str, Path]) -> int | str:
 def readme_section(runs: dict[str, Path], fidelity: list[tuple[str, str, str]], docs: Path = DOCS) -> str:
     """The agents section (markdown) from evaluated runs: the results table, the breakdown by
     target distance, the physics-fidelity table and the figures (written to ``docs``)."""
-    import gymnasium as gym
-
     rows = [row for name, run in runs.items() if (row := summary_row(name, run)) is not None]
     env = gym.make(rows[0]["env_id"], **rows[0]["env_kwargs"]).unwrapped
     curves = {name: curve for name, run in runs.items() if (curve := read_evaluations(run)) is not None}
@@ -316,12 +309,17 @@ def readme_section(runs: dict[str, Path], fidelity: list[tuple[str, str, str]], 
 GIF_ENV_KWARGS = {"render_width": 360, "render_height": 240, "render_fps": 20}  # a small GIF for the README
 
 
+def write_readme(section: str, name: str = "agents") -> None:
+    """Replace the README's ``<!-- name:start -->`` ... ``<!-- name:end -->`` block (appended if missing)."""
+    if f"<!-- {name}:start -->" not in README.read_text():
+        with open(README, "a") as file:
+            file.write(f"\n<!-- {name}:start -->\n<!-- {name}:end -->\n")
+    replace_section(name, section)
+    print(f"wrote the {name} section of {README}")
+
+
 def write_docs(runs: dict[str, Path], fidelity: list[tuple[str, str, str]], docs: Path = DOCS) -> str:
     """Figures and a GIF of the full PPO run into ``docs``, and the README's agents section."""
-    from gymnasium import error as gym_error
-
-    from agents.main import write_readme
-
     try:
         print(f"wrote {record_video(runs['full'], docs / 'throws.gif', 3, env_kwargs=GIF_ENV_KWARGS)}")
     except (ImportError, gym_error.DependencyNotInstalled) as error:  # the render extra is not installed
@@ -329,21 +327,3 @@ def write_docs(runs: dict[str, Path], fidelity: list[tuple[str, str, str]], docs
     section = readme_section(runs, fidelity, docs)
     write_readme(section)
     return section
-
-
-def main(argv: list[str] | None = None) -> None:
-    from agents.main import FIDELITY, README_RUNS
-
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--runs-dir", type=Path, default=RUNS)
-    parser.add_argument("--readme", action="store_true", help="write the section into README.md")
-    args = parser.parse_args(argv)
-    runs = {name: args.runs_dir / folder for name, folder in README_RUNS.items()}
-    if args.readme:
-        print(write_docs(runs, FIDELITY))
-    else:
-        print(readme_section(runs, FIDELITY))
-
-
-if __name__ == "__main__":
-    main()

@@ -17,6 +17,7 @@ def _register_envs() -> None:
         "BoxToss-LongSide-v0": {"target_face": "long_side"},
         "BoxToss-ShortEnd-v0": {"target_face": "short_end"},
         "BoxToss-ThisSideUp-v0": {"target_face": "exact"},
+        "BoxToss-Mixed-v0": {"target_face": "mixed"},
     }
     for env_id, kwargs in variants.items():
         if env_id in gymnasium.registry:  # importlib.reload: keep the existing registration

@@ -1,19 +1,46 @@
-"""Hyperparameter files and command-line overrides."""
+"""Hyperparameter files (RL Zoo's format plus project.yml) and command-line overrides."""
 
 import pytest
+import torch
+import yaml
 
-from agents import config
+from agents import algorithms, config
+
+VARIANTS = ("BoxToss-v0", "BoxToss-LongSide-v0", "BoxToss-ShortEnd-v0", "BoxToss-ThisSideUp-v0", "BoxToss-Mixed-v0")
 
 
-def test_every_registered_box_toss_env_has_valid_hyperparameters():
-    for env_id in ("BoxToss-v0", "BoxToss-LongSide-v0", "BoxToss-ShortEnd-v0", "BoxToss-ThisSideUp-v0"):
-        hyperparams = config.load_hyperparams(env_id)
-        config.check_config(hyperparams)
-        assert hyperparams["n_steps"] * hyperparams["n_envs"] % hyperparams["batch_size"] == 0
+@pytest.mark.parametrize("algo", sorted(algorithms.ALGORITHMS))
+def test_every_algorithm_has_valid_hyperparameters_for_every_variant(algo):
+    for env_id in VARIANTS:
+        hyperparams = config.load_hyperparams(algo, env_id)
+        config.check_config(hyperparams, algo)
+        kwargs = config.algorithm_kwargs(hyperparams, algo)
+        assert set(kwargs) <= algorithms.constructor_keys(algo)
+        if algo == "ppo":
+            assert hyperparams["n_steps"] * hyperparams["n_envs"] % hyperparams["batch_size"] == 0
+
+
+def test_zoo_expressions_are_read_and_written_back():
+    hyperparams = config.load_hyperparams("ppo", "BoxToss-ShortEnd-v0")
+    assert hyperparams["policy_kwargs"] == {"net_arch": [128, 128], "activation_fn": "nn.Tanh", "log_std_init": 0.0}
+    assert hyperparams["normalize"] == {"norm_obs": True, "norm_reward": False}
+    assert hyperparams["torch_threads"] == 1  # from project.yml
+    entry = config.zoo_entry(hyperparams)
+    assert "torch_threads" not in entry and entry["policy_kwargs"].startswith("dict(")
+    assert config.read_zoo_entry(yaml.safe_load(yaml.safe_dump(entry)), "round trip") == {
+        key: value for key, value in hyperparams.items() if key not in config.PROJECT_KEYS}
+    kwargs = config.algorithm_kwargs(hyperparams, "ppo")
+    assert kwargs["policy_kwargs"]["activation_fn"] is torch.nn.Tanh
+
+
+def test_expressions_are_never_evaluated():
+    for text in ("__import__('os').system('echo hi')", "dict(a=open('x'))", "nn.Tanh()", "lambda: 1"):
+        with pytest.raises(config.ConfigError, match="policy_kwargs"):
+            config.read_expression(text, "policy_kwargs")
 
 
 def test_overrides_reach_into_dicts_and_read_values_as_yaml():
-    base = config.load_hyperparams("BoxToss-v0")
+    base = config.load_hyperparams("ppo", "BoxToss-v0")
     changed = config.apply_overrides(base, ["n_timesteps=1e3", "learning_rate=1e-3", "policy_kwargs.net_arch=[8, 8]",
                                             "env_kwargs.target_face=exact", "normalize=false"])
     assert changed["n_timesteps"] == 1000 and isinstance(changed["n_timesteps"], int)
@@ -25,37 +52,45 @@ def test_overrides_reach_into_dicts_and_read_values_as_yaml():
     assert base["policy_kwargs"]["net_arch"] != [8, 8]  # the original is untouched
 
 
-@pytest.mark.parametrize("override, message", [
-    ("n_timestep=5", "unknown hyperparameter 'n_timestep'"),
-    ("n_timesteps", "key=value"),
-    ("=5", "key=value"),
+@pytest.mark.parametrize("algo, override, message", [
+    ("ppo", "n_timestep=5", "unknown hyperparameter 'n_timestep'"),
+    ("ppo", "buffer_size=5", "unknown hyperparameter 'buffer_size'"),  # SAC's, not PPO's
+    ("ppo", "n_timesteps", "key=value"),
+    ("sac", "=5", "key=value"),
 ])
-def test_bad_overrides_name_the_problem(override, message):
-    with pytest.raises(ValueError, match=message):
-        config.apply_overrides({}, [override])
+def test_bad_overrides_name_the_problem(algo, override, message):
+    with pytest.raises(config.ConfigError, match=message):
+        config.apply_overrides({}, [override], algo)
+    assert config.apply_overrides({}, ["buffer_size=5"], "sac") == {"buffer_size": 5}
 
 
-def test_values_are_never_evaluated_as_code():
-    _, value = config.parse_override("policy=__import__('os').system('echo hi')")
-    assert value == "__import__('os').system('echo hi')"  # a plain string
-    with pytest.raises(Exception, match="could not determine a constructor"):
-        config.parse_override("policy=!!python/object/apply:os.system ['echo hi']")
-
-
-def test_linear_schedule_and_activation_names_become_objects():
-    kwargs = config.ppo_kwargs({**config.load_hyperparams("BoxToss-v0"), "learning_rate": "lin_0.001"})
+def test_linear_schedule():
+    kwargs = config.algorithm_kwargs({**config.load_hyperparams("ppo", "BoxToss-v0"), "learning_rate": "lin_0.001"},
+                                     "ppo")
     assert kwargs["learning_rate"](1.0) == pytest.approx(1e-3)
     assert kwargs["learning_rate"](0.25) == pytest.approx(2.5e-4)
     assert kwargs["learning_rate"](-0.01) == 0.0  # the last rollout may overshoot the budget
-    assert config.ppo_kwargs(config.load_hyperparams("BoxToss-v0"))["learning_rate"](0.5) > 0
-    assert kwargs["policy_kwargs"]["activation_fn"].__name__ == "Tanh"
-    with pytest.raises(ValueError, match="lin_<number>"):
-        config.ppo_kwargs({"learning_rate": "cosine_1e-3"})
+    with pytest.raises(config.ConfigError, match="lin_<number>"):
+        config.check_config({**config.load_hyperparams("ppo", "BoxToss-v0"), "learning_rate": "cosine_1e-3"})
 
 
-def test_check_config_rejects_bad_budgets_and_activations():
-    good = config.load_hyperparams("BoxToss-v0")
-    with pytest.raises(ValueError, match="n_envs"):
-        config.check_config({**good, "n_envs": 0})
-    with pytest.raises(ValueError, match="activation_fn"):
-        config.check_config({**good, "policy_kwargs": {"activation_fn": "sigmoid"}})
+@pytest.mark.parametrize("change, message", [
+    ({"n_envs": 0}, "n_envs"),
+    ({"n_timesteps": True}, "n_timesteps"),
+    ({"policy": None}, "policy must be given"),
+    ({"policy_kwargs": {"activation_fn": "sigmoid"}}, "activation_fn"),
+    ({"policy_kwargs": {"activation_fn": "nn.NotAThing"}}, "activation_fn"),
+])
+def test_check_config_names_the_bad_key(change, message):
+    good = config.load_hyperparams("ppo", "BoxToss-v0")
+    with pytest.raises(config.ConfigError, match=message):
+        config.check_config({**good, **change}, "ppo")
+
+
+def test_a_file_that_is_not_a_mapping_is_one_clear_error(tmp_path):
+    (tmp_path / "ppo.yml").write_text("- just\n- a list\n")
+    with pytest.raises(config.ConfigError, match="must hold a mapping"):
+        config.load_hyperparams("ppo", "BoxToss-v0", tmp_path)
+    (tmp_path / "ppo.yml").write_text("BoxToss-v0: [1, 2]\n")
+    with pytest.raises(config.ConfigError, match="mapping of hyperparameters"):
+        config.load_hyperparams("ppo", "BoxToss-v0", tmp_path)

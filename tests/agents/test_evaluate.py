@@ -4,15 +4,9 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from agents.baselines import (
-    ConstantPolicy,
-    OraclePlanner,
-    OracleSettings,
-    RandomPolicy,
-    ThrowSimulator,
-    episodes_from_infos,
-)
-from agents.evaluate import Throws, draw_targets, evaluate, scores, summarize, target_seeds
+from agents.evaluation import Throws, draw_targets, evaluate, scores, summarize, target_seeds
+from agents.oracle import OraclePlanner, OracleSettings, ThrowSimulator, episodes_from_infos
+from agents.policies import ConstantPolicy, RandomPolicy
 
 DROP = (-1.0, 0.0, 0.0)  # zero launch speed, no spin: the box falls out of the hand
 

@@ -5,8 +5,8 @@ import json
 import numpy as np
 
 from agents import report
-from agents.baselines import ConstantPolicy, RandomPolicy
-from agents.evaluate import evaluate, summarize, target_seeds
+from agents.evaluation import evaluate, make_baseline_run, summarize, target_seeds
+from agents.policies import ConstantPolicy, RandomPolicy
 
 
 def fake_run(path, policy, name, timing=None):
@@ -40,8 +40,6 @@ def test_readme_section_has_the_table_and_writes_the_figures(tmp_path):
 
 
 def test_a_gif_of_a_baselines_throws(tmp_path):
-    from agents.baselines import make_baseline_run
-
     run_dir = make_baseline_run("constant", tmp_path / "drop", settings={"action": [-1.0, 0.0, 0.0]})
     path = report.record_video(run_dir, tmp_path / "throws.gif", 2, env_kwargs={"render_width": 120,
                                                                               "render_height": 80})

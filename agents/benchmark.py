@@ -1,0 +1,251 @@
+"""One benchmark table for every BoxToss variant: random, each algorithm (several training seeds), the ceiling.
+
+    python -m agents.benchmark                      # everything (hours on 2 cores): runs/benchmark/, docs/agents/
+    python -m agents.benchmark --envs BoxToss-ShortEnd-v0 --algos ppo --seeds 0 1 2
+    python -m agents.benchmark --report-only --readme   # rebuild the table and figures from finished runs
+
+Each training is ``python -m agents.train`` with the hyperparameters of ``agents/hyperparams/<algo>.yml``
+for that env id, in ``runs/benchmark/<env id>/<algo>-seed<k>``; a run that has finished is kept, so
+the command continues where a killed one stopped. The ceiling is ``agents.ceiling.sweep`` (the oracle
+at growing search budgets), saved in ``runs/benchmark/<env id>/ceiling.json``. Everything is scored on
+the same test targets (``agents.evaluation``); the results go to ``docs/agents/benchmark.md``, one
+learning-curve figure per variant and, with ``--readme``, the README's benchmark section.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from agents import ceiling, report, train
+from agents.algorithms import ALGORITHMS
+from agents.evaluation import TEST_TARGETS, evaluate_run, make_baseline_run
+from agents.training import RUNS
+
+VARIANTS = ("BoxToss-v0", "BoxToss-LongSide-v0", "BoxToss-ShortEnd-v0", "BoxToss-ThisSideUp-v0", "BoxToss-Mixed-v0")
+ROOT = RUNS / "benchmark"
+DOCS = report.DOCS
+FACE_KINDS = ("any face", "a long side", "a short end", "face 0", "face 1", "face 2", "face 3")
+
+
+def run_dir(root: Path, env_id: str, algo: str, seed: int) -> Path:
+    return root / env_id / f"{algo}-seed{seed}"
+
+
+def ensure_trained(root: Path, env_id: str, algo: str, seed: int) -> Path:
+    path = run_dir(root, env_id, algo, seed)
+    if report.read_results(path) is not None:
+        return path
+    args = ["--algo", algo, "--env", env_id, "--seed", str(seed), "--no-progress"]
+    if (path / "config.yml").exists() and (path / "checkpoints").exists():
+        train.main(["--resume", str(path), "--no-progress"])
+    else:
+        train.main([*args, "--runs-dir", str(path.parent), "--name", path.name])
+    return path
+
+
+def ensure_random(root: Path, env_id: str) -> Path:
+    path = root / env_id / "random"
+    if report.read_results(path) is None:
+        make_baseline_run("random", path, env_id, command=f"python -m agents.baselines random --env {env_id}")
+        evaluate_run(path, quiet=True)
+    return path
+
+
+def ensure_ceiling(root: Path, env_id: str) -> dict[str, Any]:
+    path = root / env_id / "ceiling.json"
+    if not path.exists():
+        print(f"{env_id}: oracle at {len(ceiling.BUDGETS)} search budgets on {ceiling.CEILING_TARGETS} targets ...")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(ceiling.sweep(env_id), indent=2))
+    return json.loads(path.read_text())
+
+
+# -- the table ------------------------------------------------------------------------------------
+def spread(values: list[float]) -> str:
+    """mean, and min-max over seeds when there are several."""
+    if not values:
+        return "-"
+    mean = float(np.mean(values))
+    return f"{mean:.1%}" if len(values) == 1 else f"{mean:.1%} ({min(values):.1%}-{max(values):.1%})"
+
+
+def agent_rows(root: Path, env_id: str, algos: list[str], seeds: list[int]) -> list[dict[str, Any]]:
+    rows = []
+    random = report.read_results(root / env_id / "random")
+    if random:
+        rows.append({"agent": "random actions", "results": [random], "timing": [None]})
+    for algo in algos:
+        found = [(report.read_results(p), report.read_timing(p)) for seed in seeds
+                 if report.read_results(p := run_dir(root, env_id, algo, seed)) is not None]
+        if found:
+            rows.append({"agent": f"{algo.upper()} ({len(found)} seed{'s' * (len(found) > 1)})",
+                         "results": [r for r, _ in found], "timing": [t for _, t in found]})
+    return rows
+
+
+def variant_table(env_id: str, rows: list[dict[str, Any]], sweep: list[dict[str, Any]] | None) -> list[str]:
+    lines = [f"### {env_id}", "",
+             "| agent | success | mean distance | median distance | face accuracy | env steps | wall time |",
+             "|---|---:|---:|---:|---:|---:|---:|"]
+    for row in rows:
+        results, timing = row["results"], [t for t in row["timing"] if t]
+        steps = f"{int(np.mean([t['timesteps'] for t in timing])):,}" if timing else "-"
+        wall = report.format_seconds(float(np.mean([t["wall_seconds"] for t in timing]))) if timing else "-"
+        lines.append(f"| {row['agent']} | {spread([r['success_rate'] for r in results])} | "
+                     f"{np.mean([r['mean_distance'] for r in results]):.3f} m | "
+                     f"{np.mean([r['median_distance'] for r in results]):.3f} m | "
+                     f"{np.mean([r['face_accuracy'] for r in results]):.1%} | {steps} | {wall} |")
+    if sweep:
+        top = ceiling.ceiling_of(sweep)
+        note = "" if top["converged"] else " (still rising)"
+        lines.append(f"| ceiling: oracle, {top['throws_per_target']:,.0f} simulated throws per target, "
+                     f"{top['n']} targets{note} | {top['success_rate']:.1%} | {top['mean_distance']:.3f} m | "
+                     f"{top['median_distance']:.3f} m | {top['face_accuracy']:.1%} | - | "
+                     f"{report.format_seconds(top['plan_seconds'])} |")
+    return lines
+
+
+def breakdowns(rows: list[dict[str, Any]]) -> list[str]:
+    """Success by target face kind and by target distance, one column per agent (seed means)."""
+    if not rows:
+        return []
+    header = "| " + " | ".join(row["agent"] for row in rows) + " |"
+    rule = "|---|" + "---:|" * len(rows)
+    lines = ["Success by target face:", "", "| target face " + header, rule]
+    kinds = [k for k in FACE_KINDS if any(e["kind"] == k for e in rows[0]["results"][0]["by_face"])]
+    for kind in kinds:
+        cells = []
+        for row in rows:
+            values = [e["success_rate"] for r in row["results"] for e in r["by_face"] if e["kind"] == kind]
+            cells.append(f"{np.mean(values):.1%}" if values else "-")
+        lines.append(f"| {kind} | " + " | ".join(cells) + " |")
+    lines += ["", "Success by target x:", "", "| target x " + header, rule]
+    for k, entry in enumerate(rows[0]["results"][0]["by_distance"]):
+        cells = [f"{np.mean([r['by_distance'][k]['success_rate'] for r in row['results']]):.1%}" for row in rows]
+        lines.append(f"| {entry['bin']} | " + " | ".join(cells) + " |")
+    return lines
+
+
+def sweep_table(sweep: list[dict[str, Any]]) -> list[str]:
+    lines = ["Oracle success as its search grows (the ceiling is the last row):", "",
+             "| initial, population x rounds (elite) | throws per target | success | face accuracy | planning |",
+             "|---|---:|---:|---:|---:|"]
+    for row in sweep:
+        b = row["budget"]
+        lines.append(f"| {b['initial']}, {b['population']} x {b['iterations']} ({b['elite']}) | "
+                     f"{row['throws_per_target']:,.0f} | {row['success_rate']:.1%} | {row['face_accuracy']:.1%} | "
+                     f"{report.format_seconds(row['plan_seconds'])} |")
+    return lines
+
+
+def plot_curves(root: Path, env_id: str, algos: list[str], seeds: list[int], sweep, path: Path) -> Path | None:
+    """Validation success against throws and against wall time, one line per training run."""
+    plt = report.pyplot()
+    fig, (ax_steps, ax_wall) = plt.subplots(1, 2, figsize=(10, 3.6))
+    drawn = False
+    for k, algo in enumerate(algos):
+        for seed in seeds:
+            curve = report.read_evaluations(run_dir(root, env_id, algo, seed))
+            if curve is None:
+                continue
+            label = algo.upper() if seed == seeds[0] else None
+            ax_steps.plot(curve["timesteps"], curve["success_rate"], color=f"C{k}", alpha=0.8, label=label)
+            ax_wall.plot(curve["wall_seconds"] / 60, curve["success_rate"], color=f"C{k}", alpha=0.8, label=label)
+            drawn = True
+    if not drawn:
+        plt.close(fig)
+        return None
+    if sweep:
+        for ax in (ax_steps, ax_wall):
+            ax.axhline(ceiling.ceiling_of(sweep)["success_rate"], color="k", linestyle="--", linewidth=1,
+                       label="ceiling (oracle)")
+    ax_steps.set(xlabel="throws (env steps)", ylabel="success (validation targets)", ylim=(0, 1.02))
+    ax_wall.set(xlabel="wall time [min]", ylim=(0, 1.02))
+    ax_steps.legend(fontsize=8)
+    for ax in (ax_steps, ax_wall):
+        ax.grid(alpha=0.3)
+    fig.suptitle(f"{env_id}: learning curves, one line per training seed")
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
+
+
+def document(root: Path, envs: list[str], algos: list[str], seeds: list[int], docs: Path = DOCS) -> str:
+    lines = [f"Every agent on the same {TEST_TARGETS:,} test targets per variant (the ceiling on the first "
+             f"{ceiling.CEILING_TARGETS}); success: at rest within the tolerance on a target face. Training runs: "
+             "`python -m agents.train --algo A --env E --seed S` with the file's hyperparameters, on this 2-core "
+             "machine; several seeds give the mean and (min-max).", ""]
+    for env_id in envs:
+        sweep_path = root / env_id / "ceiling.json"
+        sweep = json.loads(sweep_path.read_text()) if sweep_path.exists() else None
+        rows = agent_rows(root, env_id, algos, seeds)
+        if not rows and not sweep:
+            continue
+        lines += variant_table(env_id, rows, sweep) + [""]
+        lines += breakdowns(rows) + [""]
+        if sweep:
+            lines += sweep_table(sweep) + [""]
+        figure = plot_curves(root, env_id, algos, seeds, sweep, docs / f"curves_{env_id}.png")
+        if figure is not None:
+            lines += [f"![learning curves on {env_id}](curves_{env_id}.png)", ""]
+    return "\n".join(lines)
+
+
+def headline(root: Path, envs: list[str], algos: list[str], seeds: list[int]) -> str:
+    """The README's summary: success per variant and agent, against the ceiling."""
+    lines = ["| variant | random | " + " | ".join(a.upper() for a in algos) + " | ceiling |",
+             "|---|---:|" + "---:|" * len(algos) + "---:|"]
+    for env_id in envs:
+        rows = {row["agent"].split(" ")[0]: row for row in agent_rows(root, env_id, algos, seeds)}
+        sweep_path = root / env_id / "ceiling.json"
+        top = math.nan
+        if sweep_path.exists():
+            top = ceiling.ceiling_of(json.loads(sweep_path.read_text()))["success_rate"]
+        cells = [spread([r["success_rate"] for r in rows[a.upper()]["results"]]) if a.upper() in rows else "-"
+                 for a in algos]
+        random = rows.get("random")
+        lines.append(f"| {env_id} | {spread([random['results'][0]['success_rate']]) if random else '-'} | "
+                     + " | ".join(cells) + f" | {'-' if math.isnan(top) else f'{top:.1%}'} |")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--envs", nargs="+", default=list(VARIANTS))
+    parser.add_argument("--algos", nargs="+", default=sorted(ALGORITHMS), choices=sorted(ALGORITHMS))
+    parser.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
+    parser.add_argument("--root", type=Path, default=ROOT)
+    parser.add_argument("--no-ceiling", action="store_true", help="skip the oracle sweep")
+    parser.add_argument("--report-only", action="store_true", help="train nothing: tables from finished runs")
+    parser.add_argument("--readme", action="store_true", help="write docs/agents/benchmark.md and the README section")
+    args = parser.parse_args(argv)
+    if not args.report_only:
+        for env_id in args.envs:
+            ensure_random(args.root, env_id)
+            if not args.no_ceiling:
+                ensure_ceiling(args.root, env_id)
+            for seed in args.seeds:
+                for algo in args.algos:
+                    ensure_trained(args.root, env_id, algo, seed)
+    text = document(args.root, args.envs, args.algos, args.seeds)
+    summary = headline(args.root, args.envs, args.algos, args.seeds)
+    print(summary)
+    if args.readme:
+        DOCS.mkdir(parents=True, exist_ok=True)
+        (DOCS / "benchmark.md").write_text("# BoxToss benchmark\n\nGenerated by `python -m agents.benchmark "
+                                           "--report-only --readme` from the runs in `runs/benchmark/`.\n\n" + text)
+        report.write_readme("Success on the test targets (details, breakdowns by face and distance and the "
+                            "learning curves: [docs/agents/benchmark.md](docs/agents/benchmark.md)):\n\n" + summary,
+                            "benchmark")
+
+
+if __name__ == "__main__":
+    main()

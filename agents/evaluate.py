@@ -1,0 +1,51 @@
+"""Evaluate a run folder headless on fixed seeded targets: a table, figures and optionally a GIF.
+
+    python -m agents.evaluate runs/NAME                                   # 1,024 targets, seeds 10000...
+    python -m agents.evaluate runs/NAME --env-kwargs solver=seed dt=0.0009765625 --tag seed-1024
+    python -m agents.evaluate runs/NAME --video 4                         # also a GIF of 4 throws
+
+How targets are drawn and scored: ``agents.evaluation``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from agents import report
+from agents.evaluation import TEST_FIRST_SEED, TEST_TARGETS, default_tag, evaluate_run, parse_kwargs
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("run", type=Path, help="run folder (runs/NAME)")
+    parser.add_argument("--model", default="final", choices=("final", "best"),
+                        help="the model at the end of training, or the one with the best validation success")
+    parser.add_argument("--env-kwargs", nargs="*", default=[], metavar="KEY=VALUE",
+                        help="change env settings for the evaluation, e.g. solver=seed dt=0.0009765625")
+    parser.add_argument("--tag", help="name of the results folder RUN/eval/TAG (default: from the env kwargs)")
+    parser.add_argument("--targets", type=int, default=TEST_TARGETS, help="number of test targets")
+    parser.add_argument("--first-seed", type=int, default=TEST_FIRST_SEED)
+    parser.add_argument("--video", type=int, default=0, metavar="N", help="also write a GIF of N throws")
+    parser.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    args = parser.parse_args(argv)
+    if not (args.run / "config.yml").exists():
+        sys.exit(f"agents.evaluate: {args.run} is not a run folder (no config.yml)")
+    if not (args.run / "model.zip").exists() and not (args.run / "eval").exists() and "baseline" not in \
+            (args.run / "config.yml").read_text():
+        sys.exit(f"agents.evaluate: {args.run} has no model.zip (did its training finish? --resume it)")
+    results = evaluate_run(args.run, model=args.model, env_kwargs=parse_kwargs(args.env_kwargs), tag=args.tag,
+                           n_targets=args.targets, first_seed=args.first_seed)
+    out = args.run / "eval" / (args.tag or default_tag(parse_kwargs(args.env_kwargs), args.model))
+    if not args.no_plots:
+        for path in report.plot_run(args.run, out):
+            print(f"figure: {path}")
+    if args.video:
+        path = report.record_video(args.run, out / "throws.gif", args.video, model=args.model,
+                                   env_kwargs=results["env_kwargs"])
+        print(f"video: {path}")
+
+
+if __name__ == "__main__":
+    main()

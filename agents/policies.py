@@ -1,0 +1,69 @@
+"""Policies that evaluation throws with: random and constant actions, and trained SB3 models.
+
+A policy answers a batch of first observations (n, obs) and their reset infos with actions (n, 3)
+in [-1, 1]; ``env`` is the env the throws will be made in (a planner may simulate with it). The
+oracle, which plans with the simulator, is in ``agents.oracle``.
+"""
+
+from __future__ import annotations
+
+import pickle
+from pathlib import Path
+from typing import Any, Protocol
+
+import gymnasium as gym
+import numpy as np
+from stable_baselines3.common.base_class import BaseAlgorithm
+from stable_baselines3.common.vec_env import VecNormalize
+
+from agents import algorithms
+from agents.envs import observation_normalizer
+from box_toss_env.envs import task
+
+
+class Policy(Protocol):
+    def act(self, observations: np.ndarray, reset_infos: list[dict[str, Any]], env: gym.Env) -> np.ndarray: ...
+
+
+class RandomPolicy:
+    """Uniform actions in [-1, 1]^3 from a seeded generator (the same throws on every evaluation)."""
+
+    def __init__(self, seed: int = 0):
+        self.seed = seed
+
+    def act(self, observations: np.ndarray, reset_infos, env: gym.Env) -> np.ndarray:
+        return np.random.default_rng(self.seed).uniform(-1.0, 1.0, (len(observations), task.ACTION_SIZE))
+
+
+class ConstantPolicy:
+    """The same action for every target (e.g. [-1, 0, 0]: zero speed, the box drops from the hand)."""
+
+    def __init__(self, action=(-1.0, 0.0, 0.0)):
+        self.action = np.asarray(action, dtype=np.float64)
+
+    def act(self, observations: np.ndarray, reset_infos, env: gym.Env) -> np.ndarray:
+        return np.tile(self.action, (len(observations), 1))
+
+
+class TrainedPolicy:
+    """A trained SB3 model's deterministic action on observations normalised as in training."""
+
+    def __init__(self, model: BaseAlgorithm, vec_normalize: VecNormalize | None = None):
+        self.model = model
+        self.normalize = observation_normalizer(vec_normalize)
+
+    def act(self, observations: np.ndarray, reset_infos, env: gym.Env) -> np.ndarray:
+        actions, _ = self.model.predict(self.normalize(observations), deterministic=True)
+        return actions
+
+    @classmethod
+    def load(cls, run_dir: Path, algo: str, which: str = "final") -> TrainedPolicy:
+        """The final model of a run folder (``which="best"``: the best by validation success)."""
+        prefix = "" if which == "final" else "best_"
+        model = algorithms.algorithm_class(algo).load(Path(run_dir) / f"{prefix}model.zip", device="cpu")
+        stats = Path(run_dir) / f"{prefix}vecnormalize.pkl"
+        vec_normalize = None
+        if stats.exists():
+            with open(stats, "rb") as file:
+                vec_normalize = pickle.load(file)  # the statistics only (SB3 pickles it without its venv)
+        return cls(model, vec_normalize)

@@ -1,0 +1,99 @@
+"""Train PPO, SAC or TD3 (Stable-Baselines3) on a BoxToss env; one folder per run.
+
+    python -m agents.train                                           # PPO on BoxToss-v0 (agents/hyperparams/ppo.yml)
+    python -m agents.train --algo sac --env BoxToss-ShortEnd-v0      # hyperparameters: agents/hyperparams/sac.yml
+    python -m agents.train --name long --set n_timesteps=1000000 learning_rate=1e-4
+    python -m agents.train --env BoxToss-ThisSideUp-v0 --set env_kwargs.max_spin=10
+    python -m agents.train --resume runs/long --set n_timesteps=2000000   # continue from the last checkpoint
+
+Hyperparameters come from ``agents/hyperparams/<algo>.yml`` (RL Zoo's format) and
+``agents/hyperparams/project.yml`` (our own settings); see ``agents.config``. The run folder is
+described in ``agents.training``. A bad configuration is one line naming the key, before anything
+is created.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shlex
+import sys
+from pathlib import Path
+
+import gymnasium as gym
+
+import box_toss_env  # noqa: F401  (registers the BoxToss envs)
+from agents import algorithms
+from agents import config as configuration
+from agents.training import RUNS, new_run_dir, train
+
+
+def parse_args(argv: list[str]) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--algo", default="ppo", choices=sorted(algorithms.ALGORITHMS))
+    parser.add_argument("--env", default="BoxToss-v0", help="env id (a key of the hyperparameter file)")
+    parser.add_argument("--hyperparams", type=Path, default=configuration.HYPERPARAMS,
+                        help="folder of <algo>.yml and project.yml")
+    parser.add_argument("--set", nargs="*", default=[], action="extend", metavar="KEY=VALUE", dest="overrides",
+                        help="override hyperparameters, e.g. n_timesteps=100000 policy_kwargs.net_arch=[64,64]")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--name", help="run folder name (default: algorithm, env id and time)")
+    parser.add_argument("--runs-dir", type=Path, default=RUNS)
+    parser.add_argument("--resume", type=Path, metavar="RUN", help="continue a run from its last checkpoint")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument("--no-eval", action="store_true", help="skip the final evaluation on the test targets")
+    return parser.parse_args(argv)
+
+
+def resolve(args: argparse.Namespace) -> tuple[str, str, int, dict]:
+    """(algo, env id, seed, configuration) of the command, checked; raises ConfigError."""
+    if args.resume:
+        saved_path = args.resume / "config.yml"
+        if not saved_path.exists():
+            raise configuration.ConfigError(f"--resume {args.resume}: not a run folder (no config.yml)")
+        saved = configuration.load_yaml(saved_path)
+        algo, env_id, seed = saved.get("algo", "ppo"), saved["env_id"], saved["seed"]
+        config = configuration.apply_overrides(saved["hyperparams"], args.overrides, algo)
+    else:
+        algo, env_id, seed = args.algo, args.env, args.seed
+        config = configuration.apply_overrides(configuration.load_hyperparams(algo, env_id, args.hyperparams),
+                                               args.overrides, algo)
+    config.setdefault("env_kwargs", {})
+    configuration.check_config(config, algo)
+    if env_id not in gym.registry:
+        raise configuration.ConfigError(f"--env {env_id!r} is not registered; BoxToss ids: "
+                                        f"{sorted(k for k in gym.registry if k.startswith('BoxToss'))}")
+    try:
+        gym.make(env_id, **config["env_kwargs"]).close()  # the env's own checks of env_kwargs
+    except (TypeError, ValueError) as error:
+        raise configuration.ConfigError(f"env_kwargs: {error}") from None
+    return algo, env_id, seed, config
+
+
+def main(argv: list[str] | None = None) -> Path:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    args = parse_args(argv)
+    try:
+        algo, env_id, seed, config = resolve(args)
+        run_dir = args.resume or new_run_dir(args.runs_dir, args.name, env_id, algo)
+    except configuration.ConfigError as error:
+        sys.exit(f"agents.train: {error}")
+    configuration.save_yaml({"algo": algo, "env_id": env_id, "seed": seed, "env_kwargs": config["env_kwargs"],
+                             "hyperparams": config}, run_dir / "config.yml")
+    command = shlex.join([Path(sys.executable).name, "-m", "agents.train", *argv])
+    with open(run_dir / "command.txt", "a") as file:
+        file.write(f"{command}\n")
+    print(f"training {algo.upper()} on {env_id} for {config['n_timesteps']:,} steps (seed {seed}) into {run_dir}")
+    timing = train(run_dir, config, env_id, seed, algo, resume=bool(args.resume), progress_bar=not args.no_progress,
+                   final_eval=not args.no_eval)
+    print(f"trained {timing['timesteps']:,} steps in {timing['wall_seconds']:.1f} s "
+          f"(env {timing['env_share']:.0%} of the training loop, validation {timing['eval_seconds']:.1f} s)")
+    if not args.no_eval:
+        results = json.loads((run_dir / "eval" / "default" / "results.json").read_text())
+        print(f"test targets: success {results['success_rate']:.1%}, mean distance {results['mean_distance']:.3f} m, "
+              f"face accuracy {results['face_accuracy']:.1%}")
+    return run_dir
+
+
+if __name__ == "__main__":
+    main()
