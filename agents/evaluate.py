@@ -15,6 +15,7 @@ from pathlib import Path
 
 from agents import report
 from agents.evaluation import TEST_FIRST_SEED, TEST_TARGETS, default_tag, evaluate_run, parse_kwargs
+from agents.policies import UnreadableModelError
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -32,11 +33,11 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     if not (args.run / "config.yml").exists():
         sys.exit(f"agents.evaluate: {args.run} is not a run folder (no config.yml)")
-    if not (args.run / "model.zip").exists() and not (args.run / "eval").exists() and "baseline" not in \
-            (args.run / "config.yml").read_text():
-        sys.exit(f"agents.evaluate: {args.run} has no model.zip (did its training finish? --resume it)")
-    results = evaluate_run(args.run, model=args.model, env_kwargs=parse_kwargs(args.env_kwargs), tag=args.tag,
-                           n_targets=args.targets, first_seed=args.first_seed)
+    try:
+        results = evaluate_run(args.run, model=args.model, env_kwargs=parse_kwargs(args.env_kwargs), tag=args.tag,
+                               n_targets=args.targets, first_seed=args.first_seed)
+    except UnreadableModelError as error:
+        sys.exit(f"agents.evaluate: {error}")
     out = args.run / "eval" / (args.tag or default_tag(parse_kwargs(args.env_kwargs), args.model))
     if not args.no_plots:
         for path in report.plot_run(args.run, out):

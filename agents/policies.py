@@ -8,6 +8,7 @@ oracle, which plans with the simulator, is in ``agents.oracle``.
 from __future__ import annotations
 
 import pickle
+import zipfile
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -19,6 +20,21 @@ from stable_baselines3.common.vec_env import VecNormalize
 from agents import algorithms
 from agents.envs import observation_normalizer
 from box_toss_env.envs import task
+
+
+class UnreadableModelError(ValueError):
+    """A saved model that is missing, truncated or not a model of the algorithm."""
+
+
+def load_model(algo: str, path: Path, **kwargs) -> BaseAlgorithm:
+    """``algo``'s model saved at ``path`` (CPU); an UnreadableModelError naming the file if it cannot be read."""
+    if not path.exists():
+        raise UnreadableModelError(f"{path} does not exist (did the run finish? --resume it)")
+    try:
+        return algorithms.algorithm_class(algo).load(path, device="cpu", **kwargs)
+    except (zipfile.BadZipFile, EOFError, KeyError, ValueError, RuntimeError, OSError) as error:
+        raise UnreadableModelError(f"{path} cannot be read as a {algo.upper()} model ({type(error).__name__}: "
+                                   f"{error}); it may be truncated: retrain, or --resume from a checkpoint") from None
 
 
 class Policy(Protocol):
@@ -60,7 +76,7 @@ class TrainedPolicy:
     def load(cls, run_dir: Path, algo: str, which: str = "final") -> TrainedPolicy:
         """The final model of a run folder (``which="best"``: the best by validation success)."""
         prefix = "" if which == "final" else "best_"
-        model = algorithms.algorithm_class(algo).load(Path(run_dir) / f"{prefix}model.zip", device="cpu")
+        model = load_model(algo, Path(run_dir) / f"{prefix}model.zip")
         stats = Path(run_dir) / f"{prefix}vecnormalize.pkl"
         vec_normalize = None
         if stats.exists():

@@ -25,6 +25,7 @@ import gymnasium as gym
 import box_toss_env  # noqa: F401  (registers the BoxToss envs)
 from agents import algorithms
 from agents import config as configuration
+from agents.policies import UnreadableModelError
 from agents.training import RUNS, new_run_dir, train
 
 
@@ -84,8 +85,11 @@ def main(argv: list[str] | None = None) -> Path:
     with open(run_dir / "command.txt", "a") as file:
         file.write(f"{command}\n")
     print(f"training {algo.upper()} on {env_id} for {config['n_timesteps']:,} steps (seed {seed}) into {run_dir}")
-    timing = train(run_dir, config, env_id, seed, algo, resume=bool(args.resume), progress_bar=not args.no_progress,
-                   final_eval=not args.no_eval)
+    try:
+        timing = train(run_dir, config, env_id, seed, algo, resume=bool(args.resume),
+                       progress_bar=not args.no_progress, final_eval=not args.no_eval)
+    except UnreadableModelError as error:
+        sys.exit(f"agents.train: {error}")
     print(f"trained {timing['timesteps']:,} steps in {timing['wall_seconds']:.1f} s "
           f"(env {timing['env_share']:.0%} of the training loop, validation {timing['eval_seconds']:.1f} s)")
     if not args.no_eval:

@@ -28,7 +28,7 @@ from agents import algorithms
 from agents import config as configuration
 from agents.envs import TimedVecEnv, find_wrapper, make_training_env, make_vector_env, normalizer_of
 from agents.evaluation import VALIDATION_FIRST_SEED, evaluate, evaluate_run, scores, target_seeds
-from agents.policies import TrainedPolicy
+from agents.policies import TrainedPolicy, load_model
 
 RUNS = Path("runs")
 EVAL_COLUMNS = ("timesteps", "wall_seconds", "success_rate", "mean_distance", "median_distance", "face_accuracy",
@@ -157,7 +157,7 @@ def train(run_dir: Path, config: dict[str, Any], env_id: str, seed: int, algo: s
     cls = algorithms.algorithm_class(algo)
     off_policy = algorithms.is_off_policy(algo)
     if checkpoint:
-        model = cls.load(checkpoint[0], env=venv, device="cpu")
+        model = load_model(algo, checkpoint[0], env=venv)
         buffer = checkpoint[0].with_name(f"{algo}_replay_buffer_{checkpoint[2]}_steps.pkl")
         if off_policy and buffer.exists():
             model.load_replay_buffer(buffer)

@@ -71,3 +71,13 @@ def test_main_trains_evaluates_and_prints_the_table(tmp_path):
     assert "BoxToss-ThisSideUp-v0" in out  # the default task scores the face
     assert (tmp_path / "short" / "eval" / "default" / "results.json").exists()
     assert (tmp_path / "random" / "eval" / "default" / "results.json").exists()
+
+
+def test_a_truncated_model_is_one_line(tmp_path):
+    run("agents.train", "--runs-dir", str(tmp_path), "--name", "tiny", "--no-progress", "--no-eval", "--set", *COMMON,
+        *TINY["ppo"])
+    model = tmp_path / "tiny" / "model.zip"
+    model.write_bytes(model.read_bytes()[:200])
+    done = run("agents.evaluate", str(tmp_path / "tiny"), "--targets", "8", ok=False)
+    assert done.returncode != 0 and "cannot be read as a PPO model" in done.stderr
+    assert "Traceback" not in done.stderr
