@@ -199,7 +199,8 @@ class BoxTossEnv(gym.Env):
     | ``render_width``, ``render_height`` | 600, 400 | frame size [px]                                            |
 
     Registered variants: ``BoxToss-LongSide-v0`` (``target_face="long_side"``),
-    ``BoxToss-ShortEnd-v0`` (``"short_end"``) and ``BoxToss-ThisSideUp-v0`` (``"exact"``).
+    ``BoxToss-ShortEnd-v0`` (``"short_end"``), ``BoxToss-ThisSideUp-v0`` (``"exact"``) and
+    ``BoxToss-Mixed-v0`` (``"mixed"``).
 
     Rendering (needs the ``render`` extra, ``pip install "box_toss_env[render]"``): ``"rgb_array"``
     returns an (H, W, 3) uint8 frame of the current state; ``"human"`` opens a pygame window and plays
