@@ -1,6 +1,5 @@
-"""Tables and figures from evaluated runs, and the README's agents section.
-
-    python -m agents.report --readme        # README table and docs/agents/*.png from runs/{random,short,full,oracle}
+"""Tables and figures from evaluated runs, and the README's agents section (written by
+``python -m agents.main --full --readme``).
 
 Every figure in the README's agents section is written here from the runs' ``results.json`` and
 ``timing.json`` files, which the training, evaluation and baseline scripts measured.
