@@ -22,7 +22,6 @@ from agents.training import RUNS
 
 ENV_ID = "BoxToss-ThisSideUp-v0"  # one face drawn per episode must end down: the pose counts
 SHORT_TIMESTEPS = 500_000  # the default run (about 2 min); the full run uses n_timesteps of agents/hyperparams/ppo.yml
-README_RUNS = {"random": "random", "short": "short", "full": "full", "oracle": "oracle"}
 SEED_DT = 1 / 1024  # a step at which the seed scheme keeps its energy at the default stiffness
 # (run, tag, env kwargs, label) of the physics-fidelity evaluations
 FIDELITY_SETTINGS = [
