@@ -25,7 +25,7 @@ import numpy as np
 from agents import ceiling, report, train
 from agents.algorithms import ALGORITHMS
 from agents.evaluation import TEST_TARGETS, evaluate_run, make_baseline_run
-from agents.training import RUNS
+from agents.training import RUNS, read_timing
 
 VARIANTS = ("BoxToss-v0", "BoxToss-LongSide-v0", "BoxToss-ShortEnd-v0", "BoxToss-ThisSideUp-v0", "BoxToss-Mixed-v0")
 ROOT = RUNS / "benchmark"
@@ -81,7 +81,7 @@ def agent_rows(root: Path, env_id: str, algos: list[str], seeds: list[int]) -> l
     if random:
         rows.append({"agent": "random actions", "results": [random], "timing": [None]})
     for algo in algos:
-        found = [(report.read_results(p), report.read_timing(p)) for seed in seeds
+        found = [(report.read_results(p), read_timing(p)) for seed in seeds
                  if report.read_results(p := run_dir(root, env_id, algo, seed)) is not None]
         if found:
             rows.append({"agent": f"{algo.upper()} ({len(found)} seed{'s' * (len(found) > 1)})",

@@ -19,6 +19,7 @@ from gymnasium import error as gym_error
 from agents.config import load_yaml
 from agents.evaluation import TEST_FIRST_SEED, TEST_TARGETS, VALIDATION_FIRST_SEED, Throws, load_policy
 from agents.oracle import OracleSettings
+from agents.training import read_timing
 from benchmarks.readme_section import README, replace_section
 from box_toss_env.rendering import write_video
 
@@ -32,11 +33,6 @@ COLOURS = {"random": "tab:gray", "short": "tab:orange", "full": "tab:blue", "ora
 # -- reading runs --------------------------------------------------------------------------------
 def read_results(run_dir: Path, tag: str = "default") -> dict[str, Any] | None:
     path = Path(run_dir) / "eval" / tag / "results.json"
-    return json.loads(path.read_text()) if path.exists() else None
-
-
-def read_timing(run_dir: Path) -> dict[str, Any] | None:
-    path = Path(run_dir) / "timing.json"
     return json.loads(path.read_text()) if path.exists() else None
 
 

@@ -114,7 +114,8 @@ def latest_checkpoint(run_dir: Path, algo: str) -> tuple[Path, Path | None, int]
 
 
 def read_timing(run_dir: Path) -> dict[str, Any] | None:
-    path = run_dir / "timing.json"
+    """A run's timing.json (None before its training first finished)."""
+    path = Path(run_dir) / "timing.json"
     return json.loads(path.read_text()) if path.exists() else None
 
 
