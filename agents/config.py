@@ -5,7 +5,7 @@ Two files, both keyed by env id:
 - ``agents/hyperparams/<algo>.yml`` is in RL Zoo's format and loads unchanged with
   ``python -m rl_zoo3.train --algo <algo> --env <id> --gym-packages box_toss_env --conf-file ...``:
   the algorithm's constructor arguments plus Zoo's own keys (``n_timesteps``, ``n_envs``,
-  ``normalize``, ``env_kwargs``, ``noise_type``, ``noise_std``); ``policy_kwargs`` and a dict
+  ``normalize``, ``env_kwargs``, ``env_wrapper``, ``noise_type``, ``noise_std``); ``policy_kwargs`` and a dict
   ``normalize`` are Python expressions in strings (``"dict(net_arch=[64, 64], activation_fn=nn.Tanh)"``).
 - ``agents/hyperparams/project.yml`` holds what only our scripts use (engine threads, torch threads,
   validation and checkpoint frequency): ``defaults`` for every run, then per algorithm and env id.
@@ -30,6 +30,7 @@ import yaml
 from stable_baselines3.common.noise import NormalActionNoise
 
 from agents import algorithms
+from agents.envs import read_env_wrapper
 
 HYPERPARAMS = Path(__file__).parent / "hyperparams"
 PROJECT_FILE = "project.yml"
@@ -41,6 +42,7 @@ ZOO_KEYS = {
     "env_kwargs": "kwargs of gymnasium.make_vec and gymnasium.make",
     "noise_type": "action noise of off-policy algorithms: 'normal'",
     "noise_std": "standard deviation of that noise, in action units",
+    "env_wrapper": "wrapper of each env: box_toss_env.envs.ballistic.BallisticThrows (ballistic commands)",
 }
 PROJECT_KEYS = {
     "vec_env_kwargs": "kwargs of gymnasium.make_vec only (engine threads)",
@@ -242,6 +244,10 @@ def check_config(config: dict[str, Any], algo: str = "ppo") -> None:
             and isinstance(getattr(torch.nn, activation[3:], None), type)):
         raise ConfigError(f"policy_kwargs.activation_fn must name a torch.nn activation (nn.Tanh, nn.ReLU, ...), "
                           f"got {activation!r}")
+    try:
+        read_env_wrapper(config.get("env_wrapper"))
+    except ValueError as error:
+        raise ConfigError(str(error)) from None
     if config.get("noise_type") not in (None, "normal"):
         raise ConfigError(f"noise_type must be 'normal' (or absent), got {config['noise_type']!r}")
     for key in ("learning_rate", "clip_range"):

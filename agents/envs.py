@@ -1,6 +1,7 @@
 """The vector env PPO trains on, and the clock that measures the env's share of training time.
 
     gymnasium.make_vec(env_id, num_envs=n, **env_kwargs)   BoxToss's batched vector env (same-step autoreset)
+    -> BallisticThrowsVector (with env_wrapper)            the policy acts in ballistic commands (optional)
     -> SB3VecEnvAdapter                                    SB3's VecEnv interface over it
     -> TimedVecEnv                                         seconds spent inside the env
     -> VecMonitor                                          episode rewards for the logs
@@ -8,11 +9,16 @@
 
 Observations are normalised (their bounds span hundreds of metres while a throw starts within
 centimetres of the hand); rewards are not (every episode is one reward, already of order one).
+
+``env_wrapper`` is RL Zoo's key: the wrapper Zoo puts around each env. We train on one batched env, so
+each wrapper we accept there has a vector form (``ENV_WRAPPERS``), and a trained policy acting through
+it maps its actions to the env's the same way at evaluation (``command_map``).
 """
 
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from typing import Any
 
 import gymnasium as gym
@@ -20,7 +26,13 @@ import numpy as np
 from stable_baselines3.common.vec_env import VecEnv, VecEnvWrapper, VecMonitor, VecNormalize
 
 import box_toss_env  # noqa: F401  (registers the BoxToss envs)
+from box_toss_env.envs.ballistic import ballistic_actions
+from box_toss_env.vector.ballistic import BallisticThrowsVector
 from box_toss_env.vector.sb3_adapter import SB3VecEnvAdapter
+
+BALLISTIC = "box_toss_env.envs.ballistic.BallisticThrows"
+ENV_WRAPPERS = {BALLISTIC: "ballistic throw commands (flight time, landing offset, touchdown angle)"}
+"""The values of ``env_wrapper`` that training accepts (each has a vector form and a ``command_map``)."""
 
 
 class TimedVecEnv(VecEnvWrapper):
@@ -45,20 +57,54 @@ class TimedVecEnv(VecEnvWrapper):
         return result
 
 
+def read_env_wrapper(spec: Any) -> tuple[str, dict[str, Any]] | None:
+    """Zoo's ``env_wrapper`` value (None, a class path, or ``{class path: kwargs}``) as (path, kwargs);
+    a ValueError naming what is accepted otherwise."""
+    if spec is None:
+        return None
+    name, kwargs = spec, {}
+    if isinstance(spec, dict) and len(spec) == 1:
+        name, kwargs = next(iter(spec.items()))
+        kwargs = {} if kwargs is None else kwargs
+    if not isinstance(name, str) or name not in ENV_WRAPPERS or not isinstance(kwargs, dict):
+        raise ValueError(f"env_wrapper must be one of {sorted(ENV_WRAPPERS)}, optionally as {{name: {{kwargs}}}}, "
+                         f"got {spec!r}")
+    return name, kwargs
+
+
+def wrap_vector_env(vector_env: gym.vector.VectorEnv, env_wrapper: Any) -> gym.vector.VectorEnv:
+    """``vector_env`` in the vector form of ``env_wrapper`` (unchanged if None)."""
+    wrapper = read_env_wrapper(env_wrapper)
+    if wrapper is None:
+        return vector_env
+    return BallisticThrowsVector(vector_env, **wrapper[1])
+
+
+def command_map(env_wrapper: Any) -> Callable[[np.ndarray, np.ndarray, gym.Env], np.ndarray] | None:
+    """What a policy trained through ``env_wrapper`` does to its actions to get the env's:
+    ``f(observations, policy_actions, env) -> env actions`` (None without a wrapper)."""
+    wrapper = read_env_wrapper(env_wrapper)
+    if wrapper is None:
+        return None
+    kwargs = wrapper[1]
+    return lambda observations, commands, env: ballistic_actions(observations, commands, env.unwrapped.config,
+                                                                 **kwargs)[0]
+
+
 def make_vector_env(env_id: str, n_envs: int, env_kwargs: dict[str, Any] | None = None,
-                    vec_env_kwargs: dict[str, Any] | None = None) -> TimedVecEnv:
+                    vec_env_kwargs: dict[str, Any] | None = None, env_wrapper: Any = None) -> TimedVecEnv:
     """``n_envs`` BoxToss envs as one SB3 VecEnv (timed), from the env's own vector entry point."""
     vector_env = gym.make_vec(env_id, num_envs=n_envs, vectorization_mode="vector_entry_point",
                               **(env_kwargs or {}), **(vec_env_kwargs or {}))
-    return TimedVecEnv(SB3VecEnvAdapter(vector_env))
+    return TimedVecEnv(SB3VecEnvAdapter(wrap_vector_env(vector_env, env_wrapper)))
 
 
 def make_training_env(env_id: str, n_envs: int, *, seed: int, env_kwargs: dict[str, Any] | None = None,
                       vec_env_kwargs: dict[str, Any] | None = None, normalize: dict[str, Any] | bool = True,
-                      normalize_path: str | None = None) -> VecEnv:
+                      normalize_path: str | None = None, env_wrapper: Any = None) -> VecEnv:
     """The full training stack (module docstring), seeded; with ``normalize_path`` the observation
     statistics are loaded from a saved ``VecNormalize`` (to resume training)."""
-    venv: VecEnv = make_vector_env(env_id, n_envs, env_kwargs, vec_env_kwargs)
+    venv: VecEnv = make_vector_env(env_id, n_envs, env_kwargs, vec_env_kwargs, env_wrapper)
     venv.seed(seed)
     venv = VecMonitor(venv)
     if normalize_path is not None:

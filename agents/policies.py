@@ -18,7 +18,7 @@ from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.vec_env import VecNormalize
 
 from agents import algorithms
-from agents.envs import observation_normalizer
+from agents.envs import command_map, observation_normalizer
 from box_toss_env.envs import task
 
 
@@ -62,18 +62,22 @@ class ConstantPolicy:
 
 
 class TrainedPolicy:
-    """A trained SB3 model's deterministic action on observations normalised as in training."""
+    """A trained SB3 model's deterministic action on observations normalised as in training; a model
+    trained through an ``env_wrapper`` (ballistic commands) has its actions mapped as that wrapper does."""
 
-    def __init__(self, model: BaseAlgorithm, vec_normalize: VecNormalize | None = None):
+    def __init__(self, model: BaseAlgorithm, vec_normalize: VecNormalize | None = None, env_wrapper: Any = None):
         self.model = model
         self.normalize = observation_normalizer(vec_normalize)
+        self.commands_to_actions = command_map(env_wrapper)
 
     def act(self, observations: np.ndarray, reset_infos, env: gym.Env) -> np.ndarray:
         actions, _ = self.model.predict(self.normalize(observations), deterministic=True)
+        if self.commands_to_actions is not None:
+            actions = self.commands_to_actions(observations, actions, env)
         return actions
 
     @classmethod
-    def load(cls, run_dir: Path, algo: str, which: str = "final") -> TrainedPolicy:
+    def load(cls, run_dir: Path, algo: str, which: str = "final", env_wrapper: Any = None) -> TrainedPolicy:
         """The final model of a run folder (``which="best"``: the best by validation success)."""
         prefix = "" if which == "final" else "best_"
         model = load_model(algo, Path(run_dir) / f"{prefix}model.zip")
@@ -82,4 +86,4 @@ class TrainedPolicy:
         if stats.exists():
             with open(stats, "rb") as file:
                 vec_normalize = pickle.load(file)  # the statistics only (SB3 pickles it without its venv)
-        return cls(model, vec_normalize)
+        return cls(model, vec_normalize, env_wrapper)

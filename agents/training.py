@@ -79,8 +79,8 @@ class ValidationCallback(BaseCallback):
     def validate(self) -> None:
         begin = time.perf_counter()
         vec_normalize = normalizer_of(self.training_env)
-        throws, _ = evaluate(TrainedPolicy(self.model, vec_normalize), self.env_id, self.config["env_kwargs"],
-                             self.seeds)
+        policy = TrainedPolicy(self.model, vec_normalize, self.config.get("env_wrapper"))
+        throws, _ = evaluate(policy, self.env_id, self.config["env_kwargs"], self.seeds)
         result = scores(throws)
         wall = self.wall_offset + begin - self.start
         for key in ("success_rate", "mean_distance", "face_accuracy", "mean_reward"):
@@ -154,7 +154,8 @@ def train(run_dir: Path, config: dict[str, Any], env_id: str, seed: int, algo: s
     env_seed = seed + (checkpoint[2] if checkpoint else 0)
     venv = make_training_env(env_id, config["n_envs"], seed=env_seed, env_kwargs=config["env_kwargs"],
                              vec_env_kwargs=config.get("vec_env_kwargs"), normalize=config.get("normalize", True),
-                             normalize_path=str(checkpoint[1]) if checkpoint and checkpoint[1] else None)
+                             normalize_path=str(checkpoint[1]) if checkpoint and checkpoint[1] else None,
+                             env_wrapper=config.get("env_wrapper"))
     cls = algorithms.algorithm_class(algo)
     off_policy = algorithms.is_off_policy(algo)
     if checkpoint:

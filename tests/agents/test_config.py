@@ -22,7 +22,8 @@ def test_every_algorithm_has_valid_hyperparameters_for_every_variant(algo):
 
 def test_zoo_expressions_are_read_and_written_back():
     hyperparams = config.load_hyperparams("ppo", "BoxToss-ShortEnd-v0")
-    assert hyperparams["policy_kwargs"] == {"net_arch": [128, 128], "activation_fn": "nn.Tanh", "log_std_init": 0.0}
+    assert hyperparams["policy_kwargs"] == {"net_arch": [128, 128], "activation_fn": "nn.Tanh", "log_std_init": -1.0}
+    assert hyperparams["env_wrapper"] == "box_toss_env.envs.ballistic.BallisticThrows"
     assert hyperparams["normalize"] == {"norm_obs": True, "norm_reward": False}
     assert hyperparams["torch_threads"] == 1  # from project.yml
     entry = config.zoo_entry(hyperparams)
@@ -80,6 +81,8 @@ def test_linear_schedule():
     ({"policy": None}, "policy must be given"),
     ({"policy_kwargs": {"activation_fn": "sigmoid"}}, "activation_fn"),
     ({"policy_kwargs": {"activation_fn": "nn.NotAThing"}}, "activation_fn"),
+    ({"env_wrapper": "gymnasium.wrappers.ClipAction"}, "env_wrapper must be one of"),
+    ({"env_wrapper": {"box_toss_env.envs.ballistic.BallisticThrows": [1]}}, "env_wrapper must be one of"),
 ])
 def test_check_config_names_the_bad_key(change, message):
     good = config.load_hyperparams("ppo", "BoxToss-v0")

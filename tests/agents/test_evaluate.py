@@ -3,10 +3,12 @@
 import gymnasium as gym
 import numpy as np
 import pytest
+from stable_baselines3 import PPO
 
 from agents.evaluation import Throws, draw_targets, evaluate, scores, summarize, target_seeds
 from agents.oracle import OraclePlanner, OracleSettings, ThrowSimulator, episodes_from_infos
-from agents.policies import ConstantPolicy, RandomPolicy
+from agents.policies import ConstantPolicy, RandomPolicy, TrainedPolicy
+from box_toss_env.envs.ballistic import BallisticThrows
 
 DROP = (-1.0, 0.0, 0.0)  # zero launch speed, no spin: the box falls out of the hand
 
@@ -95,3 +97,16 @@ def test_the_oracle_lands_nearly_every_throw():
     throws, _ = evaluate(planner, "BoxToss-v0", {}, target_seeds(24))
     assert scores(throws)["success_rate"] >= 0.9
     assert planner.simulated >= 24 * 128
+
+
+def test_a_policy_trained_in_ballistic_commands_throws_as_the_wrapper_does():
+    """TrainedPolicy maps the model's commands to env actions exactly as the training wrapper did."""
+    wrapped = BallisticThrows(gym.make("BoxToss-ShortEnd-v0"))
+    model = PPO("MlpPolicy", wrapped, seed=0, device="cpu")
+    policy = TrainedPolicy(model, env_wrapper="box_toss_env.envs.ballistic.BallisticThrows")
+    throws, _ = evaluate(policy, "BoxToss-ShortEnd-v0", seeds=range(8))
+    commands, _ = model.predict(np.stack([wrapped.reset(seed=seed)[0] for seed in range(8)]), deterministic=True)
+    for seed in range(8):
+        wrapped.reset(seed=seed)
+        _, _, _, _, info = wrapped.step(commands[seed])
+        assert throws.final_x[seed] == info["final_x"]
