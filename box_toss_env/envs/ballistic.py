@@ -2,10 +2,9 @@
 that says how to depart from it (flight time, landing offset, lean), instead of speed, launch angle
 and spin.
 
-A policy that stands the box on an end in the env's own action space must hit a spin to within
-about 0.1 % of its range, and which spin that is depends on the release angle and on how long the
-box flies. Free flight has a closed form, so that dependence can be taken out of what is learned:
-a *command* c in [-1, 1]^3 names
+A policy that stands the box on an end in the env's own action space must hit a precise spin, and
+which spin that is depends on the release angle and on how long the box flies. Free flight has a
+closed form, so that dependence can be taken out of what is learned: a *command* c in [-1, 1]^3 names
 
     T   = T_lo + (T_hi - T_lo) (c0 + 1) / 2     flight time of the centre until touchdown [s]
     x*  = target_x + offset_range c1            where the centre should touch down [m]
@@ -24,11 +23,10 @@ Those are mapped to env actions as ``task.throws_to_actions`` does, and a throw 
 limits (speed above ``max_speed``, a launch angle outside its range, spin above ``max_spin``) is
 clipped to the limit, each component on its own; ``info["command_clipped"]`` says whether it was.
 The command c = 0 is the prior's own throw: a target face flat down, touching down at the target.
-What is left to learn is smooth and forgiving: standing the box on an end, for instance, takes a
-lean of about -0.15 rad against the slide, nearly the same for every release pose and target, and
-the success band is about 0.1 rad wide in phi (in the env's own actions, 0.1 % of the spin range).
-Touchdown is where the centre's parabola meets h(phi), before bounces and slides, which the command's
-offset and lean learn to allow for.
+What is left to learn is smooth: standing the box on an end, for instance, takes a small lean
+against the slide that changes slowly with the flight time, whatever the release angle. Touchdown is
+where the centre's parabola meets h(phi), before bounces and slides, which the command's offset and
+lean learn to allow for.
 
 ``BallisticThrows`` wraps one env; ``box_toss_env.vector.BallisticThrowsVector`` wraps a vector env;
 ``ballistic_actions`` is the mapping itself, batch-first, for policies that act on raw observations.
