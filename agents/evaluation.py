@@ -220,7 +220,7 @@ def load_policy(run_dir: Path, model: str = "final") -> tuple[Policy, dict[str, 
     algo = config["algo"]
     if algo in BASELINES:
         return make_baseline(algo, config.get("baseline", {})), config
-    return TrainedPolicy.load(run_dir, algo, model, config.get("env_wrapper")), config
+    return TrainedPolicy.load(run_dir, algo, model, config.get("hyperparams", {}).get("env_wrapper")), config
 
 
 def evaluate_run(run_dir: Path, *, model: str = "final", env_kwargs: dict[str, Any] | None = None,

@@ -8,6 +8,8 @@ from pathlib import Path
 import pytest
 import yaml
 
+from agents.evaluation import load_policy
+
 REPO = Path(__file__).resolve().parents[2]
 COMMON = ["n_timesteps=256", "n_envs=4", "eval_freq=128", "eval_targets=16", "checkpoint_freq=128",
           "policy_kwargs.net_arch=[16,16]"]
@@ -35,6 +37,9 @@ def test_train_resume_and_evaluate_a_tiny_run(tmp_path, algo):
     assert list((run_dir / "logs").glob("events.out.tfevents.*"))
     saved = yaml.safe_load((run_dir / "config.yml").read_text())
     assert saved["algo"] == algo and saved["seed"] == 3 and saved["hyperparams"]["n_envs"] == 4
+    # trained in ballistic commands (the ShortEnd entry's env_wrapper): evaluated through the same mapping
+    assert saved["hyperparams"]["env_wrapper"] == "box_toss_env.envs.ballistic.BallisticThrows"
+    assert load_policy(run_dir)[0].commands_to_actions is not None
     first = json.loads((run_dir / "timing.json").read_text())
 
     run("agents.train", "--resume", str(run_dir), "--no-progress", "--no-eval", "--set", "n_timesteps=512")
