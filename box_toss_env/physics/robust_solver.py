@@ -43,13 +43,23 @@ import numpy as np
 
 from . import layout
 from .contact_solver import (
+    APPROACH,
+    COMPRESSION,
+    CORNER_ROWS,
+    DEPTH,
+    IMPULSE,
+    MAX_CORNERS,
+    RX,
+    RY,
+    SCRATCH,
+    TARGET,
     apply_normal_impulses,
     correct_penetration,
     delassus,
     friction_impulse,
-    normal_impulses,
+    normal_velocities,
     solve_contact_velocities,
-    solve_normal_velocities,
+    solve_normal_block,
 )
 from .flight import flight_state, time_to_contact
 from .geometry import lowest_face, lowest_pair, vertex_offset
@@ -63,8 +73,14 @@ FRICTION_ITERATIONS = 8  # at most this many Gauss-Seidel sweeps over friction a
 
 
 @numba.njit(cache=True)
+def place_corner(corners, i, k, cos_a, sin_a, half_length, half_width):
+    """Corner k of the box as column i of the corner work array (its lever arm)."""
+    corners[RX, i], corners[RY, i] = vertex_offset(k, cos_a, sin_a, half_length, half_width)
+
+
+@numba.njit(cache=True)
 def resolve_impact(y, cos_a, sin_a, vx, vy, spin, half_length, half_width, inv_mass, inv_inertia, restitution,
-                   friction, threshold, simultaneous):
+                   friction, threshold, simultaneous, corners, k):
     """Impulses of an impact at the instant a corner reaches the floor.
 
     The touching corners (the lowest one, and its neighbour if within ``simultaneous`` of the
@@ -80,47 +96,46 @@ def resolve_impact(y, cos_a, sin_a, vx, vy, spin, half_length, half_width, inv_m
     touching corner separates faster than the threshold.
     """
     first, second = lowest_face(cos_a, sin_a, half_length, half_width)
-    rx1, ry1 = vertex_offset(first, cos_a, sin_a, half_length, half_width)
-    rx2, ry2 = vertex_offset(second, cos_a, sin_a, half_length, half_width)
-    pair = ry2 <= ry1 + simultaneous
-    u1 = vy + spin * rx1
-    u2 = vy + spin * rx2
-    approach = max(-u1, -u2) if pair else -u1
+    place_corner(corners, 0, first, cos_a, sin_a, half_length, half_width)
+    place_corner(corners, 1, second, cos_a, sin_a, half_length, half_width)
+    n = 2 if corners[RY, 1] <= corners[RY, 0] + simultaneous else 1
+    normal_velocities(vy, spin, corners, n, APPROACH)
+    approach = 0.0
+    for i in range(n):
+        approach = max(approach, -corners[APPROACH, i])
+        corners[TARGET, i] = 0.0
     if approach <= 0.0:
         return vx, vy, spin, 0, 0.0, False
     # compression
-    if friction > 0.0:
-        vx, vy, spin, lam1, lam2 = solve_contact_velocities(vx, vy, spin, rx1, ry1, rx2, ry2, pair, 0.0, 0.0,
-                                                            friction, inv_mass, inv_inertia, FRICTION_ITERATIONS)
-    else:
-        vy, spin, lam1, lam2 = solve_normal_velocities(vy, spin, rx1, rx2, pair, 0.0, 0.0, inv_mass, inv_inertia)
+    vx, vy, spin = solve_contact_velocities(vx, vy, spin, corners, n, friction, inv_mass, inv_inertia,
+                                            FRICTION_ITERATIONS, k)
     # restitution
-    vx, vy, spin = restitution_impulses(vx, vy, spin, rx1, ry1, rx2, ry2, pair, lam1 if u1 < -threshold else 0.0,
-                                        lam2 if u2 < -threshold else 0.0, 0.0, 0.0, restitution, friction,
-                                        inv_mass, inv_inertia)
-    leaves = vy + spin * rx1 > threshold and (not pair or vy + spin * rx2 > threshold)
-    return vx, vy, spin, 2 if pair else 1, approach, leaves
+    for i in range(n):
+        corners[COMPRESSION, i] = corners[IMPULSE, i] if corners[APPROACH, i] < -threshold else 0.0
+    vx, vy, spin = restitution_impulses(vx, vy, spin, corners, n, restitution, friction, inv_mass, inv_inertia, k)
+    leaves = True
+    for i in range(n):
+        leaves = leaves and vy + spin * corners[RX, i] > threshold
+    return vx, vy, spin, n, approach, leaves
 
 
 @numba.njit(cache=True)
-def restitution_impulses(vx, vy, spin, rx1, ry1, rx2, ry2, use2, compression1, compression2, target1, target2,
-                         restitution, friction, inv_mass, inv_inertia):
-    """Poisson's restitution phase: corner i gets the normal impulse e * compression_i, with friction
-    clamped to mu e compression_i (it can stop the slip there, never reverse it); then a corner pushed
-    towards the floor by the other's bounce is held at its target velocity (u_n >= target_i).
-    Returns (vx, vy, spin)."""
-    bounce1 = restitution * compression1
-    bounce2 = restitution * compression2
-    vy, spin = apply_normal_impulses(vy, spin, bounce1, bounce2, rx1, rx2, inv_mass, inv_inertia)
+def restitution_impulses(vx, vy, spin, corners, n, restitution, friction, inv_mass, inv_inertia, k):
+    """Poisson's restitution phase: corner i gets the normal impulse e * compression_i (row COMPRESSION),
+    with friction clamped to mu e compression_i (it can stop the slip there, never reverse it); then a
+    corner pushed towards the floor by another's bounce is held at its target velocity (u_n >= b_i,
+    row TARGET). Returns (vx, vy, spin)."""
+    for i in range(n):
+        corners[SCRATCH, i] = restitution * corners[COMPRESSION, i]
+    vy, spin = apply_normal_impulses(vy, spin, corners, n, SCRATCH, inv_mass, inv_inertia)
     if friction > 0.0:
-        vx, spin, _ = friction_impulse(vx, spin, ry1, bounce1, 0.0, friction, inv_mass, inv_inertia)
-        if use2:
-            vx, spin, _ = friction_impulse(vx, spin, ry2, bounce2, 0.0, friction, inv_mass, inv_inertia)
-    k11, k12, k22 = delassus(rx1, rx2, inv_mass, inv_inertia)
-    hold1, hold2 = normal_impulses(vy + spin * rx1, vy + spin * rx2, target1, target2, 0.0, 0.0, k11, k12, k22,
-                                   True, use2)
-    vy, spin = apply_normal_impulses(vy, spin, hold1, hold2, rx1, rx2, inv_mass, inv_inertia)
-    return vx, vy, spin
+        for i in range(n):
+            vx, spin, _ = friction_impulse(vx, spin, corners[RY, i], restitution * corners[COMPRESSION, i], 0.0,
+                                           friction, inv_mass, inv_inertia)
+    delassus(corners, n, inv_mass, inv_inertia, k)
+    for i in range(n):
+        corners[IMPULSE, i] = 0.0
+    return (vx, *solve_normal_block(vy, spin, corners, n, inv_mass, inv_inertia, k))
 
 
 @numba.njit(cache=True)
@@ -131,41 +146,73 @@ def predicted_height(k, y, cos_a, sin_a, half_length, half_width, fall, spin, h)
 
 
 @numba.njit(cache=True)
-def contact_corners(y, cos_a, sin_a, vy, spin, half_length, half_width, gravity, h):
-    """Lever arms (rx1, ry1, rx2, ry2) of the two corners that bound the face that will be down at
-    the end of a step h, judged by the heights they would reach at the current velocities, so a
-    corner swinging down is constrained before it gets there."""
+def contact_corners(y, cos_a, sin_a, vy, spin, half_length, half_width, gravity, h, corners):
+    """The corners that can touch the floor in a step h, as the first three columns of ``corners``: the
+    one that would be lowest at the end of the step at the current velocities, its lower neighbour (they
+    bound the face that will be down) and its other neighbour (the far end of a thin box's long side, whose
+    two lowest corners are the ends of a short side once it tilts by atan(W / L)). Each is constrained only
+    to close its gap, so one that cannot reach the floor in the step gets no impulse."""
     fall = h * (vy + gravity * h)
     first, second = lowest_pair(predicted_height(0, y, cos_a, sin_a, half_length, half_width, fall, spin, h),
                                 predicted_height(1, y, cos_a, sin_a, half_length, half_width, fall, spin, h),
                                 predicted_height(2, y, cos_a, sin_a, half_length, half_width, fall, spin, h),
                                 predicted_height(3, y, cos_a, sin_a, half_length, half_width, fall, spin, h))
-    rx1, ry1 = vertex_offset(first, cos_a, sin_a, half_length, half_width)
-    rx2, ry2 = vertex_offset(second, cos_a, sin_a, half_length, half_width)
-    return rx1, ry1, rx2, ry2
+    third = (first + 1) % 4 if second == (first + 3) % 4 else (first + 3) % 4
+    place_corner(corners, 0, first, cos_a, sin_a, half_length, half_width)
+    place_corner(corners, 1, second, cos_a, sin_a, half_length, half_width)
+    place_corner(corners, 2, third, cos_a, sin_a, half_length, half_width)
 
 
 @numba.njit(cache=True)
-def apply_restitution(vx, vy, spin, rx1, ry1, rx2, ry2, u1_before, u2_before, target1, target2, lam1, lam2,
-                      restitution, friction, threshold, inv_mass, inv_inertia):
-    """Corners that hit faster than the threshold and were stopped by the contact solve bounce back
-    with e times the impulse that stopped their approach (Poisson, ``restitution_impulses``);
-    resting contact gets none, so it stays still. Returns (vx, vy, spin, approach speed of the fastest such corner,
-    0 if none)."""
-    bounce1 = lam1 > 0.0 and u1_before < -threshold
-    bounce2 = lam2 > 0.0 and u2_before < -threshold
-    if not (bounce1 or bounce2):
-        return vx, vy, spin, 0.0
-    approach = max(-u1_before if bounce1 else 0.0, -u2_before if bounce2 else 0.0)
-    if restitution > 0.0:
-        # the compression impulse is what stopped the approach, -u_n- K_ii^-1, not the part of lam that
-        # carried the weight during the step (bouncing that back would pump energy into a resting box)
-        k11, _, k22 = delassus(rx1, rx2, inv_mass, inv_inertia)
-        compression1 = min(lam1, -u1_before / k11) if bounce1 else 0.0
-        compression2 = min(lam2, -u2_before / k22) if bounce2 else 0.0
-        vx, vy, spin = restitution_impulses(vx, vy, spin, rx1, ry1, rx2, ry2, True, compression1, compression2,
-                                            target1, target2, restitution, friction, inv_mass, inv_inertia)
+def apply_restitution(vx, vy, spin, corners, n, restitution, friction, threshold, inv_mass, inv_inertia, k):
+    """Corners that hit faster than the threshold (normal velocity before the step in row APPROACH) and
+    were stopped by the contact solve (impulse in row IMPULSE) bounce back with e times the impulse that
+    stopped their approach (Poisson, ``restitution_impulses``); resting contact gets none, so it stays
+    still. Returns (vx, vy, spin, approach speed of the fastest such corner, 0 if none)."""
+    approach = 0.0
+    for i in range(n):
+        u_before = corners[APPROACH, i]
+        if corners[IMPULSE, i] > 0.0 and u_before < -threshold:
+            approach = max(approach, -u_before)
+            # the compression impulse is what stopped the approach, -u_n- K_ii^-1, not the part of lam that
+            # carried the weight during the step (bouncing that back would pump energy into a resting box)
+            k_ii = inv_mass + corners[RX, i] * corners[RX, i] * inv_inertia
+            corners[COMPRESSION, i] = min(corners[IMPULSE, i], -u_before / k_ii)
+        else:
+            corners[COMPRESSION, i] = 0.0
+    if approach > 0.0 and restitution > 0.0:
+        vx, vy, spin = restitution_impulses(vx, vy, spin, corners, n, restitution, friction, inv_mass, inv_inertia,
+                                            k)
     return vx, vy, spin, approach
+
+
+@numba.njit(cache=True)
+def kinetic_energy(vx, vy, spin, inv_mass, inv_inertia):
+    """m |v|^2 / 2 + I omega^2 / 2 [J]."""
+    return 0.5 * (vx * vx + vy * vy) / inv_mass + 0.5 * spin * spin / inv_inertia
+
+
+@numba.njit(cache=True)
+def energy_limit_scale(kinetic_before, kinetic_after, potential_rise):
+    """The factor s in [0, 1] on the velocities of a contact step that keeps the step from gaining energy.
+
+    Symplectic Euler adds g h to v, the contacts take it back where the floor holds the box, and
+    positions move with what is left: where the contacts push the centre up (a rocking or bouncing box)
+    it rises h v_y without gravity having slowed it in that step, and kinetic + potential energy can
+    grow by up to m |g| h dv_y (18% of the energy of the moment for a thin bouncing box at h = 1/32 s).
+    With the velocities scaled by s, the step changes the energy by s^2 A + s B - C, where A is the
+    kinetic energy after the contact stages, B = -m g h v_y the potential energy the position update
+    adds and C the kinetic energy before the step; s is 1 where that is <= 0, else its root
+    s = 2 C / (B + sqrt(B^2 + 4 A C)), the largest s that gains nothing. Scaling the whole velocity keeps
+    every contact satisfied (u_n,i >= b_i with b_i <= 0 holds for s u_n,i) and never reverses sliding.
+    The correction is O(h) and vanishes where no step would gain (flight, sliding, resting).
+    """
+    a, b, c = kinetic_after, potential_rise, kinetic_before
+    if a + b <= c:
+        return 1.0
+    root = math.sqrt(b * b + 4.0 * a * c)
+    s = 2.0 * c / (b + root) if b > 0.0 else (root - b) / (2.0 * a)
+    return min(max(s, 0.0), 1.0)
 
 
 @numba.njit(cache=True)
@@ -212,6 +259,8 @@ def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, para
             status = layout.STATUS_OK
             fail_step = -1
             still_for = 0.0
+            corners = np.zeros((CORNER_ROWS, MAX_CORNERS))  # the corner work array (contact_solver)
+            k = np.zeros((MAX_CORNERS, MAX_CORNERS))  # their Delassus matrix
             if RECORD:
                 store_state(trajectory, 0, i, x, y, angle, vx, vy, spin)
             n = 0  # last grid step reached (and recorded)
@@ -243,12 +292,12 @@ def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, para
                     if math.isnan(first_contact):
                         first_contact = t
                     # ---- impact at the contact instant ----
-                    vx, vy, spin, corners, approach, leaves = resolve_impact(
-                        y, cos_a, sin_a, vx, vy, spin, hx, hy, inv_mass, inv_inertia, restitution, friction,
-                        threshold, simultaneous)
-                    if corners > 0 and approach > threshold:
+                    vx, vy, spin, touching, approach, leaves = resolve_impact(
+                        y, cos_a, sin_a, vx, vy, spin, hx, hy, inv_mass, inv_inertia, restitution,
+                        friction if FRICTION else 0.0, threshold, simultaneous, corners, k)
+                    if touching > 0 and approach > threshold:
                         if RECORD:
-                            record_event(events, i, n_impacts, t, approach, corners)
+                            record_event(events, i, n_impacts, t, approach, touching)
                         n_impacts += 1
                     if not is_finite_state(x, y, angle, vx, vy, spin):
                         status = layout.STATUS_NONFINITE
@@ -272,32 +321,32 @@ def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, para
                 n_sub = min(max(np.int64(math.ceil(abs(spin) * h / MAX_ROTATION_PER_STEP)), 1), MAX_SUBSTEPS)
                 h_sub = h / n_sub
                 held = False
-                ry1 = ry2 = rx1 = rx2 = 0.0
                 for _ in range(n_sub):
-                    rx1, ry1, rx2, ry2 = contact_corners(y, cos_a, sin_a, vy, spin, hx, hy, gravity, h_sub)
-                    u1_before = vy + spin * rx1
-                    u2_before = vy + spin * rx2
+                    contact_corners(y, cos_a, sin_a, vy, spin, hx, hy, gravity, h_sub, corners)
+                    normal_velocities(vy, spin, corners, MAX_CORNERS, APPROACH)
+                    kinetic_before = kinetic_energy(vx, vy, spin, inv_mass, inv_inertia)
                     # 1. integrate velocities
                     vy = vy + gravity * h_sub
                     # 2. contact velocities: each corner may close its gap but not pass it
-                    target1 = -max(y + ry1, 0.0) / h_sub
-                    target2 = -max(y + ry2, 0.0) / h_sub
-                    if FRICTION:
-                        vx, vy, spin, lam1, lam2 = solve_contact_velocities(
-                            vx, vy, spin, rx1, ry1, rx2, ry2, True, target1, target2, friction, inv_mass,
-                            inv_inertia, FRICTION_ITERATIONS)
-                    else:
-                        vy, spin, lam1, lam2 = solve_normal_velocities(vy, spin, rx1, rx2, True, target1, target2,
-                                                                       inv_mass, inv_inertia)
+                    for c in range(MAX_CORNERS):
+                        corners[TARGET, c] = -max(y + corners[RY, c], 0.0) / h_sub
+                    vx, vy, spin = solve_contact_velocities(vx, vy, spin, corners, MAX_CORNERS,
+                                                            friction if FRICTION else 0.0, inv_mass, inv_inertia,
+                                                            FRICTION_ITERATIONS, k)
+                    for c in range(MAX_CORNERS):
+                        held = held or corners[IMPULSE, c] > 0.0
                     # 3. restitution
-                    vx, vy, spin, approach = apply_restitution(vx, vy, spin, rx1, ry1, rx2, ry2, u1_before, u2_before,
-                                                               target1, target2, lam1, lam2, restitution, friction,
-                                                               threshold, inv_mass, inv_inertia)
+                    vx, vy, spin, approach = apply_restitution(vx, vy, spin, corners, MAX_CORNERS, restitution,
+                                                               friction, threshold, inv_mass, inv_inertia, k)
                     if approach > 0.0:
                         if RECORD:
                             record_event(events, i, n_impacts, t, approach, 1)
                         n_impacts += 1
-                    # 4. integrate positions
+                    # 4. no energy gained: the velocities scaled where the step would gain (energy_limit_scale)
+                    scale = energy_limit_scale(kinetic_before, kinetic_energy(vx, vy, spin, inv_mass, inv_inertia),
+                                               -gravity * h_sub * vy / inv_mass)
+                    vx, vy, spin = scale * vx, scale * vy, scale * spin
+                    # 5. integrate positions
                     x = x + h_sub * vx
                     y = y + h_sub * vy
                     angle = angle + h_sub * spin
@@ -305,18 +354,31 @@ def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, para
                     sin_a = math.sin(angle)
                     first, second = lowest_face(cos_a, sin_a, hx, hy)
                     rx1, ry1 = vertex_offset(first, cos_a, sin_a, hx, hy)
-                    rx2, ry2 = vertex_offset(second, cos_a, sin_a, hx, hy)
                     penetration = -(y + ry1)
                     max_penetration = max(max_penetration, penetration)
-                    # 5. penalty: implicit correction of what penetrates beyond the slop
+                    # 6. penalty: implicit correction of what penetrates beyond the slop, at the lowest corner
+                    # and its neighbours; the potential energy it returns is taken from the kinetic energy
                     if PENALTY and penetration > slop + tolerance:
-                        y, angle = correct_penetration(y, angle, penetration - slop, -(y + ry2) - slop, rx1, rx2,
-                                                       stiffness, h_sub, inv_mass, inv_inertia)
+                        below = 0
+                        for corner in (first, (first + 1) % 4, (first + 3) % 4):
+                            place_corner(corners, below, corner, cos_a, sin_a, hx, hy)
+                            corners[DEPTH, below] = -(y + corners[RY, below]) - slop
+                            if corners[DEPTH, below] > 0.0:
+                                below += 1
+                        lifted = y
+                        y, angle = correct_penetration(y, angle, corners, below, stiffness, h_sub, inv_mass,
+                                                       inv_inertia, k)
                         cos_a = math.cos(angle)
                         sin_a = math.sin(angle)
-                        rx1, ry1 = vertex_offset(first, cos_a, sin_a, hx, hy)
-                        rx2, ry2 = vertex_offset(second, cos_a, sin_a, hx, hy)
-                    held = held or lam1 > 0.0 or lam2 > 0.0 or penetration > 0.0
+                        kinetic = kinetic_energy(vx, vy, spin, inv_mass, inv_inertia)
+                        rise = -gravity * (y - lifted) / inv_mass
+                        if rise > 0.0 and kinetic > 0.0:
+                            scale = math.sqrt(max(1.0 - rise / kinetic, 0.0))
+                            vx, vy, spin = scale * vx, scale * vy, scale * spin
+                    held = held or penetration > 0.0
+                first, second = lowest_face(cos_a, sin_a, hx, hy)
+                rx1, ry1 = vertex_offset(first, cos_a, sin_a, hx, hy)
+                rx2, ry2 = vertex_offset(second, cos_a, sin_a, hx, hy)
                 n_steps += 1
                 n += 1
                 t = n * dt
