@@ -16,15 +16,19 @@ one that stays goes to
 Contact: time-stepping on the grid t_n = n dt (the stage script in ``make_robust_kernel``), the
 stages of one step being
   1. integrate velocities: v += dt g;
-  2. solve contact velocities: the two corners of the face that is down together (2 x 2 LCP),
-     each may close its gap but not pass it (speculative: u_n >= -max(y_i, 0)/dt), with clamped
-     friction that never reverses sliding;
+  2. solve contact velocities: the corners that can reach the floor in the step (the lowest, and
+     both its neighbours: a thin box's far end too, ``contact_corners``) together (an LCP of up to
+     three corners), each may close its gap but not pass it (speculative: u_n >= -max(y_i, 0)/dt),
+     with clamped friction that never reverses sliding;
   3. restitution: corners that hit faster than the threshold bounce back with e times the
      impulse that stopped them (Poisson; resting contact gets none, so it stays still);
-  4. integrate positions: x += dt v, alpha += dt omega (symplectic Euler);
-  5. penalty: penetration is removed by the critically damped penalty spring integrated with
+  4. no energy gained: where the step would end with more kinetic + potential energy than it began
+     with (the contacts pushing the centre up within a step), the velocities are scaled down to
+     exactly what gains nothing (``energy_limit_scale``);
+  5. integrate positions: x += dt v, alpha += dt omega (symplectic Euler);
+  6. penalty: penetration is removed by the critically damped penalty spring integrated with
      backward Euler, as a pseudo-velocity, stable for every stiffness and step
-     (``penalty_correction_share``).
+     (``penalty_correction_share``); the potential energy this returns is taken from the kinetic.
 A step is split into substeps when the box would turn more than MAX_ROTATION_PER_STEP.
 The box flies again when no corner is loaded or below the floor, and it is put to sleep
 (velocities set to zero, stepping stops) once it has lain still on a face for ``sleep_time``.
