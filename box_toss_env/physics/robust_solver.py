@@ -74,6 +74,7 @@ MAX_SUBSTEPS = 64
 CONTACT_TOLERANCE = 1e-12  # [m per m of corner radius + 1 m] a corner this close touches
 SIMULTANEOUS_TOLERANCE = 1e-9  # [same units] corners this close hit at the same instant
 FRICTION_ITERATIONS = 8  # at most this many Gauss-Seidel sweeps over friction and the normal block
+MAX_LOCATED_IMPACTS = 16  # impacts located inside one contact step at most; later ones are stopped on the grid
 
 
 @numba.njit(cache=True)
@@ -83,33 +84,26 @@ def place_corner(corners, i, k, cos_a, sin_a, half_length, half_width):
 
 
 @numba.njit(cache=True)
-def resolve_impact(y, cos_a, sin_a, vx, vy, spin, half_length, half_width, inv_mass, inv_inertia, restitution,
-                   friction, threshold, simultaneous, corners, k):
-    """Impulses of an impact at the instant a corner reaches the floor.
-
-    The touching corners (the lowest one, and its neighbour if within ``simultaneous`` of the
-    same height) are solved together, in Poisson's two phases:
-      compression: the impulses lam_c that stop every approaching corner (u_n+ = 0), with friction
+def impact_impulses(vx, vy, spin, corners, n, restitution, friction, threshold, inv_mass, inv_inertia, k):
+    """Impulses of an impact at this instant on the first n corners (those touching the floor), in
+    Poisson's two phases:
+      compression: the impulses lam_c that stop every approaching corner (u_n+ >= 0), with friction
         clamped to mu lam_c;
       restitution: each corner that hit faster than the threshold gets e lam_c more along the
         normal, with friction clamped to mu e lam_c.
     For a frictionless single corner this is Newton's law u_n+ = -e u_n-; unlike Newton's law with
     friction, it never creates energy: compression removes 1/2 lam_c^T K lam_c and restitution
-    returns e^2 of it, and clamped friction only removes energy.
-    Returns (vx, vy, spin, corners hit, approach speed, leaves), ``leaves`` being True when every
-    touching corner separates faster than the threshold.
+    returns e^2 of it, and clamped friction only removes energy. A touching corner that is not
+    approaching (one the box rests or pivots on) takes part in the compression: it holds.
+    Returns (vx, vy, spin, approach speed of the fastest corner, 0 if none approaches).
     """
-    first, second = lowest_face(cos_a, sin_a, half_length, half_width)
-    place_corner(corners, 0, first, cos_a, sin_a, half_length, half_width)
-    place_corner(corners, 1, second, cos_a, sin_a, half_length, half_width)
-    n = 2 if corners[RY, 1] <= corners[RY, 0] + simultaneous else 1
     normal_velocities(vy, spin, corners, n, APPROACH)
     approach = 0.0
     for i in range(n):
         approach = max(approach, -corners[APPROACH, i])
         corners[TARGET, i] = 0.0
     if approach <= 0.0:
-        return vx, vy, spin, 0, 0.0, False
+        return vx, vy, spin, 0.0
     # compression
     vx, vy, spin = solve_contact_velocities(vx, vy, spin, corners, n, friction, inv_mass, inv_inertia,
                                             FRICTION_ITERATIONS, k)
@@ -117,10 +111,65 @@ def resolve_impact(y, cos_a, sin_a, vx, vy, spin, half_length, half_width, inv_m
     for i in range(n):
         corners[COMPRESSION, i] = corners[IMPULSE, i] if corners[APPROACH, i] < -threshold else 0.0
     vx, vy, spin = restitution_impulses(vx, vy, spin, corners, n, restitution, friction, inv_mass, inv_inertia, k)
+    return vx, vy, spin, approach
+
+
+@numba.njit(cache=True)
+def resolve_impact(y, cos_a, sin_a, vx, vy, spin, half_length, half_width, inv_mass, inv_inertia, restitution,
+                   friction, threshold, simultaneous, corners, k):
+    """The impact of a flying box at the instant a corner reaches the floor (``impact_impulses``) on the
+    touching corners: the lowest one, and its neighbour if within ``simultaneous`` of the same height.
+    Returns (vx, vy, spin, corners hit, approach speed, leaves), ``leaves`` being True when every
+    touching corner separates faster than the threshold.
+    """
+    first, second = lowest_face(cos_a, sin_a, half_length, half_width)
+    place_corner(corners, 0, first, cos_a, sin_a, half_length, half_width)
+    place_corner(corners, 1, second, cos_a, sin_a, half_length, half_width)
+    n = 2 if corners[RY, 1] <= corners[RY, 0] + simultaneous else 1
+    vx, vy, spin, approach = impact_impulses(vx, vy, spin, corners, n, restitution, friction, threshold, inv_mass,
+                                             inv_inertia, k)
+    if approach <= 0.0:
+        return vx, vy, spin, 0, 0.0, False
     leaves = True
     for i in range(n):
         leaves = leaves and vy + spin * corners[RX, i] > threshold
     return vx, vy, spin, n, approach, leaves
+
+
+@numba.njit(cache=True)
+def contact_impact(y, cos_a, sin_a, vx, vy, spin, half_length, half_width, inv_mass, inv_inertia, restitution,
+                   friction, threshold, tolerance, located, loaded, corners, k):
+    """The impact of a box in contact at this instant: where a corner touching the floor approaches faster
+    than the threshold, the touching corners (at most three, the lowest) take ``impact_impulses`` together.
+    A corner touches when it is within ``tolerance`` of the floor, is the one ``located`` to arrive now, or
+    carried load in the last piece (bit c of ``loaded``: it ended that piece on the floor, up to the
+    second-order lift of a rotating step, which must not decide whether it takes part).
+    Returns (vx, vy, spin, corners touching, approach speed, 0 if no impact)."""
+    n = 0
+    for c in range(4):
+        rx, ry = vertex_offset(c, cos_a, sin_a, half_length, half_width)
+        touches = y + ry <= tolerance or c == located or (loaded >> c) & 1 == 1
+        if touches and vy + spin * rx < -threshold:
+            n = 1
+    if n == 0:
+        return vx, vy, spin, 0, 0.0
+    n = 0
+    for c in range(4):
+        rx, ry = vertex_offset(c, cos_a, sin_a, half_length, half_width)
+        if y + ry <= tolerance or c == located or (loaded >> c) & 1 == 1:
+            if n < MAX_CORNERS:
+                corners[RX, n], corners[RY, n] = rx, ry
+                n += 1
+            else:  # a fourth touching corner (never lower than the others at once): replace the highest
+                highest = 0
+                for i in range(1, MAX_CORNERS):
+                    if corners[RY, i] > corners[RY, highest]:
+                        highest = i
+                if ry < corners[RY, highest]:
+                    corners[RX, highest], corners[RY, highest] = rx, ry
+    vx, vy, spin, approach = impact_impulses(vx, vy, spin, corners, n, restitution, friction, threshold, inv_mass,
+                                             inv_inertia, k)
+    return vx, vy, spin, n, approach
 
 
 @numba.njit(cache=True)
@@ -155,7 +204,8 @@ def contact_corners(y, cos_a, sin_a, vy, spin, half_length, half_width, gravity,
     one that would be lowest at the end of the step at the current velocities, its lower neighbour (they
     bound the face that will be down) and its other neighbour (the far end of a thin box's long side, whose
     two lowest corners are the ends of a short side once it tilts by atan(W / L)). Each is constrained only
-    to close its gap, so one that cannot reach the floor in the step gets no impulse."""
+    to close its gap, so one that cannot reach the floor in the step gets no impulse. Returns the three
+    corners' indices."""
     fall = h * (vy + gravity * h)
     first, second = lowest_pair(predicted_height(0, y, cos_a, sin_a, half_length, half_width, fall, spin, h),
                                 predicted_height(1, y, cos_a, sin_a, half_length, half_width, fall, spin, h),
@@ -165,29 +215,7 @@ def contact_corners(y, cos_a, sin_a, vy, spin, half_length, half_width, gravity,
     place_corner(corners, 0, first, cos_a, sin_a, half_length, half_width)
     place_corner(corners, 1, second, cos_a, sin_a, half_length, half_width)
     place_corner(corners, 2, third, cos_a, sin_a, half_length, half_width)
-
-
-@numba.njit(cache=True)
-def apply_restitution(vx, vy, spin, corners, n, restitution, friction, threshold, inv_mass, inv_inertia, k):
-    """Corners that hit faster than the threshold (normal velocity before the step in row APPROACH) and
-    were stopped by the contact solve (impulse in row IMPULSE) bounce back with e times the impulse that
-    stopped their approach (Poisson, ``restitution_impulses``); resting contact gets none, so it stays
-    still. Returns (vx, vy, spin, approach speed of the fastest such corner, 0 if none)."""
-    approach = 0.0
-    for i in range(n):
-        u_before = corners[APPROACH, i]
-        if corners[IMPULSE, i] > 0.0 and u_before < -threshold:
-            approach = max(approach, -u_before)
-            # the compression impulse is what stopped the approach, -u_n- K_ii^-1, not the part of lam that
-            # carried the weight during the step (bouncing that back would pump energy into a resting box)
-            k_ii = inv_mass + corners[RX, i] * corners[RX, i] * inv_inertia
-            corners[COMPRESSION, i] = min(corners[IMPULSE, i], -u_before / k_ii)
-        else:
-            corners[COMPRESSION, i] = 0.0
-    if approach > 0.0 and restitution > 0.0:
-        vx, vy, spin = restitution_impulses(vx, vy, spin, corners, n, restitution, friction, inv_mass, inv_inertia,
-                                            k)
-    return vx, vy, spin, approach
+    return first, second, third
 
 
 @numba.njit(cache=True)
@@ -265,6 +293,9 @@ def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, para
             still_for = 0.0
             corners = np.zeros((CORNER_ROWS, MAX_CORNERS))  # the corner work array (contact_solver)
             k = np.zeros((MAX_CORNERS, MAX_CORNERS))  # their Delassus matrix
+            located = -1  # the corner a piece of a contact step was shortened to bring to the floor, or -1
+            loaded = 0  # bit c: corner c carried load in the last piece of a contact step
+            lift = 0.0  # [m] a corner held in the last piece may end this far above the floor (second order)
             if RECORD:
                 store_state(trajectory, 0, i, x, y, angle, vx, vy, spin)
             n = 0  # last grid step reached (and recorded)
@@ -321,65 +352,100 @@ def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, para
                     h = (n + 1) * dt - t  # a partial step brings the box back onto the grid
                 else:
                     h = dt
-                # ---- one contact step on the grid, split where the box turns fast ----
+                # ---- one contact step on the grid, split where the box turns fast and at impacts ----
                 n_sub = min(max(np.int64(math.ceil(abs(spin) * h / MAX_ROTATION_PER_STEP)), 1), MAX_SUBSTEPS)
                 h_sub = h / n_sub
                 held = False
+                located_impacts = 0
+                elapsed = 0.0  # time advanced in this step
                 for _ in range(n_sub):
-                    contact_corners(y, cos_a, sin_a, vy, spin, hx, hy, gravity, h_sub, corners)
-                    normal_velocities(vy, spin, corners, MAX_CORNERS, APPROACH)
-                    kinetic_before = kinetic_energy(vx, vy, spin, inv_mass, inv_inertia)
-                    # 1. integrate velocities
-                    vy = vy + gravity * h_sub
-                    # 2. contact velocities: each corner may close its gap but not pass it
-                    for c in range(MAX_CORNERS):
-                        corners[TARGET, c] = -max(y + corners[RY, c], 0.0) / h_sub
-                    vx, vy, spin = solve_contact_velocities(vx, vy, spin, corners, MAX_CORNERS,
-                                                            friction if FRICTION else 0.0, inv_mass, inv_inertia,
-                                                            FRICTION_ITERATIONS, k)
-                    for c in range(MAX_CORNERS):
-                        held = held or corners[IMPULSE, c] > 0.0
-                    # 3. restitution
-                    vx, vy, spin, approach = apply_restitution(vx, vy, spin, corners, MAX_CORNERS, restitution,
-                                                               friction, threshold, inv_mass, inv_inertia, k)
-                    if approach > 0.0:
-                        if RECORD:
-                            record_event(events, i, n_impacts, t, approach, 1)
-                        n_impacts += 1
-                    # 4. no energy gained: the velocities scaled where the step would gain (energy_limit_scale)
-                    scale = energy_limit_scale(kinetic_before, kinetic_energy(vx, vy, spin, inv_mass, inv_inertia),
-                                               -gravity * h_sub * vy / inv_mass)
-                    vx, vy, spin = scale * vx, scale * vy, scale * spin
-                    # 5. integrate positions
-                    x = x + h_sub * vx
-                    y = y + h_sub * vy
-                    angle = angle + h_sub * spin
-                    cos_a = math.cos(angle)
-                    sin_a = math.sin(angle)
-                    first, second = lowest_face(cos_a, sin_a, hx, hy)
-                    rx1, ry1 = vertex_offset(first, cos_a, sin_a, hx, hy)
-                    penetration = -(y + ry1)
-                    max_penetration = max(max_penetration, penetration)
-                    # 6. penalty: implicit correction of what penetrates beyond the slop, at the lowest corner
-                    # and its neighbours; the potential energy it returns is taken from the kinetic energy
-                    if PENALTY and penetration > slop + tolerance:
-                        below = 0
-                        for corner in (first, (first + 1) % 4, (first + 3) % 4):
-                            place_corner(corners, below, corner, cos_a, sin_a, hx, hy)
-                            corners[DEPTH, below] = -(y + corners[RY, below]) - slop
-                            if corners[DEPTH, below] > 0.0:
-                                below += 1
-                        lifted = y
-                        y, angle = correct_penetration(y, angle, corners, below, stiffness, h_sub, inv_mass,
-                                                       inv_inertia, k)
+                    left = h_sub
+                    while left > 0.0:
+                        # 0. impact at this instant: a touching corner approaching faster than the threshold
+                        vx, vy, spin, touching, approach = contact_impact(
+                            y, cos_a, sin_a, vx, vy, spin, hx, hy, inv_mass, inv_inertia, restitution,
+                            friction if FRICTION else 0.0, threshold, tolerance + lift, located, loaded, corners, k)
+                        if approach > 0.0:
+                            if RECORD:
+                                record_event(events, i, n_impacts, t + elapsed, approach, touching)
+                            n_impacts += 1
+                        piece = left
+                        located = -1
+                        vx0, vy0, spin0 = vx, vy, spin
+                        for attempt in range(2):
+                            vx, vy, spin = vx0, vy0, spin0
+                            corner_ids = contact_corners(y, cos_a, sin_a, vy, spin, hx, hy, gravity, piece, corners)
+                            normal_velocities(vy, spin, corners, MAX_CORNERS, APPROACH)
+                            kinetic_before = kinetic_energy(vx, vy, spin, inv_mass, inv_inertia)
+                            # 1. integrate velocities
+                            vy = vy + gravity * piece
+                            # 2. contact velocities: each corner may close its gap but not pass it
+                            for c in range(MAX_CORNERS):
+                                corners[TARGET, c] = -max(y + corners[RY, c], 0.0) / piece
+                            vx, vy, spin = solve_contact_velocities(vx, vy, spin, corners, MAX_CORNERS,
+                                                                    friction if FRICTION else 0.0, inv_mass,
+                                                                    inv_inertia, FRICTION_ITERATIONS, k)
+                            if attempt == 1:
+                                break
+                            # 3. an impact inside the piece: a corner off the floor stopped while approaching
+                            # faster than the threshold arrives after gap / approach; the piece is redone up to
+                            # that instant, where the impact is resolved (0.), not on the grid
+                            arrival = piece
+                            hit = -1
+                            for c in range(MAX_CORNERS):
+                                gap = y + corners[RY, c]
+                                if (corners[IMPULSE, c] > 0.0 and corners[APPROACH, c] < -threshold
+                                        and gap > tolerance and gap < -arrival * corners[APPROACH, c]):
+                                    arrival = -gap / corners[APPROACH, c]
+                                    hit = corner_ids[c]
+                            if hit < 0 or located_impacts >= MAX_LOCATED_IMPACTS:
+                                break
+                            located_impacts += 1
+                            located = hit
+                            piece = arrival
+                        loaded = 0
+                        for c in range(MAX_CORNERS):
+                            if corners[IMPULSE, c] > 0.0:
+                                loaded |= 1 << corner_ids[c]
+                        held = held or loaded != 0
+                        # 4. no energy gained: the velocities scaled where the step would gain (energy_limit_scale)
+                        scale = energy_limit_scale(kinetic_before, kinetic_energy(vx, vy, spin, inv_mass,
+                                                                                  inv_inertia),
+                                                   -gravity * piece * vy / inv_mass)
+                        vx, vy, spin = scale * vx, scale * vy, scale * spin
+                        # 5. integrate positions
+                        x = x + piece * vx
+                        y = y + piece * vy
+                        angle = angle + piece * spin
                         cos_a = math.cos(angle)
                         sin_a = math.sin(angle)
-                        kinetic = kinetic_energy(vx, vy, spin, inv_mass, inv_inertia)
-                        rise = -gravity * (y - lifted) / inv_mass
-                        if rise > 0.0 and kinetic > 0.0:
-                            scale = math.sqrt(max(1.0 - rise / kinetic, 0.0))
-                            vx, vy, spin = scale * vx, scale * vy, scale * spin
-                    held = held or penetration > 0.0
+                        first, second = lowest_face(cos_a, sin_a, hx, hy)
+                        rx1, ry1 = vertex_offset(first, cos_a, sin_a, hx, hy)
+                        penetration = -(y + ry1)
+                        max_penetration = max(max_penetration, penetration)
+                        # 6. penalty: implicit correction of what penetrates beyond the slop, at the lowest corner
+                        # and its neighbours; the potential energy it returns is taken from the kinetic energy
+                        if PENALTY and penetration > slop + tolerance:
+                            below = 0
+                            for corner in (first, (first + 1) % 4, (first + 3) % 4):
+                                place_corner(corners, below, corner, cos_a, sin_a, hx, hy)
+                                corners[DEPTH, below] = -(y + corners[RY, below]) - slop
+                                if corners[DEPTH, below] > 0.0:
+                                    below += 1
+                            lifted = y
+                            y, angle = correct_penetration(y, angle, corners, below, stiffness, piece, inv_mass,
+                                                           inv_inertia, k)
+                            cos_a = math.cos(angle)
+                            sin_a = math.sin(angle)
+                            kinetic = kinetic_energy(vx, vy, spin, inv_mass, inv_inertia)
+                            rise = -gravity * (y - lifted) / inv_mass
+                            if rise > 0.0 and kinetic > 0.0:
+                                scale = math.sqrt(max(1.0 - rise / kinetic, 0.0))
+                                vx, vy, spin = scale * vx, scale * vy, scale * spin
+                        held = held or penetration > 0.0
+                        lift = h_sub * h_sub * spin * spin * radius  # how far a rotating substep lifts a held corner
+                        elapsed += piece
+                        left = left - piece if piece < left else 0.0
                 first, second = lowest_face(cos_a, sin_a, hx, hy)
                 rx1, ry1 = vertex_offset(first, cos_a, sin_a, hx, hy)
                 rx2, ry2 = vertex_offset(second, cos_a, sin_a, hx, hy)
@@ -405,6 +471,8 @@ def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, para
                         still_for = 0.0
                 if not held:
                     in_flight = True
+                    located = -1
+                    loaded = 0
             state[i, 0], state[i, 1], state[i, 2] = x, y, angle
             state[i, 3], state[i, 4], state[i, 5] = vx, vy, spin
             write_stats(stats, i, first_contact, n_impacts, n_steps, max_penetration, rest_time, t,
