@@ -199,23 +199,27 @@ def predicted_height(k, y, cos_a, sin_a, half_length, half_width, fall, spin, h)
 
 
 @numba.njit(cache=True)
-def contact_corners(y, cos_a, sin_a, vy, spin, half_length, half_width, gravity, h, corners):
-    """The corners that can touch the floor in a step h, as the first three columns of ``corners``: the
-    one that would be lowest at the end of the step at the current velocities, its lower neighbour (they
-    bound the face that will be down) and its other neighbour (the far end of a thin box's long side, whose
-    two lowest corners are the ends of a short side once it tilts by atan(W / L)). Each is constrained only
-    to close its gap, so one that cannot reach the floor in the step gets no impulse. Returns the three
-    corners' indices."""
+def contact_corners(y, cos_a, sin_a, vy, spin, half_length, half_width, gravity, h, reach, corners, ids):
+    """The corners that can touch the floor in a step h, as the first columns of ``corners`` (their indices in
+    ``ids``): of the one that would be lowest at the end of the step at the current velocities, its lower
+    neighbour (they bound the face that will be down) and its other neighbour (the far end of a thin box's
+    long side, whose two lowest corners are the ends of a short side once it tilts by atan(W / L)), those
+    within ``reach`` of the floor. Each is constrained only to close its gap, so one that cannot reach the
+    floor in the step would get no impulse; leaving out those further than ``reach`` (what any point of the
+    box can travel in the step) saves the work. Returns how many there are."""
     fall = h * (vy + gravity * h)
     first, second = lowest_pair(predicted_height(0, y, cos_a, sin_a, half_length, half_width, fall, spin, h),
                                 predicted_height(1, y, cos_a, sin_a, half_length, half_width, fall, spin, h),
                                 predicted_height(2, y, cos_a, sin_a, half_length, half_width, fall, spin, h),
                                 predicted_height(3, y, cos_a, sin_a, half_length, half_width, fall, spin, h))
     third = (first + 1) % 4 if second == (first + 3) % 4 else (first + 3) % 4
-    place_corner(corners, 0, first, cos_a, sin_a, half_length, half_width)
-    place_corner(corners, 1, second, cos_a, sin_a, half_length, half_width)
-    place_corner(corners, 2, third, cos_a, sin_a, half_length, half_width)
-    return first, second, third
+    n = 0
+    for corner in (first, second, third):
+        place_corner(corners, n, corner, cos_a, sin_a, half_length, half_width)
+        if y + corners[RY, n] <= reach:
+            ids[n] = corner
+            n += 1
+    return n
 
 
 @numba.njit(cache=True)
@@ -293,6 +297,7 @@ def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, para
             still_for = 0.0
             corners = np.zeros((CORNER_ROWS, MAX_CORNERS))  # the corner work array (contact_solver)
             k = np.zeros((MAX_CORNERS, MAX_CORNERS))  # their Delassus matrix
+            ids = np.zeros(MAX_CORNERS, np.int64)  # which corner of the box each column is
             located = -1  # the corner a piece of a contact step was shortened to bring to the floor, or -1
             loaded = 0  # bit c: corner c carried load in the last piece of a contact step
             lift = 0.0  # [m] a corner held in the last piece may end this far above the floor (second order)
@@ -374,15 +379,21 @@ def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, para
                         vx0, vy0, spin0 = vx, vy, spin
                         for attempt in range(2):
                             vx, vy, spin = vx0, vy0, spin0
-                            corner_ids = contact_corners(y, cos_a, sin_a, vy, spin, hx, hy, gravity, piece, corners)
-                            normal_velocities(vy, spin, corners, MAX_CORNERS, APPROACH)
                             kinetic_before = kinetic_energy(vx, vy, spin, inv_mass, inv_inertia)
+                            # no point moves faster than sqrt(2 KE (1/m + R^2 / I)) once gravity has acted
+                            # (Cauchy-Schwarz; contact impulses never add kinetic energy)
+                            reach = tolerance + piece * math.sqrt(
+                                2.0 * kinetic_energy(vx, vy + gravity * piece, spin, inv_mass, inv_inertia)
+                                * (inv_mass + radius * radius * inv_inertia))
+                            n_corners = contact_corners(y, cos_a, sin_a, vy, spin, hx, hy, gravity, piece, reach,
+                                                        corners, ids)
+                            normal_velocities(vy, spin, corners, n_corners, APPROACH)
                             # 1. integrate velocities
                             vy = vy + gravity * piece
                             # 2. contact velocities: each corner may close its gap but not pass it
-                            for c in range(MAX_CORNERS):
+                            for c in range(n_corners):
                                 corners[TARGET, c] = -max(y + corners[RY, c], 0.0) / piece
-                            vx, vy, spin = solve_contact_velocities(vx, vy, spin, corners, MAX_CORNERS,
+                            vx, vy, spin = solve_contact_velocities(vx, vy, spin, corners, n_corners,
                                                                     friction if FRICTION else 0.0, inv_mass,
                                                                     inv_inertia, FRICTION_ITERATIONS, k)
                             if attempt == 1:
@@ -392,21 +403,21 @@ def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, para
                             # that instant, where the impact is resolved (0.), not on the grid
                             arrival = piece
                             hit = -1
-                            for c in range(MAX_CORNERS):
+                            for c in range(n_corners):
                                 gap = y + corners[RY, c]
                                 if (corners[IMPULSE, c] > 0.0 and corners[APPROACH, c] < -threshold
                                         and gap > tolerance and gap < -arrival * corners[APPROACH, c]):
                                     arrival = -gap / corners[APPROACH, c]
-                                    hit = corner_ids[c]
+                                    hit = ids[c]
                             if hit < 0 or located_impacts >= MAX_LOCATED_IMPACTS:
                                 break
                             located_impacts += 1
                             located = hit
                             piece = arrival
                         loaded = 0
-                        for c in range(MAX_CORNERS):
+                        for c in range(n_corners):
                             if corners[IMPULSE, c] > 0.0:
-                                loaded |= 1 << corner_ids[c]
+                                loaded |= 1 << ids[c]
                         held = held or loaded != 0
                         # 4. no energy gained: the velocities scaled where the step would gain (energy_limit_scale)
                         scale = energy_limit_scale(kinetic_before, kinetic_energy(vx, vy, spin, inv_mass,
