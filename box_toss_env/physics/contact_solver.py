@@ -161,12 +161,65 @@ def solve_normal_block(vy, spin, corners, n, inv_mass, inv_inertia, k):
 
 
 @numba.njit(cache=True)
+def solve_one_corner(vx, vy, spin, corners, friction, inv_mass, inv_inertia):
+    """The exact contact impulse (lam normal, q tangential) at one corner with Coulomb friction: with
+    u_n = vy + omega rx, u_t = vx - omega ry and the impulse changing them by
+
+        du_n = K_nn lam + K_nt q,  du_t = K_nt lam + K_tt q,
+        K_nn = 1/m + rx^2 / I,  K_tt = 1/m + ry^2 / I,  K_nt = -rx ry / I,
+
+    the first of these that holds: no impulse (u_n >= b already); sticking (u_n' = b, u_t' = 0, |q| <= mu lam);
+    sliding on (q = -s mu lam, s the sign of the slip, u_n' = b, and the slip keeps its sign: friction never
+    reverses it). Returns (vx, vy, spin, solved); ``solved`` is False only where none holds (K_nn - s mu K_nt
+    <= 0: friction so high that pushing the corner out would press it in), left to Gauss-Seidel."""
+    rx = corners[RX, 0]
+    ry = corners[RY, 0]
+    u_n = vy + spin * rx
+    u_t = vx - spin * ry
+    b = corners[TARGET, 0]
+    corners[IMPULSE, 0] = 0.0
+    if u_n >= b:
+        return vx, vy, spin, True
+    k_nn = inv_mass + rx * rx * inv_inertia
+    k_tt = inv_mass + ry * ry * inv_inertia
+    k_nt = -rx * ry * inv_inertia
+    lam = -1.0
+    q = 0.0
+    det = k_nn * k_tt - k_nt * k_nt
+    if det > 0.0:  # sticking
+        lam = ((b - u_n) * k_tt + u_t * k_nt) / det
+        q = (-u_t * k_nn - (b - u_n) * k_nt) / det
+        if not (lam >= 0.0 and abs(q) <= friction * lam):
+            lam = -1.0
+    if lam < 0.0:
+        sign = 1.0 if u_t > 0.0 else -1.0
+        for _ in range(2):  # sliding on, then (a slip that reverses under the normal impulse) the other way
+            denominator = k_nn - sign * friction * k_nt
+            if denominator > 0.0:
+                lam = (b - u_n) / denominator
+                q = -sign * friction * lam
+                if lam >= 0.0 and sign * (u_t + k_nt * lam + k_tt * q) >= 0.0:
+                    break
+            lam = -1.0
+            sign = -sign
+    if lam < 0.0:
+        return vx, vy, spin, False
+    corners[IMPULSE, 0] = lam
+    return vx + q * inv_mass, vy + lam * inv_mass, spin + (rx * lam - ry * q) * inv_inertia, True
+
+
+@numba.njit(cache=True)
 def solve_contact_velocities(vx, vy, spin, corners, n, friction, inv_mass, inv_inertia, iterations, k):
     """Velocities after the normal impulses (targets u_n,i >= b_i, row TARGET) and, with ``friction`` > 0,
     the friction impulses of the first n corners: the exact normal block, then projected Gauss-Seidel
     sweeps over friction and the normal block, until the impulses change by less than CONVERGED of the
-    normal impulse (at most ``iterations`` sweeps). The normal impulses are left in row IMPULSE.
+    normal impulse (at most ``iterations`` sweeps); a single corner is solved exactly (``solve_one_corner``).
+    The normal impulses are left in row IMPULSE.
     Returns (vx, vy, spin)."""
+    if n == 1 and friction > 0.0:
+        vx1, vy1, spin1, solved = solve_one_corner(vx, vy, spin, corners, friction, inv_mass, inv_inertia)
+        if solved:
+            return vx1, vy1, spin1
     delassus(corners, n, inv_mass, inv_inertia, k)
     for i in range(n):
         corners[IMPULSE, i] = 0.0
