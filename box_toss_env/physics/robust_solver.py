@@ -14,14 +14,17 @@ normal impulse. A box that leaves the floor flies on;
 one that stays goes to
 
 Contact: time-stepping on the grid t_n = n dt (the stage script in ``make_robust_kernel``), the
-stages of one step being
+stages of one step (or of a piece of it) being
+  0. impacts: where a corner touching the floor approaches faster than the restitution threshold,
+     the touching corners take an impact at this instant (``contact_impact``, Poisson as above);
   1. integrate velocities: v += dt g;
   2. solve contact velocities: the corners that can reach the floor in the step (the lowest, and
      both its neighbours: a thin box's far end too, ``contact_corners``) together (an LCP of up to
-     three corners), each may close its gap but not pass it (speculative: u_n >= -max(y_i, 0)/dt),
-     with clamped friction that never reverses sliding;
-  3. restitution: corners that hit faster than the threshold bounce back with e times the
-     impulse that stopped them (Poisson; resting contact gets none, so it stays still);
+     three corners; one corner with friction exactly), each may close its gap but not pass it
+     (speculative: u_n >= -max(y_i, 0)/dt), with clamped friction that never reverses sliding;
+  3. locate impacts: a corner off the floor that this solve had to stop while it approached faster
+     than the threshold would hit inside the step, after gap / approach: the piece is redone up to
+     that instant and the impact resolved there (0.), so impacts in contact are not tied to the grid;
   4. no energy gained: where the step would end with more kinetic + potential energy than it began
      with (the contacts pushing the centre up within a step), the velocities are scaled down to
      exactly what gains nothing (``energy_limit_scale``);
