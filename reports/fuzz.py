@@ -15,7 +15,7 @@ Three fuzzes, each a strategy of examples and a check returning what an example 
    finite and inside the observation space.
 
 Two profiles: ``REDUCED`` (a few seconds, run by the tests in CI) and ``FULL`` (run by
-``python -m reports.stability``). Both are derandomized, so a profile always draws the same examples.
+``python -m reports.stability``). Both draw with a fixed seed, so a profile always draws the same examples.
 """
 
 from __future__ import annotations
@@ -31,6 +31,7 @@ from box_toss_env.physics import Box, NonFiniteStateError, Scene, simulate
 PENETRATION_SHARE = 0.05  # of the box's smaller side
 ENERGY_ROUNDING = 1e-9  # a step may gain this share of the starting energy (rounding)
 GRAVITY = 9.81  # [m/s^2] of the engine scenes (the env's default)
+FUZZ_SEED = 13  # hypothesis's seed: every run of a profile draws the same examples
 
 
 @dataclass(frozen=True)
@@ -299,16 +300,18 @@ def strategy_and_check(name: str, profile: Profile):
 
 
 def draw_examples(strategy, count: int) -> list:
-    """``count`` examples of ``strategy``, derandomized (the same ones every run)."""
-    from hypothesis import HealthCheck, Phase, given, settings
+    """``count`` examples of ``strategy``, drawn with ``FUZZ_SEED`` (the same ones every run)."""
+    from hypothesis import HealthCheck, Phase, given, seed, settings
 
     drawn = []
 
     def keep(example):
         drawn.append(example)
 
-    settings(max_examples=count, derandomize=True, database=None, deadline=None, phases=[Phase.generate],
-             suppress_health_check=list(HealthCheck))(given(strategy)(keep))()
+    # a fixed seed, not derandomize=True: a derandomized run draws differently after other hypothesis runs in
+    # the same process (measured), a seeded one does not
+    seed(FUZZ_SEED)(settings(max_examples=count, database=None, deadline=None, phases=[Phase.generate],
+                             suppress_health_check=list(HealthCheck))(given(strategy)(keep)))()
     return drawn
 
 
