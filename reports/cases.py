@@ -308,7 +308,7 @@ class Throws:
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """(low, high) of (x, y) that no throw can leave: the env's observation bounds, which follow
         from the throw's energy; a landing outside them is a blow-up."""
-        low, high = task.observation_bounds(self.config)
+        low, high = task.observation_bounds(self.config, self.config.max_sim_time)
         return low[task.OBS_X:task.OBS_Y + 1].astype(float), high[task.OBS_X:task.OBS_Y + 1].astype(float)
 
     def blown_up(self, states: np.ndarray, stats: np.ndarray) -> np.ndarray:

@@ -49,6 +49,9 @@ ACCEPT_FLOOR = {"position": 1e-12, "angle": 1e-10}  # [m], [deg]: reference chan
 FACE_AGREEMENT_MIN, POSITION_ERROR_MAX, ANGLE_ERROR_MAX = 0.99, 0.01, 1.0
 MIN_JUDGED_SHARE = 0.9  # the criterion is judged only if the reference resolves it for this share of the throws
 RESOLVE_SHARE = 0.1  # a reference resolves the criterion where halving its step moves the landing < 10% of a threshold
+ORDER_GOAL, ORDER_GOAL_SHARE = 1.0, 0.95  # landings converge: per-throw order of landing x >= 1 on >= 95% of throws
+ORDER_FLOOR_FACTOR = 10.0  # a landing error below 10 times the reference's own half-step change is not fitted
+ORDER_FLOOR = 1e-9  # [m] nor one below this
 COLORS = {"seed": "tab:red", "robust": "tab:blue", "pymunk": "tab:green", "box2d": "tab:orange",
           "mujoco": "tab:purple"}
 
@@ -283,6 +286,56 @@ def fill_errors(setting: Setting, reference: Reference, accepted: np.ndarray) ->
     setting.position_errors_all = position[same_face]
     setting.position_errors = position[keep]
     setting.angle_errors = angle[keep]
+
+
+def throw_orders(settings: list[Setting], reference: Reference) -> np.ndarray:
+    """Per throw, the order of convergence of the landing x: the least-squares slope of log |x - x_ref|
+    against log dt over the settings whose error is resolved (above ``ORDER_FLOOR_FACTOR`` times the
+    reference's own change when its step is halved, and above ``ORDER_FLOOR``); nan where fewer than 3
+    settings are (the landing is within the reference's resolution at nearly every dt) or any failed."""
+    log_dt = np.log([dt_of(s.exponent) for s in settings])
+    errors = np.array([np.abs(s.states[:, 0] - reference.states[:, 0]) for s in settings])  # (settings, throws)
+    failed = np.array([s.failed for s in settings]).any(axis=0)
+    change = np.abs(reference.check_states[:, 0] - reference.states[:, 0])
+    orders = np.full(errors.shape[1], math.nan)
+    for j in range(errors.shape[1]):
+        resolved = np.isfinite(errors[:, j]) & (errors[:, j] > max(ORDER_FLOOR_FACTOR * change[j], ORDER_FLOOR))
+        if not failed[j] and resolved.sum() >= 3:
+            orders[j] = np.polyfit(log_dt[resolved], np.log(errors[resolved, j]), 1)[0]
+    return orders
+
+
+@dataclass
+class OrderSummary:
+    """The per-throw orders of landing x over some of the settings."""
+
+    label: str  # which steps
+    orders: np.ndarray  # (n,) nan where not measurable
+
+    @property
+    def measured(self) -> np.ndarray:
+        return self.orders[np.isfinite(self.orders)]
+
+    def share_at_least(self, order: float) -> float:
+        return float((self.measured >= order).mean()) if self.measured.size else math.nan
+
+    @property
+    def median(self) -> float:
+        return float(np.median(self.measured)) if self.measured.size else math.nan
+
+    def text(self) -> str:
+        if not self.measured.size:
+            return f"{self.label}: not measurable"
+        return (f"{self.label}: median {self.median:.2f}, >= 1 on {percent(self.share_at_least(1.0))}, >= 0.9 on "
+                f"{percent(self.share_at_least(0.9))} of the {self.measured.size} throws with >= 3 resolved errors")
+
+
+def order_summaries(settings: list[Setting], reference: Reference) -> list[OrderSummary]:
+    """Per-throw orders over every step, the coarse half and the fine half of the steps."""
+    half = len(settings) // 2
+    parts = [("every step", settings), ("coarse half", settings[:half]), ("fine half", settings[half:])]
+    return [OrderSummary(f"{label} ({dt_label(part[0].exponent)} to {dt_label(part[-1].exponent)} s)",
+                         throw_orders(part, reference)) for label, part in parts if len(part) >= 3]
 
 
 def measure_throws(throws: Throws, exponents, repeats: int, budget: float, parallel: bool = True, log=print):
@@ -558,6 +611,11 @@ def markdown(report: PrecisionReport, figures: dict) -> str:
             f"{sci(p50)} m median, {sci(p95)} m at the 95th percentile. Fitted order of the median position "
             f"error over all throws on the reference face: {order_text(report.throw_order(solver))}.",
             "",
+            "Per-throw order of convergence of the landing x (slope of log |x - x_ref| against log dt, fitted over the "
+            f"steps whose error is above {ORDER_FLOOR_FACTOR:g} times the reference's own half-step change and "
+            f"{ORDER_FLOOR:g} m): " + "; ".join(summary.text() for summary in order_summaries(settings, reference))
+            + ".",
+            "",
             table(THROW_HEADER, throw_rows(settings)),
             "",
         ]
@@ -650,6 +708,7 @@ def findings(report: PrecisionReport) -> str:
     lines.append(f"- Halving the robust solver's reference step ({dt_label(robust_reference.exponent)} s) moves the "
                  f"landing by more than 1 mm for {moved} of {report.throws.n} throws and changes the face of "
                  f"{flipped}.")
+    lines.append("- " + convergence_text(report))
     spread = tipping_spread(report)
     coupled, others = spread[TIPPING_MATERIALS[0]], max(spread[TIPPING_MATERIALS[1]], spread[TIPPING_MATERIALS[2]])
     verdict = ("does not converge with dt" if coupled > max(10.0 * others, RESOLVE_SHARE * POSITION_ERROR_MAX)
@@ -660,6 +719,25 @@ def findings(report: PrecisionReport) -> str:
         f"{sci(coupled)} over the three finest steps, against {sci(spread[TIPPING_MATERIALS[2]])} with e = 0 and "
         f"{sci(spread[TIPPING_MATERIALS[1]])} with mu = 0.")
     return "\n".join(lines)
+
+
+def convergence_text(report: PrecisionReport) -> str:
+    """Whether the robust solver's landings converge at first order: the per-throw order of landing x over every
+    step measured, against the goal (>= 1 on >= 95% of the throws), as measured."""
+    settings, reference = report.throw_results["robust"]
+    summaries = order_summaries(settings, reference)
+    every, fine = summaries[0], summaries[-1]
+    share = every.share_at_least(ORDER_GOAL)
+    met = share >= ORDER_GOAL_SHARE
+    change = reference.position_change[reference.valid]
+    settles = float(np.percentile(change, 95)) if change.size else math.nan
+    return (f"Convergence of the robust solver's landings: its reference settles (halving its step moves the landing "
+            f"by {sci(settles)} m at the 95th percentile), and the per-throw order of landing x is >= {ORDER_GOAL:g} "
+            f"on {percent(share)} of the throws ({every.label}; median {every.median:.2f}; >= 0.9 on "
+            f"{percent(every.share_at_least(0.9))}; {fine.label}: median {fine.median:.2f}, >= {ORDER_GOAL:g} on "
+            f"{percent(fine.share_at_least(ORDER_GOAL))}). The goal of order >= {ORDER_GOAL:g} on "
+            f">= {ORDER_GOAL_SHARE:.0%} of the throws is {'met' if met else 'not met'}: the solver is first order "
+            "in dt in the sense of these figures, no more.")
 
 
 def tipping_spread(report: PrecisionReport) -> dict:
@@ -695,6 +773,8 @@ def readme_block(report: PrecisionReport) -> str:
         "",
         f"Env default: {describe(default)}; cheapest setting with >= 99% face agreement and <= 1 cm, <= 1 degree: "
         + (describe(best) if best is not None else "none can be certified (see the report)") + ".",
+        "",
+        convergence_text(report),
     ])
 
 

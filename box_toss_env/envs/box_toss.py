@@ -108,11 +108,11 @@ class BoxTossEnv(gym.Env):
     The bounds follow from energy: a throw has at most
     ``e = max_speed^2 / 2 + (I/m) max_spin^2 / 2 + g * release_height_range[1]`` of energy per unit mass
     (``I/m = (L^2 + W^2) / 12``) and contacts only take energy away, so ``V = 2 sqrt(2 e)`` (twice the
-    largest possible speed) and ``R = V * max_sim_time`` bound what a throw can reach (about 20 m/s,
-    156 rad/s, 10.6 m and 200 m with the defaults). Nothing is clipped: a throw ending outside the
-    bounds raises ``EnergyGainError`` (see Episode End). A column whose value is fixed (``target_x_range``,
-    or a dynamics quantity that is not drawn) has bounds one float32 step either side of its value, so
-    no bound pair is degenerate.
+    largest possible speed) and ``R = V * T`` bound what a throw can reach, T being the simulated time
+    (``max_sim_time`` rounded up to whole steps) (about 20 m/s, 156 rad/s, 10.6 m and 200 m with the
+    defaults). Nothing is clipped: a throw ending outside the bounds raises ``EnergyGainError`` (see
+    Episode End). A column whose value is fixed (``target_x_range``, or a dynamics quantity that is not
+    drawn) has bounds one float32 step either side of its value, so no bound pair is degenerate.
 
     ## Rewards
 
@@ -286,7 +286,7 @@ class BoxTossEnv(gym.Env):
         self.metadata = {**self.metadata, "render_fps": self.render_fps}
 
         self.action_space = spaces.Box(-1.0, 1.0, shape=(task.ACTION_SIZE,), dtype=np.float32)
-        low, high = task.observation_bounds(config)
+        low, high = task.observation_bounds(config, self.max_steps * self.dt)
         self.observation_space = spaces.Box(low, high, dtype=np.float32)
 
         # per-episode arrays, allocated once: a throw only writes its six initial numbers

@@ -383,14 +383,15 @@ def observe(states: np.ndarray, episodes: Episodes, config: TaskConfig) -> np.nd
                           axis=1, dtype=np.float32)
 
 
-def observation_bounds(config: TaskConfig) -> tuple[np.ndarray, np.ndarray]:
-    """(low, high) float32 bounds that no observation leaves.
+def observation_bounds(config: TaskConfig, horizon: float) -> tuple[np.ndarray, np.ndarray]:
+    """(low, high) float32 bounds that no observation leaves, for throws simulated for at most ``horizon``
+    seconds (the whole steps that cover ``max_sim_time``: a step longer than it simulates one step).
 
     The energy per unit mass of a throw is at most
         e = max_speed^2 / 2 + (I/m) max_spin^2 / 2 + g y_release_max,
     and contacts never add energy, so every speed is below sqrt(2 e), the spin below
     sqrt(2 e) / sqrt(I/m), the height below e / g, and the box cannot travel further than
-    sqrt(2 e) max_sim_time from where it was released. Each bound is ``ENERGY_MARGIN`` times that.
+    sqrt(2 e) horizon from where it was released. Each bound is ``ENERGY_MARGIN`` times that.
     The centre cannot be lower than one corner radius below the floor (the whole box under it).
     A column whose value is fixed (low == high) gets bounds one float32 step either side of it.
     """
@@ -398,7 +399,7 @@ def observation_bounds(config: TaskConfig) -> tuple[np.ndarray, np.ndarray]:
               + config.gravity * config.release_height_range[1])
     speed = ENERGY_MARGIN * math.sqrt(2.0 * energy)
     spin = speed / math.sqrt(config.gyration_radius_squared)
-    reach = speed * config.max_sim_time
+    reach = speed * horizon
     low = [config.release_x_range[0] - reach, -config.corner_radius, -1.0, -1.0, -speed, -speed, -spin,
            config.target_x_range[0], 0.0, 0.0, 0.0, 0.0]
     high = [config.release_x_range[1] + reach, ENERGY_MARGIN * energy / config.gravity + config.corner_radius,

@@ -14,17 +14,24 @@ normal impulse. A box that leaves the floor flies on;
 one that stays goes to
 
 Contact: time-stepping on the grid t_n = n dt (the stage script in ``make_robust_kernel``), the
-stages of one step being
+stages of one step (or of a piece of it) being
+  0. impacts: where a corner touching the floor approaches faster than the restitution threshold,
+     the touching corners take an impact at this instant (``contact_impact``, Poisson as above);
   1. integrate velocities: v += dt g;
-  2. solve contact velocities: the two corners of the face that is down together (2 x 2 LCP),
-     each may close its gap but not pass it (speculative: u_n >= -max(y_i, 0)/dt), with clamped
-     friction that never reverses sliding;
-  3. restitution: corners that hit faster than the threshold bounce back with e times the
-     impulse that stopped them (Poisson; resting contact gets none, so it stays still);
-  4. integrate positions: x += dt v, alpha += dt omega (symplectic Euler);
-  5. penalty: penetration is removed by the critically damped penalty spring integrated with
+  2. solve contact velocities: the corners that can reach the floor in the step (the lowest, and
+     both its neighbours: a thin box's far end too, ``contact_corners``) together (an LCP of up to
+     three corners; one corner with friction exactly), each may close its gap but not pass it
+     (speculative: u_n >= -max(y_i, 0)/dt), with clamped friction that never reverses sliding;
+  3. locate impacts: a corner off the floor that this solve had to stop while it approached faster
+     than the threshold would hit inside the step, after gap / approach: the piece is redone up to
+     that instant and the impact resolved there (0.), so impacts in contact are not tied to the grid;
+  4. no energy gained: where the step would end with more kinetic + potential energy than it began
+     with (the contacts pushing the centre up within a step), the velocities are scaled down to
+     exactly what gains nothing (``energy_limit_scale``);
+  5. integrate positions: x += dt v, alpha += dt omega (symplectic Euler);
+  6. penalty: penetration is removed by the critically damped penalty spring integrated with
      backward Euler, as a pseudo-velocity, stable for every stiffness and step
-     (``penalty_correction_share``).
+     (``penalty_correction_share``); the potential energy this returns is taken from the kinetic.
 A step is split into substeps when the box would turn more than MAX_ROTATION_PER_STEP.
 The box flies again when no corner is loaded or below the floor, and it is put to sleep
 (velocities set to zero, stepping stops) once it has lain still on a face for ``sleep_time``.
@@ -43,13 +50,23 @@ import numpy as np
 
 from . import layout
 from .contact_solver import (
+    APPROACH,
+    COMPRESSION,
+    CORNER_ROWS,
+    DEPTH,
+    IMPULSE,
+    MAX_CORNERS,
+    RX,
+    RY,
+    SCRATCH,
+    TARGET,
     apply_normal_impulses,
     correct_penetration,
     delassus,
     friction_impulse,
-    normal_impulses,
+    normal_velocities,
     solve_contact_velocities,
-    solve_normal_velocities,
+    solve_normal_block,
 )
 from .flight import flight_state, time_to_contact
 from .geometry import lowest_face, lowest_pair, vertex_offset
@@ -60,67 +77,121 @@ MAX_SUBSTEPS = 64
 CONTACT_TOLERANCE = 1e-12  # [m per m of corner radius + 1 m] a corner this close touches
 SIMULTANEOUS_TOLERANCE = 1e-9  # [same units] corners this close hit at the same instant
 FRICTION_ITERATIONS = 8  # at most this many Gauss-Seidel sweeps over friction and the normal block
+MAX_LOCATED_IMPACTS = 16  # impacts located inside one contact step at most; later ones are stopped on the grid
 
 
 @numba.njit(cache=True)
-def resolve_impact(y, cos_a, sin_a, vx, vy, spin, half_length, half_width, inv_mass, inv_inertia, restitution,
-                   friction, threshold, simultaneous):
-    """Impulses of an impact at the instant a corner reaches the floor.
+def place_corner(corners, i, k, cos_a, sin_a, half_length, half_width):
+    """Corner k of the box as column i of the corner work array (its lever arm)."""
+    corners[RX, i], corners[RY, i] = vertex_offset(k, cos_a, sin_a, half_length, half_width)
 
-    The touching corners (the lowest one, and its neighbour if within ``simultaneous`` of the
-    same height) are solved together, in Poisson's two phases:
-      compression: the impulses lam_c that stop every approaching corner (u_n+ = 0), with friction
+
+@numba.njit(cache=True)
+def impact_impulses(vx, vy, spin, corners, n, restitution, friction, threshold, inv_mass, inv_inertia, k):
+    """Impulses of an impact at this instant on the first n corners (those touching the floor), in
+    Poisson's two phases:
+      compression: the impulses lam_c that stop every approaching corner (u_n+ >= 0), with friction
         clamped to mu lam_c;
       restitution: each corner that hit faster than the threshold gets e lam_c more along the
         normal, with friction clamped to mu e lam_c.
     For a frictionless single corner this is Newton's law u_n+ = -e u_n-; unlike Newton's law with
     friction, it never creates energy: compression removes 1/2 lam_c^T K lam_c and restitution
-    returns e^2 of it, and clamped friction only removes energy.
+    returns e^2 of it, and clamped friction only removes energy. A touching corner that is not
+    approaching (one the box rests or pivots on) takes part in the compression: it holds.
+    Returns (vx, vy, spin, approach speed of the fastest corner, 0 if none approaches).
+    """
+    normal_velocities(vy, spin, corners, n, APPROACH)
+    approach = 0.0
+    for i in range(n):
+        approach = max(approach, -corners[APPROACH, i])
+        corners[TARGET, i] = 0.0
+    if approach <= 0.0:
+        return vx, vy, spin, 0.0
+    # compression
+    vx, vy, spin = solve_contact_velocities(vx, vy, spin, corners, n, friction, inv_mass, inv_inertia,
+                                            FRICTION_ITERATIONS, k)
+    # restitution
+    for i in range(n):
+        corners[COMPRESSION, i] = corners[IMPULSE, i] if corners[APPROACH, i] < -threshold else 0.0
+    vx, vy, spin = restitution_impulses(vx, vy, spin, corners, n, restitution, friction, inv_mass, inv_inertia, k)
+    return vx, vy, spin, approach
+
+
+@numba.njit(cache=True)
+def resolve_impact(y, cos_a, sin_a, vx, vy, spin, half_length, half_width, inv_mass, inv_inertia, restitution,
+                   friction, threshold, simultaneous, corners, k):
+    """The impact of a flying box at the instant a corner reaches the floor (``impact_impulses``) on the
+    touching corners: the lowest one, and its neighbour if within ``simultaneous`` of the same height.
     Returns (vx, vy, spin, corners hit, approach speed, leaves), ``leaves`` being True when every
     touching corner separates faster than the threshold.
     """
     first, second = lowest_face(cos_a, sin_a, half_length, half_width)
-    rx1, ry1 = vertex_offset(first, cos_a, sin_a, half_length, half_width)
-    rx2, ry2 = vertex_offset(second, cos_a, sin_a, half_length, half_width)
-    pair = ry2 <= ry1 + simultaneous
-    u1 = vy + spin * rx1
-    u2 = vy + spin * rx2
-    approach = max(-u1, -u2) if pair else -u1
+    place_corner(corners, 0, first, cos_a, sin_a, half_length, half_width)
+    place_corner(corners, 1, second, cos_a, sin_a, half_length, half_width)
+    n = 2 if corners[RY, 1] <= corners[RY, 0] + simultaneous else 1
+    vx, vy, spin, approach = impact_impulses(vx, vy, spin, corners, n, restitution, friction, threshold, inv_mass,
+                                             inv_inertia, k)
     if approach <= 0.0:
         return vx, vy, spin, 0, 0.0, False
-    # compression
-    if friction > 0.0:
-        vx, vy, spin, lam1, lam2 = solve_contact_velocities(vx, vy, spin, rx1, ry1, rx2, ry2, pair, 0.0, 0.0,
-                                                            friction, inv_mass, inv_inertia, FRICTION_ITERATIONS)
-    else:
-        vy, spin, lam1, lam2 = solve_normal_velocities(vy, spin, rx1, rx2, pair, 0.0, 0.0, inv_mass, inv_inertia)
-    # restitution
-    vx, vy, spin = restitution_impulses(vx, vy, spin, rx1, ry1, rx2, ry2, pair, lam1 if u1 < -threshold else 0.0,
-                                        lam2 if u2 < -threshold else 0.0, 0.0, 0.0, restitution, friction,
-                                        inv_mass, inv_inertia)
-    leaves = vy + spin * rx1 > threshold and (not pair or vy + spin * rx2 > threshold)
-    return vx, vy, spin, 2 if pair else 1, approach, leaves
+    leaves = True
+    for i in range(n):
+        leaves = leaves and vy + spin * corners[RX, i] > threshold
+    return vx, vy, spin, n, approach, leaves
 
 
 @numba.njit(cache=True)
-def restitution_impulses(vx, vy, spin, rx1, ry1, rx2, ry2, use2, compression1, compression2, target1, target2,
-                         restitution, friction, inv_mass, inv_inertia):
-    """Poisson's restitution phase: corner i gets the normal impulse e * compression_i, with friction
-    clamped to mu e compression_i (it can stop the slip there, never reverse it); then a corner pushed
-    towards the floor by the other's bounce is held at its target velocity (u_n >= target_i).
-    Returns (vx, vy, spin)."""
-    bounce1 = restitution * compression1
-    bounce2 = restitution * compression2
-    vy, spin = apply_normal_impulses(vy, spin, bounce1, bounce2, rx1, rx2, inv_mass, inv_inertia)
+def contact_impact(y, cos_a, sin_a, vx, vy, spin, half_length, half_width, inv_mass, inv_inertia, restitution,
+                   friction, threshold, tolerance, located, loaded, corners, k):
+    """The impact of a box in contact at this instant: where a corner touching the floor approaches faster
+    than the threshold, the touching corners (at most three, the lowest) take ``impact_impulses`` together.
+    A corner touches when it is within ``tolerance`` of the floor, is the one ``located`` to arrive now, or
+    carried load in the last piece (bit c of ``loaded``: it ended that piece on the floor, up to the
+    second-order lift of a rotating step, which must not decide whether it takes part).
+    Returns (vx, vy, spin, corners touching, approach speed, 0 if no impact)."""
+    n = 0
+    for c in range(4):
+        rx, ry = vertex_offset(c, cos_a, sin_a, half_length, half_width)
+        touches = y + ry <= tolerance or c == located or (loaded >> c) & 1 == 1
+        if touches and vy + spin * rx < -threshold:
+            n = 1
+    if n == 0:
+        return vx, vy, spin, 0, 0.0
+    n = 0
+    for c in range(4):
+        rx, ry = vertex_offset(c, cos_a, sin_a, half_length, half_width)
+        if y + ry <= tolerance or c == located or (loaded >> c) & 1 == 1:
+            if n < MAX_CORNERS:
+                corners[RX, n], corners[RY, n] = rx, ry
+                n += 1
+            else:  # a fourth touching corner (never lower than the others at once): replace the highest
+                highest = 0
+                for i in range(1, MAX_CORNERS):
+                    if corners[RY, i] > corners[RY, highest]:
+                        highest = i
+                if ry < corners[RY, highest]:
+                    corners[RX, highest], corners[RY, highest] = rx, ry
+    vx, vy, spin, approach = impact_impulses(vx, vy, spin, corners, n, restitution, friction, threshold, inv_mass,
+                                             inv_inertia, k)
+    return vx, vy, spin, n, approach
+
+
+@numba.njit(cache=True)
+def restitution_impulses(vx, vy, spin, corners, n, restitution, friction, inv_mass, inv_inertia, k):
+    """Poisson's restitution phase: corner i gets the normal impulse e * compression_i (row COMPRESSION),
+    with friction clamped to mu e compression_i (it can stop the slip there, never reverse it); then a
+    corner pushed towards the floor by another's bounce is held at its target velocity (u_n >= b_i,
+    row TARGET). Returns (vx, vy, spin)."""
+    for i in range(n):
+        corners[SCRATCH, i] = restitution * corners[COMPRESSION, i]
+    vy, spin = apply_normal_impulses(vy, spin, corners, n, SCRATCH, inv_mass, inv_inertia)
     if friction > 0.0:
-        vx, spin, _ = friction_impulse(vx, spin, ry1, bounce1, 0.0, friction, inv_mass, inv_inertia)
-        if use2:
-            vx, spin, _ = friction_impulse(vx, spin, ry2, bounce2, 0.0, friction, inv_mass, inv_inertia)
-    k11, k12, k22 = delassus(rx1, rx2, inv_mass, inv_inertia)
-    hold1, hold2 = normal_impulses(vy + spin * rx1, vy + spin * rx2, target1, target2, 0.0, 0.0, k11, k12, k22,
-                                   True, use2)
-    vy, spin = apply_normal_impulses(vy, spin, hold1, hold2, rx1, rx2, inv_mass, inv_inertia)
-    return vx, vy, spin
+        for i in range(n):
+            vx, spin, _ = friction_impulse(vx, spin, corners[RY, i], restitution * corners[COMPRESSION, i], 0.0,
+                                           friction, inv_mass, inv_inertia)
+    delassus(corners, n, inv_mass, inv_inertia, k)
+    for i in range(n):
+        corners[IMPULSE, i] = 0.0
+    return (vx, *solve_normal_block(vy, spin, corners, n, inv_mass, inv_inertia, k))
 
 
 @numba.njit(cache=True)
@@ -131,41 +202,56 @@ def predicted_height(k, y, cos_a, sin_a, half_length, half_width, fall, spin, h)
 
 
 @numba.njit(cache=True)
-def contact_corners(y, cos_a, sin_a, vy, spin, half_length, half_width, gravity, h):
-    """Lever arms (rx1, ry1, rx2, ry2) of the two corners that bound the face that will be down at
-    the end of a step h, judged by the heights they would reach at the current velocities, so a
-    corner swinging down is constrained before it gets there."""
+def contact_corners(y, cos_a, sin_a, vy, spin, half_length, half_width, gravity, h, reach, corners, ids):
+    """The corners that can touch the floor in a step h, as the first columns of ``corners`` (their indices in
+    ``ids``): of the one that would be lowest at the end of the step at the current velocities, its lower
+    neighbour (they bound the face that will be down) and its other neighbour (the far end of a thin box's
+    long side, whose two lowest corners are the ends of a short side once it tilts by atan(W / L)), those
+    within ``reach`` of the floor. Each is constrained only to close its gap, so one that cannot reach the
+    floor in the step would get no impulse; leaving out those further than ``reach`` (what any point of the
+    box can travel in the step) saves the work. Returns how many there are."""
     fall = h * (vy + gravity * h)
     first, second = lowest_pair(predicted_height(0, y, cos_a, sin_a, half_length, half_width, fall, spin, h),
                                 predicted_height(1, y, cos_a, sin_a, half_length, half_width, fall, spin, h),
                                 predicted_height(2, y, cos_a, sin_a, half_length, half_width, fall, spin, h),
                                 predicted_height(3, y, cos_a, sin_a, half_length, half_width, fall, spin, h))
-    rx1, ry1 = vertex_offset(first, cos_a, sin_a, half_length, half_width)
-    rx2, ry2 = vertex_offset(second, cos_a, sin_a, half_length, half_width)
-    return rx1, ry1, rx2, ry2
+    third = (first + 1) % 4 if second == (first + 3) % 4 else (first + 3) % 4
+    n = 0
+    for corner in (first, second, third):
+        place_corner(corners, n, corner, cos_a, sin_a, half_length, half_width)
+        if y + corners[RY, n] <= reach:
+            ids[n] = corner
+            n += 1
+    return n
 
 
 @numba.njit(cache=True)
-def apply_restitution(vx, vy, spin, rx1, ry1, rx2, ry2, u1_before, u2_before, target1, target2, lam1, lam2,
-                      restitution, friction, threshold, inv_mass, inv_inertia):
-    """Corners that hit faster than the threshold and were stopped by the contact solve bounce back
-    with e times the impulse that stopped their approach (Poisson, ``restitution_impulses``);
-    resting contact gets none, so it stays still. Returns (vx, vy, spin, approach speed of the fastest such corner,
-    0 if none)."""
-    bounce1 = lam1 > 0.0 and u1_before < -threshold
-    bounce2 = lam2 > 0.0 and u2_before < -threshold
-    if not (bounce1 or bounce2):
-        return vx, vy, spin, 0.0
-    approach = max(-u1_before if bounce1 else 0.0, -u2_before if bounce2 else 0.0)
-    if restitution > 0.0:
-        # the compression impulse is what stopped the approach, -u_n- K_ii^-1, not the part of lam that
-        # carried the weight during the step (bouncing that back would pump energy into a resting box)
-        k11, _, k22 = delassus(rx1, rx2, inv_mass, inv_inertia)
-        compression1 = min(lam1, -u1_before / k11) if bounce1 else 0.0
-        compression2 = min(lam2, -u2_before / k22) if bounce2 else 0.0
-        vx, vy, spin = restitution_impulses(vx, vy, spin, rx1, ry1, rx2, ry2, True, compression1, compression2,
-                                            target1, target2, restitution, friction, inv_mass, inv_inertia)
-    return vx, vy, spin, approach
+def kinetic_energy(vx, vy, spin, inv_mass, inv_inertia):
+    """m |v|^2 / 2 + I omega^2 / 2 [J]."""
+    return 0.5 * (vx * vx + vy * vy) / inv_mass + 0.5 * spin * spin / inv_inertia
+
+
+@numba.njit(cache=True)
+def energy_limit_scale(kinetic_before, kinetic_after, potential_rise):
+    """The factor s in [0, 1] on the velocities of a contact step that keeps the step from gaining energy.
+
+    Symplectic Euler adds g h to v, the contacts take it back where the floor holds the box, and
+    positions move with what is left: where the contacts push the centre up (a rocking or bouncing box)
+    it rises h v_y without gravity having slowed it in that step, and kinetic + potential energy can
+    grow by up to m |g| h dv_y (18% of the energy of the moment for a thin bouncing box at h = 1/32 s).
+    With the velocities scaled by s, the step changes the energy by s^2 A + s B - C, where A is the
+    kinetic energy after the contact stages, B = -m g h v_y the potential energy the position update
+    adds and C the kinetic energy before the step; s is 1 where that is <= 0, else its root
+    s = 2 C / (B + sqrt(B^2 + 4 A C)), the largest s that gains nothing. Scaling the whole velocity keeps
+    every contact satisfied (u_n,i >= b_i with b_i <= 0 holds for s u_n,i) and never reverses sliding.
+    The correction is O(h) and vanishes where no step would gain (flight, sliding, resting).
+    """
+    a, b, c = kinetic_after, potential_rise, kinetic_before
+    if a + b <= c:
+        return 1.0
+    root = math.sqrt(b * b + 4.0 * a * c)
+    s = 2.0 * c / (b + root) if b > 0.0 else (root - b) / (2.0 * a)
+    return min(max(s, 0.0), 1.0)
 
 
 @numba.njit(cache=True)
@@ -212,6 +298,12 @@ def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, para
             status = layout.STATUS_OK
             fail_step = -1
             still_for = 0.0
+            corners = np.zeros((CORNER_ROWS, MAX_CORNERS))  # the corner work array (contact_solver)
+            k = np.zeros((MAX_CORNERS, MAX_CORNERS))  # their Delassus matrix
+            ids = np.zeros(MAX_CORNERS, np.int64)  # which corner of the box each column is
+            located = -1  # the corner a piece of a contact step was shortened to bring to the floor, or -1
+            loaded = 0  # bit c: corner c carried load in the last piece of a contact step
+            lift = 0.0  # [m] a corner held in the last piece may end this far above the floor (second order)
             if RECORD:
                 store_state(trajectory, 0, i, x, y, angle, vx, vy, spin)
             n = 0  # last grid step reached (and recorded)
@@ -243,12 +335,12 @@ def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, para
                     if math.isnan(first_contact):
                         first_contact = t
                     # ---- impact at the contact instant ----
-                    vx, vy, spin, corners, approach, leaves = resolve_impact(
-                        y, cos_a, sin_a, vx, vy, spin, hx, hy, inv_mass, inv_inertia, restitution, friction,
-                        threshold, simultaneous)
-                    if corners > 0 and approach > threshold:
+                    vx, vy, spin, touching, approach, leaves = resolve_impact(
+                        y, cos_a, sin_a, vx, vy, spin, hx, hy, inv_mass, inv_inertia, restitution,
+                        friction if FRICTION else 0.0, threshold, simultaneous, corners, k)
+                    if touching > 0 and approach > threshold:
                         if RECORD:
-                            record_event(events, i, n_impacts, t, approach, corners)
+                            record_event(events, i, n_impacts, t, approach, touching)
                         n_impacts += 1
                     if not is_finite_state(x, y, angle, vx, vy, spin):
                         status = layout.STATUS_NONFINITE
@@ -268,55 +360,109 @@ def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, para
                     h = (n + 1) * dt - t  # a partial step brings the box back onto the grid
                 else:
                     h = dt
-                # ---- one contact step on the grid, split where the box turns fast ----
+                # ---- one contact step on the grid, split where the box turns fast and at impacts ----
                 n_sub = min(max(np.int64(math.ceil(abs(spin) * h / MAX_ROTATION_PER_STEP)), 1), MAX_SUBSTEPS)
                 h_sub = h / n_sub
                 held = False
-                ry1 = ry2 = rx1 = rx2 = 0.0
+                located_impacts = 0
+                elapsed = 0.0  # time advanced in this step
                 for _ in range(n_sub):
-                    rx1, ry1, rx2, ry2 = contact_corners(y, cos_a, sin_a, vy, spin, hx, hy, gravity, h_sub)
-                    u1_before = vy + spin * rx1
-                    u2_before = vy + spin * rx2
-                    # 1. integrate velocities
-                    vy = vy + gravity * h_sub
-                    # 2. contact velocities: each corner may close its gap but not pass it
-                    target1 = -max(y + ry1, 0.0) / h_sub
-                    target2 = -max(y + ry2, 0.0) / h_sub
-                    if FRICTION:
-                        vx, vy, spin, lam1, lam2 = solve_contact_velocities(
-                            vx, vy, spin, rx1, ry1, rx2, ry2, True, target1, target2, friction, inv_mass,
-                            inv_inertia, FRICTION_ITERATIONS)
-                    else:
-                        vy, spin, lam1, lam2 = solve_normal_velocities(vy, spin, rx1, rx2, True, target1, target2,
-                                                                       inv_mass, inv_inertia)
-                    # 3. restitution
-                    vx, vy, spin, approach = apply_restitution(vx, vy, spin, rx1, ry1, rx2, ry2, u1_before, u2_before,
-                                                               target1, target2, lam1, lam2, restitution, friction,
-                                                               threshold, inv_mass, inv_inertia)
-                    if approach > 0.0:
-                        if RECORD:
-                            record_event(events, i, n_impacts, t, approach, 1)
-                        n_impacts += 1
-                    # 4. integrate positions
-                    x = x + h_sub * vx
-                    y = y + h_sub * vy
-                    angle = angle + h_sub * spin
-                    cos_a = math.cos(angle)
-                    sin_a = math.sin(angle)
-                    first, second = lowest_face(cos_a, sin_a, hx, hy)
-                    rx1, ry1 = vertex_offset(first, cos_a, sin_a, hx, hy)
-                    rx2, ry2 = vertex_offset(second, cos_a, sin_a, hx, hy)
-                    penetration = -(y + ry1)
-                    max_penetration = max(max_penetration, penetration)
-                    # 5. penalty: implicit correction of what penetrates beyond the slop
-                    if PENALTY and penetration > slop + tolerance:
-                        y, angle = correct_penetration(y, angle, penetration - slop, -(y + ry2) - slop, rx1, rx2,
-                                                       stiffness, h_sub, inv_mass, inv_inertia)
+                    left = h_sub
+                    while left > 0.0:
+                        # 0. impact at this instant: a touching corner approaching faster than the threshold
+                        vx, vy, spin, touching, approach = contact_impact(
+                            y, cos_a, sin_a, vx, vy, spin, hx, hy, inv_mass, inv_inertia, restitution,
+                            friction if FRICTION else 0.0, threshold, tolerance + lift, located, loaded, corners, k)
+                        if approach > 0.0:
+                            if RECORD:
+                                record_event(events, i, n_impacts, t + elapsed, approach, touching)
+                            n_impacts += 1
+                        piece = left
+                        located = -1
+                        vx0, vy0, spin0 = vx, vy, spin
+                        for attempt in range(2):
+                            vx, vy, spin = vx0, vy0, spin0
+                            kinetic_before = kinetic_energy(vx, vy, spin, inv_mass, inv_inertia)
+                            # no point moves faster than sqrt(2 KE (1/m + R^2 / I)) once gravity has acted
+                            # (Cauchy-Schwarz; contact impulses never add kinetic energy)
+                            reach = tolerance + piece * math.sqrt(
+                                2.0 * kinetic_energy(vx, vy + gravity * piece, spin, inv_mass, inv_inertia)
+                                * (inv_mass + radius * radius * inv_inertia))
+                            n_corners = contact_corners(y, cos_a, sin_a, vy, spin, hx, hy, gravity, piece, reach,
+                                                        corners, ids)
+                            normal_velocities(vy, spin, corners, n_corners, APPROACH)
+                            # 1. integrate velocities
+                            vy = vy + gravity * piece
+                            # 2. contact velocities: each corner may close its gap but not pass it
+                            for c in range(n_corners):
+                                corners[TARGET, c] = -max(y + corners[RY, c], 0.0) / piece
+                            vx, vy, spin = solve_contact_velocities(vx, vy, spin, corners, n_corners,
+                                                                    friction if FRICTION else 0.0, inv_mass,
+                                                                    inv_inertia, FRICTION_ITERATIONS, k)
+                            if attempt == 1:
+                                break
+                            # 3. an impact inside the piece: a corner off the floor stopped while approaching
+                            # faster than the threshold arrives after gap / approach; the piece is redone up to
+                            # that instant, where the impact is resolved (0.), not on the grid
+                            arrival = piece
+                            hit = -1
+                            for c in range(n_corners):
+                                gap = y + corners[RY, c]
+                                if (corners[IMPULSE, c] > 0.0 and corners[APPROACH, c] < -threshold
+                                        and gap > tolerance and gap < -arrival * corners[APPROACH, c]):
+                                    arrival = -gap / corners[APPROACH, c]
+                                    hit = ids[c]
+                            if hit < 0 or located_impacts >= MAX_LOCATED_IMPACTS:
+                                break
+                            located_impacts += 1
+                            located = hit
+                            piece = arrival
+                        loaded = 0
+                        for c in range(n_corners):
+                            if corners[IMPULSE, c] > 0.0:
+                                loaded |= 1 << ids[c]
+                        held = held or loaded != 0
+                        # 4. no energy gained: the velocities scaled where the step would gain (energy_limit_scale)
+                        scale = energy_limit_scale(kinetic_before, kinetic_energy(vx, vy, spin, inv_mass,
+                                                                                  inv_inertia),
+                                                   -gravity * piece * vy / inv_mass)
+                        vx, vy, spin = scale * vx, scale * vy, scale * spin
+                        # 5. integrate positions
+                        x = x + piece * vx
+                        y = y + piece * vy
+                        angle = angle + piece * spin
                         cos_a = math.cos(angle)
                         sin_a = math.sin(angle)
+                        first, second = lowest_face(cos_a, sin_a, hx, hy)
                         rx1, ry1 = vertex_offset(first, cos_a, sin_a, hx, hy)
-                        rx2, ry2 = vertex_offset(second, cos_a, sin_a, hx, hy)
-                    held = held or lam1 > 0.0 or lam2 > 0.0 or penetration > 0.0
+                        penetration = -(y + ry1)
+                        max_penetration = max(max_penetration, penetration)
+                        # 6. penalty: implicit correction of what penetrates beyond the slop, at the lowest corner
+                        # and its neighbours; the potential energy it returns is taken from the kinetic energy
+                        if PENALTY and penetration > slop + tolerance:
+                            below = 0
+                            for corner in (first, (first + 1) % 4, (first + 3) % 4):
+                                place_corner(corners, below, corner, cos_a, sin_a, hx, hy)
+                                corners[DEPTH, below] = -(y + corners[RY, below]) - slop
+                                if corners[DEPTH, below] > 0.0:
+                                    below += 1
+                            lifted = y
+                            y, angle = correct_penetration(y, angle, corners, below, stiffness, piece, inv_mass,
+                                                           inv_inertia, k)
+                            cos_a = math.cos(angle)
+                            sin_a = math.sin(angle)
+                            kinetic = kinetic_energy(vx, vy, spin, inv_mass, inv_inertia)
+                            rise = -gravity * (y - lifted) / inv_mass
+                            if rise > 0.0 and kinetic > 0.0:
+                                scale = math.sqrt(max(1.0 - rise / kinetic, 0.0))
+                                vx, vy, spin = scale * vx, scale * vy, scale * spin
+                        held = held or penetration > 0.0
+                        lift = h_sub * h_sub * spin * spin * radius  # how far a rotating substep lifts a held corner
+                        elapsed += piece
+                        left = left - piece if piece < left else 0.0
+                first, second = lowest_face(cos_a, sin_a, hx, hy)
+                rx1, ry1 = vertex_offset(first, cos_a, sin_a, hx, hy)
+                rx2, ry2 = vertex_offset(second, cos_a, sin_a, hx, hy)
                 n_steps += 1
                 n += 1
                 t = n * dt
@@ -339,6 +485,8 @@ def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, para
                         still_for = 0.0
                 if not held:
                     in_flight = True
+                    located = -1
+                    loaded = 0
             state[i, 0], state[i, 1], state[i, 2] = x, y, angle
             state[i, 3], state[i, 4], state[i, 5] = vx, vy, spin
             write_stats(stats, i, first_contact, n_impacts, n_steps, max_penetration, rest_time, t,

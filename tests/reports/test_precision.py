@@ -111,3 +111,32 @@ def test_the_report_and_its_figures_are_written(report, tmp_path):
         assert f"### {case.title}" in text
     assert "FAIL: blow-up" in text
     assert not math.isnan(report.run_seconds)
+
+
+def test_per_throw_order_of_landing_x_is_the_slope_over_resolved_errors():
+    """Throw 0 lands C dt from the reference (order 1), throw 1 C dt^2 (order 2), throw 2 within the reference's
+    own resolution at every dt (not measurable), throw 3 failed at one dt (not measured)."""
+    exponents = (5, 6, 7, 8)
+    reference_states = np.zeros((4, 6))
+    check = reference_states.copy()
+    check[2, 0] = 1e-3  # the reference of throw 2 moves 1 mm when its step is halved
+    reference = precision.Reference("robust", 12, reference_states, check, np.zeros(4), np.zeros(4),
+                                    np.ones(4, bool), np.ones(4, bool), {}, np.ones(4, bool), 0.0)
+    settings = []
+    for k in exponents:
+        dt = 2.0**-k
+        states = np.zeros((4, 6))
+        states[:, 0] = [0.3 * dt, 2.0 * dt**2, 1e-3 * dt, 0.3 * dt]
+        failed = np.array([False, False, False, k == 7])
+        settings.append(precision.Setting("robust", k, 1e-5, states, failed, np.ones(4, bool)))
+    orders = precision.throw_orders(settings, reference)
+    assert orders[0] == pytest.approx(1.0) and orders[1] == pytest.approx(2.0)
+    assert math.isnan(orders[2]) and math.isnan(orders[3])
+    summary = precision.order_summaries(settings, reference)[0]
+    assert summary.share_at_least(1.0) == 1.0 and summary.measured.size == 2
+
+
+def test_the_report_states_the_measured_convergence_order(report):
+    text = precision.convergence_text(report)
+    assert "per-throw order of landing x" in text and ("met" in text)
+    assert precision.convergence_text(report) in precision.readme_block(report)

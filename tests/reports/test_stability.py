@@ -56,3 +56,14 @@ def test_the_report_and_its_map_are_written(report, tmp_path):
     assert "## The robust default's declared range" in text
     for row in report.rows:
         assert row.title in text
+
+
+def test_the_report_runs_every_fuzz_and_the_robust_default_passes_them(report, tmp_path):
+    assert [result.name for result in report.fuzz] == list(stability.fuzz.FUZZES)
+    for result in report.fuzz:
+        assert result.examples == stability.fuzz.REDUCED.examples
+        assert result.passed, result.failures[:2]
+        assert not any(solver == "robust" for solver, _ in result.documented_errors)
+    text = stability.write_report(report, tmp_path).read_text()
+    assert "## Property-based fuzz (hypothesis)" in text
+    assert "Property-based fuzz" in stability.readme_block(report)
