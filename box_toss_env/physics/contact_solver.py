@@ -12,21 +12,21 @@ r = (rx, ry) from the centre of mass; the floor normal is n = (0, 1), the tangen
 
 import math
 
-import numba
+from .compilation import jit_stage
 
 PAIR_CONDITION = 1e-9  # det(K) below this fraction of K11 K22: the two rows are parallel
 CONVERGED = 1e-12  # Gauss-Seidel stops when the impulses change by less than this share
 PENALTY_DAMPING_RATIO = 1.0  # zeta of the penalty spring: critically damped
 
 
-@numba.njit(cache=True)
+@jit_stage
 def delassus(rx1, rx2, inv_mass, inv_inertia):
     """Entries K11, K12, K22 of the normal Delassus matrix of two corners."""
     return (inv_mass + rx1 * rx1 * inv_inertia, inv_mass + rx1 * rx2 * inv_inertia,
             inv_mass + rx2 * rx2 * inv_inertia)
 
 
-@numba.njit(cache=True)
+@jit_stage
 def normal_impulses(u1, u2, b1, b2, lam1, lam2, k11, k12, k22, use1, use2):
     """Accumulated normal impulses (lam1, lam2) >= 0 solving the contact LCP of the used corners:
 
@@ -64,13 +64,13 @@ def normal_impulses(u1, u2, b1, b2, lam1, lam2, k11, k12, k22, use1, use2):
     return lam1, lam2
 
 
-@numba.njit(cache=True)
+@jit_stage
 def apply_normal_impulses(vy, spin, d1, d2, rx1, rx2, inv_mass, inv_inertia):
     """v += (p1 + p2) n / m, omega += (rx1 p1 + rx2 p2) / I."""
     return vy + (d1 + d2) * inv_mass, spin + (rx1 * d1 + rx2 * d2) * inv_inertia
 
 
-@numba.njit(cache=True)
+@jit_stage
 def friction_impulse(vx, spin, ry, normal_impulse, accumulated, friction, inv_mass, inv_inertia):
     """Coulomb friction at one corner: the tangential impulse that would stop sliding there,
     -u_t / (1/m + ry^2 / I), added to the accumulated one and clamped to |q| <= mu lam_n.
@@ -86,7 +86,7 @@ def friction_impulse(vx, spin, ry, normal_impulse, accumulated, friction, inv_ma
     return vx + change * inv_mass, spin - ry * change * inv_inertia, total
 
 
-@numba.njit(cache=True)
+@jit_stage
 def solve_normal_velocities(vy, spin, rx1, rx2, use2, b1, b2, inv_mass, inv_inertia):
     """Velocities after the normal impulses that bring u_n,i to at least b_i at the lowest corner
     and, if ``use2``, its neighbour, solved together (exact). Returns (vy, spin, lam1, lam2)."""
@@ -96,7 +96,7 @@ def solve_normal_velocities(vy, spin, rx1, rx2, use2, b1, b2, inv_mass, inv_iner
     return vy, spin, lam1, lam2
 
 
-@numba.njit(cache=True)
+@jit_stage
 def solve_contact_velocities(vx, vy, spin, rx1, ry1, rx2, ry2, use2, b1, b2, friction, inv_mass,
                              inv_inertia, iterations):
     """Velocities after the normal impulses (targets u_n,i >= b_i) and the friction impulses of the
@@ -127,7 +127,7 @@ def solve_contact_velocities(vx, vy, spin, rx1, ry1, rx2, ry2, use2, b1, b2, fri
     return vx, vy, spin, lam1, lam2
 
 
-@numba.njit(cache=True)
+@jit_stage
 def penalty_correction_share(stiffness, k_ii, h):
     """Share of a penetration depth d removed in one step of length h by the penalty spring k d,
     critically damped, integrated with backward Euler (the error reduction parameter of a soft
@@ -145,7 +145,7 @@ def penalty_correction_share(stiffness, k_ii, h):
     return omega_h / (omega_h + 2.0 * PENALTY_DAMPING_RATIO)
 
 
-@numba.njit(cache=True)
+@jit_stage
 def correct_penetration(y, angle, depth1, depth2, rx1, rx2, stiffness, h, inv_mass, inv_inertia):
     """Push the corners out of the floor by the penalty's share of their depths, as a
     pseudo-velocity (split impulse): positions move, the real velocities do not, so resolving a

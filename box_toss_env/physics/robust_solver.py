@@ -38,10 +38,10 @@ omega dt = 2; time-stepped flight and impacts move the landing pose with the ste
 
 import math
 
-import numba
 import numpy as np
 
 from . import layout
+from .compilation import jit_kernel, jit_stage
 from .contact_solver import (
     apply_normal_impulses,
     correct_penetration,
@@ -62,7 +62,7 @@ SIMULTANEOUS_TOLERANCE = 1e-9  # [same units] corners this close hit at the same
 FRICTION_ITERATIONS = 8  # at most this many Gauss-Seidel sweeps over friction and the normal block
 
 
-@numba.njit(cache=True)
+@jit_stage
 def resolve_impact(y, cos_a, sin_a, vx, vy, spin, half_length, half_width, inv_mass, inv_inertia, restitution,
                    friction, threshold, simultaneous):
     """Impulses of an impact at the instant a corner reaches the floor.
@@ -102,7 +102,7 @@ def resolve_impact(y, cos_a, sin_a, vx, vy, spin, half_length, half_width, inv_m
     return vx, vy, spin, 2 if pair else 1, approach, leaves
 
 
-@numba.njit(cache=True)
+@jit_stage
 def restitution_impulses(vx, vy, spin, rx1, ry1, rx2, ry2, use2, compression1, compression2, target1, target2,
                          restitution, friction, inv_mass, inv_inertia):
     """Poisson's restitution phase: corner i gets the normal impulse e * compression_i, with friction
@@ -123,14 +123,14 @@ def restitution_impulses(vx, vy, spin, rx1, ry1, rx2, ry2, use2, compression1, c
     return vx, vy, spin
 
 
-@numba.njit(cache=True)
+@jit_stage
 def predicted_height(k, y, cos_a, sin_a, half_length, half_width, fall, spin, h):
     """Height of corner k after a step h at the current velocities, to first order."""
     rx, ry = vertex_offset(k, cos_a, sin_a, half_length, half_width)
     return y + ry + fall + h * spin * rx
 
 
-@numba.njit(cache=True)
+@jit_stage
 def contact_corners(y, cos_a, sin_a, vy, spin, half_length, half_width, gravity, h):
     """Lever arms (rx1, ry1, rx2, ry2) of the two corners that bound the face that will be down at
     the end of a step h, judged by the heights they would reach at the current velocities, so a
@@ -145,7 +145,7 @@ def contact_corners(y, cos_a, sin_a, vy, spin, half_length, half_width, gravity,
     return rx1, ry1, rx2, ry2
 
 
-@numba.njit(cache=True)
+@jit_stage
 def apply_restitution(vx, vy, spin, rx1, ry1, rx2, ry2, u1_before, u2_before, target1, target2, lam1, lam2,
                       restitution, friction, threshold, inv_mass, inv_inertia):
     """Corners that hit faster than the threshold and were stopped by the contact solve bounce back
@@ -168,30 +168,28 @@ def apply_restitution(vx, vy, spin, rx1, ry1, rx2, ry2, u1_before, u2_before, ta
     return vx, vy, spin, approach
 
 
-@numba.njit(cache=True)
+@jit_stage
 def is_finite_state(x, y, angle, vx, vy, spin):
     return (math.isfinite(x) and math.isfinite(y) and math.isfinite(angle) and math.isfinite(vx)
             and math.isfinite(vy) and math.isfinite(spin))
 
 
-def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, parallel: bool,
-                       source_digest: int):
+def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, source_digest: int):
     """Build the robust kernel for exactly the stages a scene uses (flags are compile-time).
 
     ``run(state, params, settings, stats, trajectory, events)`` advances every body in place up
     to ``settings[MAX_STEPS]`` grid steps, or until it sleeps when ``settings[UNTIL_REST]``.
     """
     PENALTY, FRICTION, RECORD, DIGEST = use_penalty, use_friction, record, source_digest
-    PARALLEL = parallel
 
-    @numba.njit(cache=True, parallel=parallel)
+    @jit_kernel
     def run(state, params, settings, stats, trajectory, events):
-        # numba keys its on-disk cache on closure values, not on jit options: the sources' digest and
-        # the parallel flag must be closure values, or a stale or serial kernel would be loaded
-        _ = (DIGEST, PARALLEL)
+        # numba keys its on-disk cache on this file and the closure values: the digest of every engine
+        # source must be a closure value, or a kernel compiled with an older stage would be loaded
+        _ = DIGEST
         dt, gravity, max_steps, until_rest, threshold, sleep_speed, sleep_time, slop = read_settings(settings)
         end_time = max_steps * dt
-        for i in numba.prange(state.shape[0]):
+        for i in range(state.shape[0]):
             x, y, angle, vx, vy, spin = (state[i, 0], state[i, 1], state[i, 2],
                                          state[i, 3], state[i, 4], state[i, 5])
             hx = params[i, layout.HALF_LENGTH]
