@@ -18,8 +18,8 @@ are in ``info["final_obs"]`` and ``info["final_info"]`` (with their ``_final_obs
 masks). With Gymnasium's default ``NEXT_STEP`` every other step would be an empty reset step.
 For Stable-Baselines3 wrap it in ``box_toss_env.vector.sb3_adapter.SB3VecEnvAdapter``.
 
-The engine's threads are Python threads running the compiled kernel without the GIL, not numba's
-OpenMP threading layer, so they leave torch's OpenMP thread count alone.
+The engine's threads are Python threads running the compiled kernel without the GIL; numba's own
+threading layer (OpenMP or TBB) is not used.
 """
 
 from __future__ import annotations
