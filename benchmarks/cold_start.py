@@ -8,6 +8,8 @@ directory: the cold run, then the warm run in the same directory. Times are wall
 
 - ``gym.make`` and ``make_vec``: from ``import gymnasium, box_toss_env`` to the end of the first
   ``step`` (making the env, ``reset`` and one throw, whose compilation or cache load is most of it);
+  ``make_vec`` once more with the cache holding what a ``gym.make`` throw compiled (does the batched
+  env reuse the single env's kernel?);
 - SB3 ``SubprocVecEnv`` with 4 workers: from creating it (Stable-Baselines3, torch and the package are
   imported in the parent already) to the end of its first ``step``, each worker importing the
   package and throwing once. The workers' compiled-kernel statistics say how many compiled. The same
@@ -65,16 +67,20 @@ PROBE = textwrap.dedent("""
         seconds = time.perf_counter() - start
         envs.close()
     else:
-        env = gym.make_vec("BoxToss-v0", num_envs=64) if case == "make_vec" else gym.make("BoxToss-v0")
-        env.reset(seed=0)
-        env.step(env.action_space.sample())
+        from numba.core import event
+        with event.install_recorder("numba:compile") as recorder:
+            env = gym.make_vec("BoxToss-v0", num_envs=64) if case == "make_vec" else gym.make("BoxToss-v0")
+            env.reset(seed=0)
+            env.step(env.action_space.sample())
         seconds = time.perf_counter() - start
+        compiled = sum(1 for _, e in recorder.buffer if e.is_start)  # numba compilations (loads are not counted)
     print(json.dumps({"seconds": seconds, "compiled": compiled, "package": box_toss_env.__file__}))
 """)
 
 CASES = {
     "make": 'gym.make("BoxToss-v0")',
     "make_vec": 'make_vec("BoxToss-v0", num_envs=64)',
+    "make_vec_after_make": "make_vec(64) after a gym.make throw",
     "subproc": "SB3 SubprocVecEnv, 4 workers",
     "subproc_cartpole": "the same with CartPole-v1 (SB3's own start)",
 }
@@ -83,7 +89,7 @@ CASES = {
 def run_case(case: str, cache: str, pythonpath: str) -> dict:
     env = {**os.environ, "NUMBA_CACHE_DIR": cache, "PYTHONPATH": pythonpath}
     done = subprocess.run([sys.executable, "-c", PROBE, case], env=env, capture_output=True, text=True, check=False,
-                          cwd=tempfile.gettempdir())
+                          cwd=tempfile.gettempdir(), timeout=1800)
     if done.returncode != 0:
         raise RuntimeError(f"case {case} failed:\n{done.stderr}")
     return json.loads(done.stdout.strip().splitlines()[-1])
@@ -95,8 +101,10 @@ def measure(repeats: int, pythonpath: str, cases: list[str], log=print) -> dict[
     for repeat in range(repeats):
         for case in cases:
             with tempfile.TemporaryDirectory(prefix="box_toss_cold_start_") as cache:
+                if case == "make_vec_after_make":  # "cold": only the single env's throw is cached
+                    run_case("make", cache, pythonpath)
                 for state in ("cold", "warm"):
-                    result = run_case(case, cache, pythonpath)
+                    result = run_case("make_vec" if case == "make_vec_after_make" else case, cache, pythonpath)
                     results[case][state].append(result)
                     log(f"  repeat {repeat + 1}/{repeats} {case:8} {state}: {result['seconds']:.2f} s")
     return results
@@ -116,14 +124,17 @@ def report(results: dict[str, dict[str, list]], repeats: int) -> str:
     lines = [f"numba {numba.__version__}, {os.cpu_count()} cores (load average {load} at the end: a shared machine)",
              f"first throw in a fresh interpreter [s], median of {repeats} (min-max); cold: NUMBA_CACHE_DIR empty, "
              "warm: filled by the cold run", "",
-             f"{'case':40} {'cold':>20} {'warm':>20}"]
+             f"{'case':44} {'cold':>17} {'warm':>17} {'compilations':>13}"]
     for case, runs in results.items():
         cold = [r["seconds"] for r in runs["cold"]]
         warm = [r["seconds"] for r in runs["warm"]]
-        lines.append(f"{CASES[case]:40} {summary(cold):>20} {summary(warm):>20}")
+        compiled = "" if case.startswith("subproc") else str(runs["cold"][0]["compiled"])
+        lines.append(f"{CASES[case]:44} {summary(cold):>17} {summary(warm):>17} {compiled:>13}")
+    lines += ["", "compilations: numba compilations in the cold run (the stages, numba's own helpers and the kernels)"]
     if "subproc" in results:
         compiled = [r["compiled"] for r in results["subproc"]["cold"]]
-        lines += ["", f"SubprocVecEnv, cold: workers that compiled the kernel (the others loaded it): {compiled}"]
+        lines.append(f"SubprocVecEnv, cold: how many of the 4 workers compiled the kernel (the others loaded it), "
+                     f"per repeat: {compiled}")
     return "\n".join(lines)
 
 
