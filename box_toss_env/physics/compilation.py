@@ -32,6 +32,7 @@ from collections.abc import Callable
 import filelock
 from numba.core import config, types
 from numba.core.caching import FunctionCache
+from numba.core.dispatcher import Dispatcher
 from numba.core.registry import CPUDispatcher
 
 LOCK_NAME = "box_toss_env-compile.lock"
@@ -68,7 +69,7 @@ def warn_uncached(reason: str) -> None:
         _warned_uncached = True
         warnings.warn(f"box_toss_env: no writable directory for numba's cache ({reason}). The engine is compiled "
                       "again in every process (seconds each time). Set NUMBA_CACHE_DIR to a writable directory to "
-                      "keep the compiled code.", CacheWarning, stacklevel=4)
+                      "keep the compiled code.", CacheWarning, stacklevel=2)
 
 
 def _make_dispatcher(function: Callable, **options) -> Callable:
@@ -95,12 +96,11 @@ def jit_kernel(function: Callable) -> Callable:
 
 
 def cache_location(function: Callable | None = None) -> str | None:
-    """The directory where ``function`` (default: the robust solver's kernel file's functions) is
-    cached on disk, or None if nothing is cached (no writable directory)."""
+    """The directory numba caches ``function`` (a function compiled with these decorators) in, by
+    default the engine's, or None if nothing is cached (no writable directory)."""
     if function is None:
         from .kernel_support import write_stats as function
-    cache = getattr(function, "_cache", None)
-    return getattr(cache, "cache_path", None)
+    return getattr(getattr(function, "_cache", None), "cache_path", None)
 
 
 def argument_types(kernel, args: tuple) -> tuple:
@@ -132,16 +132,15 @@ def ensure_compiled(kernel, args: tuple) -> None:
     """Compile ``kernel`` for ``args``'s types, or load it from the disk cache, before its first
     call. A compilation holds a lock file in the cache directory, so that of several processes
     needing the same kernel at once one compiles and the others load its result."""
-    if compiled_in_process(kernel, args):
+    if not isinstance(kernel, Dispatcher) or compiled_in_process(kernel, args):
         return
     signature = argument_types(kernel, args)
     directory = cache_location(kernel)
-    if directory is None or cached_on_disk(kernel, args):
-        kernel.compile(signature)
-        return
-    lock = filelock.FileLock(os.path.join(directory, LOCK_NAME), timeout=LOCK_TIMEOUT)
-    try:
-        with lock:
-            kernel.compile(signature)  # numba looks in the cache first: another process may have compiled it
-    except filelock.Timeout:
-        kernel.compile(signature)
+    if directory is not None and not cached_on_disk(kernel, args):
+        try:
+            with filelock.FileLock(os.path.join(directory, LOCK_NAME), timeout=LOCK_TIMEOUT):
+                kernel.compile(signature)  # numba looks in the cache first: another process may have compiled it
+            return
+        except (filelock.Timeout, OSError):  # held too long elsewhere, or the directory went away: compile anyway
+            pass
+    kernel.compile(signature)
