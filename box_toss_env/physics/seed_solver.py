@@ -150,7 +150,7 @@ def make_seed_kernel(use_impulses: bool, use_penalty: bool, use_friction: bool, 
                     max_penetration = max(max_penetration, -lowest_y)
                     if below & ~below_before:  # a corner newly below the floor: an impact
                         if RECORD:
-                            record_event(events, i, n_impacts, n * dt, math.nan, 1.0)
+                            record_event(events, i, n_impacts, n * dt, math.nan, 1)
                         n_impacts += 1
                 below_before = below
                 n += 1
