@@ -37,10 +37,12 @@ REPO = Path(__file__).resolve().parent.parent
 PROBE = textwrap.dedent("""
     import json, sys, time
     case = sys.argv[1]
-    start = time.perf_counter()
+    start, start_cpu = time.perf_counter(), time.process_time()
+    import numba  # timed on its own: the package imports it anyway
+    numba_import = time.process_time() - start_cpu
     import gymnasium as gym
     import box_toss_env
-    compiled = None
+    compiled = cpu = None
     if case == "subproc":
         import numpy as np
         from stable_baselines3.common.vec_env import SubprocVecEnv
@@ -72,9 +74,10 @@ PROBE = textwrap.dedent("""
             env = gym.make_vec("BoxToss-v0", num_envs=64) if case == "make_vec" else gym.make("BoxToss-v0")
             env.reset(seed=0)
             env.step(env.action_space.sample())
-        seconds = time.perf_counter() - start
+        seconds, cpu = time.perf_counter() - start, time.process_time() - start_cpu
         compiled = sum(1 for _, e in recorder.buffer if e.is_start)  # numba compilations (loads are not counted)
-    print(json.dumps({"seconds": seconds, "compiled": compiled, "package": box_toss_env.__file__}))
+    print(json.dumps({"seconds": seconds, "cpu": cpu, "compiled": compiled, "numba_import": numba_import,
+                      "package": box_toss_env.__file__}))
 """)
 
 CASES = {
@@ -122,19 +125,24 @@ def report(results: dict[str, dict[str, list]], repeats: int) -> str:
 
     load = ", ".join(f"{value:.1f}" for value in os.getloadavg()) if hasattr(os, "getloadavg") else "n/a"
     lines = [f"numba {numba.__version__}, {os.cpu_count()} cores (load average {load} at the end: a shared machine)",
-             f"first throw in a fresh interpreter [s], median of {repeats} (min-max); cold: NUMBA_CACHE_DIR empty, "
-             "warm: filled by the cold run", "",
-             f"{'case':44} {'cold':>17} {'warm':>17} {'compilations':>13}"]
+             f"first throw in a fresh interpreter: wall time [s], median of {repeats} (min-max), and the interpreter's "
+             "CPU time [s], median", "cold: NUMBA_CACHE_DIR empty; warm: filled by the cold run; compilations: "
+             "numba compilations in the cold run (stages, numba's own helpers, kernels)", "",
+             f"{'case':44} {'cold':>19} {'cpu':>5} {'warm':>17} {'cpu':>5} {'compilations':>13}"]
     for case, runs in results.items():
-        cold = [r["seconds"] for r in runs["cold"]]
-        warm = [r["seconds"] for r in runs["warm"]]
-        compiled = "" if case.startswith("subproc") else str(runs["cold"][0]["compiled"])
-        lines.append(f"{CASES[case]:44} {summary(cold):>17} {summary(warm):>17} {compiled:>13}")
-    lines += ["", "compilations: numba compilations in the cold run (the stages, numba's own helpers and the kernels)"]
+        cells = []
+        for state in ("cold", "warm"):
+            cells.append(summary([r["seconds"] for r in runs[state]]))
+            cpu = [r["cpu"] for r in runs[state] if r["cpu"] is not None]
+            cells.append(f"{statistics.median(cpu):.2f}" if cpu else "-")
+        compiled = "-" if case.startswith("subproc") else str(runs["cold"][0]["compiled"])
+        lines.append(f"{CASES[case]:44} {cells[0]:>19} {cells[1]:>5} {cells[2]:>17} {cells[3]:>5} {compiled:>13}")
+    numba_import = [r["numba_import"] for runs in results.values() for r in runs["warm"]]
+    lines += ["", f"of which `import numba` alone: {statistics.median(numba_import):.2f} s of CPU (median, warm runs)"]
     if "subproc" in results:
         compiled = [r["compiled"] for r in results["subproc"]["cold"]]
-        lines.append(f"SubprocVecEnv, cold: how many of the 4 workers compiled the kernel (the others loaded it), "
-                     f"per repeat: {compiled}")
+        lines += [f"SubprocVecEnv, cold: how many of the 4 workers compiled the kernel (the others loaded it), "
+                      f"per repeat: {compiled}"]
     return "\n".join(lines)
 
 

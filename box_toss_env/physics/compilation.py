@@ -6,7 +6,7 @@ Compile cost is per compiled function, so the decorators keep the number of comp
 - ``jit_stage``: a function called only from compiled code (a stage of a solver). It is compiled
   for the plain types of its arguments (a constant argument such as ``True`` or a corner index
   ``0`` does not compile its own copy), without the wrappers that make a function callable from
-  Python (building them cost about a third of a cold compile), and cached on disk.
+  Python (building them was about a quarter of a cold compile), and cached on disk.
 - ``jit_kernel``: an entry point called from Python (a solver's kernel). It releases the GIL, so
   ``Simulator`` runs one compiled kernel over a batch on several threads: the single env, the
   batched env and subprocess workers all load the same compiled code.
