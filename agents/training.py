@@ -136,8 +136,7 @@ def new_run_dir(runs: Path, name: str | None, env_id: str, algo: str) -> Path:
 
 def warm_up_engine(env_id: str, config: dict[str, Any]) -> None:
     """Load the env's compiled kernel with one throw in a throwaway env, so that compiling (or
-    loading from numba's cache) is not counted as env time. It also starts numba's OpenMP threads,
-    which resets the OpenMP thread count that torch reads: set torch's threads after this."""
+    loading from numba's cache) is not counted as env time."""
     venv = make_vector_env(env_id, 1, config["env_kwargs"], config.get("vec_env_kwargs"))
     venv.reset()
     venv.step(np.zeros((1, *venv.action_space.shape), dtype=np.float32))
@@ -148,7 +147,7 @@ def train(run_dir: Path, config: dict[str, Any], env_id: str, seed: int, algo: s
           progress_bar: bool = True, final_eval: bool = True) -> dict[str, Any]:
     """Train (or continue) the run in ``run_dir`` up to ``config["n_timesteps"]``; returns the timing."""
     warm_up_engine(env_id, config)
-    torch.set_num_threads(int(config.get("torch_threads", 1)))  # after the engine's threads started (see above)
+    torch.set_num_threads(int(config.get("torch_threads", 1)))
     checkpoint = latest_checkpoint(run_dir, algo) if resume else None
     # a resumed run draws new episodes (seeded after the steps already taken), not the first ones again
     env_seed = seed + (checkpoint[2] if checkpoint else 0)

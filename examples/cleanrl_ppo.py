@@ -18,8 +18,6 @@ because every BoxToss episode is ONE throw:
   masked by ``done``); the loop is kept as in CleanRL, gamma and lambda change nothing.
 - A narrow initial policy (log std -2.5, std 0.08 of the action range): with std 1 the throws scatter
   over metres and the gradient is noise. No reward normalisation, no clipping of observations.
-- ``torch.set_num_threads`` is called AFTER the first env step: numba's OpenMP layer resets the
-  OpenMP runtime's thread count (shared with torch) at its first parallel call.
 
 At the end the deterministic policy (the mean action) throws once at each of ``--eval-targets`` fixed
 targets (env i seeded with ``eval_seed + i``) and the script prints ``success rate: ...``.
@@ -150,6 +148,7 @@ def main(args: Args) -> dict[str, float]:
     random.seed(args.seed)
     rng = np.random.default_rng(args.seed)
     torch.manual_seed(args.seed)
+    torch.set_num_threads(args.torch_threads)
 
     envs = gym.make_vec(args.env_id, num_envs=args.num_envs, vectorization_mode="vector_entry_point",
                         threads=args.env_threads)
@@ -172,7 +171,6 @@ def main(args: Args) -> dict[str, float]:
     next_obs, _ = envs.reset(seed=args.seed)
     next_obs = torch.as_tensor(next_obs)
     next_done = torch.zeros(args.num_envs)
-    threads_set = False
 
     for iteration in range(1, num_iterations + 1):
         if args.anneal_lr:
@@ -188,9 +186,6 @@ def main(args: Args) -> dict[str, float]:
             actions[step] = action
             logprobs[step] = logprob
             next_obs, reward, terminations, truncations, info = envs.step(action.numpy())
-            if not threads_set:  # after numba's first parallel call, which resets OpenMP's thread count
-                torch.set_num_threads(args.torch_threads)
-                threads_set = True
             rewards[step] = torch.as_tensor(reward, dtype=torch.float32)
             next_obs = torch.as_tensor(next_obs)
             next_done = torch.as_tensor(np.logical_or(terminations, truncations), dtype=torch.float32)

@@ -6,10 +6,11 @@
 Env i behaves exactly like a single ``BoxToss-v0`` seeded the same way: it owns its own random
 stream (``reset(seed=s)`` seeds env i with s + i, as Gymnasium's vector envs do; ``random_streams``
 keeps all of them in one array) and draws its episodes with the same batch-first task functions
-(``task``), and all throws go through the same
-engine kernel, run over the batch on ``threads`` threads (default: numba's, i.e. the cores
-available); results do not depend on the thread count. The task logic, the reward and the drawing
-are the single env's, not a copy.
+(``task``), and all throws go through the single env's compiled engine kernel, run over shares of
+the batch on ``threads`` threads at once (default: ``numba.config.NUMBA_NUM_THREADS``, the cores
+available); results do not depend on the thread count. The task logic, the reward, the drawing and
+the compiled code are the single env's, not a copy: whichever of the two throws first compiles
+the kernel (or loads it from numba's cache) for both.
 
 Episodes are one step long, so envs reset in the step they end (``AutoresetMode.SAME_STEP``): the
 observation returned by ``step`` is the next episode's first one, and the final observation and info
@@ -17,9 +18,8 @@ are in ``info["final_obs"]`` and ``info["final_info"]`` (with their ``_final_obs
 masks). With Gymnasium's default ``NEXT_STEP`` every other step would be an empty reset step.
 For Stable-Baselines3 wrap it in ``box_toss_env.vector.sb3_adapter.SB3VecEnvAdapter``.
 
-With PyTorch in the same process: numba's OpenMP threading layer shares the OpenMP runtime with
-torch, and its first parallel call sets that runtime's thread count to numba's. Call
-``torch.set_num_threads`` after the first ``step`` (``agents.train`` does), or pass ``threads``.
+The engine's threads are Python threads running the compiled kernel without the GIL; numba's own
+threading layer (OpenMP or TBB) is not used.
 """
 
 from __future__ import annotations
@@ -50,7 +50,7 @@ class BoxTossVectorEnv(VectorEnv):
     Args:
         num_envs: number of envs, in [1, MAX_NUM_ENVS].
         threads: engine threads for the batch, in [1, numba.config.NUMBA_NUM_THREADS] (default:
-            numba's thread count, the cores available). It changes the speed, never the results.
+            all of them, the cores available). It changes the speed, never the results.
         render_mode: None or "rgb_array" (``render()`` returns one frame per env).
         **kwargs: the single env's arguments (see ``BoxTossEnv``), validated the same way.
     """
@@ -89,7 +89,8 @@ class BoxTossVectorEnv(VectorEnv):
 
     @property
     def simulator(self) -> Simulator:
-        """The engine kernel for the whole batch, built (compiled or loaded) at first use."""
+        """The engine kernel for the whole batch (the single env's kernel, run on threads), compiled or
+        loaded at its first run."""
         if self._simulator is None:
             self._simulator = Simulator(dataclasses.replace(self.env.flags, parallel=True), threads=self.threads)
         return self._simulator

@@ -14,9 +14,10 @@ and outputs rotr64(hi(s) ^ lo(s), hi(s) >> 58); ``random()`` maps an output x to
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 from gymnasium.utils import seeding
+
+from box_toss_env.physics.compilation import jit_kernel, jit_stage
 
 MULTIPLIER_HI = np.uint64(2549297995355413924)  # PCG_DEFAULT_MULTIPLIER_128, high and low 64 bits
 MULTIPLIER_LO = np.uint64(4865540595714422341)
@@ -26,7 +27,7 @@ STATE_HI, STATE_LO, INC_HI, INC_LO = 0, 1, 2, 3
 MASK_64 = (1 << 64) - 1
 
 
-@numba.njit(cache=True)
+@jit_stage
 def multiply_64x64(a, b):
     """The full 128-bit product of two uint64, as (high, low) uint64 halves."""
     a_lo, a_hi = a & LOW_32_BITS, a >> np.uint64(32)
@@ -38,7 +39,7 @@ def multiply_64x64(a, b):
     return high, (cross << np.uint64(32)) | (lo_lo & LOW_32_BITS)
 
 
-@numba.njit(cache=True)
+@jit_kernel
 def fill_uniform(states, out):
     """Fill ``out`` (n, k) with each row's next k doubles in [0, 1), advancing ``states`` (n, 4)."""
     for i in range(out.shape[0]):

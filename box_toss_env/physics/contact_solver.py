@@ -20,7 +20,7 @@ Corners travel in a small work array ``corners[row, i]`` (rows below), the first
 
 import math
 
-import numba
+from .compilation import jit_stage
 
 # rows of the corner work array: lever arm, target normal velocity b_i, accumulated normal and friction
 # impulses, normal velocity before the step, depth below the floor, compression impulse (Poisson), and
@@ -37,7 +37,7 @@ CONVERGED = 1e-12  # Gauss-Seidel stops when the impulses change by less than th
 PENALTY_DAMPING_RATIO = 1.0  # zeta of the penalty spring: critically damped
 
 
-@numba.njit(cache=True)
+@jit_stage
 def delassus(corners, n, inv_mass, inv_inertia, k):
     """The normal Delassus matrix K_ij = 1/m + rx_i rx_j / I of the first n corners, into k."""
     for i in range(n):
@@ -45,7 +45,7 @@ def delassus(corners, n, inv_mass, inv_inertia, k):
             k[i, j] = inv_mass + corners[RX, i] * corners[RX, j] * inv_inertia
 
 
-@numba.njit(cache=True)
+@jit_stage
 def free_corners_hold(corners, n, k, p, q, tolerance):
     """Whether every corner r other than p and q keeps w_r = a_r + K_rp x_p + K_rq x_q >= -tolerance
     (a in row FREE_W, x in row NEW_IMPULSE; p = q = -1 for none)."""
@@ -64,7 +64,7 @@ def free_corners_hold(corners, n, k, p, q, tolerance):
     return True
 
 
-@numba.njit(cache=True)
+@jit_stage
 def normal_impulses(u_row, corners, n, k):
     """New accumulated normal impulses x_i >= 0 of the first n corners, solving the contact LCP
 
@@ -114,7 +114,7 @@ def normal_impulses(u_row, corners, n, k):
             x[p] = max(x[p] - w / k[p, p], 0.0)
 
 
-@numba.njit(cache=True)
+@jit_stage
 def apply_normal_impulses(vy, spin, corners, n, row, inv_mass, inv_inertia):
     """v += sum_i p_i n / m, omega += sum_i rx_i p_i / I for the normal impulses p_i in ``corners[row]``."""
     force = 0.0
@@ -125,14 +125,14 @@ def apply_normal_impulses(vy, spin, corners, n, row, inv_mass, inv_inertia):
     return vy + force * inv_mass, spin + torque * inv_inertia
 
 
-@numba.njit(cache=True)
+@jit_stage
 def normal_velocities(vy, spin, corners, n, row):
     """u_n,i = vy + omega rx_i of the first n corners, into ``corners[row]``."""
     for i in range(n):
         corners[row, i] = vy + spin * corners[RX, i]
 
 
-@numba.njit(cache=True)
+@jit_stage
 def friction_impulse(vx, spin, ry, normal_impulse, accumulated, friction, inv_mass, inv_inertia):
     """Coulomb friction at one corner: the tangential impulse that would stop sliding there,
     -u_t / (1/m + ry^2 / I), added to the accumulated one and clamped to |q| <= mu lam_n.
@@ -148,7 +148,7 @@ def friction_impulse(vx, spin, ry, normal_impulse, accumulated, friction, inv_ma
     return vx + change * inv_mass, spin - ry * change * inv_inertia, total
 
 
-@numba.njit(cache=True)
+@jit_stage
 def solve_normal_block(vy, spin, corners, n, inv_mass, inv_inertia, k):
     """Solve the normal LCP from the accumulated impulses (row IMPULSE, targets in row TARGET) and apply
     the change: the new totals are left in row IMPULSE, the changes in row SCRATCH. Returns (vy, spin)."""
@@ -160,7 +160,7 @@ def solve_normal_block(vy, spin, corners, n, inv_mass, inv_inertia, k):
     return apply_normal_impulses(vy, spin, corners, n, SCRATCH, inv_mass, inv_inertia)
 
 
-@numba.njit(cache=True)
+@jit_stage
 def solve_one_corner(vx, vy, spin, corners, friction, inv_mass, inv_inertia):
     """The exact contact impulse (lam normal, q tangential) at one corner with Coulomb friction: with
     u_n = vy + omega rx, u_t = vx - omega ry and the impulse changing them by
@@ -208,7 +208,7 @@ def solve_one_corner(vx, vy, spin, corners, friction, inv_mass, inv_inertia):
     return vx + q * inv_mass, vy + lam * inv_mass, spin + (rx * lam - ry * q) * inv_inertia, True
 
 
-@numba.njit(cache=True)
+@jit_stage
 def solve_contact_velocities(vx, vy, spin, corners, n, friction, inv_mass, inv_inertia, iterations, k):
     """Velocities after the normal impulses (targets u_n,i >= b_i, row TARGET) and, with ``friction`` > 0,
     the friction impulses of the first n corners: the exact normal block, then projected Gauss-Seidel
@@ -244,7 +244,7 @@ def solve_contact_velocities(vx, vy, spin, corners, n, friction, inv_mass, inv_i
     return vx, vy, spin
 
 
-@numba.njit(cache=True)
+@jit_stage
 def penalty_correction_share(stiffness, k_ii, h):
     """Share of a penetration depth d removed in one step of length h by the penalty spring k d,
     critically damped, integrated with backward Euler (the error reduction parameter of a soft
@@ -262,7 +262,7 @@ def penalty_correction_share(stiffness, k_ii, h):
     return omega_h / (omega_h + 2.0 * PENALTY_DAMPING_RATIO)
 
 
-@numba.njit(cache=True)
+@jit_stage
 def correct_penetration(y, angle, corners, n, stiffness, h, inv_mass, inv_inertia, k):
     """Push the first n corners (each below the floor by ``corners[DEPTH, i]`` > 0) out by the penalty's
     share of their depths, as a pseudo-velocity (split impulse): positions move, the real velocities do

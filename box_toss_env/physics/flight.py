@@ -8,21 +8,20 @@ reaches y = 0 and jumps there.
 
 import math
 
-import numba
-
+from .compilation import jit_stage
 from .geometry import vertex_offset
 
 MAX_ADVANCE_ITERATIONS = 100_000  # a grazing approach past this many steps is handed to stepping
 
 
-@numba.njit(cache=True)
+@jit_stage
 def flight_state(x, y, angle, vx, vy, spin, gravity, tau):
     """The state a time ``tau`` after (x, y, angle, vx, vy, spin), in free flight."""
     return (x + vx * tau, y + vy * tau + 0.5 * gravity * tau * tau, angle + spin * tau,
             vx, vy + gravity * tau, spin)
 
 
-@numba.njit(cache=True)
+@jit_stage
 def safe_flight_time(height, speed, bound):
     """Largest tau for which a corner at ``height`` >= 0 with vertical speed ``speed`` provably
     stays above the floor, given that its vertical acceleration is >= -``bound``.
@@ -37,7 +36,7 @@ def safe_flight_time(height, speed, bound):
     return (speed + root) / bound if bound > 0.0 else math.inf
 
 
-@numba.njit(cache=True)
+@jit_stage
 def time_to_contact(y, angle, vy, spin, half_length, half_width, gravity, horizon, tolerance):
     """First time tau in [0, horizon] at which a corner touches the floor, by conservative
     advancement on the lowest corners. Returns (tau, touched).

@@ -2,12 +2,11 @@
 
 import math
 
-import numba
-
+from .compilation import jit_stage
 from .layout import SIGN_X, SIGN_Y
 
 
-@numba.njit(cache=True)
+@jit_stage
 def vertex_offset(k, cos_a, sin_a, half_length, half_width):
     """World-frame vector r_k = R(alpha) b_k from the centre of mass to corner k.
 
@@ -19,7 +18,7 @@ def vertex_offset(k, cos_a, sin_a, half_length, half_width):
     return cos_a * bx - sin_a * by, sin_a * bx + cos_a * by
 
 
-@numba.njit(cache=True)
+@jit_stage
 def lowest_pair(height0, height1, height2, height3):
     """Corners (k, j) of the lowest face for corner heights given in corner order: k the lowest,
     j its lower neighbour. The two lowest corners of a rectangle are adjacent, so they bound the
@@ -34,7 +33,7 @@ def lowest_pair(height0, height1, height2, height3):
     return lowest, (before if heights[before] < heights[after] else after)
 
 
-@numba.njit(cache=True)
+@jit_stage
 def lowest_face(cos_a, sin_a, half_length, half_width):
     """``lowest_pair`` of a box at the angle whose cosine and sine are given."""
     return lowest_pair(sin_a * SIGN_X[0] * half_length + cos_a * SIGN_Y[0] * half_width,

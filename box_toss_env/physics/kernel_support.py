@@ -2,17 +2,17 @@
 
 import math
 
-import numba
 import numpy as np
 
 from . import layout
+from .compilation import jit_stage
 from .geometry import lowest_face, vertex_offset
 
 FLAT_TOLERANCE = 1e-3  # [rad] a face this close to level counts as lying on the floor
 TOUCH_TOLERANCE = 1e-3  # [-] of hx + hy: a corner this close to y = 0 touches the floor
 
 
-@numba.njit(cache=True)
+@jit_stage
 def lies_still(y, ry1, ry2, rx1, rx2, vx, vy, spin, half_length, half_width, sleep_speed):
     """True when the box lies on a face (the face's corners level within FLAT_TOLERANCE and touching
     the floor) and every point of it moves slower than ``sleep_speed``:
@@ -26,7 +26,7 @@ def lies_still(y, ry1, ry2, rx1, rx2, vx, vy, spin, half_length, half_width, sle
     return abs(ry2 - ry1) <= FLAT_TOLERANCE * math.sqrt((rx2 - rx1) ** 2 + (ry2 - ry1) ** 2)
 
 
-@numba.njit(cache=True)
+@jit_stage
 def is_lying_still(y, angle, vx, vy, spin, half_length, half_width, sleep_speed):
     """``lies_still`` for a box at ``angle``."""
     cos_a = math.cos(angle)
@@ -37,7 +37,7 @@ def is_lying_still(y, angle, vx, vy, spin, half_length, half_width, sleep_speed)
     return lies_still(y, ry1, ry2, rx1, rx2, vx, vy, spin, half_length, half_width, sleep_speed)
 
 
-@numba.njit(cache=True)
+@jit_stage
 def read_settings(settings):
     """The scene-wide settings array as (dt, gravity, max_steps, until_rest, restitution_threshold,
     sleep_speed, sleep_time, penetration_slop)."""
@@ -46,7 +46,7 @@ def read_settings(settings):
             settings[layout.SLEEP_TIME], settings[layout.PENETRATION_SLOP])
 
 
-@numba.njit(cache=True)
+@jit_stage
 def store_state(trajectory, row, body, x, y, angle, vx, vy, spin):
     trajectory[row, body, 0] = x
     trajectory[row, body, 1] = y
@@ -56,7 +56,7 @@ def store_state(trajectory, row, body, x, y, angle, vx, vy, spin):
     trajectory[row, body, 5] = spin
 
 
-@numba.njit(cache=True)
+@jit_stage
 def record_event(events, body, index, time, approach_speed, n_contacts):
     if index < events.shape[1]:
         events[body, index, layout.EVENT_TIME] = time
@@ -64,7 +64,7 @@ def record_event(events, body, index, time, approach_speed, n_contacts):
         events[body, index, layout.EVENT_CONTACTS] = n_contacts
 
 
-@numba.njit(cache=True)
+@jit_stage
 def write_stats(stats, body, first_contact, n_impacts, n_steps, max_penetration, rest_time, end_time,
                 status, fail_step, n_recorded):
     stats[body, layout.FIRST_CONTACT_TIME] = first_contact

@@ -1,10 +1,12 @@
 """Kernel factory: one compiled kernel per combination of the stages a scene uses.
 
-The flags (solver, impulses, penalty, friction, recording, parallel) are compile-time: a
-branch on a flag that is off is compiled away, so a scene pays nothing for what it lacks.
-Floats never enter the flags (each new value would recompile); they travel in arrays.
-Kernels are cached in memory per flags and on disk by numba (``cache=True``); the on-disk key
-includes a digest of the engine's sources, so editing any stage recompiles its callers.
+The flags (solver, impulses, penalty, friction, recording) are compile-time: a branch on a flag
+that is off is compiled away, so a scene pays nothing for what it lacks. ``parallel`` is not: it
+says whether ``Simulator`` splits the bodies over threads, and one body or a batch of them runs
+the same compiled kernel. Floats never enter the flags (each new value would recompile); they
+travel in arrays. Kernels are cached in memory per compile-time flags and on disk by numba
+(``compilation``); the on-disk key includes a digest of the engine's sources, so editing any
+stage recompiles its callers.
 """
 
 from __future__ import annotations
@@ -20,7 +22,8 @@ from .seed_solver import make_seed_kernel
 
 @dataclass(frozen=True)
 class KernelFlags:
-    """What a kernel is built for. Hashable: it keys the kernel cache."""
+    """What a kernel is built for (every field but ``parallel``), and whether ``Simulator`` runs the
+    bodies on threads (``parallel``, a run option: it does not change the compiled kernel)."""
 
     solver: str = "robust"  # "robust" or "seed"
     use_impulses: bool = True
@@ -39,15 +42,18 @@ def source_digest() -> int:
     return int.from_bytes(sha.digest()[:7], "little")
 
 
-@functools.cache
 def make_kernel(flags: KernelFlags):
-    """The numba kernel ``run(state, params, settings, stats, trajectory, events)`` for ``flags``."""
-    if flags.solver == "seed":
-        return make_seed_kernel(flags.use_impulses, flags.use_penalty, flags.use_friction, flags.record,
-                                flags.parallel, source_digest())
-    if flags.solver == "robust":
-        if not flags.use_impulses:
+    """The numba kernel ``run(state, params, settings, stats, trajectory, events)`` for ``flags``
+    (the same kernel whatever ``flags.parallel``)."""
+    return _make_kernel(flags.solver, flags.use_impulses, flags.use_penalty, flags.use_friction, flags.record)
+
+
+@functools.cache
+def _make_kernel(solver: str, use_impulses: bool, use_penalty: bool, use_friction: bool, record: bool):
+    if solver == "seed":
+        return make_seed_kernel(use_impulses, use_penalty, use_friction, record, source_digest())
+    if solver == "robust":
+        if not use_impulses:
             raise ValueError("use_impulses must be True with solver='robust'")
-        return make_robust_kernel(flags.use_penalty, flags.use_friction, flags.record, flags.parallel,
-                                  source_digest())
-    raise ValueError(f"solver must be 'robust' or 'seed', got {flags.solver!r}")
+        return make_robust_kernel(use_penalty, use_friction, record, source_digest())
+    raise ValueError(f"solver must be 'robust' or 'seed', got {solver!r}")

@@ -45,7 +45,7 @@ omega dt = 2; time-stepped flight and impacts move the landing pose with the ste
 
 import math
 
-import numba
+from .compilation import jit_kernel, jit_stage
 import numpy as np
 
 from . import layout
@@ -80,13 +80,13 @@ FRICTION_ITERATIONS = 8  # at most this many Gauss-Seidel sweeps over friction a
 MAX_LOCATED_IMPACTS = 16  # impacts located inside one contact step at most; later ones are stopped on the grid
 
 
-@numba.njit(cache=True)
+@jit_stage
 def place_corner(corners, i, k, cos_a, sin_a, half_length, half_width):
     """Corner k of the box as column i of the corner work array (its lever arm)."""
     corners[RX, i], corners[RY, i] = vertex_offset(k, cos_a, sin_a, half_length, half_width)
 
 
-@numba.njit(cache=True)
+@jit_stage
 def impact_impulses(vx, vy, spin, corners, n, restitution, friction, threshold, inv_mass, inv_inertia, k):
     """Impulses of an impact at this instant on the first n corners (those touching the floor), in
     Poisson's two phases:
@@ -117,7 +117,7 @@ def impact_impulses(vx, vy, spin, corners, n, restitution, friction, threshold, 
     return vx, vy, spin, approach
 
 
-@numba.njit(cache=True)
+@jit_stage
 def resolve_impact(y, cos_a, sin_a, vx, vy, spin, half_length, half_width, inv_mass, inv_inertia, restitution,
                    friction, threshold, simultaneous, corners, k):
     """The impact of a flying box at the instant a corner reaches the floor (``impact_impulses``) on the
@@ -139,7 +139,7 @@ def resolve_impact(y, cos_a, sin_a, vx, vy, spin, half_length, half_width, inv_m
     return vx, vy, spin, n, approach, leaves
 
 
-@numba.njit(cache=True)
+@jit_stage
 def contact_impact(y, cos_a, sin_a, vx, vy, spin, half_length, half_width, inv_mass, inv_inertia, restitution,
                    friction, threshold, tolerance, located, loaded, corners, k):
     """The impact of a box in contact at this instant: where a corner touching the floor approaches faster
@@ -175,7 +175,7 @@ def contact_impact(y, cos_a, sin_a, vx, vy, spin, half_length, half_width, inv_m
     return vx, vy, spin, n, approach
 
 
-@numba.njit(cache=True)
+@jit_stage
 def restitution_impulses(vx, vy, spin, corners, n, restitution, friction, inv_mass, inv_inertia, k):
     """Poisson's restitution phase: corner i gets the normal impulse e * compression_i (row COMPRESSION),
     with friction clamped to mu e compression_i (it can stop the slip there, never reverse it); then a
@@ -194,14 +194,14 @@ def restitution_impulses(vx, vy, spin, corners, n, restitution, friction, inv_ma
     return (vx, *solve_normal_block(vy, spin, corners, n, inv_mass, inv_inertia, k))
 
 
-@numba.njit(cache=True)
+@jit_stage
 def predicted_height(k, y, cos_a, sin_a, half_length, half_width, fall, spin, h):
     """Height of corner k after a step h at the current velocities, to first order."""
     rx, ry = vertex_offset(k, cos_a, sin_a, half_length, half_width)
     return y + ry + fall + h * spin * rx
 
 
-@numba.njit(cache=True)
+@jit_stage
 def contact_corners(y, cos_a, sin_a, vy, spin, half_length, half_width, gravity, h, reach, corners, ids):
     """The corners that can touch the floor in a step h, as the first columns of ``corners`` (their indices in
     ``ids``): of the one that would be lowest at the end of the step at the current velocities, its lower
@@ -225,13 +225,13 @@ def contact_corners(y, cos_a, sin_a, vy, spin, half_length, half_width, gravity,
     return n
 
 
-@numba.njit(cache=True)
+@jit_stage
 def kinetic_energy(vx, vy, spin, inv_mass, inv_inertia):
     """m |v|^2 / 2 + I omega^2 / 2 [J]."""
     return 0.5 * (vx * vx + vy * vy) / inv_mass + 0.5 * spin * spin / inv_inertia
 
 
-@numba.njit(cache=True)
+@jit_stage
 def energy_limit_scale(kinetic_before, kinetic_after, potential_rise):
     """The factor s in [0, 1] on the velocities of a contact step that keeps the step from gaining energy.
 
@@ -254,30 +254,28 @@ def energy_limit_scale(kinetic_before, kinetic_after, potential_rise):
     return min(max(s, 0.0), 1.0)
 
 
-@numba.njit(cache=True)
+@jit_stage
 def is_finite_state(x, y, angle, vx, vy, spin):
     return (math.isfinite(x) and math.isfinite(y) and math.isfinite(angle) and math.isfinite(vx)
             and math.isfinite(vy) and math.isfinite(spin))
 
 
-def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, parallel: bool,
-                       source_digest: int):
+def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, source_digest: int):
     """Build the robust kernel for exactly the stages a scene uses (flags are compile-time).
 
     ``run(state, params, settings, stats, trajectory, events)`` advances every body in place up
     to ``settings[MAX_STEPS]`` grid steps, or until it sleeps when ``settings[UNTIL_REST]``.
     """
     PENALTY, FRICTION, RECORD, DIGEST = use_penalty, use_friction, record, source_digest
-    PARALLEL = parallel
 
-    @numba.njit(cache=True, parallel=parallel)
+    @jit_kernel
     def run(state, params, settings, stats, trajectory, events):
-        # numba keys its on-disk cache on closure values, not on jit options: the sources' digest and
-        # the parallel flag must be closure values, or a stale or serial kernel would be loaded
-        _ = (DIGEST, PARALLEL)
+        # numba keys its on-disk cache on this file and the closure values: the digest of every engine
+        # source must be a closure value, or a kernel compiled with an older stage would be loaded
+        _ = DIGEST
         dt, gravity, max_steps, until_rest, threshold, sleep_speed, sleep_time, slop = read_settings(settings)
         end_time = max_steps * dt
-        for i in numba.prange(state.shape[0]):
+        for i in range(state.shape[0]):
             x, y, angle, vx, vy, spin = (state[i, 0], state[i, 1], state[i, 2],
                                          state[i, 3], state[i, 4], state[i, 5])
             hx = params[i, layout.HALF_LENGTH]

@@ -20,15 +20,14 @@ e = 0, so restitution is not what drives it).
 
 import math
 
-import numba
-
 from . import layout
+from .compilation import jit_kernel, jit_stage
 from .kernel_support import is_lying_still, read_settings, record_event, store_state, write_stats
 
 TANGENT_NORMALISE_MIN = 1e-4  # the demo normalises u_t only above this length
 
 
-@numba.njit(cache=True, inline="always")
+@jit_stage(inline="always")
 def seed_step(x, y, angle, vx, vy, spin, half_length, half_width, mass, inertia, restitution,
               friction, stiffness, dt, gravity, use_impulses, use_penalty, use_friction):
     """One step of the seed scheme for one box. Returns the new state, the lowest corner height
@@ -108,22 +107,21 @@ def seed_step(x, y, angle, vx, vy, spin, half_length, half_width, mass, inertia,
 
 
 def make_seed_kernel(use_impulses: bool, use_penalty: bool, use_friction: bool, record: bool,
-                     parallel: bool, source_digest: int):
+                     source_digest: int):
     """Build the seed kernel for exactly the stages a scene uses (flags are compile-time).
 
     ``run(state, params, settings, stats, trajectory, events)`` advances every body in place for
     ``settings[MAX_STEPS]`` steps, or until it lies still on a face when ``settings[UNTIL_REST]``.
     """
     IMPULSES, PENALTY, FRICTION, RECORD, DIGEST = use_impulses, use_penalty, use_friction, record, source_digest
-    PARALLEL = parallel
 
-    @numba.njit(cache=True, parallel=parallel)
+    @jit_kernel
     def run(state, params, settings, stats, trajectory, events):
-        # numba keys its on-disk cache on closure values, not on jit options: the sources' digest and
-        # the parallel flag must be closure values, or a stale or serial kernel would be loaded
-        _ = (DIGEST, PARALLEL)
+        # numba keys its on-disk cache on this file and the closure values: the digest of every engine
+        # source must be a closure value, or a kernel compiled with an older stage would be loaded
+        _ = DIGEST
         dt, gravity, max_steps, until_rest, _, sleep_speed, sleep_time, _ = read_settings(settings)
-        for i in numba.prange(state.shape[0]):
+        for i in range(state.shape[0]):
             x, y, angle, vx, vy, spin = (state[i, 0], state[i, 1], state[i, 2],
                                          state[i, 3], state[i, 4], state[i, 5])
             hx = params[i, layout.HALF_LENGTH]
@@ -152,7 +150,7 @@ def make_seed_kernel(use_impulses: bool, use_penalty: bool, use_friction: bool, 
                     max_penetration = max(max_penetration, -lowest_y)
                     if below & ~below_before:  # a corner newly below the floor: an impact
                         if RECORD:
-                            record_event(events, i, n_impacts, n * dt, math.nan, 1.0)
+                            record_event(events, i, n_impacts, n * dt, math.nan, 1)
                         n_impacts += 1
                 below_before = below
                 n += 1

@@ -3,12 +3,15 @@
 
 from __future__ import annotations
 
+import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numba
 import numpy as np
 
 from . import layout
+from .compilation import ensure_compiled
 from .kernels import KernelFlags, make_kernel
 from .ranges import MAX_STEPS, check_step_count
 from .scene import Scene
@@ -83,8 +86,12 @@ class Simulator:
     """A kernel compiled for one combination of stages, run on arrays many times.
 
     ``run`` takes the state (n, 6) and the body parameters (n, 7) (see ``layout``) and advances
-    the state in place; it allocates nothing per step. ``parallel`` runs bodies on numba's
-    threads (``threads`` in [1, numba.config.NUMBA_NUM_THREADS], default: all of numba's).
+    the state in place; it allocates nothing per step. With ``flags.parallel`` the bodies are split
+    into ``threads`` contiguous shares run at once (``threads`` in [1, numba.config.NUMBA_NUM_THREADS],
+    default: all of them, the cores available): the kernel releases the GIL, so the shares run on a
+    thread pool, and each body's result does not depend on the split. One body and a batch run the
+    same compiled kernel (``kernels``); its first run compiles it or loads it from numba's cache
+    (``compilation.ensure_compiled``).
     """
 
     def __init__(self, flags: KernelFlags, threads: int | None = None):
@@ -93,6 +100,7 @@ class Simulator:
         self.kernel = make_kernel(flags)
         self._no_trajectory = np.zeros((0, 0, layout.STATE_SIZE))
         self._no_events = np.zeros((0, 0, layout.EVENT_SIZE))
+        self._ready = False  # compiled or loaded for the arrays of the first run
 
     @classmethod
     def for_scene(cls, scene: Scene, *, record: bool = False, parallel: bool | None = None,
@@ -103,6 +111,13 @@ class Simulator:
                             use_friction=scene.has_friction, record=record, parallel=parallel)
         return cls(flags, threads)
 
+    @property
+    def shares(self) -> int:
+        """How many threads a parallel run uses at most (1 without ``flags.parallel``)."""
+        if not self.flags.parallel:
+            return 1
+        return self.threads if self.threads is not None else numba.config.NUMBA_NUM_THREADS
+
     def run(self, state: np.ndarray, params: np.ndarray, settings: np.ndarray, stats: np.ndarray,
             trajectory: np.ndarray | None = None, events: np.ndarray | None = None) -> None:
         """Advance ``state`` in place and fill ``stats`` (n, STATS_SIZE); with ``record`` also
@@ -111,15 +126,50 @@ class Simulator:
             raise ValueError("trajectory and events arrays are required when recording")
         trajectory = self._no_trajectory if trajectory is None else trajectory
         events = self._no_events if events is None else events
-        if self.flags.parallel and self.threads is not None:
-            previous = numba.get_num_threads()
-            numba.set_num_threads(self.threads)
-            try:
-                self.kernel(state, params, settings, stats, trajectory, events)
-            finally:
-                numba.set_num_threads(previous)
-        else:
+        if not self._ready:
+            ensure_compiled(self.kernel, (state, params, settings, stats, trajectory, events))
+            self._ready = True
+        shares = min(self.shares, state.shape[0])
+        if shares <= 1 or self.flags.record:  # a recording's (T, n, 6) trajectory does not split into contiguous shares
             self.kernel(state, params, settings, stats, trajectory, events)
+        else:
+            run_in_shares(self.kernel, shares, state, params, settings, stats, trajectory, events)
+
+
+def run_in_shares(kernel, shares: int, state, params, settings, stats, trajectory, events) -> None:
+    """Run ``kernel`` on ``shares`` contiguous row ranges of the body arrays at once: all but the last
+    on the thread pool, the last on the calling thread (the kernel releases the GIL)."""
+    n = state.shape[0]
+    edges = [n * k // shares for k in range(shares + 1)]
+    pool = thread_pool(shares - 1)
+    futures = [pool.submit(kernel, state[a:b], params[a:b], settings, stats[a:b], trajectory, events)
+               for a, b in zip(edges[:-2], edges[1:-1], strict=True)]
+    a = edges[-2]
+    try:
+        kernel(state[a:], params[a:], settings, stats[a:], trajectory, events)
+    finally:
+        for future in futures:
+            future.result()
+
+
+_thread_pools: dict[int, ThreadPoolExecutor] = {}
+
+
+def thread_pool(workers: int) -> ThreadPoolExecutor:
+    """A pool of ``workers`` threads shared by every simulator (created at first use)."""
+    pool = _thread_pools.get(workers)
+    if pool is None:
+        pool = _thread_pools[workers] = ThreadPoolExecutor(workers, thread_name_prefix="box-toss-engine")
+    return pool
+
+
+def _forget_thread_pools() -> None:
+    """In a forked child the pools' threads do not exist: start new ones when needed."""
+    _thread_pools.clear()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_forget_thread_pools)
 
 
 def check_threads(threads) -> int:

@@ -24,13 +24,16 @@ from typing import Any
 import numpy as np
 
 from box_toss_env.physics import layout
+from box_toss_env.physics.compilation import cached_on_disk, compiled_in_process, ensure_compiled
 
 COMPILING_NOTICE = "compiling the {name} kernel... (first use only)"
 LOADING_NOTICE = "loading the {name} kernel from numba's cache..."
 
 
 def load_kernel(kernel: Callable[..., Any], args: tuple) -> None:
-    """The call that loads or compiles ``kernel`` for ``args``'s types (and runs it on them)."""
+    """The call that loads or compiles ``kernel`` for ``args``'s types (and runs it on them); a
+    compilation holds the engine's compile lock (``compilation.ensure_compiled``)."""
+    ensure_compiled(kernel, args)
     kernel(*args)
 
 
@@ -43,30 +46,6 @@ def zero_step_args(state: np.ndarray, params: np.ndarray, settings: np.ndarray, 
     return (np.array(state, dtype=np.float64), np.array(params, dtype=np.float64), settings,
             np.array(stats, dtype=np.float64), np.zeros((1, n, layout.STATE_SIZE)),
             np.zeros((n, layout.MAX_EVENTS, layout.EVENT_SIZE)))
-
-
-def _signature(kernel, args: tuple) -> tuple:
-    return tuple(kernel.typeof_pyval(a) for a in args)
-
-
-def compiled_in_process(kernel, args: tuple) -> bool:
-    """Whether ``kernel`` (a numba dispatcher) is compiled or loaded for ``args``'s types in this
-    process already; False for anything else."""
-    try:
-        return _signature(kernel, args) in kernel.overloads
-    except Exception:  # noqa: BLE001  (not a numba dispatcher)
-        return False
-
-
-def cached_on_disk(kernel, args: tuple) -> bool:
-    """Whether numba's on-disk cache holds ``kernel`` compiled for ``args``'s types. Best effort,
-    through numba's cache index (the key its loader looks up); False if it cannot tell."""
-    try:
-        cache = kernel._cache
-        key = cache._index_key(_signature(kernel, args), kernel.targetctx.codegen())
-        return key in cache._cache_file._load_index()
-    except Exception:  # noqa: BLE001  (not a numba dispatcher, or numba's internals changed)
-        return False
 
 
 @dataclass(eq=False)

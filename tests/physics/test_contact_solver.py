@@ -2,11 +2,27 @@
 one-corner friction solve against Gauss-Seidel run to convergence."""
 
 import math
+import os
+import subprocess
+import sys
 
+import numba
 import numpy as np
 import pytest
 
 from box_toss_env.physics import contact_solver as cs
+
+# The stages have no Python wrapper (they are compiled to be called from compiled code only), so their
+# checks run in plain Python: this module again, in a subprocess with NUMBA_DISABLE_JIT=1 (same source).
+compiled = pytest.mark.skipif(not numba.config.DISABLE_JIT, reason="run in plain Python by the test below")
+
+
+@pytest.mark.skipif(bool(numba.config.DISABLE_JIT), reason="already plain Python")
+def test_the_stages_pass_their_checks_in_plain_python():
+    done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", __file__],
+                          env={**os.environ, "NUMBA_DISABLE_JIT": "1"}, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "4 passed" in done.stdout, done.stdout  # every check below ran
 
 
 def random_corners(rng, n):
@@ -25,6 +41,7 @@ def random_corners(rng, n):
     return corners, 1.0 / mass, 1.0 / inertia
 
 
+@compiled
 @pytest.mark.parametrize("n", [1, 2, 3])
 def test_normal_impulses_solve_the_corner_lcp(n):
     """lam_i >= 0, u_i' >= b_i and lam_i (u_i' - b_i) = 0 for every corner, to rounding."""
@@ -44,6 +61,7 @@ def test_normal_impulses_solve_the_corner_lcp(n):
             assert lam * w <= 1e-9 * scale * (lam + 1.0)
 
 
+@compiled
 def test_one_corner_with_friction_is_solved_exactly():
     """The closed form meets every condition that defines the one-corner contact with Coulomb friction (which
     fix it uniquely): u_n' >= b, lam >= 0, lam (u_n' - b) = 0, |q| <= mu lam, and q = -mu lam sign(u_t') while

@@ -1,0 +1,166 @@
+"""Cold start: how long the first throw takes in a fresh interpreter, with numba's cache empty (cold)
+and filled by the run before (warm). Prints measured figures; asserts nothing.
+
+    python -m benchmarks.cold_start [--repeats 3] [--readme]
+
+Each case runs in a fresh interpreter with ``NUMBA_CACHE_DIR`` pointing at a fresh temporary
+directory: the cold run, then the warm run in the same directory. Times are wall times [s]:
+
+- ``gym.make`` and ``make_vec``: from ``import gymnasium, box_toss_env`` to the end of the first
+  ``step`` (making the env, ``reset`` and one throw, whose compilation or cache load is most of it);
+  ``make_vec`` once more with the cache holding what a ``gym.make`` throw compiled (does the batched
+  env reuse the single env's kernel?);
+- SB3 ``SubprocVecEnv`` with 4 workers: from creating it (Stable-Baselines3, torch and the package are
+  imported in the parent already) to the end of its first ``step``, each worker importing the
+  package and throwing once. The workers' compiled-kernel statistics say how many compiled. The same
+  with CartPole-v1 is what SB3's workers cost by themselves (each starts and imports SB3 and torch).
+
+``--pythonpath DIR`` measures the package found in DIR instead (e.g. an older checkout).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import textwrap
+from pathlib import Path
+
+from benchmarks.readme_section import replace_section
+
+REPO = Path(__file__).resolve().parent.parent
+
+PROBE = textwrap.dedent("""
+    import json, sys, time
+    case = sys.argv[1]
+    start, start_cpu = time.perf_counter(), time.process_time()
+    import numba  # timed on its own: the package imports it anyway
+    numba_import = time.process_time() - start_cpu
+    import gymnasium as gym
+    import box_toss_env
+    compiled = cpu = None
+    if case == "subproc":
+        import numpy as np
+        from stable_baselines3.common.vec_env import SubprocVecEnv
+
+        class CountCompilations(gym.Wrapper):
+            def kernel_compilations(self):  # 1 if this worker compiled the kernel, 0 if it loaded it
+                return sum(self.env.unwrapped._simulator.kernel.stats.cache_misses.values())
+
+        start = time.perf_counter()
+        envs = SubprocVecEnv([lambda: CountCompilations(gym.make("box_toss_env:BoxToss-v0"))] * 4)
+        envs.reset()
+        envs.step(np.zeros((4, 3), dtype=np.float32))
+        seconds = time.perf_counter() - start
+        compiled = sum(envs.env_method("kernel_compilations"))
+        envs.close()
+    elif case == "subproc_cartpole":
+        import numpy as np
+        from stable_baselines3.common.vec_env import SubprocVecEnv
+
+        start = time.perf_counter()
+        envs = SubprocVecEnv([lambda: gym.make("CartPole-v1")] * 4)
+        envs.reset()
+        envs.step(np.zeros(4, dtype=np.int64))
+        seconds = time.perf_counter() - start
+        envs.close()
+    else:
+        from numba.core import event
+        with event.install_recorder("numba:compile") as recorder:
+            env = gym.make_vec("BoxToss-v0", num_envs=64) if case == "make_vec" else gym.make("BoxToss-v0")
+            env.reset(seed=0)
+            env.step(env.action_space.sample())
+        seconds, cpu = time.perf_counter() - start, time.process_time() - start_cpu
+        compiled = sum(1 for _, e in recorder.buffer if e.is_start)  # numba compilations (loads are not counted)
+    print(json.dumps({"seconds": seconds, "cpu": cpu, "compiled": compiled, "numba_import": numba_import,
+                      "package": box_toss_env.__file__}))
+""")
+
+CASES = {
+    "make": 'gym.make("BoxToss-v0")',
+    "make_vec": 'make_vec("BoxToss-v0", num_envs=64)',
+    "make_vec_after_make": "make_vec(64) after a gym.make throw",
+    "subproc": "SB3 SubprocVecEnv, 4 workers",
+    "subproc_cartpole": "the same with CartPole-v1 (SB3's own start)",
+}
+
+
+def run_case(case: str, cache: str, pythonpath: str) -> dict:
+    env = {**os.environ, "NUMBA_CACHE_DIR": cache, "PYTHONPATH": pythonpath}
+    done = subprocess.run([sys.executable, "-c", PROBE, case], env=env, capture_output=True, text=True, check=False,
+                          cwd=tempfile.gettempdir(), timeout=1800)
+    if done.returncode != 0:
+        raise RuntimeError(f"case {case} failed:\n{done.stderr}")
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def measure(repeats: int, pythonpath: str, cases: list[str], log=print) -> dict[str, dict[str, list]]:
+    """Per case, the cold and the warm runs' results, ``repeats`` of each (a fresh cache per repeat)."""
+    results = {case: {"cold": [], "warm": []} for case in cases}
+    for repeat in range(repeats):
+        for case in cases:
+            with tempfile.TemporaryDirectory(prefix="box_toss_cold_start_") as cache:
+                if case == "make_vec_after_make":  # "cold": only the single env's throw is cached
+                    run_case("make", cache, pythonpath)
+                for state in ("cold", "warm"):
+                    result = run_case("make_vec" if case == "make_vec_after_make" else case, cache, pythonpath)
+                    results[case][state].append(result)
+                    log(f"  repeat {repeat + 1}/{repeats} {case:8} {state}: {result['seconds']:.2f} s")
+    return results
+
+
+def summary(values: list[float]) -> str:
+    """Median and range of ``values``."""
+    if len(values) == 1:
+        return f"{values[0]:.2f}"
+    return f"{statistics.median(values):.2f} ({min(values):.2f}-{max(values):.2f})"
+
+
+def report(results: dict[str, dict[str, list]], repeats: int) -> str:
+    import numba
+
+    load = ", ".join(f"{value:.1f}" for value in os.getloadavg()) if hasattr(os, "getloadavg") else "n/a"
+    lines = [f"numba {numba.__version__}, {os.cpu_count()} cores (load average {load} at the end: a shared machine)",
+             f"first throw in a fresh interpreter: wall time [s], median of {repeats} (min-max), and the interpreter's "
+             "CPU time [s], median", "cold: NUMBA_CACHE_DIR empty; warm: filled by the cold run; compilations: "
+             "numba compilations in the cold run (stages, numba's own helpers, kernels)", "",
+             f"{'case':44} {'cold':>19} {'cpu':>5} {'warm':>17} {'cpu':>5} {'compilations':>13}"]
+    for case, runs in results.items():
+        cells = []
+        for state in ("cold", "warm"):
+            cells.append(summary([r["seconds"] for r in runs[state]]))
+            cpu = [r["cpu"] for r in runs[state] if r["cpu"] is not None]
+            cells.append(f"{statistics.median(cpu):.2f}" if cpu else "-")
+        compiled = "-" if case.startswith("subproc") else str(runs["cold"][0]["compiled"])
+        lines.append(f"{CASES[case]:44} {cells[0]:>19} {cells[1]:>5} {cells[2]:>17} {cells[3]:>5} {compiled:>13}")
+    numba_import = [r["numba_import"] for runs in results.values() for r in runs["warm"]]
+    lines += ["", f"of which `import numba` alone: {statistics.median(numba_import):.2f} s of CPU (median, warm runs)"]
+    if "subproc" in results:
+        compiled = [r["compiled"] for r in results["subproc"]["cold"]]
+        lines += [f"SubprocVecEnv, cold: how many of the 4 workers compiled the kernel (the others loaded it), "
+                      f"per repeat: {compiled}"]
+    return "\n".join(lines)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--repeats", type=int, default=3, help="cold and warm runs per case (default 3)")
+    parser.add_argument("--cases", nargs="+", choices=list(CASES), default=list(CASES))
+    parser.add_argument("--pythonpath", default=str(REPO), help="where the measured box_toss_env is (default: this "
+                                                                "checkout)")
+    parser.add_argument("--readme", action="store_true", help="also write the figures into README.md")
+    args = parser.parse_args()
+    results = measure(args.repeats, args.pythonpath, args.cases)
+    package = results[args.cases[0]]["cold"][0]["package"]
+    text = report(results, args.repeats)
+    print(f"\n$ python -m benchmarks.cold_start  (package: {package})\n{text}")
+    if args.readme:
+        replace_section("cold-start", f"```text\n$ python -m benchmarks.cold_start\n{text}\n```")
+
+
+if __name__ == "__main__":
+    main()

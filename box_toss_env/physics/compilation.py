@@ -1,0 +1,146 @@
+"""How the engine is compiled: the two numba decorators every compiled function uses, where the
+compiled code is cached on disk, and one compilation at a time across processes.
+
+Compile cost is per compiled function, so the decorators keep the number of compilations down:
+
+- ``jit_stage``: a function called only from compiled code (a stage of a solver). It is compiled
+  for the plain types of its arguments (a constant argument such as ``True`` or a corner index
+  ``0`` does not compile its own copy), without the wrappers that make a function callable from
+  Python (building them was about a quarter of a cold compile), and cached on disk.
+- ``jit_kernel``: an entry point called from Python (a solver's kernel). It releases the GIL, so
+  ``Simulator`` runs one compiled kernel over a batch on several threads: the single env, the
+  batched env and subprocess workers all load the same compiled code.
+
+Where compiled code is cached (numba's own search order, ``numba.core.caching``): the directory
+in ``NUMBA_CACHE_DIR`` if set; otherwise ``__pycache__`` next to the engine's sources if writable;
+otherwise numba's user-wide cache directory (``~/.cache/numba`` on Linux). If none is writable,
+the engine compiles in memory in every process and warns once (``CacheWarning``) instead of
+failing to import, which is what numba alone does. ``cache_location()`` says which applies.
+
+``ensure_compiled`` makes a kernel's first compilation for a set of argument types hold a file lock
+in the cache directory: processes started together (``SubprocVecEnv``, ``AsyncVectorEnv``) wait for
+the first one's compilation and then load its result from the cache, instead of each compiling
+(and racing to write the same cache files, numba issue #4807).
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from collections.abc import Callable
+
+import filelock
+from numba.core import config, types
+from numba.core.caching import FunctionCache
+from numba.core.dispatcher import Dispatcher
+from numba.core.registry import CPUDispatcher
+
+LOCK_NAME = "box_toss_env-compile.lock"
+LOCK_TIMEOUT = 600.0  # [s] a compilation elsewhere holding the lock longer than this is not waited for
+
+
+class CacheWarning(UserWarning):
+    """The engine's compiled code cannot be cached on disk: it is compiled in every process."""
+
+
+class EngineDispatcher(CPUDispatcher):
+    """numba's CPU dispatcher, compiling for the plain (non-literal) types of its arguments, and
+    running without a disk cache (with a ``CacheWarning``) where numba would refuse to import."""
+
+    def get_call_template(self, args, kws):
+        # a call from compiled code with a constant argument would compile a copy for that constant
+        # (Literal[int](0), Literal[bool](True), ...): compile once for the plain types instead
+        return super().get_call_template([types.unliteral(a) for a in args],
+                                         {name: types.unliteral(a) for name, a in kws.items()})
+
+    def enable_caching(self):
+        try:
+            self._cache = FunctionCache(self.py_func)
+        except RuntimeError as error:  # numba: "cannot cache function ...: no locator available"
+            warn_uncached(str(error))
+
+
+_warned_uncached = False
+
+
+def warn_uncached(reason: str) -> None:
+    global _warned_uncached
+    if not _warned_uncached:
+        _warned_uncached = True
+        warnings.warn(f"box_toss_env: no writable directory for numba's cache ({reason}). The engine is compiled "
+                      "again in every process (seconds each time). Set NUMBA_CACHE_DIR to a writable directory to "
+                      "keep the compiled code.", CacheWarning, stacklevel=2)
+
+
+def _make_dispatcher(function: Callable, **options) -> Callable:
+    if config.DISABLE_JIT:  # NUMBA_DISABLE_JIT=1: plain Python, as numba.njit would give
+        return function
+    dispatcher = EngineDispatcher(py_func=function, locals={}, targetoptions={"nopython": True, **options})
+    dispatcher.enable_caching()
+    return dispatcher
+
+
+def jit_stage(function: Callable | None = None, *, inline: str = "never"):
+    """Decorator for a function called only from compiled code: one compilation per set of plain
+    argument types, no Python wrappers, cached on disk. ``inline="always"`` inlines it into its
+    callers at numba's level (its callers then type it again at each call site)."""
+    def decorate(function):
+        return _make_dispatcher(function, no_cpython_wrapper=True, no_cfunc_wrapper=True, inline=inline)
+    return decorate if function is None else decorate(function)
+
+
+def jit_kernel(function: Callable) -> Callable:
+    """Decorator for a kernel called from Python: it releases the GIL (so threads can run it
+    together) and is cached on disk."""
+    return _make_dispatcher(function, nogil=True, no_cfunc_wrapper=True)
+
+
+def cache_location(function: Callable | None = None) -> str | None:
+    """The directory numba caches ``function`` (a function compiled with these decorators) in, by
+    default the engine's, or None if nothing is cached (no writable directory)."""
+    if function is None:
+        from .kernel_support import write_stats as function
+    return getattr(getattr(function, "_cache", None), "cache_path", None)
+
+
+def argument_types(kernel, args: tuple) -> tuple:
+    """The numba types ``kernel`` would be compiled for when called with ``args``."""
+    return tuple(kernel.typeof_pyval(a) for a in args)
+
+
+def compiled_in_process(kernel, args: tuple) -> bool:
+    """Whether ``kernel`` (a numba dispatcher) is compiled or loaded for ``args``'s types in this
+    process already; False for anything else."""
+    try:
+        return argument_types(kernel, args) in kernel.overloads
+    except Exception:  # noqa: BLE001  (not a numba dispatcher)
+        return False
+
+
+def cached_on_disk(kernel, args: tuple) -> bool:
+    """Whether numba's on-disk cache holds ``kernel`` compiled for ``args``'s types. Best effort,
+    through numba's cache index (the key its loader looks up); False if it cannot tell."""
+    try:
+        cache = kernel._cache
+        key = cache._index_key(argument_types(kernel, args), kernel.targetctx.codegen())
+        return key in cache._cache_file._load_index()
+    except Exception:  # noqa: BLE001  (not a numba dispatcher, no disk cache, or numba's internals changed)
+        return False
+
+
+def ensure_compiled(kernel, args: tuple) -> None:
+    """Compile ``kernel`` for ``args``'s types, or load it from the disk cache, before its first
+    call. A compilation holds a lock file in the cache directory, so that of several processes
+    needing the same kernel at once one compiles and the others load its result."""
+    if not isinstance(kernel, Dispatcher) or compiled_in_process(kernel, args):
+        return
+    signature = argument_types(kernel, args)
+    directory = cache_location(kernel)
+    if directory is not None and not cached_on_disk(kernel, args):
+        try:
+            with filelock.FileLock(os.path.join(directory, LOCK_NAME), timeout=LOCK_TIMEOUT):
+                kernel.compile(signature)  # numba looks in the cache first: another process may have compiled it
+            return
+        except (filelock.Timeout, OSError):  # held too long elsewhere, or the directory went away: compile anyway
+            pass
+    kernel.compile(signature)

@@ -1,0 +1,210 @@
+"""How the engine is compiled: one kernel shared by the single and the batched env, one compilation
+per stage, numba's cache where it is told to be (or none, with a warning, on a read-only install), and
+one compilation for processes that need the same kernel at once. Structure, not time: these tests read
+numba's dispatchers, compile events and cache statistics."""
+
+import json
+import os
+import shutil
+import stat
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from numba.core import event
+
+import box_toss_env
+from box_toss_env.physics import (
+    KernelFlags,
+    contact_solver,
+    flight,
+    geometry,
+    kernel_support,
+    make_kernel,
+    robust_solver,
+    seed_solver,
+)
+from box_toss_env.physics.compilation import EngineDispatcher
+
+PACKAGE = Path(box_toss_env.__file__).parent
+STAGE_MODULES = (contact_solver, flight, geometry, kernel_support, robust_solver, seed_solver)
+
+
+def compile_events(function) -> list[str]:
+    """Names of the functions numba compiled (or loaded from its disk cache: no event) during ``function()``."""
+    with event.install_recorder("numba:compile") as recorder:
+        function()
+    return [e.data["dispatcher"].py_func.__qualname__ for _, e in recorder.buffer if e.is_start]
+
+
+def throw(env) -> None:
+    env.reset(seed=0)
+    env.step(env.action_space.sample())
+
+
+def test_after_the_batched_env_the_single_env_compiles_nothing():
+    batched = gym.make_vec("BoxToss-v0", num_envs=3, threads=2)
+    throw(batched)
+    kernel = batched.unwrapped.simulator.kernel
+    signatures = list(kernel.signatures)
+    single = gym.make("BoxToss-v0")
+    assert compile_events(lambda: throw(single)) == []
+    assert single.unwrapped._simulator.kernel is kernel
+    assert kernel.signatures == signatures and len(signatures) == 1
+
+
+def test_after_the_single_env_the_batched_env_compiles_nothing_in_the_engine():
+    single = gym.make("BoxToss-v0", friction=0.0)  # a kernel of its own (no friction stage)
+    throw(single)
+    batched = gym.make_vec("BoxToss-v0", num_envs=5, friction=0.0)
+    batched.reset(seed=0)  # draws the episodes with the batch's compiled random streams
+    events = compile_events(lambda: batched.step(batched.action_space.sample()))
+    assert events == []
+    assert batched.unwrapped.simulator.kernel is single.unwrapped._simulator.kernel
+
+
+STAGE_COUNT_PROBE = textwrap.dedent("""
+    import collections, json
+    from numba.core import event
+    from box_toss_env.physics import scenes, simulate
+    with event.install_recorder("numba:compile") as recorder:
+        for solver in ("robust", "seed"):
+            for record in (False, True):
+                for friction in (0.0, 0.5):
+                    simulate(scenes.toss(solver=solver, friction=friction), duration=1.0, until_rest=True,
+                             record=record)
+    names = [e.data["dispatcher"].py_func for _, e in recorder.buffer if e.is_start]
+    print(json.dumps(collections.Counter(f"{f.__module__}.{f.__qualname__}" for f in names)))
+""")
+
+
+def test_every_stage_is_compiled_once_for_plain_argument_types(tmp_path):
+    """With an empty cache, every solver and recording variant: each stage compiles once, whatever
+    the constants its callers pass (a corner index, True) and whichever kernel calls it."""
+    done = subprocess.run([sys.executable, "-c", STAGE_COUNT_PROBE], capture_output=True, text=True, timeout=600,
+                          env=probe_env(PYTHONPATH=PACKAGE.parent, NUMBA_CACHE_DIR=tmp_path), cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    counts = json.loads(done.stdout.strip().splitlines()[-1])
+    stages = {f"{value.py_func.__module__}.{value.py_func.__qualname__}" for module in STAGE_MODULES
+              for value in vars(module).values()
+              if isinstance(value, EngineDispatcher) and value.targetoptions["inline"] != "always"}
+    assert len(stages) > 20 and stages <= set(counts)
+    assert {name: counts[name] for name in stages if counts[name] != 1} == {}
+    kernels = {name: count for name, count in counts.items() if name.endswith("_kernel.<locals>.run")}
+    assert kernels == {"box_toss_env.physics.robust_solver.make_robust_kernel.<locals>.run": 4,
+                       "box_toss_env.physics.seed_solver.make_seed_kernel.<locals>.run": 4}
+
+
+def test_stages_have_no_python_wrapper_and_kernels_release_the_gil():
+    assert robust_solver.resolve_impact.targetoptions["no_cpython_wrapper"]
+    assert make_kernel(KernelFlags()).targetoptions["nogil"]
+    assert make_kernel(KernelFlags(parallel=True)) is make_kernel(KernelFlags())
+
+
+# -- numba's disk cache, in fresh interpreters ------------------------------------------------------
+
+PROBE = textwrap.dedent("""
+    import json, os, sys, time, warnings
+    warnings.simplefilter("always")
+    import gymnasium as gym
+    import numpy as np
+    import box_toss_env
+    from box_toss_env.physics.compilation import cache_location
+    ready, go = os.environ.get("PROBE_READY"), os.environ.get("PROBE_GO")
+    env = gym.make("BoxToss-v0")
+    env.reset(seed=0)
+    if ready:  # wait until every probe is here, then throw together
+        open(ready, "w").close()
+        while not os.path.exists(go):
+            time.sleep(0.01)
+    obs, reward, *_ = env.step(np.array([0.5, 0.2, -0.3], dtype=np.float32))
+    stats = env.unwrapped._simulator.kernel.stats
+    print(json.dumps({"package": box_toss_env.__file__, "cache": cache_location(), "reward": reward,
+                      "compiled": sum(stats.cache_misses.values()), "loaded": sum(stats.cache_hits.values())}))
+""")
+
+
+def run_probe(env: dict, cwd: Path) -> tuple[dict, str]:
+    done = subprocess.run([sys.executable, "-c", PROBE], env=env, cwd=cwd, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    return json.loads(done.stdout.strip().splitlines()[-1]), done.stderr
+
+
+def probe_env(**overrides) -> dict:
+    env = {key: value for key, value in os.environ.items()
+           if key not in ("NUMBA_CACHE_DIR", "XDG_CACHE_HOME", "PYTHONPATH", "NUMBA_DISABLE_JIT")}
+    env["PYTHONDONTWRITEBYTECODE"] = "1"
+    env.update({key: str(value) for key, value in overrides.items()})
+    return env
+
+
+def files_under(path: Path) -> set[Path]:
+    return {p for p in path.rglob("*") if p.is_file()}
+
+
+@pytest.fixture
+def read_only_install(tmp_path):
+    """A copy of the package that nothing can be written into, for root too (which ignores file modes):
+    every ``__pycache__`` is a plain file, so no cache directory can be made next to the sources."""
+    site = tmp_path / "site"
+    shutil.copytree(PACKAGE, site / "box_toss_env", ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+    directories = [site, *(p for p in site.rglob("*") if p.is_dir())]
+    for directory in directories:
+        (directory / "__pycache__").write_text("not a directory")
+    for path in [*files_under(site), *directories]:
+        path.chmod(path.stat().st_mode & ~(stat.S_IWUSR | stat.S_IWGRP | stat.S_IWOTH))
+    yield site
+    for path in [*directories, *files_under(site)]:
+        path.chmod(path.stat().st_mode | stat.S_IWUSR)
+
+
+def test_a_read_only_install_with_no_writable_home_runs_and_warns(read_only_install, tmp_path):
+    before = files_under(read_only_install)
+    result, stderr = run_probe(probe_env(PYTHONPATH=read_only_install, HOME="/dev/null"), cwd=tmp_path)
+    assert result["package"].startswith(str(read_only_install))
+    assert result["cache"] is None and result["compiled"] == 1
+    assert np.isfinite(result["reward"])
+    assert "CacheWarning" in stderr and "NUMBA_CACHE_DIR" in stderr
+    assert files_under(read_only_install) == before
+
+
+def test_numba_cache_dir_sets_where_a_read_only_install_caches(read_only_install, tmp_path):
+    cache = tmp_path / "numba cache"
+    env = probe_env(PYTHONPATH=read_only_install, HOME="/dev/null", NUMBA_CACHE_DIR=cache)
+    first, stderr = run_probe(env, cwd=tmp_path)
+    assert first["cache"].startswith(str(cache)) and first["compiled"] == 1
+    assert "CacheWarning" not in stderr
+    assert any(path.suffix == ".nbc" for path in files_under(cache))
+    second, _ = run_probe(env, cwd=tmp_path)
+    assert second["compiled"] == 0 and second["loaded"] == 1
+    assert second["reward"] == first["reward"]
+
+
+def test_processes_throwing_at_once_compile_the_kernel_once(tmp_path):
+    """Three interpreters with one empty cache reach their first throw together (as vector-env workers
+    do): one compiles the kernel, the others wait for it and load it from the cache."""
+    go = tmp_path / "go"
+    probes = []
+    for k in range(3):
+        env = probe_env(PYTHONPATH=PACKAGE.parent, NUMBA_CACHE_DIR=tmp_path / "cache",
+                        PROBE_READY=tmp_path / f"ready{k}", PROBE_GO=go)
+        probes.append(subprocess.Popen([sys.executable, "-c", PROBE], env=env, cwd=tmp_path, stdout=subprocess.PIPE,
+                                       stderr=subprocess.PIPE, text=True))
+    deadline = time.monotonic() + 300
+    while not all((tmp_path / f"ready{k}").exists() for k in range(3)):
+        assert time.monotonic() < deadline and all(p.poll() is None for p in probes), [p.communicate() for p in probes]
+        time.sleep(0.05)
+    go.touch()
+    results = []
+    for probe in probes:
+        out, err = probe.communicate(timeout=600)
+        assert probe.returncode == 0, err
+        results.append(json.loads(out.strip().splitlines()[-1]))
+    assert sorted(r["compiled"] for r in results) == [0, 0, 1]
+    assert sorted(r["loaded"] for r in results) == [0, 1, 1]
+
