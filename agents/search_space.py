@@ -32,6 +32,7 @@ class Dimension:
         """``key=<written value>``; floats rounded to 3 significant digits (what the trial trains)."""
         if isinstance(value, float):
             value = f"{value:.3g}"
+            value += "" if any(c in value for c in ".en") else ".0"  # stays a float: 0.0, not 0
         return f"{key}={self.write.format(value)}"
 
     def point(self, value: Any) -> Any:

@@ -260,5 +260,5 @@ def start_ray(address: str | None = None, num_cpus: int | None = None) -> None:
         return
     if address:
         ray.init(address=address)
-    else:
-        ray.init(num_cpus=num_cpus, include_dashboard=False)
+    else:  # "local": a new Ray of its own, even where another one runs (ray start) on this machine
+        ray.init(address="local", num_cpus=num_cpus, include_dashboard=False)
