@@ -6,9 +6,9 @@
     python -m agents.rllib_ppo --address auto --num-env-runners 8   # sample on a Ray cluster
 
 The env comes from ``agents.rllib_envs`` (``env_config``: the env's kwargs). ``--vectorize native``
-(default) gives each env runner the native batched env, ``sync`` RLlib's default; the two sample
-at the same rate within the noise of the shared 2-core machine (``python -m benchmarks.rllib_sampling``),
-since RLlib's per-episode work, not the env, sets the pace. Observations are normalised by RLlib's
+(default) gives each env runner the native batched env with one engine thread, ``sync`` RLlib's default;
+with 256 envs per runner the native env sampled a little faster (``python -m benchmarks.rllib_sampling``;
+RLlib's per-episode work, not the env, sets the pace). Observations are normalised by RLlib's
 ``MeanStdFilter`` (their bounds span hundreds of metres), and the PPO settings mirror
 ``agents/hyperparams/ppo.yml``: one-throw episodes, so gamma = 0. Each iteration prints the mean
 return and the success rate of the sampled (exploring) throws.

@@ -236,17 +236,20 @@ configuration as an entry ready for `agents/hyperparams/<algo>.yml`. Each trial 
 checkpoint to Tune, so `--resume` (`Tuner.restore`) continues unfinished trials from their checkpoints and then runs
 the trials not yet started.
 
-On a cluster: the same checkout and `pip install -e ".[tune]"` on every node, and a folder every node sees at the
-same path (NFS) for the results:
+On a cluster: the same checkout at the same path and `pip install -e ".[tune]"` on every node (Ray's workers
+import `agents` from the path the command runs in), and a folder every node sees at the same path (NFS) for the
+results. Ray 2.60 authenticates with a token:
 
 ```bash
-ray start --head --port 6379                        # on the head node
-ray start --address HEAD_IP:6379                    # on each worker node
+ray get-auth-token --generate && ray start --head --port 6379       # on the head node; prints the token
+RAY_AUTH_MODE=token RAY_AUTH_TOKEN=<token> ray start --address HEAD_IP:6379   # on each worker node
 python -m agents.tune --address auto --env BoxToss-Mixed-v0 --trials 64 --runs-dir /shared/tune   # on the head
 ```
 
-The trials then spread over the nodes' CPUs, and each writes its run folder to `/shared/tune/NAME/<env id>/`, where
-`trials.md` and `best.yml` land too.
+The trials spread over the nodes' CPUs (`--cpus-per-trial` each, `--max-concurrent` at most), each writes its run
+folder to `/shared/tune/NAME/<env id>/trial_<id>/`, and `trials.md`, `trials.csv` and `best.yml` land beside them.
+`--address` was checked here against a separately started Ray (`RAY_AUTH_MODE=token python -m agents.tune
+--address IP:PORT ...`), on one machine only: no multi-node cluster was at hand.
 
 **A real sweep**, run on this project's shared 2-core machine (`{sweep_command(settings)}`; every trial, its
 sampled values and the best entries: [docs/tune.md](docs/tune.md)):

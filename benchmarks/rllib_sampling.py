@@ -98,15 +98,15 @@ def main() -> None:
     ratios = []
     for num_envs in args.num_envs:
         by_mode = {row["mode"]: row for row in rows if row["num_envs"] == num_envs}
-        native, sync = (statistics.median(by_mode[m]["rllib"]) for m in ("native", "sync"))
-        alone_native, alone_sync = (statistics.median(by_mode[m]["alone"]) for m in ("native", "sync"))
-        ratios.append(f"{num_envs} envs: RLlib sampling native / default {native / sync:.2f}x, the env alone "
-                      f"{alone_native / alone_sync:.1f}x")
+        paired = [a / b for a, b in zip(by_mode["native"]["rllib"], by_mode["sync"]["rllib"], strict=True)]
+        alone = [a / b for a, b in zip(by_mode["native"]["alone"], by_mode["sync"]["alone"], strict=True)]
+        ratios.append(f"- {num_envs} envs: RLlib sampling, native / default: {statistics.median(paired):.2f}x "
+                      f"({min(paired):.2f}-{max(paired):.2f}x over the repeats); the env alone: "
+                      f"{statistics.median(alone):.1f}x")
     text = "\n".join([
-        f"$ python -m benchmarks.rllib_sampling --num-envs {' '.join(map(str, args.num_envs))} --throws {args.throws} "
-        f"--repeats {args.repeats}",
-        f"ray {ray.__version__}, one local env runner, {os.cpu_count()} cores shared with other work; "
-        f"median (min-max) of {args.repeats} repeats",
+        f"`python -m benchmarks.rllib_sampling --num-envs {' '.join(map(str, args.num_envs))} --throws {args.throws} "
+        f"--repeats {args.repeats}` (ray {ray.__version__}, PPO's local env runner, {os.cpu_count()} cores shared "
+        f"with other work; median and range of {args.repeats} repeats, the two vectorisations sampled in turn):",
         "", *lines, "", *ratios])
     print(text)
     if args.readme:
