@@ -78,3 +78,19 @@ def test_a_killed_two_trial_sweep_resumes_from_its_checkpoints_and_writes_its_ta
     best = configuration.load_hyperparams("ppo", "BoxToss-v0", hyperparams)
     configuration.check_config(best, "ppo")
     assert best["n_timesteps"] == 8192 and best["n_envs"] == 16
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--env", "BoxToss-Nope-v0"], "has no entry for 'BoxToss-Nope-v0'"),
+    (["--trials", "0"], "trials must be >= 1"),
+    (["--cpus-per-trial", "0"], "cpus_per_trial must be >= 1"),
+    (["--timesteps", "5000"], "eval_freq must be in \\[1, n_timesteps\\)"),
+    (["--set", "policy_kwargs.activation_fn=nn.Nope"], "activation_fn must name a torch.nn activation"),
+    (["--space", "missing.yml"], "no hyperparameter file missing.yml"),
+])
+def test_a_sweep_that_cannot_run_is_one_line_before_ray_starts(tmp_path, args, message):
+    from agents import tune
+
+    with pytest.raises(SystemExit, match=message):
+        tune.main([*args, "--runs-dir", str(tmp_path)])
+    assert not list(tmp_path.iterdir())  # nothing created
