@@ -194,10 +194,10 @@ def train(run_dir: Path, config: dict[str, Any], env_id: str, seed: int, algo: s
         wall_offset = float(rows[-1]["wall_seconds"]) if rows else 0.0
     validation = ValidationCallback(run_dir, config, env_id, wall_offset, on_validation)
     callbacks = [validation]
-    if config.get("checkpoint_freq"):
-        callbacks.append(CheckpointCallback(save_freq=max(int(config["checkpoint_freq"]) // config["n_envs"], 1),
-                                            save_path=str(run_dir / "checkpoints"), name_prefix=algo,
-                                            save_vecnormalize=True, save_replay_buffer=off_policy))
+    if config.get("checkpoint_freq"):  # first: a checkpoint of this step exists when the validation is reported
+        callbacks.insert(0, CheckpointCallback(save_freq=max(int(config["checkpoint_freq"]) // config["n_envs"], 1),
+                                               save_path=str(run_dir / "checkpoints"), name_prefix=algo,
+                                               save_vecnormalize=True, save_replay_buffer=off_policy))
     remaining = max(int(config["n_timesteps"]) - model.num_timesteps, 0)
     start = time.perf_counter()
     model.learn(remaining, callback=callbacks, progress_bar=progress_bar, reset_num_timesteps=not checkpoint)
