@@ -7,8 +7,11 @@ Run from the repository root (this folder is not installed with the package):
     python -m agents.evaluate runs/NAME         # evaluate a run on the fixed target set
     python -m agents.baselines oracle           # random actions or the simulator-planning oracle, as a run
     python -m agents.benchmark                  # every variant x algorithm x seed against the ceiling
+    python -m agents.tune --env BoxToss-ShortEnd-v0   # Optuna (TPE) on Ray Tune, ASHA pruning (tune extra)
+    python -m agents.rllib_ppo                  # RLlib's PPO on the native batched env (rllib extra)
 
-Modules import one way (``tests/agents/test_layers.py``): algorithms, config, envs -> policies, oracle ->
-evaluation -> training, ceiling -> report -> the commands (train, evaluate, baselines, benchmark, main).
+Modules import one way (``tests/agents/test_layers.py``): algorithms, config, envs, rllib_envs -> policies,
+oracle, search_space -> evaluation -> training, ceiling -> report, tuning, sweep_report -> the commands (train,
+evaluate, baselines, tune, rllib_ppo, benchmark, main).
 Needs the ``train`` extra (``pip install -e ".[train]"``).
 """

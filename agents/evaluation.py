@@ -147,6 +147,22 @@ def scores(throws: Throws, mask: np.ndarray | None = None) -> dict[str, Any]:
     }
 
 
+DISTANCE_CAP = 10.0  # [m] larger mean distances count as this in ``search_objective``
+
+
+def search_objective(success_rate: float, mean_distance: float, targets: int) -> float:
+    """One number ranking evaluations by success rate, then by distance (what ``agents.tune`` maximises):
+
+        success_rate - min(mean_distance, 10 m) / 10 m / (targets + 1)
+
+    The distance term is below one target's worth of success (1 / targets), so a higher success
+    always ranks higher and the distance only breaks ties (a NaN distance counts as 10 m)."""
+    distance = min(mean_distance, DISTANCE_CAP) if math.isfinite(mean_distance) else DISTANCE_CAP
+    if not math.isfinite(success_rate):
+        return -math.inf
+    return success_rate - distance / DISTANCE_CAP / (targets + 1)
+
+
 def distance_bins(target_x_range: tuple[float, float], n_bins: int = DISTANCE_BINS) -> np.ndarray:
     low, high = target_x_range
     return np.linspace(low, high, n_bins + 1)

@@ -26,7 +26,7 @@ import box_toss_env  # noqa: F401  (registers the BoxToss envs)
 from agents import algorithms
 from agents import config as configuration
 from agents.policies import UnreadableModelError
-from agents.training import RUNS, new_run_dir, train
+from agents.training import RUNS, new_run_dir, train, write_run_files
 
 
 def parse_args(argv: list[str]) -> argparse.Namespace:
@@ -79,11 +79,8 @@ def main(argv: list[str] | None = None) -> Path:
         run_dir = args.resume or new_run_dir(args.runs_dir, args.name, env_id, algo)
     except configuration.ConfigError as error:
         sys.exit(f"agents.train: {error}")
-    configuration.save_yaml({"algo": algo, "env_id": env_id, "seed": seed, "env_kwargs": config["env_kwargs"],
-                             "hyperparams": config}, run_dir / "config.yml")
-    command = shlex.join([Path(sys.executable).name, "-m", "agents.train", *argv])
-    with open(run_dir / "command.txt", "a") as file:
-        file.write(f"{command}\n")
+    write_run_files(run_dir, algo, env_id, seed, config, shlex.join([Path(sys.executable).name, "-m", "agents.train",
+                                                                      *argv]))
     print(f"training {algo.upper()} on {env_id} for {config['n_timesteps']:,} steps (seed {seed}) into {run_dir}")
     try:
         timing = train(run_dir, config, env_id, seed, algo, resume=bool(args.resume),

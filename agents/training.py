@@ -16,6 +16,7 @@ import json
 import re
 import shutil
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -37,12 +38,15 @@ EVAL_COLUMNS = ("timesteps", "wall_seconds", "success_rate", "mean_distance", "m
 
 class ValidationCallback(BaseCallback):
     """Every ``eval_freq`` env steps: the deterministic policy on the fixed validation targets;
-    logs the scores, appends them to evaluations.csv, keeps the best model by success rate.
+    logs the scores, appends them to evaluations.csv, keeps the best model by success rate, then
+    passes the row to ``on_validation`` if given (``agents.tuning`` reports it to Ray Tune).
     ``wall_seconds`` in the file counts training time over every session of the run."""
 
-    def __init__(self, run_dir: Path, config: dict[str, Any], env_id: str, wall_offset: float = 0.0):
+    def __init__(self, run_dir: Path, config: dict[str, Any], env_id: str, wall_offset: float = 0.0,
+                 on_validation: Callable[[dict[str, Any]], None] | None = None):
         super().__init__()
         self.run_dir, self.config, self.env_id = run_dir, config, env_id
+        self.on_validation = on_validation
         self.every = int(config["eval_freq"])
         self.seeds = target_seeds(int(config["eval_targets"]), VALIDATION_FIRST_SEED)
         self.path = run_dir / "evaluations.csv"
@@ -85,14 +89,17 @@ class ValidationCallback(BaseCallback):
         wall = self.wall_offset + begin - self.start
         for key in ("success_rate", "mean_distance", "face_accuracy", "mean_reward"):
             self.logger.record(f"eval/{key}", result[key])
+        row = {"timesteps": self.num_timesteps, "wall_seconds": wall, **{key: result[key] for key in EVAL_COLUMNS[2:]}}
         with open(self.path, "a", newline="") as file:
-            csv.writer(file).writerow([self.num_timesteps, f"{wall:.2f}"] + [result[key] for key in EVAL_COLUMNS[2:]])
+            csv.writer(file).writerow([row["timesteps"], f"{wall:.2f}"] + [row[key] for key in EVAL_COLUMNS[2:]])
         if result["success_rate"] > self.best:
             self.best = result["success_rate"]
             self.model.save(self.run_dir / "best_model.zip")
             if vec_normalize is not None:
                 vec_normalize.save(str(self.run_dir / "best_vecnormalize.pkl"))
         self.seconds += time.perf_counter() - begin
+        if self.on_validation is not None:
+            self.on_validation(row)
 
 
 def latest_checkpoint(run_dir: Path, algo: str) -> tuple[Path, Path | None, int] | None:
@@ -134,6 +141,14 @@ def new_run_dir(runs: Path, name: str | None, env_id: str, algo: str) -> Path:
     return run_dir
 
 
+def write_run_files(run_dir: Path, algo: str, env_id: str, seed: int, config: dict[str, Any], command: str) -> None:
+    """``config.yml`` (what the run trains) and a line of ``command.txt`` (the command that started it)."""
+    configuration.save_yaml({"algo": algo, "env_id": env_id, "seed": seed, "env_kwargs": config["env_kwargs"],
+                             "hyperparams": config}, run_dir / "config.yml")
+    with open(run_dir / "command.txt", "a") as file:
+        file.write(f"{command}\n")
+
+
 def warm_up_engine(env_id: str, config: dict[str, Any]) -> None:
     """Load the env's compiled kernel with one throw in a throwaway env, so that compiling (or
     loading from numba's cache) is not counted as env time."""
@@ -144,8 +159,10 @@ def warm_up_engine(env_id: str, config: dict[str, Any]) -> None:
 
 
 def train(run_dir: Path, config: dict[str, Any], env_id: str, seed: int, algo: str = "ppo", *, resume: bool = False,
-          progress_bar: bool = True, final_eval: bool = True) -> dict[str, Any]:
-    """Train (or continue) the run in ``run_dir`` up to ``config["n_timesteps"]``; returns the timing."""
+          progress_bar: bool = True, final_eval: bool = True,
+          on_validation: Callable[[dict[str, Any]], None] | None = None) -> dict[str, Any]:
+    """Train (or continue) the run in ``run_dir`` up to ``config["n_timesteps"]``; returns the timing.
+    ``on_validation`` receives each periodic validation's row of evaluations.csv (a dict)."""
     warm_up_engine(env_id, config)
     torch.set_num_threads(int(config.get("torch_threads", 1)))
     checkpoint = latest_checkpoint(run_dir, algo) if resume else None
@@ -175,12 +192,12 @@ def train(run_dir: Path, config: dict[str, Any], env_id: str, seed: int, algo: s
         with open(evaluations) as file:
             rows = [row for row in csv.DictReader(file) if int(row["timesteps"]) <= checkpoint[2]]
         wall_offset = float(rows[-1]["wall_seconds"]) if rows else 0.0
-    validation = ValidationCallback(run_dir, config, env_id, wall_offset)
+    validation = ValidationCallback(run_dir, config, env_id, wall_offset, on_validation)
     callbacks = [validation]
-    if config.get("checkpoint_freq"):
-        callbacks.append(CheckpointCallback(save_freq=max(int(config["checkpoint_freq"]) // config["n_envs"], 1),
-                                            save_path=str(run_dir / "checkpoints"), name_prefix=algo,
-                                            save_vecnormalize=True, save_replay_buffer=off_policy))
+    if config.get("checkpoint_freq"):  # first: a checkpoint of this step exists when the validation is reported
+        callbacks.insert(0, CheckpointCallback(save_freq=max(int(config["checkpoint_freq"]) // config["n_envs"], 1),
+                                               save_path=str(run_dir / "checkpoints"), name_prefix=algo,
+                                               save_vecnormalize=True, save_replay_buffer=off_policy))
     remaining = max(int(config["n_timesteps"]) - model.num_timesteps, 0)
     start = time.perf_counter()
     model.learn(remaining, callback=callbacks, progress_bar=progress_bar, reset_num_timesteps=not checkpoint)

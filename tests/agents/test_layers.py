@@ -5,12 +5,12 @@ from pathlib import Path
 
 AGENTS = Path(__file__).resolve().parents[2] / "agents"
 LAYERS = {
-    "algorithms": 0, "config": 1, "envs": 0,
-    "policies": 2, "oracle": 2,
+    "algorithms": 0, "config": 1, "envs": 0, "rllib_envs": 0,
+    "policies": 2, "oracle": 2, "search_space": 2,
     "evaluation": 3,
     "training": 4, "ceiling": 4,
-    "report": 5,
-    "train": 6, "evaluate": 6, "baselines": 6, "benchmark": 7, "main": 7,
+    "report": 5, "tuning": 5, "sweep_report": 5,
+    "train": 6, "evaluate": 6, "baselines": 6, "tune": 6, "rllib_ppo": 6, "benchmark": 7, "main": 7,
 }
 
 

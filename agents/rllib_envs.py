@@ -1,0 +1,44 @@
+"""BoxToss for RLlib: every BoxToss env id registered with an env creator that honours ``env_config``.
+
+    register_rllib_envs()
+    PPOConfig().environment("BoxToss-ShortEnd-v0", env_config={"max_spin": 10})   # env kwargs
+        .env_runners(num_envs_per_env_runner=64, gym_env_vectorize_mode="vector_entry_point")
+
+``env_config`` holds the env's keyword arguments (those of ``gymnasium.make``), plus ``threads``, the
+engine threads of the batched env. RLlib calls the creator once per env (its default vectorisation,
+``gym_env_vectorize_mode="sync"``: a ``SyncVectorEnv`` of single envs), or once per env runner with
+``num_envs`` added (``"vector_entry_point"``): then the creator returns the native batched env, seen
+with ``NEXT_STEP`` autoreset (``box_toss_env.vector.next_step``), which RLlib's env runners expect.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Any
+
+import gymnasium as gym
+from ray.tune.registry import register_env
+
+import box_toss_env  # noqa: F401  (registers the BoxToss envs with Gymnasium)
+from box_toss_env.vector.next_step import NextStepAutoreset
+
+ENV_IDS = ("BoxToss-v0", "BoxToss-LongSide-v0", "BoxToss-ShortEnd-v0", "BoxToss-ThisSideUp-v0", "BoxToss-Mixed-v0")
+VECTORIZE_MODES = {"native": "vector_entry_point", "sync": "sync"}  # ours -> RLlib's gym_env_vectorize_mode
+
+
+def make_env(env_id: str, env_config: dict[str, Any]) -> gym.Env | gym.vector.VectorEnv:
+    """The env ``env_id`` with ``env_config`` as its kwargs: a single env, or with ``num_envs`` the
+    native batched env (``threads`` engine threads) under ``NEXT_STEP`` autoreset."""
+    kwargs = dict(env_config)  # RLlib's EnvContext is a dict (worker index and the like are attributes)
+    num_envs = kwargs.pop("num_envs", None)
+    threads = kwargs.pop("threads", None)
+    if num_envs is None:
+        return gym.make(env_id, **kwargs)
+    return NextStepAutoreset(gym.make_vec(env_id, num_envs=num_envs, vectorization_mode="vector_entry_point",
+                                          threads=threads, **kwargs))
+
+
+def register_rllib_envs(env_ids: tuple[str, ...] = ENV_IDS) -> None:
+    """Register each BoxToss env id in Ray's registry (the same name RLlib's ``environment()`` takes)."""
+    for env_id in env_ids:
+        register_env(env_id, functools.partial(make_env, env_id))
