@@ -104,7 +104,7 @@ def test_wrapper_throws_what_the_mapping_says():
         plain.reset(seed=seed)
         actions, clipped = ballistic_actions(obs[None], command[None], wrapped.config)
         _, reward, _, _, info = wrapped.step(command)
-        _, plain_reward, _, _, plain_info = plain.step(actions[0].astype(np.float32))
+        _, plain_reward, _, _, plain_info = plain.step(actions[0])
         assert reward == plain_reward and info["final_x"] == plain_info["final_x"]
         assert info["command_clipped"] == clipped[0]
 
