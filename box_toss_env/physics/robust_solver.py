@@ -45,10 +45,10 @@ omega dt = 2; time-stepped flight and impacts move the landing pose with the ste
 
 import math
 
-from .compilation import jit_kernel, jit_stage
 import numpy as np
 
 from . import layout
+from .compilation import jit_kernel, jit_stage
 from .contact_solver import (
     APPROACH,
     COMPRESSION,
