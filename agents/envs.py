@@ -31,7 +31,7 @@ from box_toss_env.vector.ballistic import BallisticThrowsVector
 from box_toss_env.vector.sb3_adapter import SB3VecEnvAdapter
 
 BALLISTIC = "box_toss_env.envs.ballistic.BallisticThrows"
-ENV_WRAPPERS = {BALLISTIC: "ballistic throw commands (flight time, landing offset, touchdown angle)"}
+ENV_WRAPPERS = {BALLISTIC: "ballistic throw commands (flight time, landing offset, lean from the prior)"}
 """The values of ``env_wrapper`` that training accepts (each has a vector form and a ``command_map``)."""
 
 
