@@ -15,7 +15,7 @@ Where compiled code is cached (numba's own search order, ``numba.core.caching``)
 in ``NUMBA_CACHE_DIR`` if set; otherwise ``__pycache__`` next to the engine's sources if writable;
 otherwise numba's user-wide cache directory (``~/.cache/numba`` on Linux). If none is writable,
 the engine compiles in memory in every process and warns once (``CacheWarning``) instead of
-failing to import, which is what numba alone does. ``cache_location()`` says which applies.
+failing to import, which is what numba alone does. ``kernel_support.engine_cache_location()`` says which applies.
 
 ``ensure_compiled`` makes a kernel's first compilation for a set of argument types hold a file lock
 in the cache directory: processes started together (``SubprocVecEnv``, ``AsyncVectorEnv``) wait for
@@ -95,11 +95,9 @@ def jit_kernel(function: Callable) -> Callable:
     return _make_dispatcher(function, nogil=True, no_cfunc_wrapper=True)
 
 
-def cache_location(function: Callable | None = None) -> str | None:
-    """The directory numba caches ``function`` (a function compiled with these decorators) in, by
-    default the engine's, or None if nothing is cached (no writable directory)."""
-    if function is None:
-        from .kernel_support import write_stats as function
+def cache_location(function: Callable) -> str | None:
+    """The directory numba caches ``function`` (a function compiled with these decorators) in, or
+    None if nothing is cached (no writable directory); the engine's: ``kernel_support.engine_cache_location``."""
     return getattr(getattr(function, "_cache", None), "cache_path", None)
 
 

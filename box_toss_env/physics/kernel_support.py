@@ -5,7 +5,7 @@ import math
 import numpy as np
 
 from . import layout
-from .compilation import jit_stage
+from .compilation import cache_location, jit_stage
 from .geometry import lowest_face, vertex_offset
 
 FLAT_TOLERANCE = 1e-3  # [rad] a face this close to level counts as lying on the floor
@@ -76,3 +76,8 @@ def write_stats(stats, body, first_contact, n_impacts, n_steps, max_penetration,
     stats[body, layout.STATUS] = status
     stats[body, layout.FAIL_STEP] = fail_step
     stats[body, layout.N_RECORDED] = n_recorded
+
+
+def engine_cache_location() -> str | None:
+    """The directory numba caches the engine's compiled code in (None: compiled in memory only)."""
+    return cache_location(write_stats)

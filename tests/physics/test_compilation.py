@@ -114,7 +114,7 @@ PROBE = textwrap.dedent("""
     import gymnasium as gym
     import numpy as np
     import box_toss_env
-    from box_toss_env.physics.compilation import cache_location
+    from box_toss_env.physics.kernel_support import engine_cache_location
     ready, go = os.environ.get("PROBE_READY"), os.environ.get("PROBE_GO")
     env = gym.make("BoxToss-v0")
     env.reset(seed=0)
@@ -124,7 +124,7 @@ PROBE = textwrap.dedent("""
             time.sleep(0.01)
     obs, reward, *_ = env.step(np.array([0.5, 0.2, -0.3], dtype=np.float32))
     stats = env.unwrapped._simulator.kernel.stats
-    print(json.dumps({"package": box_toss_env.__file__, "cache": cache_location(), "reward": reward,
+    print(json.dumps({"package": box_toss_env.__file__, "cache": engine_cache_location(), "reward": reward,
                       "compiled": sum(stats.cache_misses.values()), "loaded": sum(stats.cache_hits.values())}))
 """)
 
