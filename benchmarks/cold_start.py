@@ -7,13 +7,17 @@ Each case runs in a fresh interpreter with ``NUMBA_CACHE_DIR`` pointing at a fre
 directory: the cold run, then the warm run in the same directory. Times are wall times [s]:
 
 - ``gym.make`` and ``make_vec``: from ``import gymnasium, box_toss_env`` to the end of the first
-  ``step`` (making the env, ``reset`` and one throw, whose compilation or cache load is most of it);
-  ``make_vec`` once more with the cache holding what a ``gym.make`` throw compiled (does the batched
-  env reuse the single env's kernel?);
+  ``step`` (making the env, ``reset`` and one throw); ``make_vec`` once more with the cache holding what
+  a ``gym.make`` run compiled (does the batched env reuse the single env's kernel?);
 - SB3 ``SubprocVecEnv`` with 4 workers: from creating it (Stable-Baselines3, torch and the package are
   imported in the parent already) to the end of its first ``step``, each worker importing the
-  package and throwing once. The workers' compiled-kernel statistics say how many compiled. The same
-  with CartPole-v1 is what SB3's workers cost by themselves (each starts and imports SB3 and torch).
+  package and throwing once. The same with CartPole-v1 is what SB3's workers cost by themselves
+  (each starts and imports SB3 and torch).
+
+On a cold cache the envs throw with the kernel's interpreted copy while a worker process compiles it
+(``box_toss_env.physics.background_compile``); each case then throws on until every env runs the
+compiled kernel, and that moment is reported too ("compiled after"). The warm run starts once the
+cold run's compile workers are done.
 
 ``--pythonpath DIR`` measures the package found in DIR instead (e.g. an older checkout).
 """
@@ -42,21 +46,33 @@ PROBE = textwrap.dedent("""
     numba_import = time.process_time() - start_cpu
     import gymnasium as gym
     import box_toss_env
+    try:
+        from box_toss_env.physics.background_compile import wait_for_workers
+    except ImportError:  # a checkout from before the interpreted start
+        def wait_for_workers():
+            pass
     compiled = cpu = None
     if case == "subproc":
         import numpy as np
         from stable_baselines3.common.vec_env import SubprocVecEnv
 
-        class CountCompilations(gym.Wrapper):
-            def kernel_compilations(self):  # 1 if this worker compiled the kernel, 0 if it loaded it
-                return sum(self.env.unwrapped._simulator.kernel.stats.cache_misses.values())
+        class Probe(gym.Wrapper):
+            def kernel_interpreted(self):  # whether this worker's last throw ran the interpreted kernel
+                return bool(getattr(self.env.unwrapped._simulator, "interpreted", False))
+
+            def wait_for_workers(self):
+                wait_for_workers()
 
         start = time.perf_counter()
-        envs = SubprocVecEnv([lambda: CountCompilations(gym.make("box_toss_env:BoxToss-v0"))] * 4)
+        envs = SubprocVecEnv([lambda: Probe(gym.make("box_toss_env:BoxToss-v0"))] * 4)
         envs.reset()
-        envs.step(np.zeros((4, 3), dtype=np.float32))
+        action = np.zeros((4, 3), dtype=np.float32)
+        envs.step(action)
         seconds = time.perf_counter() - start
-        compiled = sum(envs.env_method("kernel_compilations"))
+        while any(envs.env_method("kernel_interpreted")):
+            envs.step(action)
+        compiled_after = time.perf_counter() - start
+        envs.env_method("wait_for_workers")
         envs.close()
     elif case == "subproc_cartpole":
         import numpy as np
@@ -66,7 +82,7 @@ PROBE = textwrap.dedent("""
         envs = SubprocVecEnv([lambda: gym.make("CartPole-v1")] * 4)
         envs.reset()
         envs.step(np.zeros(4, dtype=np.int64))
-        seconds = time.perf_counter() - start
+        seconds = compiled_after = time.perf_counter() - start
         envs.close()
     else:
         from numba.core import event
@@ -75,9 +91,15 @@ PROBE = textwrap.dedent("""
             env.reset(seed=0)
             env.step(env.action_space.sample())
         seconds, cpu = time.perf_counter() - start, time.process_time() - start_cpu
-        compiled = sum(1 for _, e in recorder.buffer if e.is_start)  # numba compilations (loads are not counted)
+        compiled = sum(1 for _, e in recorder.buffer if e.is_start)  # numba compilations here (loads not counted)
+        simulator = env.unwrapped.simulator if case == "make_vec" else env.unwrapped._simulator
+        while getattr(simulator, "interpreted", False):  # throwing on, as a training loop would
+            env.reset()
+            env.step(env.action_space.sample())
+        compiled_after = time.perf_counter() - start
+        wait_for_workers()  # a worker still compiling other kernels (none expected) finishes before the warm run
     print(json.dumps({"seconds": seconds, "cpu": cpu, "compiled": compiled, "numba_import": numba_import,
-                      "package": box_toss_env.__file__}))
+                      "compiled_after": compiled_after, "package": box_toss_env.__file__}))
 """)
 
 CASES = {
@@ -90,7 +112,7 @@ CASES = {
 
 
 def run_case(case: str, cache: str, pythonpath: str) -> dict:
-    env = {**os.environ, "NUMBA_CACHE_DIR": cache, "PYTHONPATH": pythonpath}
+    env = {**os.environ, "NUMBA_CACHE_DIR": cache, "PYTHONPATH": pythonpath, "BOX_TOSS_ENV_START_INTERPRETED": "1"}
     done = subprocess.run([sys.executable, "-c", PROBE, case], env=env, capture_output=True, text=True, check=False,
                           cwd=tempfile.gettempdir(), timeout=1800)
     if done.returncode != 0:
@@ -126,23 +148,23 @@ def report(results: dict[str, dict[str, list]], repeats: int) -> str:
     load = ", ".join(f"{value:.1f}" for value in os.getloadavg()) if hasattr(os, "getloadavg") else "n/a"
     lines = [f"numba {numba.__version__}, {os.cpu_count()} cores (load average {load} at the end: a shared machine)",
              f"first throw in a fresh interpreter: wall time [s], median of {repeats} (min-max), and the interpreter's "
-             "CPU time [s], median", "cold: NUMBA_CACHE_DIR empty; warm: filled by the cold run; compilations: "
-             "numba compilations in the cold run (stages, numba's own helpers, kernels)", "",
-             f"{'case':44} {'cold':>19} {'cpu':>5} {'warm':>17} {'cpu':>5} {'compilations':>13}"]
+             "CPU time [s], median", "cold: NUMBA_CACHE_DIR empty; warm: filled by the cold run; compiled after: when "
+             "the throws (going on) ran the compiled kernel, not its interpreted copy, in the cold run [s], median; "
+             "compilations: numba compilations in the measured process in the cold run", "",
+             f"{'case':44} {'cold':>19} {'cpu':>5} {'warm':>17} {'cpu':>5} {'compiled after':>15} "
+             f"{'compilations':>13}"]
     for case, runs in results.items():
         cells = []
         for state in ("cold", "warm"):
             cells.append(summary([r["seconds"] for r in runs[state]]))
             cpu = [r["cpu"] for r in runs[state] if r["cpu"] is not None]
             cells.append(f"{statistics.median(cpu):.2f}" if cpu else "-")
+        after = f"{statistics.median(r['compiled_after'] for r in runs['cold']):.2f}"
         compiled = "-" if case.startswith("subproc") else str(runs["cold"][0]["compiled"])
-        lines.append(f"{CASES[case]:44} {cells[0]:>19} {cells[1]:>5} {cells[2]:>17} {cells[3]:>5} {compiled:>13}")
+        lines.append(f"{CASES[case]:44} {cells[0]:>19} {cells[1]:>5} {cells[2]:>17} {cells[3]:>5} {after:>15} "
+                     f"{compiled:>13}")
     numba_import = [r["numba_import"] for runs in results.values() for r in runs["warm"]]
     lines += ["", f"of which `import numba` alone: {statistics.median(numba_import):.2f} s of CPU (median, warm runs)"]
-    if "subproc" in results:
-        compiled = [r["compiled"] for r in results["subproc"]["cold"]]
-        lines += [f"SubprocVecEnv, cold: how many of the 4 workers compiled the kernel (the others loaded it), "
-                      f"per repeat: {compiled}"]
     return "\n".join(lines)
 
 

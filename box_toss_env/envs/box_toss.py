@@ -312,7 +312,7 @@ class BoxTossEnv(gym.Env):
         return self._settings.copy()
 
     def _build_simulator(self) -> Simulator:
-        self._simulator = Simulator(dataclasses.replace(self.flags, record=self._records))
+        self._simulator = Simulator(dataclasses.replace(self.flags, record=self._records), start_interpreted=True)
         return self._simulator
 
     # -- the Gymnasium API ------------------------------------------------------------------------

@@ -92,7 +92,8 @@ class BoxTossVectorEnv(VectorEnv):
         """The engine kernel for the whole batch (the single env's kernel, run on threads), compiled or
         loaded at its first run."""
         if self._simulator is None:
-            self._simulator = Simulator(dataclasses.replace(self.env.flags, parallel=True), threads=self.threads)
+            self._simulator = Simulator(dataclasses.replace(self.env.flags, parallel=True), threads=self.threads,
+                                        start_interpreted=True)
         return self._simulator
 
     @property

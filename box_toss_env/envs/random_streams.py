@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 from gymnasium.utils import seeding
 
+from box_toss_env.physics.background_compile import InterpretedStart
 from box_toss_env.physics.compilation import jit_kernel, jit_stage
 
 MULTIPLIER_HI = np.uint64(2549297995355413924)  # PCG_DEFAULT_MULTIPLIER_128, high and low 64 bits
@@ -65,6 +66,7 @@ class RandomStreams:
     def __init__(self, n: int):
         self.states = np.zeros((n, 4), dtype=np.uint64)
         self.seeded = np.zeros(n, dtype=bool)
+        self._start = InterpretedStart(fill_uniform, ("box_toss_env.envs.random_streams", "fill_uniform_kernel", {}))
 
     def seed(self, index: int, seed: int | None) -> None:
         """Start stream ``index`` where ``seeding.np_random(seed)`` starts (fresh entropy for None)."""
@@ -76,8 +78,14 @@ class RandomStreams:
 
     def fill_uniform(self, out: np.ndarray) -> np.ndarray:
         """Row i of ``out`` (n, k) gets stream i's next k uniform doubles; returns ``out``."""
-        fill_uniform(self.states, out)
+        if not self._start.run((self.states, out), (self.states, out)):
+            fill_uniform(self.states, out)
         return out
+
+
+def fill_uniform_kernel():
+    """``fill_uniform`` (how a background compile finds it)."""
+    return fill_uniform
 
     def generator(self, index: int) -> np.random.Generator:
         """A numpy Generator at stream ``index``'s current position (a copy: drawing from it does not

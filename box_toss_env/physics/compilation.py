@@ -119,22 +119,34 @@ def cached_on_disk(kernel, args: tuple) -> bool:
     """Whether numba's on-disk cache holds ``kernel`` compiled for ``args``'s types. Best effort,
     through numba's cache index (the key its loader looks up); False if it cannot tell."""
     try:
+        return _cached_signature(kernel, argument_types(kernel, args))
+    except Exception:  # noqa: BLE001  (not a numba dispatcher)
+        return False
+
+
+def _cached_signature(kernel, signature: tuple) -> bool:
+    try:
         cache = kernel._cache
-        key = cache._index_key(argument_types(kernel, args), kernel.targetctx.codegen())
+        key = cache._index_key(signature, kernel.targetctx.codegen())
         return key in cache._cache_file._load_index()
-    except Exception:  # noqa: BLE001  (not a numba dispatcher, no disk cache, or numba's internals changed)
+    except Exception:  # noqa: BLE001  (no disk cache, or numba's internals changed)
         return False
 
 
 def ensure_compiled(kernel, args: tuple) -> None:
     """Compile ``kernel`` for ``args``'s types, or load it from the disk cache, before its first
-    call. A compilation holds a lock file in the cache directory, so that of several processes
-    needing the same kernel at once one compiles and the others load its result."""
+    call (``compile_locked``)."""
     if not isinstance(kernel, Dispatcher) or compiled_in_process(kernel, args):
         return
-    signature = argument_types(kernel, args)
+    compile_locked(kernel, argument_types(kernel, args))
+
+
+def compile_locked(kernel, signature: tuple) -> None:
+    """Compile ``kernel`` for the numba types ``signature``, or load it from the disk cache. A
+    compilation holds a lock file in the cache directory, so that of several processes needing the
+    same kernel at once one compiles and the others load its result."""
     directory = cache_location(kernel)
-    if directory is not None and not cached_on_disk(kernel, args):
+    if directory is not None and not _cached_signature(kernel, signature):
         try:
             with filelock.FileLock(os.path.join(directory, LOCK_NAME), timeout=LOCK_TIMEOUT):
                 kernel.compile(signature)  # numba looks in the cache first: another process may have compiled it

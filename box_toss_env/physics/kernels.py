@@ -48,6 +48,11 @@ def make_kernel(flags: KernelFlags):
     return _make_kernel(flags.solver, flags.use_impulses, flags.use_penalty, flags.use_friction, flags.record)
 
 
+def make_kernel_of(**fields):
+    """``make_kernel`` of ``KernelFlags(**fields)`` (how a background compile rebuilds a kernel)."""
+    return make_kernel(KernelFlags(**fields))
+
+
 @functools.cache
 def _make_kernel(solver: str, use_impulses: bool, use_penalty: bool, use_friction: bool, record: bool):
     if solver == "seed":

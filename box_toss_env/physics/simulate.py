@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from . import layout
+from . import background_compile, layout
 from .compilation import ensure_compiled
 from .kernels import KernelFlags, make_kernel
 from .ranges import MAX_STEPS, check_step_count
@@ -91,16 +91,21 @@ class Simulator:
     default: all of them, the cores available): the kernel releases the GIL, so the shares run on a
     thread pool, and each body's result does not depend on the split. One body and a batch run the
     same compiled kernel (``kernels``); its first run compiles it or loads it from numba's cache
-    (``compilation.ensure_compiled``).
+    (``compilation.ensure_compiled``). With ``start_interpreted`` (the envs), a kernel that is not in the
+    cache yet is compiled by a worker process while runs of up to ``MAX_INTERPRETED_BODIES`` bodies use its
+    interpreted copy, which gives the same results (``background_compile``).
     """
 
-    def __init__(self, flags: KernelFlags, threads: int | None = None):
+    def __init__(self, flags: KernelFlags, threads: int | None = None, start_interpreted: bool = False):
         self.flags = flags
         self.threads = None if threads is None else check_threads(threads)
         self.kernel = make_kernel(flags)
         self._no_trajectory = np.zeros((0, 0, layout.STATE_SIZE))
         self._no_events = np.zeros((0, 0, layout.EVENT_SIZE))
         self._ready = False  # compiled or loaded for the arrays of the first run
+        self._start = (background_compile.InterpretedStart(self.kernel, background_compile.kernel_recipe(flags))
+                       if start_interpreted else None)
+        self.interpreted = False  # whether the last run used the kernel's interpreted copy
 
     @classmethod
     def for_scene(cls, scene: Scene, *, record: bool = False, parallel: bool | None = None,
@@ -127,7 +132,11 @@ class Simulator:
         trajectory = self._no_trajectory if trajectory is None else trajectory
         events = self._no_events if events is None else events
         if not self._ready:
-            ensure_compiled(self.kernel, (state, params, settings, stats, trajectory, events))
+            args = (state, params, settings, stats, trajectory, events)
+            self.interpreted = self._start is not None and self._start.run(args, (state, stats, trajectory, events))
+            if self.interpreted:
+                return
+            ensure_compiled(self.kernel, args)
             self._ready = True
         shares = min(self.shares, state.shape[0])
         if shares <= 1 or self.flags.record:  # a recording's (T, n, 6) trajectory does not split into contiguous shares
