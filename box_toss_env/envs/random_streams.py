@@ -60,6 +60,11 @@ def fill_uniform(states, out):
         states[i, STATE_HI], states[i, STATE_LO] = s_hi, s_lo
 
 
+def fill_uniform_kernel():
+    """``fill_uniform`` (how a background compile rebuilds it: ``background_compile.InterpretedStart``)."""
+    return fill_uniform
+
+
 class RandomStreams:
     """``n`` independent PCG64 streams, each seeded as ``gymnasium.utils.seeding.np_random``."""
 
@@ -81,11 +86,6 @@ class RandomStreams:
         if not self._start.run((self.states, out), (self.states, out)):
             fill_uniform(self.states, out)
         return out
-
-
-def fill_uniform_kernel():
-    """``fill_uniform`` (how a background compile finds it)."""
-    return fill_uniform
 
     def generator(self, index: int) -> np.random.Generator:
         """A numpy Generator at stream ``index``'s current position (a copy: drawing from it does not
