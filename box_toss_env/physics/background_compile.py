@@ -152,8 +152,8 @@ class InterpretedStart:
         """Run the interpreted copy on ``args`` if the compiled kernel is not ready and ``args`` is a small
         batch, starting the worker at the first such run; returns whether it ran. ``outputs`` are the
         arrays the kernel writes: if the copy raises (on a state the compiled kernel would carry on with,
-        such as NaN), they are put back and False is returned, as when the copy does not run: the caller
-        then runs the compiled kernel, which compiles or loads it here."""
+        such as NaN, or on code only numba runs), they are put back and False is returned, as when the
+        copy does not run: the caller then runs the compiled kernel, which compiles or loads it here."""
         if self.compiled or args[0].shape[0] > MAX_INTERPRETED_BODIES or not interpreted_start_enabled():
             self.compiled = True
             return False
@@ -167,7 +167,7 @@ class InterpretedStart:
             with np.errstate(over="ignore"):  # integer kernels wrap around as compiled code does
                 interpreted_copy(self.kernel)(*args)
             return True
-        except (ArithmeticError, ValueError):
+        except Exception:  # noqa: BLE001  (whatever the interpreter refuses, the compiled kernel decides)
             for array, copy in zip(outputs, saved, strict=True):
                 array[...] = copy
             self.compiled = True
