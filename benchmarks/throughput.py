@@ -173,6 +173,8 @@ def main() -> None:
     per_env, beyond_obs = memory_per_env()
     lines += ["", f"Memory of the batched env: {per_env:,.0f} bytes per env, {beyond_obs:,.0f} beyond the "
               "observation buffers (growth from 256 to 4,096 envs, measured with tracemalloc)."]
+    load = ", ".join(f"{value:.1f}" for value in os.getloadavg()) if hasattr(os, "getloadavg") else "n/a"
+    lines[0] = lines[0][:-1] + f"; load average {load} at the end (a shared machine: other jobs' load lowers these)."
     report = "\n".join(lines)
     print(report)
     DOCS.parent.mkdir(exist_ok=True)
