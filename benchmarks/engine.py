@@ -167,7 +167,8 @@ def main() -> None:
     lines.append(f"{'solver':8} {'dt [s]':>10} {'us/throw':>10} {'steps':>7} {'rest at [s]':>12}")
     for solver, dt, micros, n_steps, rest in throw_costs(repeats):
         lines.append(f"{solver:8} {dt:10.6f} {micros:10.1f} {n_steps:7d} {rest:12.3f}")
-    lines += ["", "boxes that collide: ns per body-step of a settled pile (scenes.pile, robust, dt = 1/256 s, 1 s timed)"]
+    lines += ["", "boxes that collide: ns per body-step of a settled pile (scenes.pile, robust, dt = 1/256 s, "
+              "1 s timed)"]
     lines.append(f"{'boxes':>6} {'ns/body-step':>13}")
     for row in pile_costs(repeats=repeats):
         lines.append(f"{row['n']:6d} {row['ns_per_body_step']:13.1f}")
