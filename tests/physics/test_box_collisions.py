@@ -237,9 +237,14 @@ def test_a_colliding_scene_must_not_start_with_overlapping_boxes():
     Scene(boxes=touching, boxes_collide=True)
 
 
-def test_stack_checks_its_masses():
+def test_the_named_scenes_check_their_counts():
     with pytest.raises(ValueError, match="masses must hold one mass per box"):
         scenes.stack(n=3, masses=(1.0, 2.0))
+    for make, name in ((scenes.stack, "n"), (scenes.pyramid, "rows"), (scenes.newton_row, "n"), (scenes.pile, "n")):
+        with pytest.raises(TypeError, match=f"{name} must be an integer"):
+            make(**{name: 2.5})
+        with pytest.raises(ValueError, match=f"{name} must be an integer >= 1"):
+            make(**{name: 0})
 
 
 # -- a scene that cannot collide compiles no pair finding -------------------------------------------
