@@ -1,5 +1,6 @@
-"""Engine benchmark: ns per body-step for each solver on named scenes, wall time per throw, and
-numba compile time cold and cached. Prints measured figures; asserts nothing.
+"""Engine benchmark: ns per body-step for each solver on named scenes, wall time per throw, ns per
+body-step of piles of boxes that collide (``pile_cost``), and numba compile time cold and cached.
+Prints measured figures; asserts nothing.
 
     python -m benchmarks.engine [--quick]
 """
@@ -16,7 +17,7 @@ import time
 import numpy as np
 
 from benchmarks.readme_section import replace_section
-from box_toss_env.physics import Box, Scene, Simulator, layout, make_settings, scenes
+from box_toss_env.physics import Box, Scene, Simulator, layout, make_settings, scenes, simulate
 
 
 def best_time(function, repeats: int) -> float:
@@ -92,6 +93,37 @@ def throw_costs(repeats: int) -> list[tuple]:
     return rows
 
 
+PILE_SIZES = (1, 10, 100)
+
+
+def pile_cost(n: int, solver: str = "robust", settle: float = 2.0, steps: int = 256, repeats: int = 3) -> dict:
+    """ns per body-step of ``scenes.pile(n)`` (boxes that collide) once it has settled into contact: the
+    pile is simulated for ``settle`` seconds, then ``steps`` steps from that state are timed (best of
+    ``repeats``). Returns the figure with what it was measured on: n, solver, dt, steps, how many boxes
+    still move faster than 1 cm/s at the end of the timed run, and the settled state (n, 6) (for other
+    engines to start from the same pile)."""
+    scene = scenes.pile(n, solver=solver)
+    settled = simulate(scene, duration=settle).final_state
+    simulator = Simulator.for_scene(scene)
+    params = scene.body_params()
+    settings = make_settings(scene, steps, until_rest=False)
+    stats = np.zeros((n, layout.STATS_SIZE))
+    state = settled.copy()
+
+    def run():
+        state[:] = settled
+        simulator.run(state, params, settings, stats)
+
+    seconds = best_time(run, repeats)
+    return {"n": n, "solver": solver, "dt": scene.dt, "steps": steps, "ns_per_body_step": seconds / (n * steps) * 1e9,
+            "settled_state": settled, "moving_at_end": int(np.sum(np.abs(state[:, 3:]).max(axis=1) > 1e-2))}
+
+
+def pile_costs(sizes=PILE_SIZES, repeats: int = 3) -> list[dict]:
+    """``pile_cost`` for piles of 1, 10 and 100 boxes, robust solver."""
+    return [pile_cost(n, repeats=repeats) for n in sizes]
+
+
 COMPILE_PROBE = """
 import time
 start = time.perf_counter()
@@ -135,6 +167,11 @@ def main() -> None:
     lines.append(f"{'solver':8} {'dt [s]':>10} {'us/throw':>10} {'steps':>7} {'rest at [s]':>12}")
     for solver, dt, micros, n_steps, rest in throw_costs(repeats):
         lines.append(f"{solver:8} {dt:10.6f} {micros:10.1f} {n_steps:7d} {rest:12.3f}")
+    lines += ["", "boxes that collide: ns per body-step of a settled pile (scenes.pile, robust, dt = 1/256 s, "
+              "1 s timed)"]
+    lines.append(f"{'boxes':>6} {'ns/body-step':>13}")
+    for row in pile_costs(repeats=repeats):
+        lines.append(f"{row['n']:6d} {row['ns_per_body_step']:13.1f}")
     imported, cold, warm = compile_times()
     lines += ["", f"import {imported:.2f} s; compile of the robust toss kernel: {cold:.2f} s cold, "
               f"{warm:.2f} s from the on-disk cache"]

@@ -59,6 +59,7 @@ VIEWER_KEYS = (
     ("S", "solver: seed <-> robust"),
     ("C", "compare seed | robust"),
     ("I / P", "impulses / penalty on-off"),
+    ("B", "boxes collide on-off"),
     ("Up / Down", "select a panel row"),
     ("Left / Right", "change it (next value)"),
     ("Enter or digits", "type a value; Enter sets it"),
@@ -251,7 +252,8 @@ class ViewerWindow:
         controller = self.controller
         panel = Panel(self.canvas, controller.width_px)
         panel.line(f"Rigid body collisions: {self.scene_name}")
-        panel.line("boxes against the floor, 8 steps a frame", PANEL_DIM)
+        against = "the floor and one another" if controller.scene.boxes_collide else "the floor"
+        panel.line(f"boxes against {against}, 8 steps a frame", PANEL_DIM)
         panel.gap()
         self.button_rects = panel.buttons(
             [(name, "Run" if name == "pause" and controller.paused else label) for name, label in VIEWER_BUTTONS])
@@ -346,6 +348,7 @@ class ViewerWindow:
             pygame.K_c: controller.toggle_compare,
             pygame.K_i: lambda: controller.toggle("use_impulses"),
             pygame.K_p: lambda: controller.toggle("use_penalty"),
+            pygame.K_b: lambda: controller.toggle("boxes_collide"),
             pygame.K_UP: lambda: controller.select(-1),
             pygame.K_DOWN: lambda: controller.select(+1),
             pygame.K_TAB: lambda: controller.select(+1),
