@@ -2,7 +2,7 @@
 
 The README holds one section between ``<!-- reports:start -->`` and ``<!-- reports:end -->``; each
 report command rewrites only its own block inside it (``<!-- reports:NAME:start -->`` ...), so the
-two commands can run in either order and every figure in the section comes from a command.
+commands can run in any order and every figure in the section comes from a command.
 """
 
 from __future__ import annotations
@@ -79,7 +79,7 @@ def save_figure(figure, path: Path) -> None:
     plt.close(figure)
 
 
-BLOCK_ORDER = ("precision", "stability")
+BLOCK_ORDER = ("precision", "stability", "collisions")
 
 
 def update_readme(name: str, body: str, readme: Path = README) -> None:
