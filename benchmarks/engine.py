@@ -1,5 +1,6 @@
-"""Engine benchmark: ns per body-step for each solver on named scenes, wall time per throw, and
-numba compile time cold and cached. Prints measured figures; asserts nothing.
+"""Engine benchmark: ns per body-step for each solver on named scenes, wall time per throw, ns per
+body-step on piles of boxes in contact beside pymunk and Box2D, and numba compile time cold and cached.
+Prints measured figures; asserts nothing.
 
     python -m benchmarks.engine [--quick]
 """
@@ -7,6 +8,7 @@ numba compile time cold and cached. Prints measured figures; asserts nothing.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import subprocess
 import sys
@@ -15,8 +17,18 @@ import time
 
 import numpy as np
 
+from benchmarks.other_scenes import UnsupportedScene, available_scene_engines, simulate_scene
 from benchmarks.readme_section import replace_section
-from box_toss_env.physics import Box, Scene, Simulator, layout, make_settings, scenes
+from box_toss_env.physics import (
+    Box,
+    NonFiniteStateError,
+    Scene,
+    Simulator,
+    check_finite_stats,
+    layout,
+    make_settings,
+    scenes,
+)
 
 
 def best_time(function, repeats: int) -> float:
@@ -92,6 +104,81 @@ def throw_costs(repeats: int) -> list[tuple]:
     return rows
 
 
+PILE_SIZES = (1, 10, 100)
+PILE_DURATION, QUICK_PILE_DURATION = 2.0, 0.5  # [s] simulated from release, every step timed
+NEVER_SLEEP = 1e6  # [s] a sleep_time no pile run reaches
+
+
+def pile(n: int) -> Scene:
+    """``n`` toss boxes (40 x 20 cm, 2 kg) laid like bricks in rows of ceil(sqrt(n)), every other row shifted by
+    half a box, 1 cm apart and tilted +-0.05 rad, released at rest: they settle onto one another within a few
+    steps and stay in contact (one box: lying on the floor). Boxes collide and never sleep (``sleep_time`` =
+    NEVER_SLEEP; ``pile_costs`` turns Box2D's sleeping off too), so every step solves every contact."""
+    named = getattr(scenes, "pile", None)
+    if named is not None:
+        return named(n)
+    width = math.ceil(math.sqrt(n))
+    boxes = tuple(Box(**scenes.TOSS_BOX, position=(0.41 * (k % width) + 0.205 * ((k // width) % 2),
+                                                   0.11 + 0.21 * (k // width)), angle=0.05 * (-1) ** k)
+                  for k in range(n))
+    scene = Scene(boxes=boxes, **scenes.TOSS_MATERIAL, dt=1 / 256, sleep_time=NEVER_SLEEP)
+    object.__setattr__(scene, "boxes_collide", True)  # until our engine has the field: read by the other engines
+    return scene
+
+
+def engine_has_box_contact() -> bool:
+    import dataclasses
+
+    return "boxes_collide" in {f.name for f in dataclasses.fields(Scene)}
+
+
+def pile_costs(sizes=PILE_SIZES, duration: float = PILE_DURATION, repeats: int = 3) -> list[tuple]:
+    """(method, boxes, ns per body-step or nan, note) for each pile: our solvers single-thread on raw arrays,
+    pymunk and Box2D stepped from Python as their users would (the loop alone, a fresh world per repeat)."""
+    rows = []
+    for n in sizes:
+        scene = pile(n)
+        steps = int(round(duration / scene.dt))
+        for solver in ("robust", "seed"):
+            if not engine_has_box_contact():
+                rows.append((solver, n, math.nan, "no box-box contact in our engine yet"))
+                continue
+            ours = scene.replace(solver=solver)
+            run, stats = runner(ours, steps, until_rest=False, parallel=False)
+            seconds = best_time(run, repeats)
+            try:
+                check_finite_stats(stats, solver)
+            except NonFiniteStateError as error:
+                rows.append((solver, n, math.nan, f"non-finite at step {error.step}"))
+                continue
+            rows.append((solver, n, seconds / (steps * n) * 1e9, ""))
+        for engine in available_scene_engines():
+            try:
+                runs = [simulate_scene(engine, scene, steps, record=False, sleep=False) for _ in range(repeats + 1)]
+            except UnsupportedScene as error:
+                rows.append((engine, n, math.nan, str(error)))
+                continue
+            rows.append((engine, n, min(r.ns_per_body_step for r in runs[1:]), ""))
+    return rows
+
+
+def pile_lines(rows) -> list[str]:
+    methods = list(dict.fromkeys(method for method, *_ in rows))
+    sizes = list(dict.fromkeys(n for _, n, *_ in rows))
+    cost = {(m, n): (ns, note) for m, n, ns, note in rows}
+    lines = [f"{'method':8} " + " ".join(f"{f'{n} boxes':>11}" for n in sizes)]
+    notes = []
+    for method in methods:
+        cells = []
+        for n in sizes:
+            ns, note = cost[(method, n)]
+            cells.append(f"{ns:11.1f}" if not math.isnan(ns) else f"{'-':>11}")
+            if note and (method, note) not in notes:
+                notes.append((method, note))
+        lines.append(f"{method:8} " + " ".join(cells))
+    return lines + [f"  {method}: {note}" for method, note in notes]
+
+
 COMPILE_PROBE = """
 import time
 start = time.perf_counter()
@@ -118,6 +205,14 @@ def compile_times() -> tuple[float, float, float]:
     return figures[1][0], figures[0][1], figures[1][1]
 
 
+def load_text() -> str:
+    """The 1-minute load average against the cores: other jobs share this machine."""
+    try:
+        return f"{os.getloadavg()[0]:.2f} on {os.cpu_count()} cores"
+    except OSError:
+        return "unknown"
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--quick", action="store_true", help="fewer repeats and steps")
@@ -135,6 +230,12 @@ def main() -> None:
     lines.append(f"{'solver':8} {'dt [s]':>10} {'us/throw':>10} {'steps':>7} {'rest at [s]':>12}")
     for solver, dt, micros, n_steps, rest in throw_costs(repeats):
         lines.append(f"{solver:8} {dt:10.6f} {micros:10.1f} {n_steps:7d} {rest:12.3f}")
+    pile_duration = QUICK_PILE_DURATION if args.quick else PILE_DURATION
+    lines += ["", f"ns per body-step, piles of boxes in contact (boxes collide, never sleep; {pile_duration:g} s from "
+              "release at dt = 1/256 s, every step timed; ours single-thread on raw arrays, pymunk and Box2D stepped "
+              "from Python, the loop alone; best of "
+              f"{repeats}; a shared machine, load {load_text()})"]
+    lines += pile_lines(pile_costs(duration=pile_duration, repeats=repeats))
     imported, cold, warm = compile_times()
     lines += ["", f"import {imported:.2f} s; compile of the robust toss kernel: {cold:.2f} s cold, "
               f"{warm:.2f} s from the on-disk cache"]

@@ -24,7 +24,8 @@ call). Each engine runs with its documented defaults except where the scene says
   collide with one another (``scene.boxes_collide``; when False, boxes touch only the floor, through a
   collision group: pymunk ``ShapeFilter(group=1)``, Box2D ``groupIndex=-1``).
 - **What the scene cannot set** (and so differs between engines): our penalty stiffness, restitution
-  threshold, sleep settings and penetration slop have no counterpart; each engine uses its own.
+  threshold, sleep settings and penetration slop have no counterpart; each engine uses its own
+  (``simulate_scene(..., sleep=False)`` turns Box2D's sleeping off, for runs where no engine may sleep).
 - **pymunk**: 10 solver iterations (its default), no sleeping (its default), collision slop 1 mm
   (``PYMUNK_COLLISION_SLOP``: pymunk's default 0.1 is meant for pixels). pymunk multiplies the two
   shapes' elasticities and frictions. With boxes that collide, every shape (the floor included) gets
@@ -114,8 +115,9 @@ def one_material(scene: Scene, engine: str, why: str) -> tuple[float, float]:
     return pairs.pop()
 
 
-def build_pymunk(scene: Scene) -> tuple[Callable[[], object], Callable[[np.ndarray], None]]:
-    """A pymunk space of ``scene``: (step, read_states into an (n, 6) array)."""
+def build_pymunk(scene: Scene, sleep: bool = True) -> tuple[Callable[[], object], Callable[[np.ndarray], None]]:
+    """A pymunk space of ``scene``: (step, read_states into an (n, 6) array). pymunk does not sleep by default
+    (``sleep_time_threshold`` infinite), so ``sleep`` changes nothing."""
     pymunk = _import("pymunk", "pymunk")
     space = pymunk.Space()
     space.gravity = (0.0, scene.gravity)
@@ -157,10 +159,10 @@ def build_pymunk(scene: Scene) -> tuple[Callable[[], object], Callable[[np.ndarr
     return lambda: space.step(dt), read_states
 
 
-def build_box2d(scene: Scene) -> tuple[Callable[[], object], Callable[[np.ndarray], None]]:
-    """A Box2D world of ``scene``: (step, read_states into an (n, 6) array)."""
+def build_box2d(scene: Scene, sleep: bool = True) -> tuple[Callable[[], object], Callable[[np.ndarray], None]]:
+    """A Box2D world of ``scene``: (step, read_states into an (n, 6) array); ``sleep``: Box2D's ``doSleep``."""
     Box2D = _import("Box2D", "box2d")
-    world = Box2D.b2World(gravity=(0.0, scene.gravity), doSleep=True)
+    world = Box2D.b2World(gravity=(0.0, scene.gravity), doSleep=sleep)
     skin = Box2D.b2_polygonRadius
     mixed = set(materials(scene))
     if len({mu for _, mu in mixed}) > 1:
@@ -198,7 +200,7 @@ def build_box2d(scene: Scene) -> tuple[Callable[[], object], Callable[[np.ndarra
 
 
 SCENE_ENGINES: dict[str, Callable] = {"pymunk": build_pymunk, "box2d": build_box2d}
-"""Builders by engine name: ``build(scene) -> (step, read_states)``."""
+"""Builders by engine name: ``build(scene, sleep) -> (step, read_states)``."""
 
 
 def available_scene_engines() -> list[str]:
@@ -206,12 +208,13 @@ def available_scene_engines() -> list[str]:
     return [name for name in SCENE_ENGINES if ENGINES[name].available()]
 
 
-def simulate_scene(engine: str, scene: Scene, steps: int, record: bool = True) -> SceneRun:
+def simulate_scene(engine: str, scene: Scene, steps: int, record: bool = True, sleep: bool = True) -> SceneRun:
     """Build ``scene`` in ``engine`` and step it ``steps`` times of ``scene.dt``, timing the loop alone
-    (with ``record``, reading every box's state after each step is inside the loop: time without it)."""
+    (with ``record``, reading every box's state after each step is inside the loop: time without it).
+    ``sleep=False`` keeps every body awake (Box2D's ``doSleep``; pymunk never sleeps by default)."""
     if steps < 0:
         raise ValueError(f"steps must be >= 0, got {steps}")
-    step, read_states = SCENE_ENGINES[engine](scene)
+    step, read_states = SCENE_ENGINES[engine](scene, sleep)
     n = scene.n_bodies
     states = None
     if record:
