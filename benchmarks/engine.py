@@ -166,7 +166,7 @@ def pile_lines(rows) -> list[str]:
     methods = list(dict.fromkeys(method for method, *_ in rows))
     sizes = list(dict.fromkeys(n for _, n, *_ in rows))
     cost = {(m, n): (ns, note) for m, n, ns, note in rows}
-    lines = [f"{'method':8} " + " ".join(f"{f'{n} boxes':>11}" for n in sizes)]
+    lines = [f"{'method':8} " + " ".join(f"{f'{n} box' + ('es' if n > 1 else ''):>11}" for n in sizes)]
     notes = []
     for method in methods:
         cells = []

@@ -23,4 +23,4 @@ def test_pile_costs_runs_every_method_on_a_tiny_pile():
     if engine.engine_has_box_contact():
         assert all(not math.isnan(ns) for method, _, ns, _ in rows if method == "robust")
     lines = engine.pile_lines(rows)
-    assert lines[0].split() == ["method", "1", "boxes", "2", "boxes"]
+    assert lines[0].split() == ["method", "1", "box", "2", "boxes"]
