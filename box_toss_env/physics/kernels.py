@@ -1,12 +1,17 @@
 """Kernel factory: one compiled kernel per combination of the stages a scene uses.
 
-The flags (solver, impulses, penalty, friction, recording) are compile-time: a branch on a flag
+The flags (solver, impulses, penalty, friction, recording, boxes colliding) are compile-time: a branch on a flag
 that is off is compiled away, so a scene pays nothing for what it lacks. ``parallel`` is not: it
 says whether ``Simulator`` splits the bodies over threads, and one body or a batch of them runs
 the same compiled kernel. Floats never enter the flags (each new value would recompile); they
 travel in arrays. Kernels are cached in memory per compile-time flags and on disk by numba
 (``compilation``); the on-disk key includes a digest of the engine's sources, so editing any
 stage recompiles its callers.
+
+``boxes_collide`` picks a different kernel, not a branch in one: with it False (every scene that does
+not ask for box-box contact) ``make_kernel`` returns the very kernel it returned before box-box contact
+existed, and nothing of ``box_collision``, ``colliding_solver`` or ``colliding_seed`` is compiled; with
+it True the bodies of the scene are stepped together (``colliding_solver``, ``colliding_seed``).
 """
 
 from __future__ import annotations
@@ -16,6 +21,8 @@ import hashlib
 from dataclasses import dataclass
 from pathlib import Path
 
+from .colliding_seed import make_colliding_seed_kernel
+from .colliding_solver import make_colliding_robust_kernel
 from .robust_solver import make_robust_kernel
 from .seed_solver import make_seed_kernel
 
@@ -23,7 +30,8 @@ from .seed_solver import make_seed_kernel
 @dataclass(frozen=True)
 class KernelFlags:
     """What a kernel is built for (every field but ``parallel``), and whether ``Simulator`` runs the
-    bodies on threads (``parallel``, a run option: it does not change the compiled kernel)."""
+    bodies on threads (``parallel``, a run option: it does not change the compiled kernel; a kernel
+    whose boxes collide runs its bodies together on one thread whatever ``parallel`` says)."""
 
     solver: str = "robust"  # "robust" or "seed"
     use_impulses: bool = True
@@ -31,6 +39,7 @@ class KernelFlags:
     use_friction: bool = True
     record: bool = False
     parallel: bool = False
+    boxes_collide: bool = False  # the bodies of a call are one scene whose boxes collide (stepped together)
 
 
 @functools.lru_cache(maxsize=1)
@@ -45,6 +54,9 @@ def source_digest() -> int:
 def make_kernel(flags: KernelFlags):
     """The numba kernel ``run(state, params, settings, stats, trajectory, events)`` for ``flags``
     (the same kernel whatever ``flags.parallel``)."""
+    if flags.boxes_collide:
+        return _make_colliding_kernel(flags.solver, flags.use_impulses, flags.use_penalty, flags.use_friction,
+                                      flags.record)
     return _make_kernel(flags.solver, flags.use_impulses, flags.use_penalty, flags.use_friction, flags.record)
 
 
@@ -56,4 +68,15 @@ def _make_kernel(solver: str, use_impulses: bool, use_penalty: bool, use_frictio
         if not use_impulses:
             raise ValueError("use_impulses must be True with solver='robust'")
         return make_robust_kernel(use_penalty, use_friction, record, source_digest())
+    raise ValueError(f"solver must be 'robust' or 'seed', got {solver!r}")
+
+
+@functools.cache
+def _make_colliding_kernel(solver: str, use_impulses: bool, use_penalty: bool, use_friction: bool, record: bool):
+    if solver == "seed":
+        return make_colliding_seed_kernel(use_impulses, use_penalty, use_friction, record, source_digest())
+    if solver == "robust":
+        if not use_impulses:
+            raise ValueError("use_impulses must be True with solver='robust'")
+        return make_colliding_robust_kernel(use_penalty, use_friction, record, source_digest())
     raise ValueError(f"solver must be 'robust' or 'seed', got {solver!r}")

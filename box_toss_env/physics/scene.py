@@ -11,6 +11,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from . import layout
+from .box_collision import overlapping_boxes
 from .ranges import ENGINE_RANGES
 from .validation import check_bool, check_choice, check_finite, check_vector
 
@@ -63,6 +64,12 @@ class Scene:
     The last four settings belong to the robust solver: impacts slower than
     ``restitution_threshold`` are inelastic, a box lying on a face slower than ``sleep_speed``
     for ``sleep_time`` is put to sleep, and ``penetration_slop`` is left uncorrected.
+
+    ``boxes_collide``: False (default), every box meets only the floor and the boxes are independent
+    (a batch of them runs on threads); True, the boxes of the scene also collide with one another and
+    are stepped together (``colliding_solver``, ``colliding_seed``). A colliding scene must start with no
+    two boxes overlapping (a ValueError names them); overlaps that arise during a run are resolved by
+    the penalty.
     """
 
     boxes: tuple[Box, ...] = field(default_factory=lambda: (Box(position=(0.0, 5.0)),))
@@ -78,6 +85,7 @@ class Scene:
     sleep_speed: float = 0.01  # [m/s]
     sleep_time: float = 0.1  # [s]
     penetration_slop: float = 0.0  # [m]
+    boxes_collide: bool = False
 
     def __post_init__(self):
         set_ = object.__setattr__
@@ -91,7 +99,7 @@ class Scene:
         for name in ("dt", "gravity", "restitution", "friction", "penalty_stiffness", "restitution_threshold",
                      "sleep_speed", "sleep_time", "penetration_slop"):
             set_(self, name, ENGINE_RANGES[name].check(name, getattr(self, name)))
-        for name in ("use_impulses", "use_penalty"):
+        for name in ("use_impulses", "use_penalty", "boxes_collide"):
             set_(self, name, check_bool(name, getattr(self, name)))
         check_choice("solver", self.solver, SOLVERS)
         if self.solver == "robust" and not self.use_impulses:
@@ -99,6 +107,12 @@ class Scene:
                 "use_impulses must be True with solver='robust' (its contacts are impulses); "
                 "a penalty-only run is available with solver='seed'"
             )
+        if self.boxes_collide:
+            overlap = overlapping_boxes(boxes)
+            if overlap is not None:
+                i, j, depth = overlap
+                raise ValueError(f"boxes[{i}] and boxes[{j}] overlap by {depth:.3g} m at the start; with "
+                                 "boxes_collide=True the boxes must start apart or touching (overlap <= 1e-9 m)")
 
     # -- what the scene has: these decide which kernel stages are compiled in -------------------
     @property

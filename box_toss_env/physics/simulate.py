@@ -106,15 +106,16 @@ class Simulator:
     def for_scene(cls, scene: Scene, *, record: bool = False, parallel: bool | None = None,
                   threads: int | None = None) -> Simulator:
         if parallel is None:
-            parallel = scene.n_bodies > 1
+            parallel = scene.n_bodies > 1 and not scene.boxes_collide
         flags = KernelFlags(solver=scene.solver, use_impulses=scene.use_impulses, use_penalty=scene.has_penalty,
-                            use_friction=scene.has_friction, record=record, parallel=parallel)
+                            use_friction=scene.has_friction, record=record, parallel=parallel,
+                            boxes_collide=scene.boxes_collide)
         return cls(flags, threads)
 
     @property
     def shares(self) -> int:
         """How many threads a parallel run uses at most (1 without ``flags.parallel``)."""
-        if not self.flags.parallel:
+        if not self.flags.parallel or self.flags.boxes_collide:  # colliding boxes are stepped together
             return 1
         return self.threads if self.threads is not None else numba.config.NUMBA_NUM_THREADS
 

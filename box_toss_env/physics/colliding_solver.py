@@ -1,0 +1,528 @@
+"""The robust solver for scenes whose boxes collide (``Scene(boxes_collide=True)``): every box of the
+scene is stepped together, since a contact between two boxes couples them. A scene whose boxes cannot
+meet runs ``robust_solver``'s kernel instead, which compiles none of this.
+
+Contacts (``box_collision``) push body 1 out of body 2 along n at a point with lever arms r1, r2. The
+two-body formulas of the reference text: with u_rel = u1 - u2, u = v + omega x r, a normal impulse
+p n applied +p n to body 1 and -p n to body 2 changes u_rel . n by K_n p with the effective mass
+
+    K_n = 1/m1 + 1/m2 + (r1 x n)^2 / I1 + (r2 x n)^2 / I2       (the floor: 1/m2 = 1/I2 = 0),
+
+and a tangential impulse q t changes u_rel . t by K_t q, K_t the same with t for n. So the impulse
+that stops the approach is p = -u_rel . n / K_n, and an impact with restitution e gets
+p = -(1 + e) u_rel . n / K_n in total (the text's p = (1 + e) p' for two bodies).
+
+The stage script of one substep of length h (``make_colliding_robust_kernel``):
+  1. find contacts: every box-floor corner and box-box point whose gap the two bodies could close
+     within h (speculative contacts, ``box_collision.find_contacts``); each starts from its impulse of
+     the last substep when the same feature touched (warm starting), so a stack's load is carried from
+     step to step rather than rebuilt by the iterations;
+  2. penalty: penetration deeper than the slop is removed by the critically damped penalty spring with
+     backward Euler, as a pseudo-velocity (``robust_solver``'s split impulse, now between two bodies:
+     ERP = h omega / (h omega + 2), omega = sqrt(k K_n)); positions move, velocities do not, and the
+     potential energy it returns is taken from the kinetic energy of the bodies it moved;
+  3. integrate velocities: v += h g;
+  4. solve contact velocities: projected Gauss-Seidel over the contacts (Box2D's sequential
+     impulses), friction then normal at each: the accumulated normal impulse stays >= 0 and lets each
+     gap close but not pass (u_rel . n >= -max(gap, 0) / h), the accumulated friction impulse is clamped
+     to mu times it (it can bring the slip at a contact to zero, never drive it the other way); sweeps
+     until the impulses change by less than CONVERGED of their sum (at most VELOCITY_ITERATIONS);
+  5. restitution, only for impacts: a contact that approached faster than the restitution threshold
+     before this substep (u0 = u_rel . n < -threshold) and took an impulse gets the target
+     u_rel . n >= -e u0 (Newton's law with the approach speed before the solve, as Box2D v3), so a
+     single frictionless contact takes p = -(1 + e) u0 / K_n in all, the closed form; resting contacts
+     (slower than the threshold) get none;
+  6. no energy gained: the bodies that took an impulse are scaled by the one factor s in [0, 1] that
+     keeps their kinetic + potential energy from rising in the substep (``energy_limit_scale``; with
+     several contacts, friction or warm starting the impulses alone could add energy). Scaling every
+     velocity by s keeps every contact satisfied and reverses no slip;
+  7. integrate positions: a body that took no impulse moves on its exact parabola
+     (x += h v - h^2 g / 2 with v already at the end of the substep), one in contact with symplectic
+     Euler (x += h v).
+A grid step dt is split into substeps so that no point of any box moves further than
+TUNNEL_FRACTION of the smallest half extent of the scene in one (relative speed below
+2 TUNNEL_FRACTION min(hx, hy) / h; the point speed bound |v| + |g| h + |omega| R) and no box turns
+further than MAX_ROTATION_PER_STEP, up to MAX_SUBSTEPS. No tunnelling: within that bound, two boxes
+cannot pass through one another in a substep (their relative motion is less than half the thinnest
+box, and the speculative contacts stop the gap from closing past zero); the floor's speculative
+contacts hold at any speed. Beyond MAX_SUBSTEPS substeps (a relative speed above
+2 * TUNNEL_FRACTION * MAX_SUBSTEPS * min(hx, hy) / dt, 3,200 m/s for 10 cm thick boxes at dt = 1/256 s)
+the guarantee lapses.
+
+What carries over from the floor-only robust solver, and what does not: exact flight and events located
+in time are not kept (a colliding scene is time-stepped; a body out of contact still moves on its exact
+parabola). Sleeping with ``until_rest``: the scene sleeps as a whole once every box has been supported
+(it took a contact impulse) and slower than ``sleep_speed`` at every point for ``sleep_time``.
+
+Material of a box-box contact (Box2D's mixing rules): restitution max(e1, e2), friction sqrt(mu1 mu2),
+penalty stiffness min(k1, k2); box-floor contacts use the box's own.
+"""
+
+import math
+
+import numpy as np
+
+from . import layout
+from .box_collision import (
+    APPROACH,
+    BODY1,
+    BODY2,
+    CONTACT_COLUMNS,
+    FRICTION,
+    FRICTION_IMPULSE,
+    GAP,
+    ID_COLUMNS,
+    IMPULSE,
+    KEY,
+    NORMAL_MASS,
+    NX,
+    NY,
+    PSEUDO_IMPULSE,
+    R1X,
+    R1Y,
+    R2X,
+    R2Y,
+    RESTITUTION,
+    STIFFNESS,
+    TANGENT_MASS,
+    TARGET,
+    find_contacts,
+    update_geometry,
+)
+from .compilation import jit_kernel, jit_stage
+from .contact_solver import penalty_correction_share
+from .kernel_support import read_settings, record_event, store_state, write_stats
+from .robust_solver import MAX_ROTATION_PER_STEP, energy_limit_scale
+
+TUNNEL_FRACTION = 0.5  # [-] of the smallest half extent: the most any point moves in one substep
+MAX_SUBSTEPS = 256
+VELOCITY_ITERATIONS = 64  # Gauss-Seidel sweeps at most per substep
+RESTITUTION_ITERATIONS = 16
+PENALTY_ITERATIONS = 16
+CONVERGED = 1e-9  # sweeps stop when the impulses change by less than this share of their sum
+CONTACT_TOLERANCE = 1e-12  # [m per m of size + 1 m] penetration below this is not corrected
+MIN_CAPACITY = 16
+
+
+@jit_stage
+def relative_velocity(c, contacts, ids, vel):
+    """u_rel = u1 - u2 at contact c, u = v + omega x r = (vx - omega ry, vy + omega rx)."""
+    b1 = ids[c, BODY1]
+    b2 = ids[c, BODY2]
+    ux = vel[b1, 0] - vel[b1, 2] * contacts[c, R1Y]
+    uy = vel[b1, 1] + vel[b1, 2] * contacts[c, R1X]
+    if b2 >= 0:
+        ux -= vel[b2, 0] - vel[b2, 2] * contacts[c, R2Y]
+        uy -= vel[b2, 1] + vel[b2, 2] * contacts[c, R2X]
+    return ux, uy
+
+
+@jit_stage
+def apply_impulse(c, px, py, contacts, ids, vel, inv_mass, inv_inertia):
+    """The impulse P at contact c: +P on body 1 (v1 += P / m1, omega1 += (r1 x P) / I1), -P on body 2."""
+    b1 = ids[c, BODY1]
+    b2 = ids[c, BODY2]
+    vel[b1, 0] += px * inv_mass[b1]
+    vel[b1, 1] += py * inv_mass[b1]
+    vel[b1, 2] += (contacts[c, R1X] * py - contacts[c, R1Y] * px) * inv_inertia[b1]
+    if b2 >= 0:
+        vel[b2, 0] -= px * inv_mass[b2]
+        vel[b2, 1] -= py * inv_mass[b2]
+        vel[b2, 2] -= (contacts[c, R2X] * py - contacts[c, R2Y] * px) * inv_inertia[b2]
+
+
+@jit_stage
+def prepare_contacts(contacts, ids, count, params, inv_mass, inv_inertia):
+    """Effective masses 1 / K_n, 1 / K_t and the mixed material of each contact."""
+    for c in range(count):
+        b1 = ids[c, BODY1]
+        b2 = ids[c, BODY2]
+        nx, ny = contacts[c, NX], contacts[c, NY]
+        rn1 = contacts[c, R1X] * ny - contacts[c, R1Y] * nx
+        rt1 = contacts[c, R1X] * nx + contacts[c, R1Y] * ny  # r1 x t with t = (-ny, nx)
+        k_n = inv_mass[b1] + rn1 * rn1 * inv_inertia[b1]
+        k_t = inv_mass[b1] + rt1 * rt1 * inv_inertia[b1]
+        if b2 >= 0:
+            rn2 = contacts[c, R2X] * ny - contacts[c, R2Y] * nx
+            rt2 = contacts[c, R2X] * nx + contacts[c, R2Y] * ny
+            k_n += inv_mass[b2] + rn2 * rn2 * inv_inertia[b2]
+            k_t += inv_mass[b2] + rt2 * rt2 * inv_inertia[b2]
+            contacts[c, RESTITUTION] = max(params[b1, layout.RESTITUTION], params[b2, layout.RESTITUTION])
+            contacts[c, FRICTION] = math.sqrt(params[b1, layout.FRICTION] * params[b2, layout.FRICTION])
+            contacts[c, STIFFNESS] = min(params[b1, layout.STIFFNESS], params[b2, layout.STIFFNESS])
+        else:
+            contacts[c, RESTITUTION] = params[b1, layout.RESTITUTION]
+            contacts[c, FRICTION] = params[b1, layout.FRICTION]
+            contacts[c, STIFFNESS] = params[b1, layout.STIFFNESS]
+        contacts[c, NORMAL_MASS] = 1.0 / k_n
+        contacts[c, TANGENT_MASS] = 1.0 / k_t
+
+
+@jit_stage
+def warm_start(contacts, ids, count, previous_keys, previous_impulses, n_previous, ratio, vel, inv_mass,
+               inv_inertia):
+    """Start each contact from the impulses its key had in the last substep (times ``ratio``, the ratio
+    of the substep lengths), applied to the velocities; new contacts start from zero."""
+    for c in range(count):
+        contacts[c, IMPULSE] = 0.0
+        contacts[c, FRICTION_IMPULSE] = 0.0
+        if n_previous == 0:
+            continue
+        at = np.searchsorted(previous_keys[:n_previous], ids[c, KEY])
+        if at < n_previous and previous_keys[at] == ids[c, KEY]:
+            p = ratio * previous_impulses[at, 0]
+            q = ratio * previous_impulses[at, 1]
+            contacts[c, IMPULSE] = p
+            contacts[c, FRICTION_IMPULSE] = q
+            nx, ny = contacts[c, NX], contacts[c, NY]
+            apply_impulse(c, p * nx - q * ny, p * ny + q * nx, contacts, ids, vel, inv_mass, inv_inertia)
+
+
+@jit_stage
+def solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction):
+    """Projected Gauss-Seidel over the contacts (stage 4): friction clamped to mu times the normal
+    impulse, then the normal impulse >= 0 with u_rel . n >= target (column TARGET)."""
+    for _ in range(VELOCITY_ITERATIONS):
+        change = 0.0
+        total = 0.0
+        for c in range(count):
+            nx, ny = contacts[c, NX], contacts[c, NY]
+            if use_friction and contacts[c, FRICTION] > 0.0:
+                ux, uy = relative_velocity(c, contacts, ids, vel)
+                slip = -ux * ny + uy * nx  # u_rel . t, t = (-ny, nx)
+                before = contacts[c, FRICTION_IMPULSE]
+                limit = contacts[c, FRICTION] * contacts[c, IMPULSE]
+                after = min(max(before - slip * contacts[c, TANGENT_MASS], -limit), limit)
+                contacts[c, FRICTION_IMPULSE] = after
+                dq = after - before
+                if dq != 0.0:
+                    apply_impulse(c, -dq * ny, dq * nx, contacts, ids, vel, inv_mass, inv_inertia)
+                change += abs(dq)
+            ux, uy = relative_velocity(c, contacts, ids, vel)
+            before = contacts[c, IMPULSE]
+            after = max(before - (ux * nx + uy * ny - contacts[c, TARGET]) * contacts[c, NORMAL_MASS], 0.0)
+            contacts[c, IMPULSE] = after
+            dp = after - before
+            if dp != 0.0:
+                apply_impulse(c, dp * nx, dp * ny, contacts, ids, vel, inv_mass, inv_inertia)
+            change += abs(dp)
+            total += after
+        if change <= CONVERGED * total:
+            break
+
+
+@jit_stage
+def apply_restitution(contacts, ids, count, vel, inv_mass, inv_inertia, threshold):
+    """Stage 5: u_rel . n >= -e u0 for the contacts that approached faster than the threshold and took an
+    impulse (the normal impulse stays >= 0). Returns how many contacts are impacts."""
+    impacts = 0
+    for c in range(count):
+        if contacts[c, APPROACH] < -threshold and contacts[c, IMPULSE] > 0.0 and contacts[c, RESTITUTION] > 0.0:
+            impacts += 1
+    if impacts == 0:
+        return 0
+    for _ in range(RESTITUTION_ITERATIONS):
+        change = 0.0
+        total = 0.0
+        for c in range(count):
+            if not (contacts[c, APPROACH] < -threshold and contacts[c, IMPULSE] > 0.0):
+                continue
+            nx, ny = contacts[c, NX], contacts[c, NY]
+            ux, uy = relative_velocity(c, contacts, ids, vel)
+            target = -contacts[c, RESTITUTION] * contacts[c, APPROACH]
+            before = contacts[c, IMPULSE]
+            after = max(before - (ux * nx + uy * ny - target) * contacts[c, NORMAL_MASS], 0.0)
+            contacts[c, IMPULSE] = after
+            dp = after - before
+            if dp != 0.0:
+                apply_impulse(c, dp * nx, dp * ny, contacts, ids, vel, inv_mass, inv_inertia)
+            change += abs(dp)
+            total += after
+        if change <= CONVERGED * total:
+            break
+    return impacts
+
+
+@jit_stage
+def correct_penetrations(contacts, ids, count, pose, vel, pseudo, inv_mass, inv_inertia, h, slop, tolerance,
+                         gravity, params):
+    """Stage 2: pseudo-velocities that remove the penalty's share of each penetration deeper than the slop
+    (Gauss-Seidel on the normal impulses >= 0, targets ERP depth / h), moved into the positions; the gaps
+    of every contact follow to first order, and the potential energy gained is taken from the kinetic
+    energy of the moved bodies. Returns the deepest penetration corrected (0 if none)."""
+    deepest = 0.0
+    for c in range(count):
+        deepest = max(deepest, -contacts[c, GAP])
+    if deepest <= slop + tolerance:
+        return deepest
+    n = pose.shape[0]
+    for b in range(n):
+        pseudo[b, 0] = 0.0
+        pseudo[b, 1] = 0.0
+        pseudo[b, 2] = 0.0
+    for c in range(count):
+        depth = -contacts[c, GAP] - slop
+        contacts[c, PSEUDO_IMPULSE] = 0.0
+        if depth > tolerance:
+            share = penalty_correction_share(contacts[c, STIFFNESS], 1.0 / contacts[c, NORMAL_MASS], h)
+            contacts[c, TARGET] = share * depth / h
+        else:
+            contacts[c, TARGET] = -math.inf
+    for _ in range(PENALTY_ITERATIONS):
+        change = 0.0
+        total = 0.0
+        for c in range(count):
+            if contacts[c, TARGET] == -math.inf:
+                continue
+            nx, ny = contacts[c, NX], contacts[c, NY]
+            ux, uy = relative_velocity(c, contacts, ids, pseudo)
+            before = contacts[c, PSEUDO_IMPULSE]
+            after = max(before - (ux * nx + uy * ny - contacts[c, TARGET]) * contacts[c, NORMAL_MASS], 0.0)
+            contacts[c, PSEUDO_IMPULSE] = after
+            dp = after - before
+            if dp != 0.0:
+                apply_impulse(c, dp * nx, dp * ny, contacts, ids, pseudo, inv_mass, inv_inertia)
+            change += abs(dp)
+            total += after
+        if change <= CONVERGED * total:
+            break
+    for c in range(count):
+        ux, uy = relative_velocity(c, contacts, ids, pseudo)
+        contacts[c, GAP] += h * (ux * contacts[c, NX] + uy * contacts[c, NY])
+    rise = 0.0
+    kinetic = 0.0
+    for b in range(n):
+        if pseudo[b, 0] != 0.0 or pseudo[b, 1] != 0.0 or pseudo[b, 2] != 0.0:
+            pose[b, 0] += h * pseudo[b, 0]
+            pose[b, 1] += h * pseudo[b, 1]
+            pose[b, 2] += h * pseudo[b, 2]
+            rise += -gravity * h * pseudo[b, 1] * params[b, layout.MASS]
+            kinetic += body_kinetic_energy(vel, b, params)
+    if rise > 0.0 and kinetic > 0.0:
+        scale = math.sqrt(max(1.0 - rise / kinetic, 0.0))
+        for b in range(n):
+            if pseudo[b, 0] != 0.0 or pseudo[b, 1] != 0.0 or pseudo[b, 2] != 0.0:
+                vel[b, 0] *= scale
+                vel[b, 1] *= scale
+                vel[b, 2] *= scale
+    return deepest
+
+
+@jit_stage
+def body_kinetic_energy(vel, b, params):
+    """m |v|^2 / 2 + I omega^2 / 2 of body b [J]."""
+    return 0.5 * (params[b, layout.MASS] * (vel[b, 0] ** 2 + vel[b, 1] ** 2)
+                  + params[b, layout.INERTIA] * vel[b, 2] ** 2)
+
+
+@jit_stage
+def substeps(vel, radius, smallest_half, dt, gravity):
+    """How many substeps a grid step needs: no point moves further than TUNNEL_FRACTION of the smallest
+    half extent, no box turns further than MAX_ROTATION_PER_STEP (at most MAX_SUBSTEPS)."""
+    speed = 0.0
+    turn = 0.0
+    for b in range(vel.shape[0]):
+        speed = max(speed, math.sqrt(vel[b, 0] ** 2 + vel[b, 1] ** 2) + abs(gravity) * dt
+                    + abs(vel[b, 2]) * radius[b])
+        turn = max(turn, abs(vel[b, 2]))
+    by_speed = math.ceil(2.0 * speed * dt / (TUNNEL_FRACTION * smallest_half))
+    by_turn = math.ceil(turn * dt / MAX_ROTATION_PER_STEP)
+    if not (by_speed < MAX_SUBSTEPS and by_turn < MAX_SUBSTEPS):  # also for a non-finite state
+        return MAX_SUBSTEPS
+    return max(max(np.int64(by_speed), np.int64(by_turn)), 1)
+
+
+def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, source_digest: int):
+    """Build the robust kernel for scenes whose boxes collide (flags are compile-time, as
+    ``robust_solver.make_robust_kernel``'s): ``run(state, params, settings, stats, trajectory, events)``
+    advances every body of the scene together, in place."""
+    PENALTY, FRICTION_ON, RECORD, DIGEST = use_penalty, use_friction, record, source_digest
+
+    @jit_kernel
+    def run(state, params, settings, stats, trajectory, events):
+        _ = DIGEST  # the on-disk cache key includes every engine source (see robust_solver)
+        dt, gravity, max_steps, until_rest, threshold, sleep_speed, sleep_time, slop = read_settings(settings)
+        nb = state.shape[0]
+        pose = state[:, 0:3].copy()
+        vel = state[:, 3:6].copy()
+        half = params[:, 0:2].copy()
+        inv_mass = 1.0 / params[:, layout.MASS]
+        inv_inertia = 1.0 / params[:, layout.INERTIA]
+        radius = np.sqrt(half[:, 0] ** 2 + half[:, 1] ** 2)
+        smallest_half = half.min()
+        tolerance = CONTACT_TOLERANCE * (1.0 + radius.max())
+        trig = np.zeros((nb, 2))
+        bound = np.zeros((nb, 2))
+        reach = np.zeros(nb)
+        pseudo = np.zeros((nb, 3))
+        kinetic_before = np.zeros(nb)
+        touched = np.zeros(nb, np.bool_)
+        supported = np.zeros(nb, np.bool_)
+        impacted = np.zeros(nb, np.int64)
+        first_contact = np.full(nb, math.nan)
+        n_impacts = np.zeros(nb, np.int64)
+        max_penetration = np.zeros(nb)
+        capacity = max(8 * nb, MIN_CAPACITY)
+        contacts = np.zeros((capacity, CONTACT_COLUMNS))
+        ids = np.zeros((capacity, ID_COLUMNS), np.int64)
+        previous_keys = np.zeros(capacity, np.int64)
+        previous_impulses = np.zeros((capacity, 2))
+        n_previous = 0
+        h_previous = dt
+        status = layout.STATUS_OK
+        fail_step = -1
+        rest_time = math.nan
+        still_for = 0.0
+        if RECORD:
+            for b in range(nb):
+                store_state(trajectory, 0, b, pose[b, 0], pose[b, 1], pose[b, 2], vel[b, 0], vel[b, 1], vel[b, 2])
+        n = 0
+        while n < max_steps:
+            n_sub = substeps(vel, radius, smallest_half, dt, gravity)
+            h = dt / n_sub
+            for b in range(nb):
+                supported[b] = False
+            for sub in range(n_sub):
+                t = n * dt + sub * h
+                # 1. find contacts within what the bodies can travel in the substep
+                update_geometry(pose, half, trig, bound)
+                for b in range(nb):
+                    reach[b] = h * (math.sqrt(vel[b, 0] ** 2 + vel[b, 1] ** 2) + abs(gravity) * h
+                                    + abs(vel[b, 2]) * radius[b]) + tolerance
+                count = find_contacts(pose, trig, half, bound, reach, contacts, ids)
+                while count < 0:
+                    capacity *= 2
+                    contacts = np.zeros((capacity, CONTACT_COLUMNS))
+                    ids = np.zeros((capacity, ID_COLUMNS), np.int64)
+                    keys = np.zeros(capacity, np.int64)
+                    keys[:n_previous] = previous_keys[:n_previous]
+                    impulses = np.zeros((capacity, 2))
+                    impulses[:n_previous] = previous_impulses[:n_previous]
+                    previous_keys, previous_impulses = keys, impulses
+                    count = find_contacts(pose, trig, half, bound, reach, contacts, ids)
+                prepare_contacts(contacts, ids, count, params, inv_mass, inv_inertia)
+                for c in range(count):
+                    depth = -contacts[c, GAP]
+                    b1 = ids[c, BODY1]
+                    b2 = ids[c, BODY2]
+                    max_penetration[b1] = max(max_penetration[b1], depth)
+                    if b2 >= 0:
+                        max_penetration[b2] = max(max_penetration[b2], depth)
+                # 2. penalty: split-impulse correction of penetrations deeper than the slop
+                if PENALTY and count > 0:
+                    correct_penetrations(contacts, ids, count, pose, vel, pseudo, inv_mass, inv_inertia, h, slop,
+                                         tolerance, gravity, params)
+                for b in range(nb):
+                    kinetic_before[b] = body_kinetic_energy(vel, b, params)
+                for c in range(count):
+                    ux, uy = relative_velocity(c, contacts, ids, vel)
+                    contacts[c, APPROACH] = ux * contacts[c, NX] + uy * contacts[c, NY]
+                # 3. integrate velocities
+                for b in range(nb):
+                    vel[b, 1] += h * gravity
+                # 4. contact velocities: warm start, then Gauss-Seidel with speculative targets
+                for c in range(count):
+                    contacts[c, TARGET] = -max(contacts[c, GAP], 0.0) / h
+                warm_start(contacts, ids, count, previous_keys, previous_impulses, n_previous, h / h_previous, vel,
+                           inv_mass, inv_inertia)
+                solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, FRICTION_ON)
+                for c in range(count):  # kept for the next substep's warm start (before restitution)
+                    previous_keys[c] = ids[c, KEY]
+                    previous_impulses[c, 0] = contacts[c, IMPULSE]
+                    previous_impulses[c, 1] = contacts[c, FRICTION_IMPULSE]
+                n_previous = count
+                h_previous = h
+                # 5. restitution for impacts only
+                impacts = apply_restitution(contacts, ids, count, vel, inv_mass, inv_inertia, threshold)
+                # 6. no energy gained by the bodies that took an impulse
+                for b in range(nb):
+                    touched[b] = False
+                    impacted[b] = 0
+                for c in range(count):
+                    if contacts[c, IMPULSE] > 0.0:
+                        b1 = ids[c, BODY1]
+                        b2 = ids[c, BODY2]
+                        touched[b1] = True
+                        if b2 >= 0:
+                            touched[b2] = True
+                        if impacts > 0 and contacts[c, APPROACH] < -threshold:
+                            impacted[b1] += 1
+                            if b2 >= 0:
+                                impacted[b2] += 1
+                before = 0.0
+                after = 0.0
+                rise = 0.0
+                for b in range(nb):
+                    if touched[b]:
+                        supported[b] = True
+                        if math.isnan(first_contact[b]):
+                            first_contact[b] = t
+                        before += kinetic_before[b]
+                        after += body_kinetic_energy(vel, b, params)
+                        rise += -gravity * h * vel[b, 1] * params[b, layout.MASS]
+                    if impacted[b] > 0:
+                        if RECORD:
+                            approach = 0.0
+                            for c in range(count):
+                                if ids[c, BODY1] == b or ids[c, BODY2] == b:
+                                    approach = max(approach, -contacts[c, APPROACH])
+                            record_event(events, b, n_impacts[b], t, approach, impacted[b])
+                        n_impacts[b] += 1
+                if after > 0.0:
+                    scale = energy_limit_scale(before, after, rise)
+                    if scale < 1.0:
+                        for b in range(nb):
+                            if touched[b]:
+                                vel[b, 0] *= scale
+                                vel[b, 1] *= scale
+                                vel[b, 2] *= scale
+                # 7. integrate positions: exact parabola out of contact, symplectic Euler in contact
+                for b in range(nb):
+                    pose[b, 0] += h * vel[b, 0]
+                    pose[b, 1] += h * vel[b, 1]
+                    if not touched[b]:
+                        pose[b, 1] -= 0.5 * h * h * gravity
+                    pose[b, 2] += h * vel[b, 2]
+            n += 1
+            finite = True
+            for b in range(nb):
+                if RECORD:
+                    store_state(trajectory, n, b, pose[b, 0], pose[b, 1], pose[b, 2], vel[b, 0], vel[b, 1],
+                                vel[b, 2])
+                if not (math.isfinite(pose[b, 0]) and math.isfinite(pose[b, 1]) and math.isfinite(pose[b, 2])
+                        and math.isfinite(vel[b, 0]) and math.isfinite(vel[b, 1]) and math.isfinite(vel[b, 2])):
+                    finite = False
+            if not finite:
+                status = layout.STATUS_NONFINITE
+                fail_step = n
+                break
+            if until_rest:
+                still = True
+                for b in range(nb):
+                    speed = math.sqrt(vel[b, 0] ** 2 + vel[b, 1] ** 2) + abs(vel[b, 2]) * radius[b]
+                    still = still and supported[b] and speed <= sleep_speed
+                if still:
+                    still_for += dt
+                    if still_for >= sleep_time:
+                        rest_time = n * dt
+                        for b in range(nb):
+                            vel[b, 0] = 0.0
+                            vel[b, 1] = 0.0
+                            vel[b, 2] = 0.0
+                            if RECORD:
+                                store_state(trajectory, n, b, pose[b, 0], pose[b, 1], pose[b, 2], 0.0, 0.0, 0.0)
+                        break
+                else:
+                    still_for = 0.0
+        for b in range(nb):
+            state[b, 0], state[b, 1], state[b, 2] = pose[b, 0], pose[b, 1], pose[b, 2]
+            state[b, 3], state[b, 4], state[b, 5] = vel[b, 0], vel[b, 1], vel[b, 2]
+            body_status = layout.STATUS_OK
+            if status != layout.STATUS_OK and not (math.isfinite(pose[b, 0]) and math.isfinite(pose[b, 1])
+                                                   and math.isfinite(pose[b, 2]) and math.isfinite(vel[b, 0])
+                                                   and math.isfinite(vel[b, 1]) and math.isfinite(vel[b, 2])):
+                body_status = status
+            write_stats(stats, b, first_contact[b], n_impacts[b], n, max_penetration[b], rest_time, n * dt,
+                        body_status, fail_step if body_status != layout.STATUS_OK else -1, n + 1)
+
+    return run
