@@ -110,26 +110,16 @@ NEVER_SLEEP = 1e6  # [s] a sleep_time no pile run reaches
 
 
 def pile(n: int) -> Scene:
-    """``n`` toss boxes (40 x 20 cm, 2 kg) laid like bricks in rows of ceil(sqrt(n)), every other row shifted by
-    half a box, 1 cm apart and tilted +-0.05 rad, released at rest: they settle onto one another within a few
-    steps and stay in contact (one box: lying on the floor). Boxes collide and never sleep (``sleep_time`` =
+    """``scenes.pile(n)``: boxes dropped onto one another into a pile, here never put to sleep (``sleep_time`` =
     NEVER_SLEEP; ``pile_costs`` turns Box2D's sleeping off too), so every step solves every contact."""
-    named = getattr(scenes, "pile", None)
-    if named is not None:
-        return named(n)
-    width = math.ceil(math.sqrt(n))
-    boxes = tuple(Box(**scenes.TOSS_BOX, position=(0.41 * (k % width) + 0.205 * ((k // width) % 2),
-                                                   0.11 + 0.21 * (k // width)), angle=0.05 * (-1) ** k)
-                  for k in range(n))
-    scene = Scene(boxes=boxes, **scenes.TOSS_MATERIAL, dt=1 / 256, sleep_time=NEVER_SLEEP)
-    object.__setattr__(scene, "boxes_collide", True)  # until our engine has the field: read by the other engines
-    return scene
-
-
-def engine_has_box_contact() -> bool:
-    import dataclasses
-
-    return "boxes_collide" in {f.name for f in dataclasses.fields(Scene)}
+    try:
+        return scenes.pile(n, sleep_time=NEVER_SLEEP)
+    except ValueError:  # TEMPORARY: scenes.pile of aaac18f starts boxes overlapping for n >= 2 (fix under way)
+        width = math.ceil(math.sqrt(n))
+        boxes = tuple(Box(**scenes.TOSS_BOX, position=(0.42 * (k % width) + 0.21 * ((k // width) % 2),
+                                                       0.12 + 0.23 * (k // width)), angle=0.05 * (-1) ** k)
+                      for k in range(n))
+        return Scene(boxes=boxes, boxes_collide=True, **scenes.TOSS_MATERIAL, dt=1 / 256, sleep_time=NEVER_SLEEP)
 
 
 def pile_costs(sizes=PILE_SIZES, duration: float = PILE_DURATION, repeats: int = 3) -> list[tuple]:
@@ -140,9 +130,6 @@ def pile_costs(sizes=PILE_SIZES, duration: float = PILE_DURATION, repeats: int =
         scene = pile(n)
         steps = int(round(duration / scene.dt))
         for solver in ("robust", "seed"):
-            if not engine_has_box_contact():
-                rows.append((solver, n, math.nan, "no box-box contact in our engine yet"))
-                continue
             ours = scene.replace(solver=solver)
             run, stats = runner(ours, steps, until_rest=False, parallel=False)
             seconds = best_time(run, repeats)

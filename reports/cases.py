@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import inspect
 import math
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, replace
 from functools import cached_property
 
 import numpy as np
@@ -386,11 +386,6 @@ def tipping_box(restitution: float, friction: float, **scene) -> Scene:
 
 
 # -- scenes of several boxes that collide ---------------------------------------------------------------------
-def engine_has_box_contact() -> bool:
-    """Whether our engine has box-box contact (``Scene.boxes_collide``)."""
-    return "boxes_collide" in {f.name for f in fields(Scene)}
-
-
 def scene_energy(scene: Scene, states: np.ndarray) -> np.ndarray:
     """(T,) total energy of every box of ``scene`` in states (T, n, 6) [J]."""
     return sum(energy(box, scene.gravity, states[:, i]) for i, box in enumerate(scene.boxes))
@@ -436,10 +431,9 @@ def stack(n: int, **scene) -> Scene:
 def mass_ratio_stack(ratio: float, heavy_on_top: bool, **scene) -> Scene:
     """A stack of two boxes of ``scenes.stack`` whose masses differ ``ratio`` times (the top one the heavier if
     ``heavy_on_top``), material unchanged."""
-    base = stack(2, **scene)
-    light, heavy = base.boxes[0].mass, base.boxes[0].mass * ratio
-    masses = (light, heavy) if heavy_on_top else (heavy, light)
-    return base.replace(boxes=tuple(replace(box, mass=m) for box, m in zip(base.boxes, masses, strict=True)))
+    light = scenes.stack(n=1).boxes[0].mass
+    masses = (light, light * ratio) if heavy_on_top else (light * ratio, light)
+    return stack(2, masses=masses, **scene)
 
 
 def body_impact(speed: float, onto_floor: bool, **scene) -> Scene:

@@ -1,7 +1,5 @@
 """A Scene of several boxes in pymunk and Box2D: the same boxes, material and layout as ours."""
 
-import dataclasses
-
 import numpy as np
 import pytest
 
@@ -19,10 +17,7 @@ def engine(request) -> str:
 
 def colliding(scene: Scene) -> Scene:
     """``scene`` with boxes that collide with one another."""
-    if "boxes_collide" in {f.name for f in dataclasses.fields(Scene)}:
-        return scene.replace(boxes_collide=True)
-    object.__setattr__(scene, "boxes_collide", True)  # before our engine had the flag
-    return scene
+    return scene.replace(boxes_collide=True)
 
 
 def box(x, y, **kw):

@@ -30,14 +30,10 @@ def test_every_method_runs_every_scene_or_says_why(report):
             assert run.ran or run.problem, (result.spec.name, method)
 
 
-def test_our_solvers_run_every_scene_once_the_engine_has_box_contact(report):
+def test_our_solvers_run_every_scene(report):
     for result in report.results:
-        for method in collisions.SOLVERS:
-            problem = result.runs[method].problem
-            if collisions.engine_has_box_contact():
-                assert "cannot run" not in problem, (result.spec.name, method, problem)
-            else:
-                assert problem.startswith("cannot run"), problem
+        assert "robust" in result.outcomes, result.runs["robust"].problem
+        assert result.runs["seed"].ran or result.runs["seed"].problem.startswith("non-finite")
 
 
 @pytest.mark.parametrize("engine", ["pymunk", "box2d"])
@@ -51,8 +47,6 @@ def test_other_engines_keep_the_flight_collisions_momentum(report, engine):
 
 
 def test_our_robust_solver_keeps_momentum_and_angular_momentum_in_flight(report):
-    if not collisions.engine_has_box_contact():
-        pytest.skip("our engine has no box-box contact yet")
     checks = outcome(report, "flight_collision", "robust").checks
     assert all(checks.values()), checks
 
@@ -67,20 +61,29 @@ def test_the_stack_comes_to_rest_in_the_other_engines(report, engine):
 
 
 def test_the_robust_stack_rests_and_the_pyramid_holds(report):
-    if not collisions.engine_has_box_contact():
-        pytest.skip("our engine has no box-box contact yet")
     assert outcome(report, "stack", "robust").checks["rests (drift < 1 mm)"]
     assert outcome(report, "pyramid", "robust").label == "holds"
 
 
-@pytest.mark.parametrize("method", ["robust", "pymunk", "box2d"])
+@pytest.mark.parametrize("method", ["robust", "pymunk"])
 def test_the_newton_row_passes_the_momentum_to_its_last_box(report, method):
-    if method not in report.methods or method not in report.result("newton_row").outcomes:
-        pytest.skip(f"{method} did not run the row")
+    if method in report.missing:
+        pytest.skip(f"{method} not installed")
     values = outcome(report, "newton_row", method).values
     velocities = values["final vx per box [m/s]"]
     assert velocities[-1] == pytest.approx(report.result("newton_row").scene.boxes[0].velocity[0], rel=0.01)
     assert max(abs(v) for v in velocities[:-1]) < 0.02 * abs(velocities[-1])
+
+
+def test_box2d_moves_the_newton_row_together_below_its_restitution_threshold(report):
+    """The row's impacts are not faster than b2_velocityThreshold = 1 m/s, so Box2D makes them perfectly inelastic:
+    the five boxes end moving together at v0 / 5 (documented in benchmarks/other_engines.py)."""
+    if "box2d" in report.missing:
+        pytest.skip("box2d not installed")
+    v0 = report.result("newton_row").scene.boxes[0].velocity[0]
+    assert v0 <= collisions.BOX2D_RESTITUTION_THRESHOLD
+    velocities = outcome(report, "newton_row", "box2d").values["final vx per box [m/s]"]
+    assert velocities == pytest.approx([v0 / 5] * 5, rel=0.05)
 
 
 def test_distances_are_symmetric_and_a_different_face_never_agrees(report):

@@ -5,9 +5,14 @@ import pytest
 from reports import stability
 
 # Rows the robust default fails inside its declared range because of an engine issue reported to the lead, with
-# the reason; strict, so an entry must go once the engine is fixed (and the reports regenerated). Empty: the
-# push-out (k = 1e2 at fine dt) and the energy gain of Newton restitution with friction were fixed in the engine.
-KNOWN_ENGINE_FAILURES: dict[str, str] = {}
+# the reason; strict, so an entry must go once the engine is fixed (and the reports regenerated). The
+# push-out (k = 1e2 at fine dt) and the energy gain of Newton restitution with friction were fixed in the engine;
+# the rows of boxes that collide fail at the coarse steps below.
+KNOWN_ENGINE_FAILURES: dict[str, str] = {
+    "stacks": "the robust stack of 10 drifts 1.7 cm in 2 s at dt 2^-5 (8.8 cm in 10 s; passes at 2^-8 and finer)",
+    "mass_ratio_stacks": "a 2000 kg box on a 2 kg box sinks 11 cm into it and drifts 48 cm at dt 2^-5 (also at 2^-8; "
+                         "passes at 2^-11 and finer)",
+}
 
 
 @pytest.fixture(scope="module")
@@ -22,9 +27,6 @@ def test_every_row_runs_both_solvers_on_the_same_points(report):
                                                  "mass_ratio_stacks", "random_scenes"]
     for row in report.rows:
         assert row.criterion and row.declared
-        if row.unavailable:  # only the rows of boxes that collide, while our engine has no box-box contact
-            assert row.name in BOX_CONTACT_ROWS and not stability.cases.engine_has_box_contact()
-            continue
         robust, seed = row.of("robust"), row.of("seed")
         assert robust and [c.point for c in robust] == [c.point for c in seed], row.name
 
@@ -36,8 +38,6 @@ BOX_CONTACT_ROWS = ("stacks", "body_impacts", "mass_ratio_stacks")
                                   "fast_spin", "thin_boxes", "masses", "embedded", "far_from_origin",
                                   "corner_friction", *BOX_CONTACT_ROWS, "random_scenes"])
 def test_the_robust_default_passes_every_row_in_its_declared_range(report, name, request):
-    if report.row(name).unavailable:
-        pytest.skip(report.row(name).unavailable)
     if name in KNOWN_ENGINE_FAILURES:
         request.applymarker(pytest.mark.xfail(reason=KNOWN_ENGINE_FAILURES[name], strict=True))
     row = report.row(name)
