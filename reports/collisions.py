@@ -249,14 +249,13 @@ class NewtonRow(CollisionScene):
 
 
 def moves_vector(final: np.ndarray, radius: np.ndarray) -> np.ndarray:
-    """(n, 4): x, y, R angle and R, to compare poses between methods."""
-    return np.column_stack([final[:, 0], final[:, 1], radius * wrap(final[:, 2]), radius])
+    """(n, 4): x, y, angle and corner radius R of each box, to compare poses between methods."""
+    return np.column_stack([final[:, 0], final[:, 1], final[:, 2], radius])
 
 
 def largest_pose_difference(a: np.ndarray, b: np.ndarray) -> float:
-    """max over boxes of |dx| + R |da| between two ``moves_vector``s."""
-    return float((np.hypot(a[:, 0] - b[:, 0], a[:, 1] - b[:, 1]) + np.abs(wrap((a[:, 2] - b[:, 2]) / a[:, 3]))
-                  * a[:, 3]).max())
+    """max over boxes of |dx| + R |da| between two ``moves_vector``s [m]."""
+    return float((np.hypot(a[:, 0] - b[:, 0], a[:, 1] - b[:, 1]) + a[:, 3] * np.abs(wrap(a[:, 2] - b[:, 2]))).max())
 
 
 def collision_scenes() -> tuple[CollisionScene, ...]:

@@ -468,52 +468,39 @@ class BodiesRun:
         return ENERGY_ROUNDING * abs(start) + mass * abs(self.scene.gravity) * self.overlap
 
 
-def run_bodies(scene: Scene, duration: float, order: Callable[[Scene, np.ndarray], np.ndarray] | None = None,
-               chunk: float = 1.0) -> BodiesRun:
-    """Run a scene of several boxes on raw arrays in chunks of ``chunk`` seconds (each continuing from the
-    last state, so long runs need no long recording), checking every grid state; ``order(scene, states) ->
-    (T,) bool`` is a condition that must hold throughout (e.g. no box passed through another)."""
+def run_bodies(scene: Scene, duration: float, order: Callable[[Scene, np.ndarray], np.ndarray] | None = None
+               ) -> BodiesRun:
+    """Run a scene of several boxes in one recorded call (restarting a run from its last state would wake
+    sleeping boxes and drop the solver's warm start, which moves a stack) and check every grid state;
+    ``order(scene, states) -> (T,) bool`` is a condition that must hold throughout (e.g. no box passed
+    through another)."""
     run = BodiesRun(scene)
+    try:
+        result = simulate(scene, duration=duration, record=True)
+    except NonFiniteStateError as error:
+        run.error = f"non-finite at step {error.step}"
+        return run
+    states = result.trajectory.state
+    if not np.isfinite(states).all():
+        run.error = "non-finite"
+        return run
+    start = states[0]
     radius = np.array([corner_radius(box) for box in scene.boxes])
-    start = scene.initial_state()
+    moved = np.hypot(states[..., 0] - start[:, 0], states[..., 1] - start[:, 1])
+    run.drift = float((moved + radius * np.abs(cases.wrap(states[..., 2] - start[:, 2]))).max())
+    run.overlap = cases.deepest_overlap(scene, states)
+    total = cases.scene_energy(scene, states)
+    run.energy_rise = float(total.max() - total[0])
+    kinetic = cases.scene_kinetic_energy(scene, states)
+    run.kinetic_start = float(kinetic[0])
+    run.kinetic_rise = float(np.diff(kinetic).max(initial=0.0))
+    if order is not None:
+        run.order_kept = bool(order(scene, states).all())
+    run.end = states[-1].copy()
     mass = np.array([box.mass for box in scene.boxes])
-    e0 = float(cases.scene_energy(scene, start[None])[0])
-    run.kinetic_start = float(cases.scene_kinetic_energy(scene, start[None])[0])
-    run.drift = run.overlap = run.energy_rise = run.kinetic_rise = 0.0
-    n, steps_total = scene.n_bodies, int(round(duration / scene.dt))
-    per_chunk = max(1, int(round(chunk / scene.dt)))
-    simulator = Simulator.for_scene(scene, record=True)
-    state, params = start.copy(), scene.body_params()
-    stats = np.zeros((n, layout.STATS_SIZE))
-    trajectory = np.empty((per_chunk + 1, n, layout.STATE_SIZE))
-    events = np.zeros((n, layout.MAX_EVENTS, layout.EVENT_SIZE))
-    done, last_kinetic = 0, run.kinetic_start
-    while done < steps_total:
-        steps = min(per_chunk, steps_total - done)
-        simulator.run(state, params, make_settings(scene, steps, until_rest=False), stats, trajectory, events)
-        if (stats[:, layout.STATUS] != layout.STATUS_OK).any() or not np.isfinite(state).all():
-            failed = np.flatnonzero(stats[:, layout.STATUS] != layout.STATUS_OK)
-            step = int(stats[failed[0], layout.FAIL_STEP]) if failed.size else 0
-            run.error = f"non-finite at step {done + step}"
-            return run
-        recorded = stats[:, layout.N_RECORDED].astype(np.int64)
-        for body, count in enumerate(recorded):  # a body asleep early keeps its final state
-            trajectory[count:steps + 1, body] = state[body]
-        states = trajectory[:steps + 1]
-        moved = np.hypot(states[..., 0] - start[:, 0], states[..., 1] - start[:, 1])
-        turned = radius * np.abs(cases.wrap(states[..., 2] - start[:, 2]))
-        run.drift = max(run.drift, float((moved + turned).max()))
-        run.overlap = max(run.overlap, cases.deepest_overlap(scene, states))
-        run.energy_rise = max(run.energy_rise, float(cases.scene_energy(scene, states).max() - e0))
-        kinetic = np.concatenate([[last_kinetic], cases.scene_kinetic_energy(scene, states[1:])])
-        run.kinetic_rise = max(run.kinetic_rise, float(np.diff(kinetic).max(initial=0.0)))
-        last_kinetic = float(kinetic[-1])
-        if order is not None:
-            run.order_kept &= bool(order(scene, states).all())
-        done += steps
-    run.end = state.copy()
-    momentum = mass @ run.end[:, 3:5] - mass @ start[:, 3:5]
-    run.momentum_change = momentum - np.array([0.0, mass.sum() * scene.gravity * done * scene.dt])
+    elapsed = float(result.end_time.max())
+    run.momentum_change = mass @ run.end[:, 3:5] - mass @ start[:, 3:5] - np.array([0.0, mass.sum() * scene.gravity
+                                                                                       * elapsed])
     return run
 
 
