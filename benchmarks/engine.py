@@ -1,5 +1,6 @@
 """Engine benchmark: ns per body-step for each solver on named scenes, wall time per throw, ns per
-body-step on piles of boxes in contact beside pymunk and Box2D, and numba compile time cold and cached.
+body-step of piles of boxes that collide (``pile_cost``) and the same piles in pymunk and Box2D
+(``pile_comparison``), and numba compile time cold and cached.
 Prints measured figures; asserts nothing.
 
     python -m benchmarks.engine [--quick]
@@ -106,21 +107,39 @@ def throw_costs(repeats: int) -> list[tuple]:
 
 
 PILE_SIZES = (1, 10, 100)
-PILE_DURATION, QUICK_PILE_DURATION = 2.0, 0.5  # [s] simulated from release, every step timed
+
+
+def pile_cost(n: int, solver: str = "robust", settle: float = 2.0, steps: int = 256, repeats: int = 3) -> dict:
+    """ns per body-step of ``scenes.pile(n)`` (boxes that collide) once it has settled into contact: the
+    pile is simulated for ``settle`` seconds, then ``steps`` steps from that state are timed (best of
+    ``repeats``). Returns the figure with what it was measured on: n, solver, dt, steps, how many boxes
+    still move faster than 1 cm/s at the end of the timed run, and the settled state (n, 6) (for other
+    engines to start from the same pile)."""
+    scene = scenes.pile(n, solver=solver)
+    settled = simulate(scene, duration=settle).final_state
+    simulator = Simulator.for_scene(scene)
+    params = scene.body_params()
+    settings = make_settings(scene, steps, until_rest=False)
+    stats = np.zeros((n, layout.STATS_SIZE))
+    state = settled.copy()
+
+    def run():
+        state[:] = settled
+        simulator.run(state, params, settings, stats)
+
+    seconds = best_time(run, repeats)
+    return {"n": n, "solver": solver, "dt": scene.dt, "steps": steps, "ns_per_body_step": seconds / (n * steps) * 1e9,
+            "settled_state": settled, "moving_at_end": int(np.sum(np.abs(state[:, 3:]).max(axis=1) > 1e-2))}
+
+
+def pile_costs(sizes=PILE_SIZES, repeats: int = 3) -> list[dict]:
+    """``pile_cost`` for piles of 1, 10 and 100 boxes, robust solver."""
+    return [pile_cost(n, repeats=repeats) for n in sizes]
+
+
 NEVER_SLEEP = 1e6  # [s] a sleep_time no pile run reaches
-
-
-def pile(n: int) -> Scene:
-    """``scenes.pile(n)``: boxes dropped onto one another into a pile, here never put to sleep (``sleep_time`` =
-    NEVER_SLEEP; ``pile_costs`` turns Box2D's sleeping off too), so every step solves every contact."""
-    try:
-        return scenes.pile(n, sleep_time=NEVER_SLEEP)
-    except ValueError:  # TEMPORARY: scenes.pile of aaac18f starts boxes overlapping for n >= 2 (fix under way)
-        width = math.ceil(math.sqrt(n))
-        boxes = tuple(Box(**scenes.TOSS_BOX, position=(0.42 * (k % width) + 0.21 * ((k // width) % 2),
-                                                       0.12 + 0.23 * (k // width)), angle=0.05 * (-1) ** k)
-                      for k in range(n))
-        return Scene(boxes=boxes, boxes_collide=True, **scenes.TOSS_MATERIAL, dt=1 / 256, sleep_time=NEVER_SLEEP)
+PILE_SETTLE = 2.0  # [s] as ``pile_cost``
+PILE_STEPS, QUICK_PILE_STEPS = 256, 64
 
 
 def pile_energy(scene: Scene, state: np.ndarray) -> float:
@@ -131,35 +150,61 @@ def pile_energy(scene: Scene, state: np.ndarray) -> float:
                  - scene.gravity * mass @ state[:, 1])
 
 
-def pile_costs(sizes=PILE_SIZES, duration: float = PILE_DURATION, repeats: int = 3) -> list[tuple]:
-    """(method, boxes, ns per body-step or nan, note) for each pile: our solvers single-thread on raw arrays,
-    pymunk and Box2D stepped from Python as their users would (the loop alone, a fresh world per repeat)."""
+def time_from(scene: Scene, start: np.ndarray, steps: int, repeats: int) -> tuple[float, np.ndarray, np.ndarray]:
+    """(best wall time [s] of ``steps`` steps of ``scene`` from the state ``start``, single thread, the state
+    reached and the stats)."""
+    simulator = Simulator.for_scene(scene, parallel=False)
+    params, settings = scene.body_params(), make_settings(scene, steps, until_rest=False)
+    stats = np.zeros((scene.n_bodies, layout.STATS_SIZE))
+    state = start.copy()
+
+    def run():
+        state[:] = start
+        simulator.run(state, params, settings, stats)
+
+    return best_time(run, repeats), state, stats
+
+
+def pile_comparison(sizes=PILE_SIZES, steps: int = PILE_STEPS, settle: float = PILE_SETTLE,
+                    repeats: int = 3) -> list[tuple]:
+    """(method, boxes, ns per body-step or nan, note) on the same piles in every engine: ``scenes.pile(n)``
+    settled for ``settle`` s by our robust solver with nobody sleeping, then ``steps`` steps from that state
+    timed in each method, nobody sleeping (``sleep_time`` NEVER_SLEEP, Box2D's sleeping off), so every step
+    solves the pile's contacts. Ours: single thread on raw arrays; pymunk and Box2D stepped from Python as
+    their users would (the loop alone, a fresh world per repeat). A method that blows the pile apart (its
+    energy at the end above 1.1 times the settled pile's) has no figure: it has no contacts left to solve.
+    Beside them, ``pile_cost``: the robust solver with its default sleeping."""
     rows = []
     for n in sizes:
-        scene = pile(n)
-        steps = int(round(duration / scene.dt))
+        scene = scenes.pile(n, sleep_time=NEVER_SLEEP)
+        settled = simulate(scene, duration=settle).final_state
+        start = pile_energy(scene, settled)
         for solver in ("robust", "seed"):
             ours = scene.replace(solver=solver)
-            run, stats = runner(ours, steps, until_rest=False, parallel=False)
-            seconds = best_time(run, repeats)
+            seconds, state, stats = time_from(ours, settled, steps, repeats)
             try:
                 check_finite_stats(stats, solver)
-                end = simulate(ours, steps=steps).final_state
             except NonFiniteStateError as error:
                 rows.append((solver, n, math.nan, f"non-finite at step {error.step}"))
                 continue
-            gain = pile_energy(ours, end) / pile_energy(ours, ours.initial_state())
-            if gain > 1.1:  # a pile that blew apart has no contacts left to solve: its cost means nothing
-                rows.append((solver, n, math.nan, f"blows up on the piles (energy x{gain:.3g} at the end)"))
+            gain = pile_energy(ours, state) / start
+            if gain > 1.1:
+                rows.append((solver, n, math.nan, f"blows the pile apart (energy x{gain:.3g} in {steps} steps)"))
                 continue
             rows.append((solver, n, seconds / (steps * n) * 1e9, ""))
+        default = pile_cost(n, settle=settle, steps=steps, repeats=repeats)
+        rows.append(("robust, sleeping", n, default["ns_per_body_step"],
+                     f"{default['moving_at_end']} boxes moving at the end"))
         for engine in available_scene_engines():
             try:
-                runs = [simulate_scene(engine, scene, steps, record=False, sleep=False) for _ in range(repeats + 1)]
+                runs = [simulate_scene(engine, scene, steps, record=False, sleep=False, state=settled)
+                        for _ in range(repeats + 1)]
             except UnsupportedScene as error:
                 rows.append((engine, n, math.nan, str(error)))
                 continue
-            rows.append((engine, n, min(r.ns_per_body_step for r in runs[1:]), ""))
+            gain = pile_energy(scene, runs[-1].final_state) / start
+            note = f"blows the pile apart (energy x{gain:.3g})" if gain > 1.1 else ""
+            rows.append((engine, n, math.nan if note else min(r.ns_per_body_step for r in runs[1:]), note))
     return rows
 
 
@@ -167,10 +212,10 @@ def pile_lines(rows) -> list[str]:
     methods = list(dict.fromkeys(method for method, *_ in rows))
     sizes = list(dict.fromkeys(n for _, n, *_ in rows))
     cost = {(m, n): (ns, note) for m, n, ns, note in rows}
-    lines = [f"{'method':8} " + " ".join(f"{boxes_text(n):>11}" for n in sizes)]
+    lines = [f"{'method':17} " + " ".join(f"{boxes_text(n):>11}" for n in sizes)]
     for method in methods:
-        lines.append(f"{method:8} " + " ".join(f"{cost[(method, n)][0]:11.1f}" if not math.isnan(cost[(method, n)][0])
-                                               else f"{'-':>11}" for n in sizes))
+        lines.append(f"{method:17} " + " ".join(f"{cost[(method, n)][0]:11.1f}" if not math.isnan(cost[(method, n)][0])
+                                                else f"{'-':>11}" for n in sizes))
     return lines + [f"  {method}, {boxes_text(n)}: {note}" for method, n, _, note in rows if note]
 
 
@@ -229,12 +274,13 @@ def main() -> None:
     lines.append(f"{'solver':8} {'dt [s]':>10} {'us/throw':>10} {'steps':>7} {'rest at [s]':>12}")
     for solver, dt, micros, n_steps, rest in throw_costs(repeats):
         lines.append(f"{solver:8} {dt:10.6f} {micros:10.1f} {n_steps:7d} {rest:12.3f}")
-    pile_duration = QUICK_PILE_DURATION if args.quick else PILE_DURATION
-    lines += ["", f"ns per body-step, piles of boxes in contact (boxes collide, never sleep; {pile_duration:g} s from "
-              "release at dt = 1/256 s, every step timed; ours single-thread on raw arrays, pymunk and Box2D stepped "
-              "from Python, the loop alone; best of "
-              f"{repeats}; a shared machine, load {load_text()})"]
-    lines += pile_lines(pile_costs(duration=pile_duration, repeats=repeats))
+    pile_steps = QUICK_PILE_STEPS if args.quick else PILE_STEPS
+    lines += ["", f"boxes that collide: ns per body-step of a settled pile (scenes.pile, dt = 1/256 s, settled "
+              f"{PILE_SETTLE:g} s by the robust solver, then {pile_steps} steps timed from that same state in every "
+              "method, nobody sleeping but in 'robust, sleeping' (pile_cost); ours single-thread on raw arrays, "
+              f"pymunk and Box2D stepped from Python, the loop alone; best of {repeats}; a shared machine, load "
+              f"{load_text()})"]
+    lines += pile_lines(pile_comparison(steps=pile_steps, repeats=repeats))
     imported, cold, warm = compile_times()
     lines += ["", f"import {imported:.2f} s; compile of the robust toss kernel: {cold:.2f} s cold, "
               f"{warm:.2f} s from the on-disk cache"]

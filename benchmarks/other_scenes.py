@@ -115,7 +115,8 @@ def one_material(scene: Scene, engine: str, why: str) -> tuple[float, float]:
     return pairs.pop()
 
 
-def build_pymunk(scene: Scene, sleep: bool = True) -> tuple[Callable[[], object], Callable[[np.ndarray], None]]:
+def build_pymunk(scene: Scene, sleep: bool = True, state: np.ndarray | None = None
+                 ) -> tuple[Callable[[], object], Callable[[np.ndarray], None]]:
     """A pymunk space of ``scene``: (step, read_states into an (n, 6) array). pymunk does not sleep by default
     (``sleep_time_threshold`` infinite), so ``sleep`` changes nothing."""
     pymunk = _import("pymunk", "pymunk")
@@ -137,12 +138,13 @@ def build_pymunk(scene: Scene, sleep: bool = True) -> tuple[Callable[[], object]
     floor.elasticity, floor.friction = floor_e, floor_mu
     space.add(floor)
     bodies = []
-    for box, (e, mu) in zip(scene.boxes, box_material, strict=True):
+    start = scene.initial_state() if state is None else np.asarray(state, dtype=float)
+    for box, (e, mu), (x, y, angle, vx, vy, spin) in zip(scene.boxes, box_material, start, strict=True):
         body = pymunk.Body(box.mass, box.inertia)
-        body.position = box.position
-        body.angle = box.angle
-        body.velocity = box.velocity
-        body.angular_velocity = box.spin
+        body.position = (x, y)
+        body.angle = angle
+        body.velocity = (vx, vy)
+        body.angular_velocity = spin
         shape = pymunk.Poly.create_box(body, (box.length, box.width), 0.0)
         shape.elasticity, shape.friction = e, mu
         if not collide:
@@ -159,7 +161,8 @@ def build_pymunk(scene: Scene, sleep: bool = True) -> tuple[Callable[[], object]
     return lambda: space.step(dt), read_states
 
 
-def build_box2d(scene: Scene, sleep: bool = True) -> tuple[Callable[[], object], Callable[[np.ndarray], None]]:
+def build_box2d(scene: Scene, sleep: bool = True, state: np.ndarray | None = None
+                ) -> tuple[Callable[[], object], Callable[[np.ndarray], None]]:
     """A Box2D world of ``scene``: (step, read_states into an (n, 6) array); ``sleep``: Box2D's ``doSleep``."""
     Box2D = _import("Box2D", "box2d")
     world = Box2D.b2World(gravity=(0.0, scene.gravity), doSleep=sleep)
@@ -180,14 +183,15 @@ def build_box2d(scene: Scene, sleep: bool = True) -> tuple[Callable[[], object],
     ground = world.CreateStaticBody(position=(0.0, 0.0))
     ground.CreateEdgeFixture(vertices=[(-half, -skin), (half, -skin)], friction=floor_mu, restitution=0.0)
     bodies = []
-    for box, (e, mu) in zip(scene.boxes, materials(scene), strict=True):
-        body = world.CreateDynamicBody(position=box.position, angle=box.angle)
+    start = scene.initial_state() if state is None else np.asarray(state, dtype=float)
+    for box, (e, mu), (x, y, angle, vx, vy, spin) in zip(scene.boxes, materials(scene), start, strict=True):
+        body = world.CreateDynamicBody(position=(x, y), angle=angle)
         body.CreatePolygonFixture(box=(box.length / 2 - skin, box.width / 2 - skin),
                                   density=box.mass / (box.length * box.width), friction=mu, restitution=e,
                                   groupIndex=group)
         body.massData = Box2D.b2MassData(mass=box.mass, center=(0.0, 0.0), I=box.inertia)
-        body.linearVelocity = box.velocity
-        body.angularVelocity = box.spin
+        body.linearVelocity = (vx, vy)
+        body.angularVelocity = spin
         bodies.append(body)
 
     def read_states(out: np.ndarray) -> None:
@@ -200,7 +204,7 @@ def build_box2d(scene: Scene, sleep: bool = True) -> tuple[Callable[[], object],
 
 
 SCENE_ENGINES: dict[str, Callable] = {"pymunk": build_pymunk, "box2d": build_box2d}
-"""Builders by engine name: ``build(scene, sleep) -> (step, read_states)``."""
+"""Builders by engine name: ``build(scene, sleep, state) -> (step, read_states)``."""
 
 
 def available_scene_engines() -> list[str]:
@@ -208,13 +212,16 @@ def available_scene_engines() -> list[str]:
     return [name for name in SCENE_ENGINES if ENGINES[name].available()]
 
 
-def simulate_scene(engine: str, scene: Scene, steps: int, record: bool = True, sleep: bool = True) -> SceneRun:
+def simulate_scene(engine: str, scene: Scene, steps: int, record: bool = True, sleep: bool = True,
+                   state: np.ndarray | None = None) -> SceneRun:
     """Build ``scene`` in ``engine`` and step it ``steps`` times of ``scene.dt``, timing the loop alone
     (with ``record``, reading every box's state after each step is inside the loop: time without it).
-    ``sleep=False`` keeps every body awake (Box2D's ``doSleep``; pymunk never sleeps by default)."""
+    ``sleep=False`` keeps every body awake (Box2D's ``doSleep``; pymunk never sleeps by default);
+    ``state`` (n, 6) starts the boxes there instead of at the scene's initial state (e.g. a pile settled
+    by another engine, which may overlap a little: no check is made)."""
     if steps < 0:
         raise ValueError(f"steps must be >= 0, got {steps}")
-    step, read_states = SCENE_ENGINES[engine](scene, sleep)
+    step, read_states = SCENE_ENGINES[engine](scene, sleep, state)
     n = scene.n_bodies
     states = None
     if record:

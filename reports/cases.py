@@ -413,14 +413,16 @@ def box_overlap(a: Box, b: Box, state_a: np.ndarray, state_b: np.ndarray) -> np.
     return np.maximum(depth, 0.0)
 
 
-def deepest_overlap(scene: Scene, states: np.ndarray) -> float:
-    """The deepest any two boxes of ``scene`` overlap in states (T, n, 6), and any box goes below the floor [m]."""
+def deepest_overlaps(scene: Scene, states: np.ndarray) -> tuple[float, float]:
+    """(the deepest any two boxes of ``scene`` overlap, the deepest any box goes below the floor) over the
+    states (T, n, 6) [m]."""
     boxes = scene.boxes
-    deepest = max(float(-lowest_corner(box, states[:, i]).min()) for i, box in enumerate(boxes))
+    floor = max(float(-lowest_corner(box, states[:, i]).min()) for i, box in enumerate(boxes))
+    between = 0.0
     for i in range(len(boxes)):
         for j in range(i + 1, len(boxes)):
-            deepest = max(deepest, float(box_overlap(boxes[i], boxes[j], states[:, i], states[:, j]).max()))
-    return max(deepest, 0.0)
+            between = max(between, float(box_overlap(boxes[i], boxes[j], states[:, i], states[:, j]).max()))
+    return between, max(floor, 0.0)
 
 
 def stack(n: int, **scene) -> Scene:

@@ -219,9 +219,14 @@ def update_geometry(pose, half, trig, bound):
         bound[i, 1] = abs(s) * half[i, 0] + abs(c) * half[i, 1]
 
 
-def overlapping_boxes(boxes, tolerance: float = 1e-9) -> tuple[int, int, float] | None:
-    """The first pair of boxes (i, j, depth) that overlap by more than ``tolerance`` [m] (separating
-    axes, in plain numpy: used to validate a scene before any kernel runs), or None."""
+START_OVERLAP = 0.01  # [share of the thinner box's smaller half extent] a colliding scene may start with this
+
+
+def overlapping_boxes(boxes, share: float = START_OVERLAP) -> tuple[int, int, float] | None:
+    """The first pair of boxes (i, j, depth) that overlap by more than ``share`` of the smaller half extent
+    of the two (separating axes, in plain numpy: used to validate a scene before any kernel runs), or None.
+    A little overlap is allowed so that a scene can start from a simulated state (a settled pile overlaps
+    by a few 1e-4 of a box's size: the penalty's job)."""
     n = len(boxes)
     if n < 2:
         return None
@@ -232,9 +237,9 @@ def overlapping_boxes(boxes, tolerance: float = 1e-9) -> tuple[int, int, float] 
     bound = np.stack([np.abs(c) * half[:, 0] + np.abs(s) * half[:, 1],
                       np.abs(s) * half[:, 0] + np.abs(c) * half[:, 1]], axis=1)
     for i in range(n - 1):
-        near = np.flatnonzero(np.all(np.abs(centre[i + 1:] - centre[i]) < bound[i + 1:] + bound[i] - tolerance,
-                                     axis=1)) + i + 1
+        near = np.flatnonzero(np.all(np.abs(centre[i + 1:] - centre[i]) < bound[i + 1:] + bound[i], axis=1)) + i + 1
         for j in near:
+            tolerance = share * min(half[i].min(), half[j].min())
             separation = -math.inf
             for a, b, sign in ((i, j, 1.0), (j, i, -1.0)):
                 d = sign * (centre[j] - centre[i])

@@ -20,7 +20,9 @@ The stage script of one substep of length h (``make_colliding_robust_kernel``):
   2. penalty: penetration deeper than the slop is removed by the critically damped penalty spring with
      backward Euler, as a pseudo-velocity (``robust_solver``'s split impulse, now between two bodies:
      ERP = h omega / (h omega + 2), omega = sqrt(k K_n)); positions move, velocities do not, and the
-     potential energy it returns is taken from the kinetic energy of the bodies it moved;
+     potential energy it returns is taken from the kinetic energy of the bodies it moved, as far as
+     they have it (the one place a substep can gain energy: a box pushed up out of an overlap while at
+     rest; the scene's energy still never exceeds what it started with in our tests);
   3. integrate velocities: v += h g;
   4. solve contact velocities: projected Gauss-Seidel over the contacts (Box2D's sequential
      impulses), friction then normal at each: the accumulated normal impulse stays >= 0 and lets each
@@ -30,8 +32,9 @@ The stage script of one substep of length h (``make_colliding_robust_kernel``):
   5. restitution, only for impacts: a contact that approached faster than the restitution threshold
      before this substep (u0 = u_rel . n < -threshold) and took an impulse gets the target
      u_rel . n >= -e u0 (Newton's law with the approach speed before the solve, as Box2D v3), so a
-     single frictionless contact takes p = -(1 + e) u0 / K_n in all, the closed form; resting contacts
-     (slower than the threshold) get none;
+     single frictionless contact takes p = -(1 + e) u0 / K_n in all, the closed form, in the substep
+     its gap closes (also for e = 0: the impact is not spread over the speculative steps); resting
+     contacts (slower than the threshold) get none;
   6. no energy gained: the bodies that took an impulse are scaled by the one factor s in [0, 1] that
      keeps their kinetic + potential energy from rising in the substep (``energy_limit_scale``; with
      several contacts, friction or warm starting the impulses alone could add energy). Scaling every
@@ -102,6 +105,9 @@ PENALTY_ITERATIONS = 16
 CONVERGED = 1e-9  # sweeps stop when the impulses change by less than this share of their sum
 CONTACT_TOLERANCE = 1e-12  # [m per m of size + 1 m] penetration below this is not corrected
 MIN_CAPACITY = 16
+DIRECT_LIMIT = 48  # contacts: up to this many, the normal impulses are solved exactly (``normal_lcp``)
+REGULARISATION = 1e-12  # share of W_cc added to the diagonal of the exact solve (redundant contacts)
+LCP_TOLERANCE = 1e-12  # share of the largest |free velocity|: a contact left free may approach by this much
 
 
 @jit_stage
@@ -179,9 +185,178 @@ def warm_start(contacts, ids, count, previous_keys, previous_impulses, n_previou
 
 
 @jit_stage
-def solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction):
-    """Projected Gauss-Seidel over the contacts (stage 4): friction clamped to mu times the normal
-    impulse, then the normal impulse >= 0 with u_rel . n >= target (column TARGET)."""
+def delassus_matrix(contacts, ids, count, inv_mass, inv_inertia, w):
+    """The normal Delassus matrix W_cd = J_c M^-1 J_d^T of the first ``count`` contacts into w: how a unit
+    normal impulse at contact d changes u_rel . n at contact c (nonzero where they share a body)."""
+    for c in range(count):
+        for d in range(c, count):
+            value = 0.0
+            for side_c in range(2):
+                b = ids[c, BODY1 + side_c]
+                if b < 0:
+                    continue
+                rcx = contacts[c, R1X] if side_c == 0 else contacts[c, R2X]
+                rcy = contacts[c, R1Y] if side_c == 0 else contacts[c, R2Y]
+                for side_d in range(2):
+                    if ids[d, BODY1 + side_d] != b:
+                        continue
+                    rdx = contacts[d, R1X] if side_d == 0 else contacts[d, R2X]
+                    rdy = contacts[d, R1Y] if side_d == 0 else contacts[d, R2Y]
+                    sign = 1.0 if side_c == side_d else -1.0
+                    along = contacts[c, NX] * contacts[d, NX] + contacts[c, NY] * contacts[d, NY]
+                    turn = ((rcx * contacts[c, NY] - rcy * contacts[c, NX])
+                            * (rdx * contacts[d, NY] - rdy * contacts[d, NX]))
+                    value += sign * (along * inv_mass[b] + turn * inv_inertia[b])
+            w[c, d] = value
+            w[d, c] = value
+
+
+@jit_stage
+def solve_active(w, free, active, count, x, factor):
+    """x on the active contacts solving W_AA x_A = -free_A (Cholesky, with a relative regularisation
+    REGULARISATION on the diagonal for redundant contacts), 0 elsewhere. Returns False if the active
+    block is not positive definite."""
+    m = 0
+    index = np.empty(count, np.int64)
+    for c in range(count):
+        x[c] = 0.0
+        if active[c]:
+            index[m] = c
+            m += 1
+    for p in range(m):
+        for q in range(p + 1):
+            value = w[index[p], index[q]]
+            if p == q:
+                value += REGULARISATION * w[index[p], index[p]]
+            for r in range(q):
+                value -= factor[p, r] * factor[q, r]
+            if p == q:
+                if value <= 0.0:
+                    return False
+                factor[p, p] = math.sqrt(value)
+            else:
+                factor[p, q] = value / factor[q, q]
+    y = np.empty(m)
+    for p in range(m):
+        value = -free[index[p]]
+        for r in range(p):
+            value -= factor[p, r] * y[r]
+        y[p] = value / factor[p, p]
+    for p in range(m - 1, -1, -1):
+        value = y[p]
+        for r in range(p + 1, m):
+            value -= factor[r, p] * x[index[r]]
+        x[index[p]] = value / factor[p, p]
+    return True
+
+
+@jit_stage
+def normal_lcp(w, free, x, active, count, factor):
+    """The normal impulses x >= 0 with W x + free >= 0 and x_c (W x + free)_c = 0 (free: u_rel . n - target
+    at zero impulse), by an active set on the dense W: solve the active block, drop the contacts that
+    would pull, add the one that penetrates most, until neither happens. ``active`` holds the first guess
+    (the contacts that carried load). Returns False if it does not settle (the caller falls back to
+    Gauss-Seidel)."""
+    scale = 0.0
+    for c in range(count):
+        scale = max(scale, abs(free[c]))
+    tolerance = LCP_TOLERANCE * scale
+    for _ in range(3 * count + 3):
+        if not solve_active(w, free, active, count, x, factor):
+            return False
+        dropped = False
+        for c in range(count):
+            if active[c] and x[c] < 0.0:
+                active[c] = False
+                dropped = True
+        if dropped:
+            continue
+        worst = -tolerance
+        add = -1
+        for c in range(count):
+            if not active[c]:
+                value = free[c]
+                for d in range(count):
+                    value += w[c, d] * x[d]
+                if value < worst:
+                    worst = value
+                    add = c
+        if add < 0:
+            return True
+        active[add] = True
+    return False
+
+
+@jit_stage
+def solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, w, factor, free, x, active):
+    """Stage 4: the contact impulses. Up to DIRECT_LIMIT contacts, the normal impulses are solved exactly
+    together (``normal_lcp``: a stack's load passes through every box at once, whatever the mass ratio),
+    alternating with a friction sweep until the impulses settle; beyond that, or if the exact solve fails,
+    projected Gauss-Seidel (``gauss_seidel``)."""
+    if count == 0:
+        return
+    if count <= DIRECT_LIMIT:
+        delassus_matrix(contacts, ids, count, inv_mass, inv_inertia, w)
+        for c in range(count):
+            active[c] = contacts[c, IMPULSE] > 0.0
+        solved = True
+        for _ in range(VELOCITY_ITERATIONS if use_friction else 1):
+            for c in range(count):
+                ux, uy = relative_velocity(c, contacts, ids, vel)
+                value = ux * contacts[c, NX] + uy * contacts[c, NY] - contacts[c, TARGET]
+                for d in range(count):
+                    value -= w[c, d] * contacts[d, IMPULSE]
+                free[c] = value
+                if free[c] < 0.0:
+                    active[c] = True
+            if not normal_lcp(w, free, x, active, count, factor):
+                solved = False
+                break
+            change = 0.0
+            total = 0.0
+            for c in range(count):
+                dp = x[c] - contacts[c, IMPULSE]
+                contacts[c, IMPULSE] = x[c]
+                if dp != 0.0:
+                    apply_impulse(c, dp * contacts[c, NX], dp * contacts[c, NY], contacts, ids, vel, inv_mass,
+                                  inv_inertia)
+                change += abs(dp)
+                total += x[c]
+            if use_friction:
+                change += friction_sweep(contacts, ids, count, vel, inv_mass, inv_inertia)
+            if change <= CONVERGED * total:
+                break
+        if solved:
+            return
+    gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction)
+
+
+@jit_stage
+def friction_sweep(contacts, ids, count, vel, inv_mass, inv_inertia):
+    """One Gauss-Seidel sweep of friction: at each contact the tangential impulse that stops the slip, added
+    to the accumulated one and clamped to mu times the normal impulse. Returns the sum of the changes."""
+    change = 0.0
+    for c in range(count):
+        if contacts[c, FRICTION] <= 0.0:
+            continue
+        nx, ny = contacts[c, NX], contacts[c, NY]
+        ux, uy = relative_velocity(c, contacts, ids, vel)
+        slip = -ux * ny + uy * nx  # u_rel . t, t = (-ny, nx)
+        before = contacts[c, FRICTION_IMPULSE]
+        limit = contacts[c, FRICTION] * contacts[c, IMPULSE]
+        after = min(max(before - slip * contacts[c, TANGENT_MASS], -limit), limit)
+        contacts[c, FRICTION_IMPULSE] = after
+        dq = after - before
+        if dq != 0.0:
+            apply_impulse(c, -dq * ny, dq * nx, contacts, ids, vel, inv_mass, inv_inertia)
+        change += abs(dq)
+    return change
+
+
+@jit_stage
+def gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction):
+    """Projected Gauss-Seidel over the contacts (Box2D's sequential impulses): friction clamped to mu times
+    the normal impulse, then the normal impulse >= 0 with u_rel . n >= target (column TARGET)."""
     for _ in range(VELOCITY_ITERATIONS):
         change = 0.0
         total = 0.0
@@ -217,7 +392,7 @@ def apply_restitution(contacts, ids, count, vel, inv_mass, inv_inertia, threshol
     impulse (the normal impulse stays >= 0). Returns how many contacts are impacts."""
     impacts = 0
     for c in range(count):
-        if contacts[c, APPROACH] < -threshold and contacts[c, IMPULSE] > 0.0 and contacts[c, RESTITUTION] > 0.0:
+        if contacts[c, APPROACH] < -threshold and contacts[c, IMPULSE] > 0.0:
             impacts += 1
     if impacts == 0:
         return 0
@@ -367,6 +542,11 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
         ids = np.zeros((capacity, ID_COLUMNS), np.int64)
         previous_keys = np.zeros(capacity, np.int64)
         previous_impulses = np.zeros((capacity, 2))
+        w = np.zeros((DIRECT_LIMIT, DIRECT_LIMIT))  # the exact normal solve's work arrays
+        factor = np.zeros((DIRECT_LIMIT, DIRECT_LIMIT))
+        free = np.zeros(DIRECT_LIMIT)
+        x = np.zeros(DIRECT_LIMIT)
+        active = np.zeros(DIRECT_LIMIT, np.bool_)
         n_previous = 0
         h_previous = dt
         status = layout.STATUS_OK
@@ -425,7 +605,8 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
                     contacts[c, TARGET] = -max(contacts[c, GAP], 0.0) / h
                 warm_start(contacts, ids, count, previous_keys, previous_impulses, n_previous, h / h_previous, vel,
                            inv_mass, inv_inertia)
-                solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, FRICTION_ON)
+                solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, FRICTION_ON, w, factor, free, x,
+                                 active)
                 for c in range(count):  # kept for the next substep's warm start (before restitution)
                     previous_keys[c] = ids[c, KEY]
                     previous_impulses[c, 0] = contacts[c, IMPULSE]

@@ -68,8 +68,8 @@ class Scene:
     ``boxes_collide``: False (default), every box meets only the floor and the boxes are independent
     (a batch of them runs on threads); True, the boxes of the scene also collide with one another and
     are stepped together (``colliding_solver``, ``colliding_seed``). A colliding scene must start with no
-    two boxes overlapping (a ValueError names them); overlaps that arise during a run are resolved by
-    the penalty.
+    two boxes overlapping by more than 1% of the thinner one's smaller half extent (a ValueError names
+    them); smaller overlaps, and those that arise during a run, are resolved by the penalty.
     """
 
     boxes: tuple[Box, ...] = field(default_factory=lambda: (Box(position=(0.0, 5.0)),))
@@ -112,7 +112,8 @@ class Scene:
             if overlap is not None:
                 i, j, depth = overlap
                 raise ValueError(f"boxes[{i}] and boxes[{j}] overlap by {depth:.3g} m at the start; with "
-                                 "boxes_collide=True the boxes must start apart or touching (overlap <= 1e-9 m)")
+                                 "boxes_collide=True the boxes must start apart or touching (an overlap of at most "
+                                 "1% of the thinner box's half width is resolved by the penalty)")
 
     # -- what the scene has: these decide which kernel stages are compiled in -------------------
     @property

@@ -157,7 +157,7 @@ def pile(n: int = 10, seed: int = 0, **scene) -> Scene:
     for k in range(n):
         row, column = divmod(k, columns)
         boxes.append(Box(**STACK_BOX, mass=2.0,
-                         position=(0.42 * (column - 0.5 * (columns - 1)) + float(rng.uniform(-0.08, 0.08)),
+                         position=(0.6 * (column - 0.5 * (columns - 1)) + float(rng.uniform(-0.08, 0.08)),
                                    0.15 + 0.3 * row),
                          angle=float(rng.uniform(-0.2, 0.2))))
     return Scene(boxes=tuple(boxes), boxes_collide=True, **{**STACK_MATERIAL, **scene})

@@ -34,6 +34,8 @@ def make_parser() -> argparse.ArgumentParser:
         parser.add_argument(f"--{flag}", type=float, help=f"{help_text} (default: the scene's)")
     parser.add_argument("--no-impulses", action="store_true", help="switch impulses off (seed solver only)")
     parser.add_argument("--no-penalty", action="store_true", help="switch penalty forces off")
+    parser.add_argument("--boxes-collide", action="store_true",
+                        help="the boxes collide with one another too (the demo's meet only the floor); key B")
     parser.add_argument("--compare", action="store_true", help="start with seed | robust side by side")
     parser.add_argument("--paused", action="store_true", help="start paused")
     parser.add_argument("--steps-per-frame", type=int, default=STEPS_PER_FRAME,
@@ -83,6 +85,8 @@ def run_viewer(parser: argparse.ArgumentParser, args) -> int:
         changes["use_impulses"] = False
     if args.no_penalty:
         changes["use_penalty"] = False
+    if args.boxes_collide:
+        changes["boxes_collide"] = True
     # in a window, kernels load on a background thread after the first frame (headless: at the first step)
     loader = KernelLoader() if args.frames is None else None
     try:

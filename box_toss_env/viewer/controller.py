@@ -90,10 +90,10 @@ PARAMETERS = (
     Parameter("friction", "friction coefficient", "",
               (0.0, 0.01, 0.02, 0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.8, 1.0, 1.5, 2.0)),
 )
-TOGGLES = (("use_impulses", "use impulses"), ("use_penalty", "use penalty force"))
+TOGGLES = (("use_impulses", "use impulses"), ("use_penalty", "use penalty force"), ("boxes_collide", "boxes collide"))
 PARAMETER_BY_NAME = {parameter.name: parameter for parameter in PARAMETERS}
 ROWS = (*(parameter.name for parameter in PARAMETERS), *(name for name, _ in TOGGLES), "solver")
-"""The panel's selectable rows, top to bottom: the five parameters, the two toggles, the solver."""
+"""The panel's selectable rows, top to bottom: the five parameters, the three toggles, the solver."""
 ROW_LABELS = {**{p.name: p.label for p in PARAMETERS}, **dict(TOGGLES), "solver": "solver"}
 COMPARE_SOLVERS = ("seed", "robust")
 """The lanes of compare mode, left to right."""
@@ -190,7 +190,7 @@ class Lane:
 
     def set_scene(self, scene: Scene) -> None:
         """Take new parameters; the state goes on from where it is. The simulator is rebuilt only
-        when the compile-time flags change (solver, impulses, penalty, friction on or off)."""
+        when the compile-time flags change (solver, impulses, penalty, friction, boxes colliding on or off)."""
         simulator = self._make_simulator(scene)
         if simulator.flags != self.simulator.flags:
             self._use_simulator(simulator, scene)
@@ -418,7 +418,8 @@ class ViewerController:
         return self.set_parameter(name, parameter.next_value(getattr(self.scene, name), direction))
 
     def toggle(self, name: str) -> bool:
-        """Switch ``use_impulses`` or ``use_penalty``."""
+        """Switch ``use_impulses``, ``use_penalty`` or ``boxes_collide`` (the boxes collide with one another:
+        a box dragged into another pushes it; the state goes on from where it is)."""
         if name not in dict(TOGGLES):
             raise KeyError(f"unknown toggle {name!r}; the toggles are {tuple(dict(TOGGLES))}")
         return self._apply(**{name: not getattr(self.scene, name)})

@@ -24,7 +24,7 @@ def run_frames(controller: ViewerController, n: int) -> None:
 def test_opens_the_seed_demo_with_its_panel_and_read_outs(demo):
     assert len(demo.lanes) == 1 and demo.lanes[0].solver == "seed"
     assert [demo.row_value(row) for row in ROWS] == [
-        "0.005 s", "-9.81 m/s^2", "100 N/m", "0.5", "0.02", "on", "on", "seed"]
+        "0.005 s", "-9.81 m/s^2", "100 N/m", "0.5", "0.02", "on", "on", "off", "seed"]
     assert demo.readouts(0) == ["seed solver", "0.00 s", "-- ms / step", "5 bodies"]
     np.testing.assert_array_equal(demo.lanes[0].state, scenes.seed_demo().initial_state())
 
@@ -312,3 +312,37 @@ def test_the_first_view_shows_every_box_of_every_named_scene(name):
     assert (points[:, 1] > y_min).all() and (points[:, 1] < y_max).all()
     assert y_min < 0.0 < y_max  # the floor is in view
     assert math.isfinite(controller.view.pixels_per_metre)
+
+
+@pytest.mark.parametrize("solver", ["seed", "robust"])
+def test_boxes_collide_toggle_makes_a_dragged_box_push_another(solver):
+    """Dragging box 1 of the demo into box 2 (after they have landed): with "boxes collide" on, box 2 is
+    pushed along and the two never pass through each other; off, box 1 passes through box 2."""
+    moved = {}
+    for collide in (False, True):
+        demo = ViewerController(scenes.seed_demo(solver=solver, penalty_stiffness=1e3))
+        run_frames(demo, 75)  # 3 s: every box lies on the floor
+        if collide:
+            assert demo.toggle("boxes_collide") and demo.lanes[0].simulator.flags.boxes_collide
+            assert demo.row_value("boxes_collide") == "on"
+        lane = demo.lanes[0]
+        start = lane.state[:, :2].copy()
+        assert lane.grab_at(start[1])
+        lane.grab.target = start[1] + np.array([6.0, 0.5])  # far beyond box 2 (3 m to the right)
+        left_of_it = []
+        for _ in range(60):
+            demo.advance_frame()
+            left_of_it.append(lane.state[1, 0] < lane.state[2, 0])
+        moved[collide] = lane.state[2, 0] - start[2, 0]
+        if collide:
+            assert all(left_of_it)
+        else:
+            assert not left_of_it[-1]  # it went through
+    assert abs(moved[False]) < 0.2 and moved[True] > 1.0  # alone, box 2 creeps (the seed scheme: 8 cm)
+
+
+def test_boxes_collide_from_the_command_line():
+    from box_toss_env.viewer.__main__ import make_parser
+
+    args = make_parser().parse_args(["--boxes-collide"])
+    assert args.boxes_collide

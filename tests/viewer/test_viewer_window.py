@@ -134,3 +134,11 @@ def test_play_window_throws_on_release():
     assert play.result is None and play.target_x != target
     assert not play_window.handle(key(pygame.K_ESCAPE))
     env.close()
+
+
+def test_key_b_switches_boxes_collide(window):
+    controller = window.controller
+    window.handle(key(pygame.K_b, "b"))
+    assert controller.scene.boxes_collide and controller.lanes[0].simulator.flags.boxes_collide
+    window.handle(key(pygame.K_b, "b"))
+    assert not controller.scene.boxes_collide
