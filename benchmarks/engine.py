@@ -250,11 +250,11 @@ def compile_times() -> tuple[float, float, float]:
 
 
 def load_text() -> str:
-    """The 1-minute load average against the cores: other jobs share this machine."""
+    """The 1-minute load average: other jobs share this machine, and its figures move with them."""
     try:
-        return f"{os.getloadavg()[0]:.2f} on {os.cpu_count()} cores"
-    except OSError:
-        return "unknown"
+        return f"load {os.getloadavg()[0]:.2f} at the start, shared with other jobs"
+    except OSError:  # no load average on this platform
+        return "load unknown, shared with other jobs"
 
 
 def main() -> None:
@@ -265,7 +265,7 @@ def main() -> None:
     repeats, steps = (3, 1024) if args.quick else (5, 4096)
     import numba
 
-    lines = [f"numba {numba.__version__}, {numba.get_num_threads()} threads, {os.cpu_count()} cores", ""]
+    lines = [f"numba {numba.__version__}, {numba.get_num_threads()} threads, {os.cpu_count()} cores; {load_text()}", ""]
     lines.append("ns per body-step (fixed-length runs, dt = 1/256 s; robust flight is closed form, not stepped)")
     lines.append(f"{'solver':8} {'scene':8} {'1 box':>10} {'1024 boxes':>11}")
     for solver, name, one, batch in step_costs(repeats, steps):
@@ -278,8 +278,7 @@ def main() -> None:
     lines += ["", f"boxes that collide: ns per body-step of a settled pile (scenes.pile, dt = 1/256 s, settled "
               f"{PILE_SETTLE:g} s by the robust solver, then {pile_steps} steps timed from that same state in every "
               "method, nobody sleeping but in 'robust, sleeping' (pile_cost); ours single-thread on raw arrays, "
-              f"pymunk and Box2D stepped from Python, the loop alone; best of {repeats}; a shared machine, load "
-              f"{load_text()})"]
+              f"pymunk and Box2D stepped from Python, the loop alone; best of {repeats})"]
     lines += pile_lines(pile_comparison(steps=pile_steps, repeats=repeats))
     imported, cold, warm = compile_times()
     lines += ["", f"import {imported:.2f} s; compile of the robust toss kernel: {cold:.2f} s cold, "
