@@ -104,3 +104,15 @@ def test_the_report_is_written(report, tmp_path):
     for result in report.results:
         assert f"## {result.spec.title}" in text
     assert "Who agrees" not in collisions.readme_block(report) and "| pair |" in collisions.readme_block(report)
+
+
+@pytest.mark.parametrize("scene", ["flight_collision", "newton_row", "stack", "pyramid"])
+def test_the_robust_solver_agrees_with_pymunk(report, scene):
+    """Both apply Newton's impact law with sharp corners: the same post-collision velocities (to rounding in
+    flight), the same row, the same resting stack and pyramid (within pymunk's 1 mm slop per contact)."""
+    if "pymunk" in report.missing:
+        pytest.skip("pymunk not installed")
+    result = report.result(scene)
+    assert result.agree("robust", "pymunk"), result.distance("robust", "pymunk")
+    if scene == "flight_collision":
+        assert result.distance("robust", "pymunk") < 1e-9
