@@ -110,7 +110,7 @@ REGULARISATION = 1e-12  # share of W_cc added to the diagonal of the exact solve
 LCP_TOLERANCE = 1e-12  # share of the largest |free velocity|: a contact left free may approach by this much
 
 
-@jit_stage
+@jit_stage(inline="always")
 def relative_velocity(c, contacts, ids, vel):
     """u_rel = u1 - u2 at contact c, u = v + omega x r = (vx - omega ry, vy + omega rx)."""
     b1 = ids[c, BODY1]
@@ -123,7 +123,7 @@ def relative_velocity(c, contacts, ids, vel):
     return ux, uy
 
 
-@jit_stage
+@jit_stage(inline="always")
 def apply_impulse(c, px, py, contacts, ids, vel, inv_mass, inv_inertia):
     """The impulse P at contact c: +P on body 1 (v1 += P / m1, omega1 += (r1 x P) / I1), -P on body 2."""
     b1 = ids[c, BODY1]
@@ -212,12 +212,11 @@ def delassus_matrix(contacts, ids, count, inv_mass, inv_inertia, w):
 
 
 @jit_stage
-def solve_active(w, free, active, count, x, factor):
+def solve_active(w, free, active, count, x, factor, index, y):
     """x on the active contacts solving W_AA x_A = -free_A (Cholesky, with a relative regularisation
-    REGULARISATION on the diagonal for redundant contacts), 0 elsewhere. Returns False if the active
-    block is not positive definite."""
+    REGULARISATION on the diagonal for redundant contacts), 0 elsewhere (``index``, ``y``: work arrays).
+    Returns False if the active block is not positive definite."""
     m = 0
-    index = np.empty(count, np.int64)
     for c in range(count):
         x[c] = 0.0
         if active[c]:
@@ -236,7 +235,6 @@ def solve_active(w, free, active, count, x, factor):
                 factor[p, p] = math.sqrt(value)
             else:
                 factor[p, q] = value / factor[q, q]
-    y = np.empty(m)
     for p in range(m):
         value = -free[index[p]]
         for r in range(p):
@@ -251,7 +249,7 @@ def solve_active(w, free, active, count, x, factor):
 
 
 @jit_stage
-def normal_lcp(w, free, x, active, count, factor):
+def normal_lcp(w, free, x, active, count, factor, index, y):
     """The normal impulses x >= 0 with W x + free >= 0 and x_c (W x + free)_c = 0 (free: u_rel . n - target
     at zero impulse), by an active set on the dense W: solve the active block, drop the contacts that
     would pull, add the one that penetrates most, until neither happens. ``active`` holds the first guess
@@ -262,7 +260,7 @@ def normal_lcp(w, free, x, active, count, factor):
         scale = max(scale, abs(free[c]))
     tolerance = LCP_TOLERANCE * scale
     for _ in range(3 * count + 3):
-        if not solve_active(w, free, active, count, x, factor):
+        if not solve_active(w, free, active, count, x, factor, index, y):
             return False
         dropped = False
         for c in range(count):
@@ -288,7 +286,8 @@ def normal_lcp(w, free, x, active, count, factor):
 
 
 @jit_stage
-def solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, w, factor, free, x, active):
+def solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, w, factor, free, x, active,
+                     index, y):
     """Stage 4: the contact impulses. Up to DIRECT_LIMIT contacts, the normal impulses are solved exactly
     together (``normal_lcp``: a stack's load passes through every box at once, whatever the mass ratio),
     alternating with a friction sweep until the impulses settle; beyond that, or if the exact solve fails,
@@ -309,7 +308,7 @@ def solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, use_frict
                 free[c] = value
                 if free[c] < 0.0:
                     active[c] = True
-            if not normal_lcp(w, free, x, active, count, factor):
+            if not normal_lcp(w, free, x, active, count, factor, index, y):
                 solved = False
                 break
             change = 0.0
@@ -547,6 +546,8 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
         free = np.zeros(DIRECT_LIMIT)
         x = np.zeros(DIRECT_LIMIT)
         active = np.zeros(DIRECT_LIMIT, np.bool_)
+        index = np.zeros(DIRECT_LIMIT, np.int64)
+        lcp_y = np.zeros(DIRECT_LIMIT)
         n_previous = 0
         h_previous = dt
         status = layout.STATUS_OK
@@ -606,7 +607,7 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
                 warm_start(contacts, ids, count, previous_keys, previous_impulses, n_previous, h / h_previous, vel,
                            inv_mass, inv_inertia)
                 solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, FRICTION_ON, w, factor, free, x,
-                                 active)
+                                 active, index, lcp_y)
                 for c in range(count):  # kept for the next substep's warm start (before restitution)
                     previous_keys[c] = ids[c, KEY]
                     previous_impulses[c, 0] = contacts[c, IMPULSE]
