@@ -8,6 +8,10 @@ Two solvers share one scene description:
   stiffness, speed, spin, mass and aspect ratio (``robust_solver``).
 
 ``simulate(scene, ...)`` runs a scene; ``Simulator`` runs compiled kernels on raw arrays.
+
+``Scene(boxes_collide=True)`` makes the boxes of a scene collide with one another too (``box_collision``,
+``colliding_solver``, ``colliding_seed``; docs/box_collisions.md); by default they meet only the floor
+and none of that is compiled.
 """
 
 from . import layout, scenes

@@ -43,14 +43,14 @@ The stage script of one substep of length h (``make_colliding_robust_kernel``):
      (x += h v - h^2 g / 2 with v already at the end of the substep), one in contact with symplectic
      Euler (x += h v).
 A grid step dt is split into substeps so that no point of any box moves further than
-TUNNEL_FRACTION of the smallest half extent of the scene in one (relative speed below
-2 TUNNEL_FRACTION min(hx, hy) / h; the point speed bound |v| + |g| h + |omega| R) and no box turns
-further than MAX_ROTATION_PER_STEP, up to MAX_SUBSTEPS. No tunnelling: within that bound, two boxes
-cannot pass through one another in a substep (their relative motion is less than half the thinnest
-box, and the speculative contacts stop the gap from closing past zero); the floor's speculative
-contacts hold at any speed. Beyond MAX_SUBSTEPS substeps (a relative speed above
-2 * TUNNEL_FRACTION * MAX_SUBSTEPS * min(hx, hy) / dt, 3,200 m/s for 10 cm thick boxes at dt = 1/256 s)
-the guarantee lapses.
+TUNNEL_FRACTION / 2 of the scene's smallest half extent in one (the point speed bound
+|v| + |g| h + |omega| R), so two boxes move by at most TUNNEL_FRACTION of it relative to one another,
+and no box turns further than MAX_ROTATION_PER_STEP, up to MAX_SUBSTEPS. No tunnelling: within that
+bound two boxes cannot pass through one another in a substep (they move by less than half the
+thinnest box, and the speculative contacts stop the gap from closing past zero); the floor's
+speculative contacts hold at any speed. The bound holds up to a relative speed of
+MAX_SUBSTEPS * TUNNEL_FRACTION * min(hx, hy) / dt (3,300 m/s for 10 cm thick boxes at dt = 1/256 s);
+beyond it the substeps are capped and only the speculative contacts remain (not guaranteed).
 
 What carries over from the floor-only robust solver, and what does not: exact flight and events located
 in time are not kept (a colliding scene is time-stepped; a body out of contact still moves on its exact
@@ -419,11 +419,13 @@ def apply_restitution(contacts, ids, count, vel, inv_mass, inv_inertia, threshol
 
 @jit_stage
 def correct_penetrations(contacts, ids, count, pose, vel, pseudo, inv_mass, inv_inertia, h, slop, tolerance,
-                         gravity, params):
+                         gravity, params, w, factor, free, x, active, index, y):
     """Stage 2: pseudo-velocities that remove the penalty's share of each penetration deeper than the slop
-    (Gauss-Seidel on the normal impulses >= 0, targets ERP depth / h), moved into the positions; the gaps
-    of every contact follow to first order, and the potential energy gained is taken from the kinetic
-    energy of the moved bodies. Returns the deepest penetration corrected (0 if none)."""
+    (normal impulses >= 0 with targets ERP depth / h; the other contacts may close their gap but not pass
+    it), moved into the positions; the gaps of every contact follow to first order, and the potential
+    energy gained is taken from the kinetic energy of the moved bodies. Up to DIRECT_LIMIT contacts the
+    impulses are solved exactly (``normal_lcp``, as the velocities: Gauss-Seidel leaves a light box
+    between heavy ones turning), beyond that by Gauss-Seidel. Returns the deepest penetration (0 if none)."""
     deepest = 0.0
     for c in range(count):
         deepest = max(deepest, -contacts[c, GAP])
@@ -441,13 +443,24 @@ def correct_penetrations(contacts, ids, count, pose, vel, pseudo, inv_mass, inv_
             share = penalty_correction_share(contacts[c, STIFFNESS], 1.0 / contacts[c, NORMAL_MASS], h)
             contacts[c, TARGET] = share * depth / h
         else:
-            contacts[c, TARGET] = -math.inf
-    for _ in range(PENALTY_ITERATIONS):
+            contacts[c, TARGET] = -max(contacts[c, GAP], 0.0) / h
+    solved = False
+    if count <= DIRECT_LIMIT:
+        delassus_matrix(contacts, ids, count, inv_mass, inv_inertia, w)
+        for c in range(count):
+            free[c] = -contacts[c, TARGET]
+            active[c] = free[c] < 0.0
+        solved = normal_lcp(w, free, x, active, count, factor, index, y)
+        if solved:
+            for c in range(count):
+                contacts[c, PSEUDO_IMPULSE] = x[c]
+                if x[c] != 0.0:
+                    apply_impulse(c, x[c] * contacts[c, NX], x[c] * contacts[c, NY], contacts, ids, pseudo, inv_mass,
+                                  inv_inertia)
+    for _ in range(0 if solved else PENALTY_ITERATIONS):
         change = 0.0
         total = 0.0
         for c in range(count):
-            if contacts[c, TARGET] == -math.inf:
-                continue
             nx, ny = contacts[c, NX], contacts[c, NY]
             ux, uy = relative_velocity(c, contacts, ids, pseudo)
             before = contacts[c, PSEUDO_IMPULSE]
@@ -592,7 +605,7 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
                 # 2. penalty: split-impulse correction of penetrations deeper than the slop
                 if PENALTY and count > 0:
                     correct_penetrations(contacts, ids, count, pose, vel, pseudo, inv_mass, inv_inertia, h, slop,
-                                         tolerance, gravity, params)
+                                         tolerance, gravity, params, w, factor, free, x, active, index, lcp_y)
                 for b in range(nb):
                     kinetic_before[b] = body_kinetic_energy(vel, b, params)
                 for c in range(count):
