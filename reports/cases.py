@@ -430,12 +430,16 @@ def stack(n: int, **scene) -> Scene:
     return scenes.stack(n=n, **{"penalty_stiffness": STIFFNESS, **scene})
 
 
-def mass_ratio_stack(ratio: float, heavy_on_top: bool, **scene) -> Scene:
-    """A stack of two boxes of ``scenes.stack`` whose masses differ ``ratio`` times (the top one the heavier if
-    ``heavy_on_top``), material unchanged."""
+MASS_ORDERS = {"heavy on top": (0, 1), "heavy below": (1, 0), "light between heavy": (1, 0, 1)}
+"""A mass-ratio stack's boxes from the bottom: 1 the heavy box, 0 the light one."""
+
+
+def mass_ratio_stack(ratio: float, order: str, **scene) -> Scene:
+    """A stack of ``scenes.stack`` whose boxes weigh the stack's mass (light) or ``ratio`` times it (heavy) in the
+    ``order`` of MASS_ORDERS, material unchanged."""
     light = scenes.stack(n=1).boxes[0].mass
-    masses = (light, light * ratio) if heavy_on_top else (light * ratio, light)
-    return stack(2, masses=masses, **scene)
+    pattern = MASS_ORDERS[order]
+    return stack(len(pattern), masses=tuple(light * ratio if heavy else light for heavy in pattern), **scene)
 
 
 def body_impact(speed: float, onto_floor: bool, **scene) -> Scene:
