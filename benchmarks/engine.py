@@ -1,5 +1,6 @@
 """Engine benchmark: ns per body-step for each solver on named scenes, wall time per throw, ns per
-body-step of piles of boxes that collide (``pile_cost``), and numba compile time cold and cached.
+body-step of piles of boxes that collide (``pile_cost``) and the same piles in pymunk and Box2D
+(``pile_comparison``), and numba compile time cold and cached.
 Prints measured figures; asserts nothing.
 
     python -m benchmarks.engine [--quick]
@@ -8,6 +9,7 @@ Prints measured figures; asserts nothing.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import subprocess
 import sys
@@ -16,8 +18,19 @@ import time
 
 import numpy as np
 
+from benchmarks.other_scenes import UnsupportedScene, available_scene_engines, simulate_scene
 from benchmarks.readme_section import replace_section
-from box_toss_env.physics import Box, Scene, Simulator, layout, make_settings, scenes, simulate
+from box_toss_env.physics import (
+    Box,
+    NonFiniteStateError,
+    Scene,
+    Simulator,
+    check_finite_stats,
+    layout,
+    make_settings,
+    scenes,
+    simulate,
+)
 
 
 def best_time(function, repeats: int) -> float:
@@ -124,6 +137,92 @@ def pile_costs(sizes=PILE_SIZES, repeats: int = 3) -> list[dict]:
     return [pile_cost(n, repeats=repeats) for n in sizes]
 
 
+NEVER_SLEEP = 1e6  # [s] a sleep_time no pile run reaches
+PILE_SETTLE = 2.0  # [s] as ``pile_cost``
+PILE_STEPS, QUICK_PILE_STEPS = 256, 64
+
+
+def pile_energy(scene: Scene, state: np.ndarray) -> float:
+    """Total energy of every box, 0.5 m |v|^2 + 0.5 I w^2 - m g y [J] (floor at y = 0, g < 0)."""
+    mass = np.array([box.mass for box in scene.boxes])
+    inertia = np.array([box.inertia for box in scene.boxes])
+    return float(0.5 * mass @ (state[:, 3:5] ** 2).sum(axis=1) + 0.5 * inertia @ state[:, 5] ** 2
+                 - scene.gravity * mass @ state[:, 1])
+
+
+def time_from(scene: Scene, start: np.ndarray, steps: int, repeats: int) -> tuple[float, np.ndarray, np.ndarray]:
+    """(best wall time [s] of ``steps`` steps of ``scene`` from the state ``start``, single thread, the state
+    reached and the stats)."""
+    simulator = Simulator.for_scene(scene, parallel=False)
+    params, settings = scene.body_params(), make_settings(scene, steps, until_rest=False)
+    stats = np.zeros((scene.n_bodies, layout.STATS_SIZE))
+    state = start.copy()
+
+    def run():
+        state[:] = start
+        simulator.run(state, params, settings, stats)
+
+    return best_time(run, repeats), state, stats
+
+
+def pile_comparison(sizes=PILE_SIZES, steps: int = PILE_STEPS, settle: float = PILE_SETTLE,
+                    repeats: int = 3) -> list[tuple]:
+    """(method, boxes, ns per body-step or nan, note) on the same piles in every engine: ``scenes.pile(n)``
+    settled for ``settle`` s by our robust solver with nobody sleeping, then ``steps`` steps from that state
+    timed in each method, nobody sleeping (``sleep_time`` NEVER_SLEEP, Box2D's sleeping off), so every step
+    solves the pile's contacts. Ours: single thread on raw arrays; pymunk and Box2D stepped from Python as
+    their users would (the loop alone, a fresh world per repeat). A method that blows the pile apart (its
+    energy at the end above 1.1 times the settled pile's) has no figure: it has no contacts left to solve.
+    Beside them, ``pile_cost``: the robust solver with its default sleeping."""
+    rows = []
+    for n in sizes:
+        scene = scenes.pile(n, sleep_time=NEVER_SLEEP)
+        settled = simulate(scene, duration=settle).final_state
+        start = pile_energy(scene, settled)
+        for solver in ("robust", "seed"):
+            ours = scene.replace(solver=solver)
+            seconds, state, stats = time_from(ours, settled, steps, repeats)
+            try:
+                check_finite_stats(stats, solver)
+            except NonFiniteStateError as error:
+                rows.append((solver, n, math.nan, f"non-finite at step {error.step}"))
+                continue
+            gain = pile_energy(ours, state) / start
+            if gain > 1.1:
+                rows.append((solver, n, math.nan, f"blows the pile apart (energy x{gain:.3g} in {steps} steps)"))
+                continue
+            rows.append((solver, n, seconds / (steps * n) * 1e9, ""))
+        default = pile_cost(n, settle=settle, steps=steps, repeats=repeats)
+        rows.append(("robust, sleeping", n, default["ns_per_body_step"],
+                     f"{default['moving_at_end']} boxes moving at the end"))
+        for engine in available_scene_engines():
+            try:
+                runs = [simulate_scene(engine, scene, steps, record=False, sleep=False, state=settled)
+                        for _ in range(repeats + 1)]
+            except UnsupportedScene as error:
+                rows.append((engine, n, math.nan, str(error)))
+                continue
+            gain = pile_energy(scene, runs[-1].final_state) / start
+            note = f"blows the pile apart (energy x{gain:.3g})" if gain > 1.1 else ""
+            rows.append((engine, n, math.nan if note else min(r.ns_per_body_step for r in runs[1:]), note))
+    return rows
+
+
+def pile_lines(rows) -> list[str]:
+    methods = list(dict.fromkeys(method for method, *_ in rows))
+    sizes = list(dict.fromkeys(n for _, n, *_ in rows))
+    cost = {(m, n): (ns, note) for m, n, ns, note in rows}
+    lines = [f"{'method':17} " + " ".join(f"{boxes_text(n):>11}" for n in sizes)]
+    for method in methods:
+        lines.append(f"{method:17} " + " ".join(f"{cost[(method, n)][0]:11.1f}" if not math.isnan(cost[(method, n)][0])
+                                                else f"{'-':>11}" for n in sizes))
+    return lines + [f"  {method}, {boxes_text(n)}: {note}" for method, n, _, note in rows if note]
+
+
+def boxes_text(n: int) -> str:
+    return f"{n} box" if n == 1 else f"{n} boxes"
+
+
 COMPILE_PROBE = """
 import time
 start = time.perf_counter()
@@ -150,6 +249,14 @@ def compile_times() -> tuple[float, float, float]:
     return figures[1][0], figures[0][1], figures[1][1]
 
 
+def load_text() -> str:
+    """The 1-minute load average: other jobs share this machine, and its figures move with them."""
+    try:
+        return f"load {os.getloadavg()[0]:.2f} at the start, shared with other jobs"
+    except OSError:  # no load average on this platform
+        return "load unknown, shared with other jobs"
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--quick", action="store_true", help="fewer repeats and steps")
@@ -158,7 +265,7 @@ def main() -> None:
     repeats, steps = (3, 1024) if args.quick else (5, 4096)
     import numba
 
-    lines = [f"numba {numba.__version__}, {numba.get_num_threads()} threads, {os.cpu_count()} cores", ""]
+    lines = [f"numba {numba.__version__}, {numba.get_num_threads()} threads, {os.cpu_count()} cores; {load_text()}", ""]
     lines.append("ns per body-step (fixed-length runs, dt = 1/256 s; robust flight is closed form, not stepped)")
     lines.append(f"{'solver':8} {'scene':8} {'1 box':>10} {'1024 boxes':>11}")
     for solver, name, one, batch in step_costs(repeats, steps):
@@ -167,11 +274,12 @@ def main() -> None:
     lines.append(f"{'solver':8} {'dt [s]':>10} {'us/throw':>10} {'steps':>7} {'rest at [s]':>12}")
     for solver, dt, micros, n_steps, rest in throw_costs(repeats):
         lines.append(f"{solver:8} {dt:10.6f} {micros:10.1f} {n_steps:7d} {rest:12.3f}")
-    lines += ["", "boxes that collide: ns per body-step of a settled pile (scenes.pile, robust, dt = 1/256 s, "
-              "1 s timed)"]
-    lines.append(f"{'boxes':>6} {'ns/body-step':>13}")
-    for row in pile_costs(repeats=repeats):
-        lines.append(f"{row['n']:6d} {row['ns_per_body_step']:13.1f}")
+    pile_steps = QUICK_PILE_STEPS if args.quick else PILE_STEPS
+    lines += ["", f"boxes that collide: ns per body-step of a settled pile (scenes.pile, dt = 1/256 s, settled "
+              f"{PILE_SETTLE:g} s by the robust solver, then {pile_steps} steps timed from that same state in every "
+              "method, nobody sleeping but in 'robust, sleeping' (pile_cost); ours single-thread on raw arrays, "
+              f"pymunk and Box2D stepped from Python, the loop alone; best of {repeats})"]
+    lines += pile_lines(pile_comparison(steps=pile_steps, repeats=repeats))
     imported, cold, warm = compile_times()
     lines += ["", f"import {imported:.2f} s; compile of the robust toss kernel: {cold:.2f} s cold, "
               f"{warm:.2f} s from the on-disk cache"]

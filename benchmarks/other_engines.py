@@ -3,7 +3,9 @@
 The throughput benchmarks and the precision reports compare box_toss_env's engine against these three.
 Each adapter builds one scene (a box thrown onto the floor y = 0), steps it with the engine's own
 Python API in a plain Python loop, as a user of that engine would, and returns the trajectory and the
-wall time of the stepping loop alone (scene construction excluded).
+wall time of the stepping loop alone (scene construction excluded). Scenes of several boxes (stacks,
+piles, boxes that collide) are built in pymunk and Box2D by ``benchmarks.other_scenes``, with the same
+conventions.
 
 Usage::
 

@@ -383,3 +383,78 @@ def tipping_box(restitution: float, friction: float, **scene) -> Scene:
     angle = 0.3
     reach = 0.5 * box.length * math.sin(angle) + 0.5 * box.width * math.cos(angle)  # centre above the lowest corner
     return with_box(base, position=(0.0, reach), angle=angle, velocity=(1.0, 0.0), spin=0.0)
+
+
+# -- scenes of several boxes that collide ---------------------------------------------------------------------
+def scene_energy(scene: Scene, states: np.ndarray) -> np.ndarray:
+    """(T,) total energy of every box of ``scene`` in states (T, n, 6) [J]."""
+    return sum(energy(box, scene.gravity, states[:, i]) for i, box in enumerate(scene.boxes))
+
+
+def scene_kinetic_energy(scene: Scene, states: np.ndarray) -> np.ndarray:
+    """(T,) kinetic energy of every box of ``scene`` in states (T, n, 6) [J]."""
+    return sum(kinetic_energy(box, states[:, i]) for i, box in enumerate(scene.boxes))
+
+
+def box_overlap(a: Box, b: Box, state_a: np.ndarray, state_b: np.ndarray) -> np.ndarray:
+    """(...,) how deep two boxes overlap [m]: the smallest overlap of their projections on the four face
+    normals (separating axes), 0 where one of them separates the boxes."""
+    half = {id(a): (0.5 * a.length, 0.5 * a.width), id(b): (0.5 * b.length, 0.5 * b.width)}
+    axes_of = {}
+    for box, state in ((a, state_a), (b, state_b)):
+        c, s = np.cos(state[..., layout.ANGLE]), np.sin(state[..., layout.ANGLE])
+        axes_of[id(box)] = ((c, s), (-s, c))
+    d = (state_b[..., layout.X] - state_a[..., layout.X], state_b[..., layout.Y] - state_a[..., layout.Y])
+    depth = np.full(np.shape(d[0]), np.inf)
+    for axis in (*axes_of[id(a)], *axes_of[id(b)]):
+        reach = sum(h * np.abs(axis[0] * u[0] + axis[1] * u[1])
+                    for box in (a, b) for h, u in zip(half[id(box)], axes_of[id(box)], strict=True))
+        depth = np.minimum(depth, reach - np.abs(axis[0] * d[0] + axis[1] * d[1]))
+    return np.maximum(depth, 0.0)
+
+
+def deepest_overlaps(scene: Scene, states: np.ndarray) -> tuple[float, float]:
+    """(the deepest any two boxes of ``scene`` overlap, the deepest any box goes below the floor) over the
+    states (T, n, 6) [m]."""
+    boxes = scene.boxes
+    floor = max(float(-lowest_corner(box, states[:, i]).min()) for i, box in enumerate(boxes))
+    between = 0.0
+    for i in range(len(boxes)):
+        for j in range(i + 1, len(boxes)):
+            between = max(between, float(box_overlap(boxes[i], boxes[j], states[:, i], states[:, j]).max()))
+    return between, max(floor, 0.0)
+
+
+def stack(n: int, **scene) -> Scene:
+    """``scenes.stack`` of ``n`` boxes at the env's penalty stiffness."""
+    return scenes.stack(n=n, **{"penalty_stiffness": STIFFNESS, **scene})
+
+
+MASS_ORDERS = {"heavy on top": (0, 1), "heavy below": (1, 0), "light between heavy": (1, 0, 1)}
+"""A mass-ratio stack's boxes from the bottom: 1 the heavy box, 0 the light one."""
+
+
+def mass_ratio_stack(ratio: float, order: str, **scene) -> Scene:
+    """A stack of ``scenes.stack`` whose boxes weigh the stack's mass (light) or ``ratio`` times it (heavy) in the
+    ``order`` of MASS_ORDERS, material unchanged."""
+    light = scenes.stack(n=1).boxes[0].mass
+    pattern = MASS_ORDERS[order]
+    return stack(len(pattern), masses=tuple(light * ratio if heavy else light for heavy in pattern), **scene)
+
+
+def body_impact(speed: float, onto_floor: bool, **scene) -> Scene:
+    """The toss box (corner first, angle 0.3) hitting a level toss box at ``speed``, e = 0, mu = 0.5. In flight
+    (zero gravity): it flies along x into the other box at rest 0.5 m away. Onto the floor: it falls on the other
+    box lying on the floor, its lowest corner 0.5 m above it."""
+    material = {**scenes.TOSS_MATERIAL, "restitution": 0.0, "friction": 0.5, "penalty_stiffness": STIFFNESS}
+    size = scenes.TOSS_BOX
+    angle = 0.3
+    reach_x = 0.5 * size["length"] * math.cos(angle) + 0.5 * size["width"] * math.sin(angle)
+    reach_y = 0.5 * size["length"] * math.sin(angle) + 0.5 * size["width"] * math.cos(angle)
+    if onto_floor:
+        boxes = (Box(**size, position=(0.0, 0.5 * size["width"])),
+                 Box(**size, position=(0.05, size["width"] + 0.5 + reach_y), angle=angle, velocity=(0.0, -speed)))
+        return Scene(boxes=boxes, boxes_collide=True, **{**material, "dt": 1 / 256, **scene})
+    boxes = (Box(**size, position=(-0.5 - reach_x - 0.5 * size["length"], 10.0), angle=angle, velocity=(speed, 0.0)),
+             Box(**size, position=(0.0, 10.05)))
+    return Scene(boxes=boxes, boxes_collide=True, **{**material, "gravity": 0.0, "dt": 1 / 256, **scene})

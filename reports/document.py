@@ -2,7 +2,7 @@
 
 The README holds one section between ``<!-- reports:start -->`` and ``<!-- reports:end -->``; each
 report command rewrites only its own block inside it (``<!-- reports:NAME:start -->`` ...), so the
-two commands can run in either order and every figure in the section comes from a command.
+commands can run in any order and every figure in the section comes from a command.
 """
 
 from __future__ import annotations
@@ -71,6 +71,14 @@ def machine() -> str:
             f"Python {platform.python_version()}, numpy {numpy.__version__}, numba {numba.__version__}")
 
 
+def load() -> str:
+    """The machine's 1-minute load average against its cores: other jobs share it, and timings move with it."""
+    try:
+        return f"load {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores, shared with other jobs"
+    except OSError:  # no load average on this platform
+        return "load unknown, shared with other jobs"
+
+
 def save_figure(figure, path: Path) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     figure.savefig(path, dpi=110, bbox_inches="tight", metadata={"Software": None})
@@ -79,7 +87,7 @@ def save_figure(figure, path: Path) -> None:
     plt.close(figure)
 
 
-BLOCK_ORDER = ("precision", "stability")
+BLOCK_ORDER = ("precision", "stability", "collisions")
 
 
 def update_readme(name: str, body: str, readme: Path = README) -> None:

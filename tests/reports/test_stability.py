@@ -5,9 +5,13 @@ import pytest
 from reports import stability
 
 # Rows the robust default fails inside its declared range because of an engine issue reported to the lead, with
-# the reason; strict, so an entry must go once the engine is fixed (and the reports regenerated). Empty: the
-# push-out (k = 1e2 at fine dt) and the energy gain of Newton restitution with friction were fixed in the engine.
-KNOWN_ENGINE_FAILURES: dict[str, str] = {}
+# the reason; strict, so an entry must go once the engine is fixed (and the reports regenerated). The push-out
+# (k = 1e2 at fine dt), the energy gain of Newton restitution with friction, and the drift of stacks at coarse
+# steps were fixed in the engine.
+KNOWN_ENGINE_FAILURES: dict[str, str] = {
+    "body_impacts": "a box hitting a box that lies on the floor at 200 m/s pushes it 1.3 cm into the floor at "
+                    "dt 2^-11 (more than the 2 mm allowed; 2.5 to 6 mm at 50 m/s); box-box overlap stays below 1 mm",
+}
 
 
 @pytest.fixture(scope="module")
@@ -18,16 +22,20 @@ def report():
 def test_every_row_runs_both_solvers_on_the_same_points(report):
     assert [row.name for row in report.rows] == ["stiffness_map", "elastic_bouncing", "long_rest", "sliding",
                                                  "fast_impacts", "fast_spin", "thin_boxes", "masses", "embedded",
-                                                 "far_from_origin", "corner_friction", "random_scenes"]
+                                                 "far_from_origin", "corner_friction", "stacks", "body_impacts",
+                                                 "mass_ratio_stacks", "random_scenes"]
     for row in report.rows:
+        assert row.criterion and row.declared
         robust, seed = row.of("robust"), row.of("seed")
         assert robust and [c.point for c in robust] == [c.point for c in seed], row.name
-        assert row.criterion and row.declared
+
+
+BOX_CONTACT_ROWS = ("stacks", "body_impacts", "mass_ratio_stacks")
 
 
 @pytest.mark.parametrize("name", ["stiffness_map", "elastic_bouncing", "long_rest", "sliding", "fast_impacts",
                                   "fast_spin", "thin_boxes", "masses", "embedded", "far_from_origin",
-                                  "corner_friction", "random_scenes"])
+                                  "corner_friction", *BOX_CONTACT_ROWS, "random_scenes"])
 def test_the_robust_default_passes_every_row_in_its_declared_range(report, name, request):
     if name in KNOWN_ENGINE_FAILURES:
         request.applymarker(pytest.mark.xfail(reason=KNOWN_ENGINE_FAILURES[name], strict=True))
