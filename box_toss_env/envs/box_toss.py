@@ -246,6 +246,10 @@ class BoxTossEnv(gym.Env):
         friction_range: tuple[float, float] | None = None,
         restitution_range: tuple[float, float] | None = None,
         observe_dynamics: bool = False,
+        base_box: bool = False,
+        base_length_range: tuple[float, float] | None = None,
+        base_height_range: tuple[float, float] | None = None,
+        base_mass: float | None = None,
         solver: str = "robust",
         dt: float = 1 / 128,
         max_sim_time: float = 10.0,
@@ -266,7 +270,8 @@ class BoxTossEnv(gym.Env):
             max_speed=max_speed, launch_angle_range=launch_angle_range, max_spin=max_spin,
             position_tolerance=position_tolerance, distance_weight=distance_weight,
             orientation_weight=orientation_weight, success_bonus=success_bonus,
-            observe_dynamics=observe_dynamics, max_sim_time=max_sim_time)
+            observe_dynamics=observe_dynamics, max_sim_time=max_sim_time, base_box=base_box,
+            base_length_range=base_length_range, base_height_range=base_height_range, base_mass=base_mass)
         config = self.config
         # the engine validates the solver settings (dt, solver, material) and names what is wrong
         scene = Scene(
@@ -277,8 +282,11 @@ class BoxTossEnv(gym.Env):
         self.solver = scene.solver
         self.dt = scene.dt
         self.max_steps = max(1, check_step_count("max_sim_time", config.max_sim_time, scene.dt))
+        # with a base box the thrown box and the base are one scene of colliding boxes (the colliding kernel);
+        # without one, the floor-only kernel, which compiles no box-box contact at all
         self.flags = KernelFlags(solver=scene.solver, use_impulses=True, use_penalty=scene.has_penalty,
-                                 use_friction=config.friction_range[1] > 0.0, record=False, parallel=False)
+                                 use_friction=config.friction_range[1] > 0.0, record=False, parallel=False,
+                                 boxes_collide=config.base_box)
         self._settings = make_settings(scene, self.max_steps, until_rest=True)
         self.render_fps = task.ENV_RANGES["render_fps"].check("render_fps", render_fps)
         self.render_size = (_check_pixels("render_width", render_width),
@@ -289,14 +297,16 @@ class BoxTossEnv(gym.Env):
         low, high = task.observation_bounds(config, self.max_steps * self.dt)
         self.observation_space = spaces.Box(low, high, dtype=np.float32)
 
-        # per-episode arrays, allocated once: a throw only writes its six initial numbers
-        self._episodes = task.Episodes.empty(1)
-        self._params = np.zeros((1, layout.PARAM_SIZE))
-        self._state = np.zeros((1, layout.STATE_SIZE))
-        self._stats = np.zeros((1, layout.STATS_SIZE))
+        # per-episode arrays, allocated once: a throw only writes its six initial numbers. The engine's
+        # arrays hold the thrown box in row 0 and, with base_box, the base box in row 1
+        bodies = config.bodies_per_env
+        self._episodes = task.Episodes.empty(1, config.episode_size)
+        self._params = np.zeros((bodies, layout.PARAM_SIZE))
+        self._state = np.zeros((bodies, layout.STATE_SIZE))
+        self._stats = np.zeros((bodies, layout.STATS_SIZE))
         self._records = render_mode in ("human", "rgb_array_list")
-        self._trajectory = np.zeros((self.max_steps + 1, 1, layout.STATE_SIZE)) if self._records else None
-        self._events = np.zeros((1, layout.MAX_EVENTS, layout.EVENT_SIZE)) if self._records else None
+        self._trajectory = np.zeros((self.max_steps + 1, bodies, layout.STATE_SIZE)) if self._records else None
+        self._events = np.zeros((bodies, layout.MAX_EVENTS, layout.EVENT_SIZE)) if self._records else None
         self._needs_reset = True
         self._params_stale = True  # body parameters are written at the first reset, then per reset if drawn
         self._renderer = None
@@ -321,10 +331,12 @@ class BoxTossEnv(gym.Env):
         ``options`` is unused."""
         super().reset(seed=seed)
         episodes = task.sample_episodes(self.np_random, self.config, self._episodes)
-        if self._params_stale or self.config.randomises_dynamics:
+        if self._params_stale or self.config.draws_body_params:
             task.write_body_params(self._params, episodes, self.config)
             self._params_stale = False
-        task.write_initial_states(self._state, episodes, None)
+        task.write_initial_states(self._state[:1], episodes, None)
+        if self.config.base_box:
+            task.write_base_states(self._state[1:], episodes)
         self._needs_reset = False
         self._hand_unseen, self._throw_unseen, self._outcome = self.render_mode == "rgb_array_list", False, None
         if self.render_mode == "human":
@@ -340,14 +352,21 @@ class BoxTossEnv(gym.Env):
             "friction": row[task.EP_FRICTION],
             "restitution": row[task.EP_RESTITUTION],
         }
-        return task.observe(self._state, episodes, self.config)[0], info
+        if self.config.base_box:
+            info["base_length"], info["base_height"] = row[task.EP_BASE_LENGTH], row[task.EP_BASE_HEIGHT]
+        return self._observe()[0], info
+
+    def _observe(self) -> np.ndarray:
+        return task.observe(self._state[:1], self._episodes, self.config, self._state[1:])
 
     def step(self, action):
         """Throw the box with ``action`` and simulate until it rests (or ``max_sim_time``)."""
         if self._needs_reset:
             raise ResetNeeded("each BoxToss episode is a single throw: call reset() before step()")
         actions = task.check_actions(action, self.action_space.shape)
-        task.write_initial_states(self._state, self._episodes, task.actions_to_throws(actions, self.config))
+        task.write_initial_states(self._state[:1], self._episodes, task.actions_to_throws(actions, self.config))
+        if self.config.base_box:
+            task.write_base_states(self._state[1:], self._episodes)
         self._needs_reset = True
         simulator = self._simulator or self._build_simulator()
         simulator.run(self._state, self._params, self._settings, self._stats, self._trajectory, self._events)
@@ -356,7 +375,7 @@ class BoxTossEnv(gym.Env):
             check_finite_stats(self._stats, self.solver)  # raises NonFiniteStateError
         rest_time, end_time = stats[layout.REST_TIME], stats[layout.END_TIME]
         at_rest = not math.isnan(rest_time)
-        reward, terms, success, distance, orientation_error = self._landing(self._state, at_rest)
+        reward, terms, success, distance, orientation_error = self._landing(self._state[:1], at_rest, self._state[1:])
         x, y, angle, _, _, _ = self._state[0].tolist()
         episode = self._episodes.data[0].tolist()
         flight_time = stats[layout.FIRST_CONTACT_TIME]
@@ -380,6 +399,9 @@ class BoxTossEnv(gym.Env):
             "friction": episode[task.EP_FRICTION],
             "restitution": episode[task.EP_RESTITUTION],
         }
+        if self.config.base_box:
+            info.update({key: value[0].item() for key, value in
+                         base_landing_info(self._state[1:], self._state[:1], self._episodes, self.config).items()})
         if self.render_mode is not None:
             from box_toss_env.envs.render import ThrowOutcome
 
@@ -387,7 +409,7 @@ class BoxTossEnv(gym.Env):
             self._throw_unseen = self.render_mode == "rgb_array_list"
             if self.render_mode == "human":
                 self.render()
-        observation = task.observe(self._state, self._episodes, self.config)
+        observation = self._observe()
         if task.outside_bounds(observation, self.observation_space.low, self.observation_space.high)[0]:
             raise EnergyGainError(self._bounds_message(observation[0]))
         return observation[0], float(reward[0]), True, False, info
@@ -396,7 +418,8 @@ class BoxTossEnv(gym.Env):
         """What the throw that ended in ``observation`` (outside the bounds) did, for the solver that ran."""
         space = self.observation_space
         column = int(np.argmax(np.maximum(space.low - observation, observation - space.high)))
-        where = (f"the throw ended with {task.OBSERVATION_NAMES[column]} = {observation[column]:g}, outside the "
+        where = (f"the throw ended with {task.observation_names(self.config)[column]} = {observation[column]:g}, "
+                 f"outside the "
                  f"observation bounds [{space.low[column]:g}, {space.high[column]:g}]")
         stiffness = self.config.penalty_stiffness
         if column == task.OBS_Y and observation[column] < space.low[column]:
@@ -416,15 +439,23 @@ class BoxTossEnv(gym.Env):
                        f"stiffness (dt={self.dt:g} s with penalty_stiffness={stiffness:g} N/m): use a smaller dt "
                        "(e.g. 1/1024 s for 1e5 N/m), a softer penalty_stiffness, or solver='robust'")
 
-    def landing_reward(self, final_state: np.ndarray, at_rest: bool) -> tuple[float, dict[str, float]]:
+    def landing_reward(self, final_state: np.ndarray, at_rest: bool, base_state: np.ndarray | None = None
+                       ) -> tuple[float, dict[str, float]]:
         """The reward of the current episode's throw ending in ``final_state`` (x, y, angle, vx, vy,
-        spin) and its named terms (see Rewards); ``step`` returns exactly this."""
+        spin) and its named terms (see Rewards); ``step`` returns exactly this. With a base box,
+        ``base_state`` is where the base ended (default: where it stands at reset)."""
         state = np.asarray(final_state, dtype=np.float64).reshape(1, layout.STATE_SIZE)
-        reward, terms, *_ = self._landing(state, at_rest)
+        base = None
+        if self.config.base_box:
+            if base_state is None:
+                base = task.write_base_states(np.zeros((1, layout.STATE_SIZE)), self._episodes)
+            else:
+                base = np.asarray(base_state, dtype=np.float64).reshape(1, layout.STATE_SIZE)
+        reward, terms, *_ = self._landing(state, at_rest, base)
         return float(reward[0]), {name: float(value[0]) for name, value in terms.items()}
 
-    def _landing(self, states: np.ndarray, at_rest: bool):
-        return task.reward_terms(states, np.array([at_rest]), self._episodes, self.config)
+    def _landing(self, states: np.ndarray, at_rest: bool, base_states: np.ndarray | None = None):
+        return task.reward_terms(states, np.array([at_rest]), self._episodes, self.config, base_states)
 
     # -- rendering --------------------------------------------------------------------------------
     def render(self):
@@ -496,6 +527,20 @@ class BoxTossEnv(gym.Env):
 
     def __setstate__(self, state):
         self.__dict__.update(state)
+
+
+def base_landing_info(base_states: np.ndarray, states: np.ndarray, episodes: task.Episodes,
+                      config: task.TaskConfig) -> dict[str, np.ndarray]:
+    """The step info of a task with a base box, (n,) arrays: where the base ended (``base_x``, ``base_y``
+    [m], ``base_angle`` [rad, wrapped to [-pi, pi)]), the thrown box's lowest point above the base's top
+    (``height_above_base`` [m]) and whether it rests on it (``on_base``: within ``task.SUPPORT_TOLERANCE``
+    of the top, its centre over the top face)."""
+    _, dy = task.landing_offsets(states, episodes, config, base_states)
+    top_x, _, half_top = task.base_top(base_states, episodes)
+    on_base = (np.abs(dy) <= task.SUPPORT_TOLERANCE) & (np.abs(states[:, layout.X] - top_x) <= half_top)
+    return {"base_x": base_states[:, layout.X].copy(), "base_y": base_states[:, layout.Y].copy(),
+            "base_angle": task.wrap_angles(base_states[:, layout.ANGLE]), "height_above_base": dy,
+            "on_base": on_base}
 
 
 def _check_pixels(name: str, value) -> int:
