@@ -128,8 +128,9 @@ class TaskConfig:
     def draws_body_params(self) -> bool:
         """Whether the engine's body parameters change from episode to episode: drawn dynamics, or the
         base box's drawn size."""
-        return self.randomises_dynamics or (self.base_box and (self.base_length_range[0] != self.base_length_range[1]
-                                                               or self.base_height_range[0] != self.base_height_range[1]))
+        base_drawn = self.base_length_range[0] != self.base_length_range[1] or (
+            self.base_height_range[0] != self.base_height_range[1])
+        return self.randomises_dynamics or (self.base_box and base_drawn)
 
     @property
     def obs_size(self) -> int:
