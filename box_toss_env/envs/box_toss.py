@@ -191,6 +191,10 @@ class BoxTossEnv(gym.Env):
     | ``friction_range``     | None              | (low, high): draw the friction per episode                      |
     | ``restitution_range``  | None              | (low, high) in [0, 1]: draw the restitution per episode         |
     | ``observe_dynamics``   | False             | append mass, friction, restitution to the observation           |
+    | ``base_box``           | False             | a base box to come to rest on (see "A base box to land on")      |
+    | ``base_length_range``  | None: (0.6, 1.0)  | with ``base_box``: the base box's length, drawn per episode [m]  |
+    | ``base_height_range``  | None: (0.2, 0.5)  | with ``base_box``: its height, drawn per episode [m]             |
+    | ``base_mass``          | None: 10.0        | with ``base_box``: its mass [kg]                                 |
     | ``solver``             | "robust"          | "robust" (the engine's default) or "seed" (the explicit scheme) |
     | ``dt``                 | 1/128             | solver time step [s] (docs/precision.md: the cheapest accurate one) |
     | ``max_sim_time``       | 10.0              | simulated time after which a throw ends anyway [s]              |
@@ -199,8 +203,45 @@ class BoxTossEnv(gym.Env):
     | ``render_width``, ``render_height`` | 600, 400 | frame size [px]                                            |
 
     Registered variants: ``BoxToss-LongSide-v0`` (``target_face="long_side"``),
-    ``BoxToss-ShortEnd-v0`` (``"short_end"``), ``BoxToss-ThisSideUp-v0`` (``"exact"``) and
-    ``BoxToss-Mixed-v0`` (``"mixed"``).
+    ``BoxToss-ShortEnd-v0`` (``"short_end"``), ``BoxToss-ThisSideUp-v0`` (``"exact"``),
+    ``BoxToss-Mixed-v0`` (``"mixed"``) and ``BoxToss-OnBox-v0`` (``base_box=True``).
+
+    ## A base box to land on (``base_box=True``, ``BoxToss-OnBox-v0``)
+
+    A second box, the base, rests on the floor, level, its centre at the target x; its length and height
+    are drawn per episode, uniformly in ``base_length_range`` and ``base_height_range`` (mass
+    ``base_mass``; friction, restitution and penalty stiffness those of the thrown box). The thrown box
+    must come to rest on the base's top. The two boxes collide (the engine's box-box contact: they are
+    one scene of ``Scene(boxes_collide=True)``, stepped by its colliding kernel, and the base can be
+    pushed or knocked over). The observation gains six columns after all the others:
+
+    | Num      | Observation                      | Min                                | Max                                   | Unit |
+    |----------|----------------------------------|------------------------------------|---------------------------------------|------|
+    | k        | x of the base box's centre       | target x min - V_b T               | target x max + V_b T                  | m    |
+    | k+1      | y of the base box's centre       | -base corner radius                | base corner radius + 2 e m / (m_b g)  | m    |
+    | k+2, k+3 | cos, sin of the base box's angle | -1                                 | 1                                     |      |
+    | k+4      | base box length                  | ``base_length_range[0]``           | ``base_length_range[1]``              | m    |
+    | k+5      | base box height                  | ``base_height_range[0]``           | ``base_height_range[1]``              | m    |
+
+    with k = 12 (15 with ``observe_dynamics``), m the largest mass of the thrown box, m_b the base's and
+    V_b = 2 sqrt(2 e m / m_b): the base starts at rest in its lowest pose (lying on its long side, which
+    is why ``base_height_range[1] <= base_length_range[0]`` is required), so it can take at most the
+    energy m e of the throw. Column 7, the target x, is where the base was placed; columns k, k+1 are
+    where it is (after the throw, where it ended).
+
+    The target is the centre of the base's top (where the base ended): with dx the thrown box's centre x
+    minus the base's centre x and dy the height of the box's lowest point above the base's highest point,
+
+        distance = sqrt(dx^2 + dy^2),    reward_distance = -distance_weight * distance
+
+    (the other terms as above), and success means at rest, ``distance <= position_tolerance``, a target
+    face down, and resting on the top: |dy| <= ``task.SUPPORT_TOLERANCE`` (1 cm). A box on the floor beside
+    the base is |dy| = the base's height from its target, whatever its x. ``info`` after ``reset`` adds
+    ``base_length``, ``base_height``; after ``step``, where the base ended (``base_x``, ``base_y``,
+    ``base_angle``), ``height_above_base`` (dy) and ``on_base`` (|dy| within the tolerance and the centre
+    over the top face, whatever the target). ``target_x_range`` must leave the base clear of the box in
+    the hand (its start at least release x max + the box's corner radius + half the longest base).
+    Renders show the thrown box only.
 
     Rendering (needs the ``render`` extra, ``pip install "box_toss_env[render]"``): ``"rgb_array"``
     returns an (H, W, 3) uint8 frame of the current state; ``"human"`` opens a pygame window and plays

@@ -345,3 +345,22 @@ def test_other_variants_run_the_floor_only_kernel_with_no_base(env_id):
     assert "base_length" not in info
     _, _, _, _, info = env.step(np.zeros(3))
     assert "on_base" not in info
+
+
+# -- a known fault of the colliding kernel that this task exposes ----------------------------------------
+@pytest.mark.xfail(reason="the colliding kernel's flat landings depend on where in a time step the impact "
+                          "falls (box_toss_env/physics/colliding_solver.py, not this task's code)", strict=True)
+def test_a_flat_landing_slides_the_same_whatever_the_phase_of_the_impact_in_the_step():
+    """A box dropped flat with 2 m/s sideways onto a wide base: drop heights 4 mm apart move the impact
+    within a time step, which should change where it stops by millimetres (the floor-only kernel: 1.482 to
+    1.496 m over 12 such drops). The colliding kernel stops it anywhere from 1.42 to 1.69 m."""
+    from box_toss_env.physics import Box, Scene, simulate
+
+    finals = []
+    for k in range(12):
+        thrown = Box(length=0.4, width=0.2, mass=2.0, position=(0.0, 2.9 + 0.004 * k), velocity=(2.0, 0.0))
+        base = Box(length=4.0, width=0.3, mass=10.0, position=(0.0, 0.15))
+        scene = Scene(boxes=(thrown, base), dt=1 / 128, gravity=-9.81, restitution=0.3, friction=0.5,
+                      penalty_stiffness=1e5, boxes_collide=True)
+        finals.append(simulate(scene, duration=10.0, until_rest=True).final_state[0, layout.X])
+    assert max(finals) - min(finals) < 0.05
