@@ -24,11 +24,14 @@ The stage script of one substep of length h (``make_colliding_robust_kernel``):
      they have it (the one place a substep can gain energy: a box pushed up out of an overlap while at
      rest; the scene's energy still never exceeds what it started with in our tests);
   3. integrate velocities: v += h g;
-  4. solve contact velocities: projected Gauss-Seidel over the contacts (Box2D's sequential
-     impulses), friction then normal at each: the accumulated normal impulse stays >= 0 and lets each
-     gap close but not pass (u_rel . n >= -max(gap, 0) / h), the accumulated friction impulse is clamped
-     to mu times it (it can bring the slip at a contact to zero, never drive it the other way); sweeps
-     until the impulses change by less than CONVERGED of their sum (at most VELOCITY_ITERATIONS);
+  4. solve contact velocities: the normal impulses stay >= 0 and let each gap close but not pass
+     (u_rel . n >= -max(gap, 0) / h); each contact's accumulated friction impulse is clamped to mu times
+     its normal impulse (it can bring the slip at a contact to zero, never drive it the other way). Up to
+     DIRECT_LIMIT contacts the normal impulses are solved exactly together (an active set on the dense
+     Delassus matrix, ``normal_lcp``: a stack's load passes through every box at once, whatever the mass
+     ratio), alternating with friction sweeps until the impulses change by less than CONVERGED of their
+     sum (at most VELOCITY_ITERATIONS rounds); beyond that, projected Gauss-Seidel over the contacts
+     (Box2D's sequential impulses, friction then normal at each, at most GAUSS_SEIDEL_ITERATIONS sweeps);
   5. restitution, only for impacts: a contact that approached faster than the restitution threshold
      before this substep (u0 = u_rel . n < -threshold) and took an impulse gets the target
      u_rel . n >= -e u0 (Newton's law with the approach speed before the solve, as Box2D v3), so a
@@ -99,13 +102,14 @@ from .robust_solver import MAX_ROTATION_PER_STEP, energy_limit_scale
 
 TUNNEL_FRACTION = 0.5  # [-] of the smallest half extent: the most any point moves in one substep
 MAX_SUBSTEPS = 256
-VELOCITY_ITERATIONS = 64  # Gauss-Seidel sweeps at most per substep
+VELOCITY_ITERATIONS = 64  # rounds of exact normal solve and friction sweep at most per substep
+GAUSS_SEIDEL_ITERATIONS = 16  # sweeps at most of the Gauss-Seidel fallback (more than DIRECT_LIMIT contacts)
 RESTITUTION_ITERATIONS = 16
 PENALTY_ITERATIONS = 16
 CONVERGED = 1e-9  # sweeps stop when the impulses change by less than this share of their sum
 CONTACT_TOLERANCE = 1e-12  # [m per m of size + 1 m] penetration below this is not corrected
 MIN_CAPACITY = 16
-DIRECT_LIMIT = 48  # contacts: up to this many, the normal impulses are solved exactly (``normal_lcp``)
+DIRECT_LIMIT = 64  # contacts: up to this many, the normal impulses are solved exactly (``normal_lcp``)
 REGULARISATION = 1e-12  # share of W_cc added to the diagonal of the exact solve (redundant contacts)
 LCP_TOLERANCE = 1e-12  # share of the largest |free velocity|: a contact left free may approach by this much
 
@@ -356,7 +360,7 @@ def friction_sweep(contacts, ids, count, vel, inv_mass, inv_inertia):
 def gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction):
     """Projected Gauss-Seidel over the contacts (Box2D's sequential impulses): friction clamped to mu times
     the normal impulse, then the normal impulse >= 0 with u_rel . n >= target (column TARGET)."""
-    for _ in range(VELOCITY_ITERATIONS):
+    for _ in range(GAUSS_SEIDEL_ITERATIONS):
         change = 0.0
         total = 0.0
         for c in range(count):
