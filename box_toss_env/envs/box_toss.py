@@ -215,13 +215,13 @@ class BoxTossEnv(gym.Env):
     one scene of ``Scene(boxes_collide=True)``, stepped by its colliding kernel, and the base can be
     pushed or knocked over). The observation gains six columns after all the others:
 
-    | Num      | Observation                      | Min                                | Max                                   | Unit |
-    |----------|----------------------------------|------------------------------------|---------------------------------------|------|
-    | k        | x of the base box's centre       | target x min - V_b T               | target x max + V_b T                  | m    |
-    | k+1      | y of the base box's centre       | -base corner radius                | base corner radius + 2 e m / (m_b g)  | m    |
-    | k+2, k+3 | cos, sin of the base box's angle | -1                                 | 1                                     |      |
-    | k+4      | base box length                  | ``base_length_range[0]``           | ``base_length_range[1]``              | m    |
-    | k+5      | base box height                  | ``base_height_range[0]``           | ``base_height_range[1]``              | m    |
+    | Num      | Observation                | Min                      | Max                                  | Unit |
+    |----------|----------------------------|--------------------------|--------------------------------------|------|
+    | k        | x of the base's centre     | target x min - V_b T     | target x max + V_b T                 | m    |
+    | k+1      | y of the base's centre     | -base corner radius      | base corner radius + 2 e m / (m_b g) | m    |
+    | k+2, k+3 | cos, sin of its angle      | -1                       | 1                                    |      |
+    | k+4      | base box length            | ``base_length_range[0]`` | ``base_length_range[1]``             | m    |
+    | k+5      | base box height            | ``base_height_range[0]`` | ``base_height_range[1]``             | m    |
 
     with k = 12 (15 with ``observe_dynamics``), m the largest mass of the thrown box, m_b the base's and
     V_b = 2 sqrt(2 e m / m_b): the base starts at rest in its lowest pose (lying on its long side, which
@@ -241,7 +241,7 @@ class BoxTossEnv(gym.Env):
     ``base_angle``), ``height_above_base`` (dy) and ``on_base`` (|dy| within the tolerance and the centre
     over the top face, whatever the target). ``target_x_range`` must leave the base clear of the box in
     the hand (its start at least release x max + the box's corner radius + half the longest base).
-    Renders show the thrown box only.
+    Renders draw the base box too.
 
     Rendering (needs the ``render`` extra, ``pip install "box_toss_env[render]"``): ``"rgb_array"``
     returns an (H, W, 3) uint8 frame of the current state; ``"human"`` opens a pygame window and plays
@@ -515,7 +515,7 @@ class BoxTossEnv(gym.Env):
         if self._needs_reset:  # a throw just happened: play it
             renderer.play(self._throw_trajectory(), self.dt, target_x, target_faces, self._outcome)
         else:
-            renderer.show(self._state[0], target_x, target_faces, "in the hand")
+            renderer.show(self._drawn_state(), target_x, target_faces, "in the hand")
         return None
 
     def _caption(self) -> str:
@@ -526,7 +526,7 @@ class BoxTossEnv(gym.Env):
 
     def _draw_state(self, caption: str) -> np.ndarray:
         episodes = self._episodes
-        return self._renderer_for_env().frame(self._state[0], float(episodes.target_x[0]),
+        return self._renderer_for_env().frame(self._drawn_state(), float(episodes.target_x[0]),
                                               episodes.target_faces[0], caption, self._outcome)
 
     def _unseen_frames(self) -> list[np.ndarray]:
@@ -545,13 +545,20 @@ class BoxTossEnv(gym.Env):
             from box_toss_env.envs.render import ThrowRenderer
 
             self._renderer = ThrowRenderer(self.config, *self.render_size, fps=self.render_fps)
+        if self.config.base_box:  # this episode's base box is drawn too
+            self._renderer.other_boxes = 0.5 * self._episodes.base_size[:1]
         return self._renderer
+
+    def _drawn_state(self) -> np.ndarray:
+        """The state drawn: the thrown box's (6,), with a base box both boxes' (2, 6)."""
+        return self._state if self.config.base_box else self._state[0]
 
     def _throw_trajectory(self) -> np.ndarray:
         """(T, 6) states of the last throw on the grid t = k dt, up to where it ended (the engine
-        writes rows up to the step where the box fell asleep; later rows are left unwritten)."""
+        writes rows up to the step where the box fell asleep; later rows are left unwritten); with a base
+        box (T, 2, 6), the thrown box first."""
         recorded = int(self._stats[0, layout.N_RECORDED])
-        return self._trajectory[:recorded, 0]
+        return self._trajectory[:recorded] if self.config.base_box else self._trajectory[:recorded, 0]
 
     def close(self):
         """Close the window if one is open; safe to call more than once."""

@@ -246,8 +246,15 @@ class BoxTossVectorEnv(VectorEnv):
         if self.render_mode is None:
             return None
         renderer = self.env._renderer_for_env()
-        return tuple(renderer.frame(self._thrown_state[i], float(self._episodes.target_x[i]),
-                                    self._episodes.target_faces[i], f"env {i}") for i in range(self.num_envs))
+        bodies = self.config.bodies_per_env
+        frames = []
+        for i in range(self.num_envs):
+            if self.config.base_box:  # env i's base box is drawn too
+                renderer.other_boxes = 0.5 * self._episodes.base_size[i:i + 1]
+            state = self._state[bodies * i:bodies * (i + 1)] if self.config.base_box else self._state[i]
+            frames.append(renderer.frame(state, float(self._episodes.target_x[i]), self._episodes.target_faces[i],
+                                         f"env {i}"))
+        return tuple(frames)
 
     def close_extras(self, **kwargs) -> None:
         self.env.close()

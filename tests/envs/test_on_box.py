@@ -364,3 +364,24 @@ def test_a_flat_landing_slides_the_same_whatever_the_phase_of_the_impact_in_the_
                       penalty_stiffness=1e5, boxes_collide=True)
         finals.append(simulate(scene, duration=10.0, until_rest=True).final_state[0, layout.X])
     assert max(finals) - min(finals) < 0.05
+
+
+# -- rendering draws the base box too ----------------------------------------------------------------
+def test_rgb_array_draws_the_base_box_and_rgb_array_list_the_whole_throw():
+    import os
+
+    os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+    os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
+    with_base = gym.make(ENV_ID, render_mode="rgb_array")
+    _, info = with_base.reset(seed=0)
+    frame = with_base.render()
+    renderer = with_base.unwrapped._renderer_for_env()
+    camera = renderer.camera_for_state(with_base.unwrapped._state)
+    column, row = camera.world_to_pixel(np.array([info["target_x"], 0.5 * info["base_height"]]))
+    assert frame.shape == (400, 600, 3)
+    assert tuple(frame[int(row), int(column)]) == renderer.renderer.palette.box_fill  # the base's middle
+    recorded = gym.make(ENV_ID, render_mode="rgb_array_list")
+    recorded.reset(seed=0)
+    recorded.step(np.zeros(3))
+    frames = recorded.render()
+    assert len(frames) > 10 and all(f.shape == (400, 600, 3) for f in frames)
