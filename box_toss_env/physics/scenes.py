@@ -11,6 +11,7 @@ import math
 import numpy as np
 
 from .scene import Box, Scene
+from .validation import check_integer
 
 # the typical BoxToss throw: a 40 x 20 cm, 2 kg box released at 1.5 m, thrown forward and up
 TOSS_BOX = dict(length=0.4, width=0.2, mass=2.0)
@@ -91,6 +92,7 @@ STACK_MATERIAL = dict(restitution=0.3, friction=0.5, penalty_stiffness=1e5, dt=1
 def stack(n: int = 10, masses=None, length: float = 0.4, width: float = 0.2, **scene) -> Scene:
     """``n`` boxes lying level in a vertical stack on the floor, each touching the one below, at rest;
     ``masses`` (one per box, bottom first) defaults to 2 kg each."""
+    n = check_integer("n", n, 1)
     masses = (2.0,) * n if masses is None else tuple(masses)
     if len(masses) != n:
         raise ValueError(f"masses must hold one mass per box (n = {n}), got {len(masses)}")
@@ -102,6 +104,7 @@ def stack(n: int = 10, masses=None, length: float = 0.4, width: float = 0.2, **s
 def pyramid(rows: int = 5, length: float = 0.4, width: float = 0.2, spacing: float = 0.04, **scene) -> Scene:
     """A pyramid of rows (rows, rows - 1, ..., 1 boxes from the bottom: 15 for 5 rows), each box lying level
     across two of the row below; boxes of a row ``spacing`` apart, at rest."""
+    rows = check_integer("rows", rows, 1)
     boxes = []
     pitch = length + spacing
     for row in range(rows):
@@ -141,6 +144,7 @@ def flight_collision(speed: float = 2.0, angle: float = 0.4, offset: float = 0.0
 def newton_row(n: int = 5, speed: float = 1.0, spacing: float = 0.1, **scene) -> Scene:
     """``n`` equal 40 x 20 cm boxes lying in a row on a frictionless floor, ``spacing`` apart, with e = 1
     and mu = 0; the first slides into the second at ``speed``: momentum passes along the row."""
+    n = check_integer("n", n, 1)
     boxes = tuple(Box(**STACK_BOX, mass=2.0, position=(k * (0.4 + spacing), 0.1),
                       velocity=(speed if k == 0 else 0.0, 0.0)) for k in range(n))
     return Scene(boxes=boxes, boxes_collide=True,
@@ -151,6 +155,7 @@ def pile(n: int = 10, seed: int = 0, **scene) -> Scene:
     """``n`` 40 x 20 cm boxes dropped onto one another: a loose grid (ceil(sqrt(n)) columns) a little
     above the floor, each box shifted and tilted at random (``seed``), falling into a pile (the
     engine benchmark's pile; one box is a box dropped on the floor)."""
+    n = check_integer("n", n, 1)
     rng = np.random.default_rng(seed)
     columns = math.ceil(math.sqrt(n))
     boxes = []

@@ -252,7 +252,8 @@ class ViewerWindow:
         controller = self.controller
         panel = Panel(self.canvas, controller.width_px)
         panel.line(f"Rigid body collisions: {self.scene_name}")
-        panel.line("boxes against the floor, 8 steps a frame", PANEL_DIM)
+        against = "the floor and one another" if controller.scene.boxes_collide else "the floor"
+        panel.line(f"boxes against {against}, 8 steps a frame", PANEL_DIM)
         panel.gap()
         self.button_rects = panel.buttons(
             [(name, "Run" if name == "pause" and controller.paused else label) for name, label in VIEWER_BUTTONS])

@@ -79,6 +79,14 @@ def test_a_box_dropped_on_another_comes_to_rest_on_it():
     assert result.n_impacts[1] >= 1
 
 
+def test_the_seed_scheme_keeps_a_dropped_box_on_the_other():
+    # with a penalty soft enough for its explicit spring (dt sqrt(k K_n) < 2 for two bodies)
+    result = simulate(scenes.drop_on_box(solver="seed", penalty_stiffness=1e4), duration=3.0)
+    lower, upper = result.final_state
+    assert upper[1] == pytest.approx(0.3, abs=5e-3)  # measured: 2.4 mm into the lower box
+    assert abs(upper[0] - lower[0]) < 0.2 and abs(math.remainder(upper[2], math.pi / 2)) < 1e-2
+
+
 # -- in flight: conservation and the closed form ----------------------------------------------------
 @pytest.mark.parametrize("solver", ["robust", "seed"])
 @pytest.mark.parametrize("friction", [0.0, 0.5])
@@ -237,9 +245,14 @@ def test_a_colliding_scene_must_not_start_with_overlapping_boxes():
     Scene(boxes=touching, boxes_collide=True)
 
 
-def test_stack_checks_its_masses():
+def test_the_named_scenes_check_their_counts():
     with pytest.raises(ValueError, match="masses must hold one mass per box"):
         scenes.stack(n=3, masses=(1.0, 2.0))
+    for make, name in ((scenes.stack, "n"), (scenes.pyramid, "rows"), (scenes.newton_row, "n"), (scenes.pile, "n")):
+        with pytest.raises(TypeError, match=f"{name} must be an integer"):
+            make(**{name: 2.5})
+        with pytest.raises(ValueError, match=f"{name} must be an integer >= 1"):
+            make(**{name: 0})
 
 
 # -- a scene that cannot collide compiles no pair finding -------------------------------------------
