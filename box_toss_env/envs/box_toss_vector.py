@@ -10,7 +10,9 @@ keeps all of them in one array) and draws its episodes with the same batch-first
 the batch on ``threads`` threads at once (default: ``numba.config.NUMBA_NUM_THREADS``, the cores
 available); results do not depend on the thread count. The task logic, the reward, the drawing and
 the compiled code are the single env's, not a copy: whichever of the two throws first compiles
-the kernel (or loads it from numba's cache) for both.
+the kernel (or loads it from numba's cache) for both. With a base box (``BoxToss-OnBox-v0``) each env is a
+scene of two colliding boxes, rows 2i and 2i + 1 of the engine's arrays, and the batch runs the single env's
+colliding kernel on each env's pair in one compiled call (``physics.grouped``, whole envs per thread).
 
 Episodes are one step long, so envs reset in the step they end (``AutoresetMode.SAME_STEP``): the
 observation returned by ``step`` is the next episode's first one, and the final observation and info
