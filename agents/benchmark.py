@@ -27,7 +27,8 @@ from agents.algorithms import ALGORITHMS
 from agents.evaluation import TEST_TARGETS, evaluate_run, make_baseline_run
 from agents.training import RUNS, read_timing
 
-VARIANTS = ("BoxToss-v0", "BoxToss-LongSide-v0", "BoxToss-ShortEnd-v0", "BoxToss-ThisSideUp-v0", "BoxToss-Mixed-v0")
+VARIANTS = ("BoxToss-v0", "BoxToss-LongSide-v0", "BoxToss-ShortEnd-v0", "BoxToss-ThisSideUp-v0", "BoxToss-Mixed-v0",
+            "BoxToss-OnBox-v0")
 ROOT = RUNS / "benchmark"
 DOCS = report.DOCS
 FACE_KINDS = ("any face", "a long side", "a short end", "face 0", "face 1", "face 2", "face 3")

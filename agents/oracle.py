@@ -17,18 +17,23 @@ import gymnasium as gym
 import numpy as np
 
 from box_toss_env.envs import task
-from box_toss_env.physics import Simulator, layout
+from box_toss_env.physics import layout
+from box_toss_env.physics.grouped import make_simulator
 
 
 def episodes_from_infos(reset_infos: list[dict[str, Any]]) -> task.Episodes:
-    """The episodes (release pose, target, dynamics) that ``reset`` drew, rebuilt from its infos."""
-    episodes = task.Episodes.empty(len(reset_infos))
+    """The episodes (release pose, target, dynamics, and the base box's size where there is one) that
+    ``reset`` drew, rebuilt from its infos."""
+    base_box = bool(reset_infos) and "base_length" in reset_infos[0]
+    episodes = task.Episodes.empty(len(reset_infos), task.EPISODE_SIZE_WITH_BASE if base_box else task.EPISODE_SIZE)
     data = episodes.data
     for i, info in enumerate(reset_infos):
         data[i, task.EP_RELEASE] = info["release_x"], info["release_y"], info["release_angle"]
         data[i, task.EP_TARGET_X] = info["target_x"]
         data[i, task.EP_TARGET_FACES] = info["target_faces"]
         data[i, task.EP_DYNAMICS] = info["mass"], info["friction"], info["restitution"]
+        if base_box:
+            data[i, task.EP_BASE_LENGTH], data[i, task.EP_BASE_HEIGHT] = info["base_length"], info["base_height"]
     return episodes
 
 
@@ -39,24 +44,31 @@ class ThrowSimulator:
         unwrapped = env.unwrapped
         self.config = unwrapped.config
         self.settings = unwrapped.engine_settings  # the env's solver settings (dt, sleep, ...): throws as the env's
-        self.simulator = Simulator(dataclasses.replace(unwrapped.flags, parallel=True, record=False), threads=threads)
+        self.simulator = make_simulator(dataclasses.replace(unwrapped.flags, parallel=True, record=False),
+                                        self.config.bodies_per_env, threads=threads)
         self.low, self.high = unwrapped.observation_space.low, unwrapped.observation_space.high
 
     def rewards(self, episodes: task.Episodes, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(reward, success, distance) of throwing ``actions`` (n, 3) in ``episodes`` (n rows); a
         throw the env would refuse (non-finite state, energy gain) gets reward -inf."""
         n = len(actions)
-        params = task.write_body_params(np.zeros((n, layout.PARAM_SIZE)), episodes, self.config)
-        states = np.zeros((n, layout.STATE_SIZE))
-        throws = task.actions_to_throws(task.check_actions(actions, (n, task.ACTION_SIZE)), self.config)
+        config = self.config
+        bodies = n * config.bodies_per_env  # each throw's bodies in consecutive rows (with a base box, two)
+        params = task.write_body_params(np.zeros((bodies, layout.PARAM_SIZE)), episodes, config)
+        all_states = np.zeros((bodies, layout.STATE_SIZE))
+        states, base = task.thrown_rows(all_states, config), task.base_rows(all_states, config)
+        throws = task.actions_to_throws(task.check_actions(actions, (n, task.ACTION_SIZE)), config)
         task.write_initial_states(states, episodes, throws)
-        stats = np.zeros((n, layout.STATS_SIZE))
-        self.simulator.run(states, params, self.settings, stats)
-        refused = stats[:, layout.STATUS] != layout.STATUS_OK
+        if config.base_box:
+            task.write_base_states(base, episodes)
+        all_stats = np.zeros((bodies, layout.STATS_SIZE))
+        self.simulator.run(all_states, params, self.settings, all_stats)
+        stats = task.thrown_rows(all_stats, config)
+        refused = (all_stats[:, layout.STATUS] != layout.STATUS_OK).reshape(n, -1).any(axis=1)
         at_rest = ~np.isnan(stats[:, layout.REST_TIME])
         with np.errstate(invalid="ignore"):
-            reward, _, success, distance, _ = task.reward_terms(states, at_rest, episodes, self.config)
-            refused |= task.outside_bounds(task.observe(states, episodes, self.config), self.low, self.high)
+            reward, _, success, distance, _ = task.reward_terms(states, at_rest, episodes, config, base)
+            refused |= task.outside_bounds(task.observe(states, episodes, config, base), self.low, self.high)
         reward[refused] = -np.inf
         success[refused] = False
         return reward, success, distance

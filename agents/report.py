@@ -229,10 +229,11 @@ scripts use (engine and torch threads, validation and checkpoints) are in `agent
 Our training runs the algorithm on the batched vector env (`gymnasium.make_vec`, all envs thrown in one engine
 call, through `box_toss_env.vector.sb3_adapter.SB3VecEnvAdapter`), with observations normalised by
 `VecNormalize` and one torch thread. Where a face counts (`BoxToss-ShortEnd-v0`, `-ThisSideUp-v0`, `-Mixed-v0`)
-the algorithms act in ballistic commands (`env_wrapper: box_toss_env.envs.ballistic.BallisticThrows` in the
-hyperparameter files: flight time, landing offset and lean from a throw that lands a target face flat on the
-target, see the environment section); evaluation maps a policy's commands to the env's actions the same way,
-so every agent is scored on the env's own throws. Each run folder `runs/NAME/` keeps `config.yml` (algorithm, resolved
+and on a box (`BoxToss-OnBox-v0`, touching down on the base's top) the algorithms act in ballistic commands
+(`env_wrapper: box_toss_env.envs.ballistic.BallisticThrows` in the hyperparameter files: flight time, landing
+offset and lean from a throw that lands a target face flat on the target, see the environment section);
+evaluation maps a policy's commands to the env's actions the same way, so every agent is scored on the env's
+own throws. Each run folder `runs/NAME/` keeps `config.yml` (algorithm, resolved
 hyperparameters, env kwargs, seed), `command.txt`, `model.zip` and `vecnormalize.pkl`, the best model by
 validation success, `evaluations.csv`, TensorBoard logs, checkpoints (with the replay buffer for SAC and TD3),
 `timing.json` and `eval/*/results.json`.

@@ -22,7 +22,8 @@ from ray.tune.registry import register_env
 import box_toss_env  # noqa: F401  (registers the BoxToss envs with Gymnasium)
 from box_toss_env.vector.next_step import NextStepAutoreset
 
-ENV_IDS = ("BoxToss-v0", "BoxToss-LongSide-v0", "BoxToss-ShortEnd-v0", "BoxToss-ThisSideUp-v0", "BoxToss-Mixed-v0")
+ENV_IDS = ("BoxToss-v0", "BoxToss-LongSide-v0", "BoxToss-ShortEnd-v0", "BoxToss-ThisSideUp-v0", "BoxToss-Mixed-v0",
+           "BoxToss-OnBox-v0")
 VECTORIZE_MODES = {"native": "vector_entry_point", "sync": "sync"}  # ours -> RLlib's gym_env_vectorize_mode
 
 

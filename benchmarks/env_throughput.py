@@ -3,6 +3,9 @@ included), each throw being ``reset()`` + ``step(action)`` with random actions. 
 figures; asserts nothing.
 
     python -m benchmarks.env_throughput [--throws 5000] [--repeats 5] [--solver robust] [--dt 0.0078125]
+    python -m benchmarks.env_throughput --env BoxToss-OnBox-v0 --batch 256   # another variant, and a batch
+
+``--batch N`` also times the native batched env (``gymnasium.make_vec``, N envs, one engine thread).
 
 The actions are drawn before timing; a warm-up pass first loads the compiled kernel and fills the
 caches. Reported: the median over repeats, with the spread, and the part spent in the engine
@@ -39,7 +42,9 @@ def kernel_seconds_per_throw(env: gym.Env, actions: np.ndarray) -> float:
         unwrapped.step(action)  # draws the episode; its initial state is rebuilt below
         state = unwrapped._state.copy()
         throws = task.actions_to_throws(task.check_actions(action, (3,)), unwrapped.config)
-        task.write_initial_states(state, unwrapped._episodes, throws)
+        task.write_initial_states(state[:1], unwrapped._episodes, throws)
+        if unwrapped.config.base_box:
+            task.write_base_states(state[1:], unwrapped._episodes)
         states.append((state, unwrapped._params.copy()))
     stats = unwrapped._stats.copy()
     start = time.perf_counter()
@@ -55,19 +60,35 @@ def main() -> None:
     parser.add_argument("--solver", default="robust")
     parser.add_argument("--dt", type=float, default=1 / 128)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--env", default="BoxToss-v0", help="the registered variant (default BoxToss-v0)")
+    parser.add_argument("--batch", type=int, default=0, help="also time a batched env of this many envs")
     args = parser.parse_args()
 
-    env = gym.make("BoxToss-v0", solver=args.solver, dt=args.dt)
+    env = gym.make(args.env, solver=args.solver, dt=args.dt)
     env.reset(seed=args.seed)
     actions = np.random.default_rng(args.seed).uniform(-1.0, 1.0, (args.throws, 3)).astype(np.float32)
     throws_per_second(env, actions[: min(500, args.throws)])  # warm-up
     rates = [throws_per_second(env, actions) for _ in range(args.repeats)]
     kernel = kernel_seconds_per_throw(env, actions[: min(2000, args.throws)])
     median = statistics.median(rates)
-    print(f"BoxToss-v0 via gymnasium.make, solver={args.solver}, dt={args.dt:g} s, random actions")
+    print(f"{args.env} via gymnasium.make, solver={args.solver}, dt={args.dt:g} s, random actions")
     print(f"throws/s (reset + step), median of {args.repeats} x {args.throws}: {median:,.0f} "
           f"(min {min(rates):,.0f}, max {max(rates):,.0f})")
     print(f"per throw: {1e6 / median:.0f} us, of which engine kernel {1e6 * kernel:.0f} us")
+    if args.batch:
+        envs = gym.make_vec(args.env, num_envs=args.batch, vectorization_mode="vector_entry_point", threads=1,
+                            solver=args.solver, dt=args.dt)
+        envs.reset(seed=args.seed)
+        batch_actions = actions[: args.batch * (len(actions) // args.batch)].reshape(-1, args.batch, 3)
+        envs.step(batch_actions[0])  # warm-up
+        rates = []
+        for _ in range(args.repeats):
+            start = time.perf_counter()
+            for step_actions in batch_actions:
+                envs.step(step_actions)
+            rates.append(batch_actions.size / 3 / (time.perf_counter() - start))
+        print(f"batched, make_vec num_envs={args.batch}, 1 engine thread: {statistics.median(rates):,.0f} throws/s "
+              f"(min {min(rates):,.0f}, max {max(rates):,.0f})")
 
 
 if __name__ == "__main__":

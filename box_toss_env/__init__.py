@@ -18,6 +18,7 @@ def _register_envs() -> None:
         "BoxToss-ShortEnd-v0": {"target_face": "short_end"},
         "BoxToss-ThisSideUp-v0": {"target_face": "exact"},
         "BoxToss-Mixed-v0": {"target_face": "mixed"},
+        "BoxToss-OnBox-v0": {"base_box": True},  # come to rest on a base box drawn per episode
     }
     for env_id, kwargs in variants.items():
         if env_id in gymnasium.registry:  # importlib.reload: keep the existing registration

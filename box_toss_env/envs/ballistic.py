@@ -19,6 +19,11 @@ pose (x0, y0, theta0) in the observation:
     vx = (x* - x0) / T,   vy = (h(phi) - y0) / T + g T / 2,   spin = (phi - theta0) / T
     speed = sqrt(vx^2 + vy^2),   launch angle = atan2(vy, vx).
 
+With a base box to land on (``BoxToss-OnBox-v0``) the touchdown is on the base's top rather than on the
+floor: the height h(phi) is raised by the top's height y_top (from the base's pose and size in the
+observation: y_base + (L_b/2) |sin theta_b| + (H_b/2) |cos theta_b|), and x* is measured from the base's
+centre, which is the target x.
+
 Those are mapped to env actions as ``task.throws_to_actions`` does, and a throw beyond the env's
 limits (speed above ``max_speed``, a launch angle outside its range, spin above ``max_spin``) is
 clipped to the limit, each component on its own; ``info["command_clipped"]`` says whether it was.
@@ -73,6 +78,14 @@ def face_angles(theta0: np.ndarray, target_faces: np.ndarray) -> np.ndarray:
     return candidates[np.arange(len(theta0)), np.argmin(distance, axis=1)]
 
 
+def observed_base_top(observations: np.ndarray) -> np.ndarray:
+    """(n,) height [m] of the top of the base box in observations (n, obs) of a task with a base box:
+    y_base + (L_b/2) |sin theta_b| + (H_b/2) |cos theta_b|."""
+    obs = np.asarray(observations, dtype=np.float64)
+    return (obs[:, task.OBS_BASE_Y] + 0.5 * obs[:, task.OBS_BASE_LENGTH] * np.abs(obs[:, task.OBS_BASE_SIN])
+            + 0.5 * obs[:, task.OBS_BASE_HEIGHT] * np.abs(obs[:, task.OBS_BASE_COS]))
+
+
 def ballistic_throws(observations: np.ndarray, commands: np.ndarray, config: task.TaskConfig,
                      flight_time_range: tuple[float, float], offset_range: float, turn_range: float) -> np.ndarray:
     """(n, 3) speed [m/s], launch angle [rad] and spin [rad/s] that carry out ``commands`` (n, 3)
@@ -86,6 +99,8 @@ def ballistic_throws(observations: np.ndarray, commands: np.ndarray, config: tas
     landing_x = obs[:, task.OBS_TARGET_X] + offset_range * c[:, 1]
     phi = face_angles(theta0, obs[:, task.OBS_TARGET_FACES]) + turn_range * c[:, 2]
     height = config.half_length * np.abs(np.sin(phi)) + config.half_width * np.abs(np.cos(phi))
+    if config.base_box:  # touch down on the base box's top
+        height = height + observed_base_top(obs)
     vx = (landing_x - x0) / flight_time
     vy = (height - y0) / flight_time + 0.5 * config.gravity * flight_time
     spin = (phi - theta0) / flight_time

@@ -191,6 +191,10 @@ class BoxTossEnv(gym.Env):
     | ``friction_range``     | None              | (low, high): draw the friction per episode                      |
     | ``restitution_range``  | None              | (low, high) in [0, 1]: draw the restitution per episode         |
     | ``observe_dynamics``   | False             | append mass, friction, restitution to the observation           |
+    | ``base_box``           | False             | a base box to come to rest on (see "A base box to land on")      |
+    | ``base_length_range``  | None: (0.6, 1.0)  | with ``base_box``: the base box's length, drawn per episode [m]  |
+    | ``base_height_range``  | None: (0.2, 0.5)  | with ``base_box``: its height, drawn per episode [m]             |
+    | ``base_mass``          | None: 10.0        | with ``base_box``: its mass [kg]                                 |
     | ``solver``             | "robust"          | "robust" (the engine's default) or "seed" (the explicit scheme) |
     | ``dt``                 | 1/128             | solver time step [s] (docs/precision.md: the cheapest accurate one) |
     | ``max_sim_time``       | 10.0              | simulated time after which a throw ends anyway [s]              |
@@ -199,8 +203,45 @@ class BoxTossEnv(gym.Env):
     | ``render_width``, ``render_height`` | 600, 400 | frame size [px]                                            |
 
     Registered variants: ``BoxToss-LongSide-v0`` (``target_face="long_side"``),
-    ``BoxToss-ShortEnd-v0`` (``"short_end"``), ``BoxToss-ThisSideUp-v0`` (``"exact"``) and
-    ``BoxToss-Mixed-v0`` (``"mixed"``).
+    ``BoxToss-ShortEnd-v0`` (``"short_end"``), ``BoxToss-ThisSideUp-v0`` (``"exact"``),
+    ``BoxToss-Mixed-v0`` (``"mixed"``) and ``BoxToss-OnBox-v0`` (``base_box=True``).
+
+    ## A base box to land on (``base_box=True``, ``BoxToss-OnBox-v0``)
+
+    A second box, the base, rests on the floor, level, its centre at the target x; its length and height
+    are drawn per episode, uniformly in ``base_length_range`` and ``base_height_range`` (mass
+    ``base_mass``; friction, restitution and penalty stiffness those of the thrown box). The thrown box
+    must come to rest on the base's top. The two boxes collide (the engine's box-box contact: they are
+    one scene of ``Scene(boxes_collide=True)``, stepped by its colliding kernel, and the base can be
+    pushed or knocked over). The observation gains six columns after all the others:
+
+    | Num      | Observation                | Min                      | Max                                  | Unit |
+    |----------|----------------------------|--------------------------|--------------------------------------|------|
+    | k        | x of the base's centre     | target x min - V_b T     | target x max + V_b T                 | m    |
+    | k+1      | y of the base's centre     | -base corner radius      | base corner radius + 2 e m / (m_b g) | m    |
+    | k+2, k+3 | cos, sin of its angle      | -1                       | 1                                    |      |
+    | k+4      | base box length            | ``base_length_range[0]`` | ``base_length_range[1]``             | m    |
+    | k+5      | base box height            | ``base_height_range[0]`` | ``base_height_range[1]``             | m    |
+
+    with k = 12 (15 with ``observe_dynamics``), m the largest mass of the thrown box, m_b the base's and
+    V_b = 2 sqrt(2 e m / m_b): the base starts at rest in its lowest pose (lying on its long side, which
+    is why ``base_height_range[1] <= base_length_range[0]`` is required), so it can take at most the
+    energy m e of the throw. Column 7, the target x, is where the base was placed; columns k, k+1 are
+    where it is (after the throw, where it ended).
+
+    The target is the centre of the base's top (where the base ended): with dx the thrown box's centre x
+    minus the base's centre x and dy the height of the box's lowest point above the base's highest point,
+
+        distance = sqrt(dx^2 + dy^2),    reward_distance = -distance_weight * distance
+
+    (the other terms as above), and success means at rest, ``distance <= position_tolerance``, a target
+    face down, and resting on the top: |dy| <= ``task.SUPPORT_TOLERANCE`` (1 cm). A box on the floor beside
+    the base is |dy| = the base's height from its target, whatever its x. ``info`` after ``reset`` adds
+    ``base_length``, ``base_height``; after ``step``, where the base ended (``base_x``, ``base_y``,
+    ``base_angle``), ``height_above_base`` (dy) and ``on_base`` (|dy| within the tolerance and the centre
+    over the top face, whatever the target). ``target_x_range`` must leave the base clear of the box in
+    the hand (its start at least release x max + the box's corner radius + half the longest base).
+    Renders draw the base box too.
 
     Rendering (needs the ``render`` extra, ``pip install "box_toss_env[render]"``): ``"rgb_array"``
     returns an (H, W, 3) uint8 frame of the current state; ``"human"`` opens a pygame window and plays
@@ -246,6 +287,10 @@ class BoxTossEnv(gym.Env):
         friction_range: tuple[float, float] | None = None,
         restitution_range: tuple[float, float] | None = None,
         observe_dynamics: bool = False,
+        base_box: bool = False,
+        base_length_range: tuple[float, float] | None = None,
+        base_height_range: tuple[float, float] | None = None,
+        base_mass: float | None = None,
         solver: str = "robust",
         dt: float = 1 / 128,
         max_sim_time: float = 10.0,
@@ -266,7 +311,8 @@ class BoxTossEnv(gym.Env):
             max_speed=max_speed, launch_angle_range=launch_angle_range, max_spin=max_spin,
             position_tolerance=position_tolerance, distance_weight=distance_weight,
             orientation_weight=orientation_weight, success_bonus=success_bonus,
-            observe_dynamics=observe_dynamics, max_sim_time=max_sim_time)
+            observe_dynamics=observe_dynamics, max_sim_time=max_sim_time, base_box=base_box,
+            base_length_range=base_length_range, base_height_range=base_height_range, base_mass=base_mass)
         config = self.config
         # the engine validates the solver settings (dt, solver, material) and names what is wrong
         scene = Scene(
@@ -277,8 +323,11 @@ class BoxTossEnv(gym.Env):
         self.solver = scene.solver
         self.dt = scene.dt
         self.max_steps = max(1, check_step_count("max_sim_time", config.max_sim_time, scene.dt))
+        # with a base box the thrown box and the base are one scene of colliding boxes (the colliding kernel);
+        # without one, the floor-only kernel, which compiles no box-box contact at all
         self.flags = KernelFlags(solver=scene.solver, use_impulses=True, use_penalty=scene.has_penalty,
-                                 use_friction=config.friction_range[1] > 0.0, record=False, parallel=False)
+                                 use_friction=config.friction_range[1] > 0.0, record=False, parallel=False,
+                                 boxes_collide=config.base_box)
         self._settings = make_settings(scene, self.max_steps, until_rest=True)
         self.render_fps = task.ENV_RANGES["render_fps"].check("render_fps", render_fps)
         self.render_size = (_check_pixels("render_width", render_width),
@@ -289,14 +338,16 @@ class BoxTossEnv(gym.Env):
         low, high = task.observation_bounds(config, self.max_steps * self.dt)
         self.observation_space = spaces.Box(low, high, dtype=np.float32)
 
-        # per-episode arrays, allocated once: a throw only writes its six initial numbers
-        self._episodes = task.Episodes.empty(1)
-        self._params = np.zeros((1, layout.PARAM_SIZE))
-        self._state = np.zeros((1, layout.STATE_SIZE))
-        self._stats = np.zeros((1, layout.STATS_SIZE))
+        # per-episode arrays, allocated once: a throw only writes its six initial numbers. The engine's
+        # arrays hold the thrown box in row 0 and, with base_box, the base box in row 1
+        bodies = config.bodies_per_env
+        self._episodes = task.Episodes.empty(1, config.episode_size)
+        self._params = np.zeros((bodies, layout.PARAM_SIZE))
+        self._state = np.zeros((bodies, layout.STATE_SIZE))
+        self._stats = np.zeros((bodies, layout.STATS_SIZE))
         self._records = render_mode in ("human", "rgb_array_list")
-        self._trajectory = np.zeros((self.max_steps + 1, 1, layout.STATE_SIZE)) if self._records else None
-        self._events = np.zeros((1, layout.MAX_EVENTS, layout.EVENT_SIZE)) if self._records else None
+        self._trajectory = np.zeros((self.max_steps + 1, bodies, layout.STATE_SIZE)) if self._records else None
+        self._events = np.zeros((bodies, layout.MAX_EVENTS, layout.EVENT_SIZE)) if self._records else None
         self._needs_reset = True
         self._params_stale = True  # body parameters are written at the first reset, then per reset if drawn
         self._renderer = None
@@ -321,10 +372,12 @@ class BoxTossEnv(gym.Env):
         ``options`` is unused."""
         super().reset(seed=seed)
         episodes = task.sample_episodes(self.np_random, self.config, self._episodes)
-        if self._params_stale or self.config.randomises_dynamics:
+        if self._params_stale or self.config.draws_body_params:
             task.write_body_params(self._params, episodes, self.config)
             self._params_stale = False
-        task.write_initial_states(self._state, episodes, None)
+        task.write_initial_states(self._state[:1], episodes, None)
+        if self.config.base_box:
+            task.write_base_states(self._state[1:], episodes)
         self._needs_reset = False
         self._hand_unseen, self._throw_unseen, self._outcome = self.render_mode == "rgb_array_list", False, None
         if self.render_mode == "human":
@@ -340,14 +393,21 @@ class BoxTossEnv(gym.Env):
             "friction": row[task.EP_FRICTION],
             "restitution": row[task.EP_RESTITUTION],
         }
-        return task.observe(self._state, episodes, self.config)[0], info
+        if self.config.base_box:
+            info["base_length"], info["base_height"] = row[task.EP_BASE_LENGTH], row[task.EP_BASE_HEIGHT]
+        return self._observe()[0], info
+
+    def _observe(self) -> np.ndarray:
+        return task.observe(self._state[:1], self._episodes, self.config, self._state[1:])
 
     def step(self, action):
         """Throw the box with ``action`` and simulate until it rests (or ``max_sim_time``)."""
         if self._needs_reset:
             raise ResetNeeded("each BoxToss episode is a single throw: call reset() before step()")
         actions = task.check_actions(action, self.action_space.shape)
-        task.write_initial_states(self._state, self._episodes, task.actions_to_throws(actions, self.config))
+        task.write_initial_states(self._state[:1], self._episodes, task.actions_to_throws(actions, self.config))
+        if self.config.base_box:
+            task.write_base_states(self._state[1:], self._episodes)
         self._needs_reset = True
         simulator = self._simulator or self._build_simulator()
         simulator.run(self._state, self._params, self._settings, self._stats, self._trajectory, self._events)
@@ -356,7 +416,7 @@ class BoxTossEnv(gym.Env):
             check_finite_stats(self._stats, self.solver)  # raises NonFiniteStateError
         rest_time, end_time = stats[layout.REST_TIME], stats[layout.END_TIME]
         at_rest = not math.isnan(rest_time)
-        reward, terms, success, distance, orientation_error = self._landing(self._state, at_rest)
+        reward, terms, success, distance, orientation_error = self._landing(self._state[:1], at_rest, self._state[1:])
         x, y, angle, _, _, _ = self._state[0].tolist()
         episode = self._episodes.data[0].tolist()
         flight_time = stats[layout.FIRST_CONTACT_TIME]
@@ -380,6 +440,9 @@ class BoxTossEnv(gym.Env):
             "friction": episode[task.EP_FRICTION],
             "restitution": episode[task.EP_RESTITUTION],
         }
+        if self.config.base_box:
+            info.update({key: value[0].item() for key, value in
+                         base_landing_info(self._state[1:], self._state[:1], self._episodes, self.config).items()})
         if self.render_mode is not None:
             from box_toss_env.envs.render import ThrowOutcome
 
@@ -387,7 +450,7 @@ class BoxTossEnv(gym.Env):
             self._throw_unseen = self.render_mode == "rgb_array_list"
             if self.render_mode == "human":
                 self.render()
-        observation = task.observe(self._state, self._episodes, self.config)
+        observation = self._observe()
         if task.outside_bounds(observation, self.observation_space.low, self.observation_space.high)[0]:
             raise EnergyGainError(self._bounds_message(observation[0]))
         return observation[0], float(reward[0]), True, False, info
@@ -396,7 +459,8 @@ class BoxTossEnv(gym.Env):
         """What the throw that ended in ``observation`` (outside the bounds) did, for the solver that ran."""
         space = self.observation_space
         column = int(np.argmax(np.maximum(space.low - observation, observation - space.high)))
-        where = (f"the throw ended with {task.OBSERVATION_NAMES[column]} = {observation[column]:g}, outside the "
+        where = (f"the throw ended with {task.observation_names(self.config)[column]} = {observation[column]:g}, "
+                 f"outside the "
                  f"observation bounds [{space.low[column]:g}, {space.high[column]:g}]")
         stiffness = self.config.penalty_stiffness
         if column == task.OBS_Y and observation[column] < space.low[column]:
@@ -416,15 +480,23 @@ class BoxTossEnv(gym.Env):
                        f"stiffness (dt={self.dt:g} s with penalty_stiffness={stiffness:g} N/m): use a smaller dt "
                        "(e.g. 1/1024 s for 1e5 N/m), a softer penalty_stiffness, or solver='robust'")
 
-    def landing_reward(self, final_state: np.ndarray, at_rest: bool) -> tuple[float, dict[str, float]]:
+    def landing_reward(self, final_state: np.ndarray, at_rest: bool, base_state: np.ndarray | None = None
+                       ) -> tuple[float, dict[str, float]]:
         """The reward of the current episode's throw ending in ``final_state`` (x, y, angle, vx, vy,
-        spin) and its named terms (see Rewards); ``step`` returns exactly this."""
+        spin) and its named terms (see Rewards); ``step`` returns exactly this. With a base box,
+        ``base_state`` is where the base ended (default: where it stands at reset)."""
         state = np.asarray(final_state, dtype=np.float64).reshape(1, layout.STATE_SIZE)
-        reward, terms, *_ = self._landing(state, at_rest)
+        base = None
+        if self.config.base_box:
+            if base_state is None:
+                base = task.write_base_states(np.zeros((1, layout.STATE_SIZE)), self._episodes)
+            else:
+                base = np.asarray(base_state, dtype=np.float64).reshape(1, layout.STATE_SIZE)
+        reward, terms, *_ = self._landing(state, at_rest, base)
         return float(reward[0]), {name: float(value[0]) for name, value in terms.items()}
 
-    def _landing(self, states: np.ndarray, at_rest: bool):
-        return task.reward_terms(states, np.array([at_rest]), self._episodes, self.config)
+    def _landing(self, states: np.ndarray, at_rest: bool, base_states: np.ndarray | None = None):
+        return task.reward_terms(states, np.array([at_rest]), self._episodes, self.config, base_states)
 
     # -- rendering --------------------------------------------------------------------------------
     def render(self):
@@ -443,7 +515,7 @@ class BoxTossEnv(gym.Env):
         if self._needs_reset:  # a throw just happened: play it
             renderer.play(self._throw_trajectory(), self.dt, target_x, target_faces, self._outcome)
         else:
-            renderer.show(self._state[0], target_x, target_faces, "in the hand")
+            renderer.show(self._drawn_state(), target_x, target_faces, "in the hand")
         return None
 
     def _caption(self) -> str:
@@ -454,7 +526,7 @@ class BoxTossEnv(gym.Env):
 
     def _draw_state(self, caption: str) -> np.ndarray:
         episodes = self._episodes
-        return self._renderer_for_env().frame(self._state[0], float(episodes.target_x[0]),
+        return self._renderer_for_env().frame(self._drawn_state(), float(episodes.target_x[0]),
                                               episodes.target_faces[0], caption, self._outcome)
 
     def _unseen_frames(self) -> list[np.ndarray]:
@@ -473,13 +545,20 @@ class BoxTossEnv(gym.Env):
             from box_toss_env.envs.render import ThrowRenderer
 
             self._renderer = ThrowRenderer(self.config, *self.render_size, fps=self.render_fps)
+        if self.config.base_box:  # this episode's base box is drawn too
+            self._renderer.other_boxes = 0.5 * self._episodes.base_size[:1]
         return self._renderer
+
+    def _drawn_state(self) -> np.ndarray:
+        """The state drawn: the thrown box's (6,), with a base box both boxes' (2, 6)."""
+        return self._state if self.config.base_box else self._state[0]
 
     def _throw_trajectory(self) -> np.ndarray:
         """(T, 6) states of the last throw on the grid t = k dt, up to where it ended (the engine
-        writes rows up to the step where the box fell asleep; later rows are left unwritten)."""
+        writes rows up to the step where the box fell asleep; later rows are left unwritten); with a base
+        box (T, 2, 6), the thrown box first."""
         recorded = int(self._stats[0, layout.N_RECORDED])
-        return self._trajectory[:recorded, 0]
+        return self._trajectory[:recorded] if self.config.base_box else self._trajectory[:recorded, 0]
 
     def close(self):
         """Close the window if one is open; safe to call more than once."""
@@ -496,6 +575,20 @@ class BoxTossEnv(gym.Env):
 
     def __setstate__(self, state):
         self.__dict__.update(state)
+
+
+def base_landing_info(base_states: np.ndarray, states: np.ndarray, episodes: task.Episodes,
+                      config: task.TaskConfig) -> dict[str, np.ndarray]:
+    """The step info of a task with a base box, (n,) arrays: where the base ended (``base_x``, ``base_y``
+    [m], ``base_angle`` [rad, wrapped to [-pi, pi)]), the thrown box's lowest point above the base's top
+    (``height_above_base`` [m]) and whether it rests on it (``on_base``: within ``task.SUPPORT_TOLERANCE``
+    of the top, its centre over the top face)."""
+    _, dy = task.landing_offsets(states, episodes, config, base_states)
+    top_x, _, half_top = task.base_top(base_states, episodes)
+    on_base = (np.abs(dy) <= task.SUPPORT_TOLERANCE) & (np.abs(states[:, layout.X] - top_x) <= half_top)
+    return {"base_x": base_states[:, layout.X].copy(), "base_y": base_states[:, layout.Y].copy(),
+            "base_angle": task.wrap_angles(base_states[:, layout.ANGLE]), "height_above_base": dy,
+            "on_base": on_base}
 
 
 def _check_pixels(name: str, value) -> int:

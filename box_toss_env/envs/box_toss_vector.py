@@ -10,7 +10,9 @@ keeps all of them in one array) and draws its episodes with the same batch-first
 the batch on ``threads`` threads at once (default: ``numba.config.NUMBA_NUM_THREADS``, the cores
 available); results do not depend on the thread count. The task logic, the reward, the drawing and
 the compiled code are the single env's, not a copy: whichever of the two throws first compiles
-the kernel (or loads it from numba's cache) for both.
+the kernel (or loads it from numba's cache) for both. With a base box (``BoxToss-OnBox-v0``) each env is a
+scene of two colliding boxes, rows 2i and 2i + 1 of the engine's arrays, and the batch runs the single env's
+colliding kernel on each env's pair in one compiled call (``physics.grouped``, whole envs per thread).
 
 Episodes are one step long, so envs reset in the step they end (``AutoresetMode.SAME_STEP``): the
 observation returned by ``step`` is the next episode's first one, and the final observation and info
@@ -34,9 +36,10 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from box_toss_env.envs import task
-from box_toss_env.envs.box_toss import BoxTossEnv, EnergyGainError, check_render_mode_type
+from box_toss_env.envs.box_toss import BoxTossEnv, EnergyGainError, base_landing_info, check_render_mode_type
 from box_toss_env.envs.random_streams import RandomStreams
 from box_toss_env.physics import Simulator, check_finite_stats, layout
+from box_toss_env.physics.grouped import GroupedSimulator, make_simulator
 from box_toss_env.physics.simulate import check_threads
 from box_toss_env.physics.validation import check_integer
 
@@ -76,25 +79,35 @@ class BoxTossVectorEnv(VectorEnv):
         self.metadata = {**self.metadata, "render_fps": self.env.render_fps}
 
         n = self.num_envs
-        self._episodes = task.Episodes.empty(n)
-        self._uniforms = np.zeros((n, task.EPISODE_SIZE))  # the variates each episode is drawn from
-        self._params = np.zeros((n, layout.PARAM_SIZE))
-        self._state = np.zeros((n, layout.STATE_SIZE))
-        self._stats = np.zeros((n, layout.STATS_SIZE))
+        bodies = n * self.config.bodies_per_env  # env i's bodies: consecutive rows, its thrown box first
+        self._episodes = task.Episodes.empty(n, self.config.episode_size)
+        self._uniforms = np.zeros((n, self.config.episode_size))  # the variates each episode is drawn from
+        self._params = np.zeros((bodies, layout.PARAM_SIZE))
+        self._state = np.zeros((bodies, layout.STATE_SIZE))
+        self._stats = np.zeros((bodies, layout.STATS_SIZE))
         self._streams = RandomStreams(n)  # env i's random stream: np_random of a single env
         self._settings = self.env.engine_settings
         self._params_stale = True
         self._needs_reset = True
-        self._simulator: Simulator | None = None
+        self._simulator: Simulator | GroupedSimulator | None = None
 
     @property
-    def simulator(self) -> Simulator:
-        """The engine kernel for the whole batch (the single env's kernel, run on threads), compiled or
-        loaded at its first run."""
+    def simulator(self) -> Simulator | GroupedSimulator:
+        """The engine kernel for the whole batch (the single env's kernel, run on threads; with a base
+        box the single env's colliding kernel run on each env's pair of boxes, ``physics.grouped``),
+        compiled or loaded at its first run."""
         if self._simulator is None:
-            self._simulator = Simulator(dataclasses.replace(self.env.flags, parallel=True), threads=self.threads,
-                                        start_interpreted=True)
+            self._simulator = make_simulator(dataclasses.replace(self.env.flags, parallel=True),
+                                             self.config.bodies_per_env, threads=self.threads, start_interpreted=True)
         return self._simulator
+
+    @property
+    def _thrown_state(self) -> np.ndarray:
+        return task.thrown_rows(self._state, self.config)
+
+    @property
+    def _base_state(self) -> np.ndarray:
+        return task.base_rows(self._state, self.config)
 
     @property
     def np_random(self) -> list[np.random.Generator]:
@@ -127,12 +140,14 @@ class BoxTossVectorEnv(VectorEnv):
         """Draw every env's next episode (each from its own stream); the boxes are in the hand."""
         episodes = task.episodes_from_uniforms(self._streams.fill_uniform(self._uniforms), self.config,
                                                self._episodes)
-        if self._params_stale or self.config.randomises_dynamics:
+        if self._params_stale or self.config.draws_body_params:
             task.write_body_params(self._params, episodes, self.config)
             self._params_stale = False
-        task.write_initial_states(self._state, episodes, None)
+        task.write_initial_states(self._thrown_state, episodes, None)
+        if self.config.base_box:
+            task.write_base_states(self._base_state, episodes)
         data = episodes.data
-        return {
+        info = {
             "target_x": data[:, task.EP_TARGET_X].copy(),
             "target_faces": data[:, task.EP_TARGET_FACES].astype(np.int8),
             "release_x": data[:, task.EP_RELEASE_X].copy(),
@@ -142,6 +157,13 @@ class BoxTossVectorEnv(VectorEnv):
             "friction": data[:, task.EP_FRICTION].copy(),
             "restitution": data[:, task.EP_RESTITUTION].copy(),
         }
+        if self.config.base_box:
+            info["base_length"] = data[:, task.EP_BASE_LENGTH].copy()
+            info["base_height"] = data[:, task.EP_BASE_HEIGHT].copy()
+        return info
+
+    def _observe(self) -> np.ndarray:
+        return task.observe(self._thrown_state, self._episodes, self.config, self._base_state)
 
     # -- the Gymnasium API ------------------------------------------------------------------------
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None):
@@ -149,7 +171,7 @@ class BoxTossVectorEnv(VectorEnv):
         self._seed(seed)
         info = self._new_episodes()
         self._needs_reset = False
-        return task.observe(self._state, self._episodes, self.config), with_masks(info, self.num_envs)
+        return self._observe(), with_masks(info, self.num_envs)
 
     def step(self, actions):
         """Throw every box, simulate all throws together until each rests (or ``max_sim_time``),
@@ -158,12 +180,14 @@ class BoxTossVectorEnv(VectorEnv):
             raise ResetNeeded("call reset() before the first step()")
         actions = task.check_actions(actions, self.action_space.shape)
         episodes = self._episodes
-        task.write_initial_states(self._state, episodes, task.actions_to_throws(actions, self.config))
+        task.write_initial_states(self._thrown_state, episodes, task.actions_to_throws(actions, self.config))
+        if self.config.base_box:
+            task.write_base_states(self._base_state, episodes)
         self.simulator.run(self._state, self._params, self._settings, self._stats)
-        stats = self._stats
-        if np.any(stats[:, layout.STATUS] != layout.STATUS_OK):
-            check_finite_stats(stats, self.env.solver)
-        final_obs = task.observe(self._state, episodes, self.config)
+        if np.any(self._stats[:, layout.STATUS] != layout.STATUS_OK):
+            check_finite_stats(self._stats, self.env.solver)
+        stats = task.thrown_rows(self._stats, self.config)
+        final_obs = self._observe()
         outside = task.outside_bounds(final_obs, self.single_observation_space.low, self.single_observation_space.high)
         if outside.any():
             i = int(np.argmax(outside))
@@ -172,7 +196,7 @@ class BoxTossVectorEnv(VectorEnv):
         reward = final_info.pop("reward")
         # every episode ended: start the next ones
         info = self._new_episodes()
-        observations = task.observe(self._state, episodes, self.config)
+        observations = self._observe()
         n = self.num_envs
         info = with_masks(info, n)
         info["final_obs"] = final_obs
@@ -183,16 +207,17 @@ class BoxTossVectorEnv(VectorEnv):
 
     def _landing_info(self, stats: np.ndarray) -> dict[str, np.ndarray]:
         """The single env's step ``info``, one array per key, plus the reward."""
-        state = self._state
+        state = self._thrown_state
+        base = self._base_state
         rest_time = stats[:, layout.REST_TIME]
         at_rest = ~np.isnan(rest_time)
         reward, terms, success, distance, orientation_error = task.reward_terms(state, at_rest, self._episodes,
-                                                                                self.config)
+                                                                                self.config, base)
         angle = state[:, layout.ANGLE]
         flight_time = stats[:, layout.FIRST_CONTACT_TIME]
         end_time = stats[:, layout.END_TIME].copy()
         data = self._episodes.data
-        return {
+        info = {
             "reward": reward,
             "final_x": state[:, layout.X].copy(),
             "final_y": state[:, layout.Y].copy(),
@@ -213,6 +238,9 @@ class BoxTossVectorEnv(VectorEnv):
             "friction": data[:, task.EP_FRICTION].copy(),
             "restitution": data[:, task.EP_RESTITUTION].copy(),
         }
+        if self.config.base_box:
+            info.update(base_landing_info(base, state, self._episodes, self.config))
+        return info
 
     def render(self) -> tuple[np.ndarray, ...] | None:
         """One frame per env of its current state (the box in the hand after a step, since envs
@@ -220,8 +248,15 @@ class BoxTossVectorEnv(VectorEnv):
         if self.render_mode is None:
             return None
         renderer = self.env._renderer_for_env()
-        return tuple(renderer.frame(self._state[i], float(self._episodes.target_x[i]),
-                                    self._episodes.target_faces[i], f"env {i}") for i in range(self.num_envs))
+        bodies = self.config.bodies_per_env
+        frames = []
+        for i in range(self.num_envs):
+            if self.config.base_box:  # env i's base box is drawn too
+                renderer.other_boxes = 0.5 * self._episodes.base_size[i:i + 1]
+            state = self._state[bodies * i:bodies * (i + 1)] if self.config.base_box else self._state[i]
+            frames.append(renderer.frame(state, float(self._episodes.target_x[i]), self._episodes.target_faces[i],
+                                         f"env {i}"))
+        return tuple(frames)
 
     def close_extras(self, **kwargs) -> None:
         self.env.close()

@@ -128,6 +128,9 @@ class ThrowRenderer:
         self.home_camera = self.camera_for(self.home_bounds)
         self.renderer = SceneRenderer(width_px, height_px, camera=self.home_camera)
         self.half_extents = np.array([config.half_length, config.half_width])
+        self.other_boxes: np.ndarray | None = None
+        """(m, 2) half extents of the boxes drawn besides the thrown one (a base box, set per episode by the env),
+        whose states follow the thrown box's in the states given: (1 + m, 6), trajectories (T, 1 + m, 6)."""
         self.tolerance = config.position_tolerance
         self.fps = fps
         self.trace = trace
@@ -175,7 +178,7 @@ class ThrowRenderer:
         """
         from box_toss_env.rendering import follow_bounds, union_bounds
 
-        trajectory = np.asarray(trajectory).reshape(-1, layout.STATE_SIZE)
+        trajectory = thrown_trajectory(trajectory)
         rows = frame_rows(trajectory.shape[0], dt, self.fps)
         if follow:
             held = union_bounds(self.box_bounds(trajectory[rows]), self.home_bounds)
@@ -191,10 +194,12 @@ class ThrowRenderer:
     def _scene(self, state: np.ndarray, target_x: float, target_faces: np.ndarray, caption: str, camera,
                outcome: ThrowOutcome | None = None, trace: np.ndarray | None = None) -> dict:
         faces = np.flatnonzero(target_faces > 0.0)
+        states = np.asarray(state, dtype=np.float64).reshape(-1, layout.STATE_SIZE)  # the thrown box first
+        half_extents = self.half_extents if len(states) == 1 else np.vstack((self.half_extents, self.other_boxes))
         return dict(
-            position=state[layout.X:layout.Y + 1],
-            angle=state[layout.ANGLE],
-            half_extents=self.half_extents,
+            position=states[:, layout.X:layout.Y + 1],
+            angle=states[:, layout.ANGLE],
+            half_extents=half_extents,
             target_x=target_x,
             target_face=int(faces[0]) if faces.size == 1 else None,
             target_tolerance_m=self.tolerance,
@@ -211,13 +216,13 @@ class ThrowRenderer:
                        target_faces: np.ndarray, outcome: ThrowOutcome | None) -> dict:
         shows_result = planned.shows_result and outcome is not None
         caption = planned.caption + (", at rest" if shows_result and outcome.at_rest else "")
-        trace = trajectory[:planned.row + 1, layout.X:layout.Y + 1] if self.trace else None
+        trace = thrown_trajectory(trajectory)[:planned.row + 1, layout.X:layout.Y + 1] if self.trace else None
         return self._scene(trajectory[planned.row], target_x, target_faces, caption, planned.camera,
                            outcome if shows_result else None, trace)
 
     def camera_for_state(self, state: np.ndarray):
         """The home camera, or if the box of the engine state (6,) is not inside the home view, the home
-        view widened to hold it."""
+        view widened to hold it (of states (1 + m, 6), the thrown box's: the first)."""
         bounds = self.box_bounds(state)[0]
         home = self.home_bounds
         # a box resting on the floor dips into it by up to a few millimetres: the ground band holds that
@@ -257,6 +262,12 @@ class ThrowRenderer:
 
     def close(self) -> None:
         self.renderer.close()
+
+
+def thrown_trajectory(trajectory: np.ndarray) -> np.ndarray:
+    """(T, 6) states of the thrown box in a trajectory (T, 6) or (T, bodies, 6) (the thrown box first)."""
+    trajectory = np.asarray(trajectory)
+    return trajectory[:, 0] if trajectory.ndim == 3 else trajectory.reshape(-1, layout.STATE_SIZE)
 
 
 def record_throws(env, path: str | Path, n_throws: int = 1,

@@ -12,6 +12,13 @@ what is thrown, where it should land and how a landing is scored:
 3. ``observe``: body state and target as float32, inside ``observation_bounds``;
 4. ``reward_terms``: the reward of a landing, its named terms and success.
 
+With ``base_box`` (``BoxToss-OnBox-v0``) every episode also has a base box resting on the floor, which the
+thrown box must come to rest on: the base stands centred at the target x, its length and height are drawn
+per episode, and the engine steps the two boxes together with box-box contact. An env's bodies are then
+consecutive rows of the engine's arrays, its thrown box first (``thrown_rows``, ``base_rows``); the
+functions above take the thrown box's rows, and the base's where it matters (``write_base_states``,
+``observe``, ``reward_terms``).
+
 Faces are numbered by their outward normal in the body frame (as in ``physics.face_down`` and the
 renderer): 0 = local -y, 1 = +x, 2 = +y, 3 = -x. The box's length runs along local x, so faces 0
 and 2 are its long sides and faces 1 and 3 its short ends. Face f is down when the box's angle is
@@ -48,6 +55,10 @@ QUARTER_TURN = 0.5 * math.pi
 (EP_RELEASE_X, EP_RELEASE_Y, EP_RELEASE_ANGLE, EP_TARGET_X, EP_FACE_0, EP_FACE_1, EP_FACE_2, EP_FACE_3,
  EP_MASS, EP_FRICTION, EP_RESTITUTION) = range(11)
 EPISODE_SIZE = 11
+# with base_box: the base box's length and height [m] (its centre x is the target x); a task without a
+# base draws EPISODE_SIZE variates per episode, as it always did
+EP_BASE_LENGTH, EP_BASE_HEIGHT = 11, 12
+EPISODE_SIZE_WITH_BASE = 13
 EP_RELEASE = slice(EP_RELEASE_X, EP_RELEASE_ANGLE + 1)  # x [m], y [m], angle [rad] in the hand
 EP_TARGET_FACES = slice(EP_FACE_0, EP_FACE_3 + 1)  # 1.0 for each face that may end down
 EP_DYNAMICS = slice(EP_MASS, EP_RESTITUTION + 1)  # mass [kg], friction [-], restitution [-]
@@ -60,6 +71,9 @@ OBS_TARGET_FACES = slice(8, 12)  # 1.0 where that face may end down
 OBS_MASS, OBS_FRICTION, OBS_RESTITUTION = 12, 13, 14  # only with observe_dynamics
 OBS_SIZE = 12
 OBS_SIZE_WITH_DYNAMICS = 15
+# with base_box, six columns after all the others: the base box's pose and size
+BASE_OBS_SIZE = 6  # base x [m], base y [m], cos and sin of its angle, its length and height [m]
+OBS_BASE_X, OBS_BASE_Y, OBS_BASE_COS, OBS_BASE_SIN, OBS_BASE_LENGTH, OBS_BASE_HEIGHT = range(-6, 0)
 # the observation's target and dynamics columns are the episode's columns from EP_TARGET_X on
 assert OBS_SIZE - OBS_TARGET_X == EP_MASS - EP_TARGET_X
 
@@ -100,15 +114,38 @@ class TaskConfig:
     success_bonus: float  # [-]
     observe_dynamics: bool
     max_sim_time: float  # [s]
+    base_box: bool = False  # a base box to land on (BoxToss-OnBox-v0)
+    base_length_range: tuple[float, float] = (0.0, 0.0)  # [m] of the base box, with base_box
+    base_height_range: tuple[float, float] = (0.0, 0.0)  # [m] of the base box, with base_box
+    base_mass: float = 0.0  # [kg] of the base box, with base_box
 
     @functools.cached_property
     def randomises_dynamics(self) -> bool:
         """Whether mass, friction or restitution are drawn per episode."""
         return any(low != high for low, high in (self.mass_range, self.friction_range, self.restitution_range))
 
+    @functools.cached_property
+    def draws_body_params(self) -> bool:
+        """Whether the engine's body parameters change from episode to episode: drawn dynamics, or the
+        base box's drawn size."""
+        base_drawn = self.base_length_range[0] != self.base_length_range[1] or (
+            self.base_height_range[0] != self.base_height_range[1])
+        return self.randomises_dynamics or (self.base_box and base_drawn)
+
     @property
     def obs_size(self) -> int:
-        return OBS_SIZE_WITH_DYNAMICS if self.observe_dynamics else OBS_SIZE
+        size = OBS_SIZE_WITH_DYNAMICS if self.observe_dynamics else OBS_SIZE
+        return size + BASE_OBS_SIZE if self.base_box else size
+
+    @property
+    def episode_size(self) -> int:
+        """Columns of ``Episodes.data`` (and variates drawn per episode)."""
+        return EPISODE_SIZE_WITH_BASE if self.base_box else EPISODE_SIZE
+
+    @property
+    def bodies_per_env(self) -> int:
+        """Engine bodies per episode: the thrown box, and the base box with ``base_box``."""
+        return 2 if self.base_box else 1
 
     @property
     def corner_radius(self) -> float:
@@ -123,12 +160,15 @@ class TaskConfig:
     # constant arrays, computed once (the functions below run per step and stay cheap on small batches)
     @functools.cached_property
     def episode_low_span(self) -> tuple[np.ndarray, np.ndarray]:
-        """(EPISODE_SIZE,) low and high - low of each drawn column (0 for the face columns)."""
-        low, span = np.zeros(EPISODE_SIZE), np.zeros(EPISODE_SIZE)
-        for column, (a, b) in ((EP_RELEASE_X, self.release_x_range), (EP_RELEASE_Y, self.release_height_range),
-                               (EP_RELEASE_ANGLE, self.release_angle_range), (EP_TARGET_X, self.target_x_range),
-                               (EP_MASS, self.mass_range), (EP_FRICTION, self.friction_range),
-                               (EP_RESTITUTION, self.restitution_range)):
+        """(episode_size,) low and high - low of each drawn column (0 for the face columns)."""
+        low, span = np.zeros(self.episode_size), np.zeros(self.episode_size)
+        columns = [(EP_RELEASE_X, self.release_x_range), (EP_RELEASE_Y, self.release_height_range),
+                   (EP_RELEASE_ANGLE, self.release_angle_range), (EP_TARGET_X, self.target_x_range),
+                   (EP_MASS, self.mass_range), (EP_FRICTION, self.friction_range),
+                   (EP_RESTITUTION, self.restitution_range)]
+        if self.base_box:
+            columns += [(EP_BASE_LENGTH, self.base_length_range), (EP_BASE_HEIGHT, self.base_height_range)]
+        for column, (a, b) in columns:
             low[column], span[column] = a, b - a
         return low, span
 
@@ -149,8 +189,9 @@ class Episodes:
     data: np.ndarray
 
     @classmethod
-    def empty(cls, n: int) -> Episodes:
-        return cls(np.zeros((n, EPISODE_SIZE)))
+    def empty(cls, n: int, size: int = EPISODE_SIZE) -> Episodes:
+        """``n`` episodes of ``size`` columns (``TaskConfig.episode_size``)."""
+        return cls(np.zeros((n, size)))
 
     @property
     def release(self) -> np.ndarray:  # (n, 3): x [m], y [m], angle [rad] of the box in the hand
@@ -167,6 +208,10 @@ class Episodes:
     @property
     def dynamics(self) -> np.ndarray:  # (n, 3): mass [kg], friction [-], restitution [-]
         return self.data[:, EP_DYNAMICS]
+
+    @property
+    def base_size(self) -> np.ndarray:  # (n, 2): the base box's length and height [m] (with base_box)
+        return self.data[:, EP_BASE_LENGTH:EP_BASE_HEIGHT + 1]
 
 
 # -- configuration ------------------------------------------------------------------------------
@@ -192,6 +237,9 @@ ENV_RANGES = {
     "dt": ENGINE_RANGES["dt"],
     "max_sim_time": Range(0.0, 1e4, "s", low_open=True),  # and max_sim_time / dt <= ranges.MAX_STEPS
     "render_fps": Range(0.0, 1e3, "1/s", low_open=True),
+    "base_length_range": ENGINE_RANGES["length"],  # and base_height_range[1] <= base_length_range[0]
+    "base_height_range": ENGINE_RANGES["width"],
+    "base_mass": ENGINE_RANGES["mass"],
 }
 """The env's arguments and their allowed ranges (docs/ranges.md): every observation stays finite in
 float32 and every throw is simulated, at every combination of them."""
@@ -224,10 +272,12 @@ def make_task_config(*, box_length, box_width, gravity, mass, friction, restitut
                      mass_range, friction_range, restitution_range, release_x_range, release_height_range,
                      release_angle_range, target_x_range, target_face, max_speed, launch_angle_range,
                      max_spin, position_tolerance, distance_weight, orientation_weight, success_bonus,
-                     observe_dynamics, max_sim_time) -> TaskConfig:
+                     observe_dynamics, max_sim_time, base_box=False, base_length_range=None, base_height_range=None,
+                     base_mass=None) -> TaskConfig:
     """Validate the task's keyword arguments into a TaskConfig: a TypeError names an argument of the
     wrong type, a ValueError one outside its range (``ENV_RANGES``). ``*_range=None`` fixes that
-    quantity at its scalar argument."""
+    quantity at its scalar argument. ``base_*=None`` takes ``BASE_DEFAULTS`` with ``base_box=True``
+    (they must stay None without it)."""
     scalar = {name: ENV_RANGES[name].check(name, value) for name, value in (
         ("box_length", box_length), ("box_width", box_width), ("gravity", gravity),
         ("penalty_stiffness", penalty_stiffness), ("max_speed", max_speed), ("max_spin", max_spin),
@@ -243,6 +293,8 @@ def make_task_config(*, box_length, box_width, gravity, mass, friction, restitut
         raise ValueError(
             f"release_height_range must lie above the box's corner radius {corner_radius:g} m (so the box "
             f"starts clear of the floor at any angle), got {release_height_range!r}")
+    base = check_base_box(base_box, base_length_range, base_height_range, base_mass, pairs["target_x_range"],
+                          pairs["release_x_range"], corner_radius)
     return TaskConfig(
         half_length=0.5 * scalar.pop("box_length"),
         half_width=0.5 * scalar.pop("box_width"),
@@ -254,21 +306,52 @@ def make_task_config(*, box_length, box_width, gravity, mass, friction, restitut
         observe_dynamics=check_bool("observe_dynamics", observe_dynamics),
         **scalar,
         **pairs,
+        **base,
     )
+
+
+BASE_DEFAULTS = {"base_length_range": (0.6, 1.0), "base_height_range": (0.2, 0.5), "base_mass": 10.0}
+"""The base box's size ranges [m] and mass [kg] when ``base_box=True`` leaves them None."""
+
+
+def check_base_box(base_box, base_length_range, base_height_range, base_mass, target_x_range, release_x_range,
+                   corner_radius) -> dict:
+    """The TaskConfig fields of the base box, validated (``make_task_config``)."""
+    given = {"base_length_range": base_length_range, "base_height_range": base_height_range,
+             "base_mass": base_mass}
+    if not check_bool("base_box", base_box):
+        for name, value in given.items():
+            if value is not None:
+                raise ValueError(f"{name} applies only with base_box=True (a base box to land on), got {name}="
+                                 f"{value!r} with base_box=False")
+        return {}
+    values = {name: BASE_DEFAULTS[name] if value is None else value for name, value in given.items()}
+    lengths = check_interval("base_length_range", values["base_length_range"], ENV_RANGES["base_length_range"])
+    heights = check_interval("base_height_range", values["base_height_range"], ENV_RANGES["base_height_range"])
+    mass = ENV_RANGES["base_mass"].check("base_mass", values["base_mass"])
+    if heights[1] > lengths[0]:
+        raise ValueError(f"base_height_range must not exceed base_length_range[0] = {lengths[0]:g} m (the base box "
+                         f"lies on its long side, its lowest pose), got {values['base_height_range']!r}")
+    clearance = release_x_range[1] + corner_radius + 0.5 * lengths[1]
+    if target_x_range[0] < clearance:
+        raise ValueError(f"target_x_range must start at {clearance:g} m or beyond with base_box=True (the base box, "
+                         f"centred at the target x, must stand clear of the box in the hand: release x max + its "
+                         f"corner radius + half the longest base), got {target_x_range!r}")
+    return {"base_box": True, "base_length_range": lengths, "base_height_range": heights, "base_mass": mass}
 
 
 # -- 1. sampling ---------------------------------------------------------------------------------
 def sample_episodes(rng: np.random.Generator, config: TaskConfig, out: Episodes) -> Episodes:
-    """Draw ``len(out.data)`` episodes into ``out`` with one call to ``rng`` and return it
-    (``episodes_from_uniforms`` of ``rng.random(out.data.shape)``)."""
+    """Draw ``len(out.data)`` episodes into ``out`` (of ``config.episode_size`` columns) with one call to
+    ``rng`` and return it (``episodes_from_uniforms`` of ``rng.random(out.data.shape)``)."""
     return episodes_from_uniforms(rng.random(out.data.shape), config, out)
 
 
 def episodes_from_uniforms(u: np.ndarray, config: TaskConfig, out: Episodes) -> Episodes:
     """The episodes (written into ``out`` and returned) that the uniform variates ``u`` (n,
-    EPISODE_SIZE) in [0, 1) stand for: each value is uniform over its range (release x, height and
-    angle, target x, mass, friction, restitution); the target faces follow ``config.target_face``
-    (see ``TARGET_FACE_KINDS``)."""
+    episode_size) in [0, 1) stand for: each value is uniform over its range (release x, height and
+    angle, target x, mass, friction, restitution; with a base box its length and height); the
+    target faces follow ``config.target_face`` (see ``TARGET_FACE_KINDS``)."""
     low, span = config.episode_low_span
     np.multiply(u, span, out=out.data)
     out.data += low
@@ -303,17 +386,47 @@ def describe_target_faces(target_faces: np.ndarray) -> str:
     return "face " + " or ".join(str(f) for f in range(4) if mask[f])
 
 
+def thrown_rows(array: np.ndarray, config: TaskConfig) -> np.ndarray:
+    """The thrown boxes' rows (n, ...) of an engine array (n * bodies_per_env, ...): a view (``array``
+    itself without a base box)."""
+    return array[::config.bodies_per_env]
+
+
+def base_rows(array: np.ndarray, config: TaskConfig) -> np.ndarray:
+    """The base boxes' rows (n, ...) of an engine array (n * 2, ...) of a task with ``base_box``: a view."""
+    return array[1::config.bodies_per_env]
+
+
 def write_body_params(params: np.ndarray, episodes: Episodes, config: TaskConfig) -> np.ndarray:
-    """Fill the engine's body parameters (n, layout.PARAM_SIZE) for the drawn dynamics."""
+    """Fill the engine's body parameters (n * bodies_per_env, layout.PARAM_SIZE) for the drawn
+    dynamics (and base boxes: same friction, restitution and stiffness as the thrown box)."""
     mass = episodes.data[:, EP_MASS]
-    params[:, layout.HALF_LENGTH] = config.half_length
-    params[:, layout.HALF_WIDTH] = config.half_width
-    params[:, layout.MASS] = mass
-    np.multiply(mass, config.gyration_radius_squared, out=params[:, layout.INERTIA])
-    params[:, layout.RESTITUTION] = episodes.data[:, EP_RESTITUTION]
-    params[:, layout.FRICTION] = episodes.data[:, EP_FRICTION]
-    params[:, layout.STIFFNESS] = config.penalty_stiffness
+    thrown = thrown_rows(params, config)
+    thrown[:, layout.HALF_LENGTH] = config.half_length
+    thrown[:, layout.HALF_WIDTH] = config.half_width
+    thrown[:, layout.MASS] = mass
+    thrown[:, layout.INERTIA] = mass * config.gyration_radius_squared
+    thrown[:, layout.RESTITUTION] = episodes.data[:, EP_RESTITUTION]
+    thrown[:, layout.FRICTION] = episodes.data[:, EP_FRICTION]
+    thrown[:, layout.STIFFNESS] = config.penalty_stiffness
+    if config.base_box:
+        base = base_rows(params, config)
+        half = 0.5 * episodes.base_size
+        base[:, layout.HALF_LENGTH] = half[:, 0]
+        base[:, layout.HALF_WIDTH] = half[:, 1]
+        base[:, layout.MASS] = config.base_mass
+        base[:, layout.INERTIA] = config.base_mass * (half[:, 0] ** 2 + half[:, 1] ** 2) / 3.0
+        base[:, layout.RESTITUTION:layout.STIFFNESS + 1] = thrown[:, layout.RESTITUTION:layout.STIFFNESS + 1]
     return params
+
+
+def write_base_states(states: np.ndarray, episodes: Episodes) -> np.ndarray:
+    """The engine states (n, 6) of base boxes at rest on the floor, centred at the target x, level
+    (angle 0: the length along the floor)."""
+    states[:, layout.X] = episodes.data[:, EP_TARGET_X]
+    states[:, layout.Y] = 0.5 * episodes.data[:, EP_BASE_HEIGHT]
+    states[:, layout.ANGLE:] = 0.0
+    return states
 
 
 # -- 2. actions ----------------------------------------------------------------------------------
@@ -374,13 +487,20 @@ def write_initial_states(states: np.ndarray, episodes: Episodes, throws: np.ndar
 
 
 # -- 3. observations -----------------------------------------------------------------------------
-def observe(states: np.ndarray, episodes: Episodes, config: TaskConfig) -> np.ndarray:
+def observe(states: np.ndarray, episodes: Episodes, config: TaskConfig, base_states: np.ndarray | None = None
+            ) -> np.ndarray:
     """A new float32 (n, obs_size) array: x, y, cos(angle), sin(angle), vx, vy, spin, target x,
-    the four target-face flags, and with ``observe_dynamics`` the mass, friction and restitution."""
+    the four target-face flags, with ``observe_dynamics`` the mass, friction and restitution, and with
+    ``base_box`` the base box's x, y, cos(angle), sin(angle) (from ``base_states`` (n, 6)), length and height."""
     angles = states[:, layout.ANGLE:layout.ANGLE + 1]
-    return np.concatenate((states[:, layout.X:layout.Y + 1], np.cos(angles), np.sin(angles), states[:, layout.VX:],
-                           episodes.data[:, EP_TARGET_X:EP_TARGET_X + config.obs_size - OBS_TARGET_X]),
-                          axis=1, dtype=np.float32)
+    size = config.obs_size - (BASE_OBS_SIZE if config.base_box else 0)
+    parts = [states[:, layout.X:layout.Y + 1], np.cos(angles), np.sin(angles), states[:, layout.VX:],
+             episodes.data[:, EP_TARGET_X:EP_TARGET_X + size - OBS_TARGET_X]]
+    if config.base_box:
+        base_angles = base_states[:, layout.ANGLE:layout.ANGLE + 1]
+        parts += [base_states[:, layout.X:layout.Y + 1], np.cos(base_angles), np.sin(base_angles),
+                  episodes.base_size]
+    return np.concatenate(parts, axis=1, dtype=np.float32)
 
 
 def observation_bounds(config: TaskConfig, horizon: float) -> tuple[np.ndarray, np.ndarray]:
@@ -407,6 +527,17 @@ def observation_bounds(config: TaskConfig, horizon: float) -> tuple[np.ndarray, 
     if config.observe_dynamics:
         low += [config.mass_range[0], config.friction_range[0], config.restitution_range[0]]
         high += [config.mass_range[1], config.friction_range[1], config.restitution_range[1]]
+    if config.base_box:
+        # the base box starts at rest in its lowest pose, so it can take at most the thrown box's energy
+        # m e: its speed stays below sqrt(2 e m / m_base), its height gain below e m / (m_base g)
+        share = config.mass_range[1] / config.base_mass
+        base_speed = ENERGY_MARGIN * math.sqrt(2.0 * energy * share)
+        base_radius = 0.5 * math.hypot(config.base_length_range[1], config.base_height_range[1])
+        low += [config.target_x_range[0] - base_speed * horizon, -base_radius, -1.0, -1.0,
+                config.base_length_range[0], config.base_height_range[0]]
+        high += [config.target_x_range[1] + base_speed * horizon,
+                 base_radius + ENERGY_MARGIN * energy * share / config.gravity, 1.0, 1.0,
+                 config.base_length_range[1], config.base_height_range[1]]
     low, high = np.array(low, dtype=np.float32), np.array(high, dtype=np.float32)
     # a fixed quantity (target x, mass, friction or restitution not drawn) would have equal bounds, which
     # Gymnasium's checker flags as a degenerate space: its bounds are one float32 step either side instead
@@ -418,6 +549,13 @@ def observation_bounds(config: TaskConfig, horizon: float) -> tuple[np.ndarray, 
 
 OBSERVATION_NAMES = ("x", "y", "cos(angle)", "sin(angle)", "vx", "vy", "spin", "target x", "target face 0",
                      "target face 1", "target face 2", "target face 3", "mass", "friction", "restitution")
+BASE_OBSERVATION_NAMES = ("base x", "base y", "base cos(angle)", "base sin(angle)", "base length", "base height")
+
+
+def observation_names(config: TaskConfig) -> tuple[str, ...]:
+    """The name of each observation column."""
+    size = OBS_SIZE_WITH_DYNAMICS if config.observe_dynamics else OBS_SIZE
+    return OBSERVATION_NAMES[:size] + (BASE_OBSERVATION_NAMES if config.base_box else ())
 
 
 def outside_bounds(obs: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
@@ -449,20 +587,60 @@ def orientation_errors(angles: np.ndarray, target_faces: np.ndarray) -> np.ndarr
 REWARD_TERMS = ("reward_distance", "reward_orientation", "reward_success")
 
 
-def reward_terms(states: np.ndarray, at_rest: np.ndarray, episodes: Episodes, config: TaskConfig):
+SUPPORT_TOLERANCE = 0.01
+"""[m] With a base box, the thrown box rests on it when its lowest point is this close to the base's top."""
+
+
+def half_extents_along_axes(angles: np.ndarray, half_length, half_width) -> tuple[np.ndarray, np.ndarray]:
+    """(n,) half the horizontal and half the vertical extent [m] of boxes at ``angles``:
+    hx |cos a| + hy |sin a| and hx |sin a| + hy |cos a|."""
+    cos, sin = np.abs(np.cos(angles)), np.abs(np.sin(angles))
+    return half_length * cos + half_width * sin, half_length * sin + half_width * cos
+
+
+def base_top(base_states: np.ndarray, episodes: Episodes) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(x, y, half length) [m] of the top of each base box (n,): its centre x, its highest point and half
+    its horizontal extent (for a base lying on a face, the centre and half length of its top face)."""
+    half_x, half_y = half_extents_along_axes(base_states[:, layout.ANGLE], 0.5 * episodes.data[:, EP_BASE_LENGTH],
+                                             0.5 * episodes.data[:, EP_BASE_HEIGHT])
+    return base_states[:, layout.X], base_states[:, layout.Y] + half_y, half_x
+
+
+def landing_offsets(states: np.ndarray, episodes: Episodes, config: TaskConfig,
+                    base_states: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(dx, dy) [m]: the thrown box's centre x minus the target x, and (with a base box) its lowest point
+    minus the top of the base box (where ``base_states`` ended), the base's centre x being the target
+    x; dy = 0 without a base box."""
+    if not config.base_box:
+        return states[:, layout.X] - episodes.data[:, EP_TARGET_X], np.zeros(len(states))
+    top_x, top_y, _ = base_top(base_states, episodes)
+    _, half_y = half_extents_along_axes(states[:, layout.ANGLE], config.half_length, config.half_width)
+    return states[:, layout.X] - top_x, states[:, layout.Y] - half_y - top_y
+
+
+def reward_terms(states: np.ndarray, at_rest: np.ndarray, episodes: Episodes, config: TaskConfig,
+                 base_states: np.ndarray | None = None):
     """Score landings. Returns (reward (n,), terms {name: (n,)}, success (n,) bool, distance (n,) [m],
     orientation error (n,) [rad]), with
 
-        reward_distance    = -distance_weight    * |x - target_x|
+        reward_distance    = -distance_weight    * distance
         reward_orientation = -orientation_weight * orientation error
         reward_success     =  success_bonus      * success
         reward             =  reward_distance + reward_orientation + reward_success,
 
-    success meaning at rest, |x - target_x| <= position_tolerance, and a target face down.
+    distance = |x - target_x|, and success meaning at rest, distance <= position_tolerance and a target
+    face down. With a base box (``base_states`` (n, 6): where the base boxes ended), the target is the
+    centre of the base's top: distance = sqrt(dx^2 + dy^2) with dx the centre's horizontal offset from the
+    base's centre and dy the height of the box's lowest point above the base's top (``landing_offsets``),
+    and success also needs the box to rest on the base, |dy| <= SUPPORT_TOLERANCE (|dx| <= position_tolerance
+    keeps its centre over the top).
     """
-    distance = np.abs(states[:, layout.X] - episodes.data[:, EP_TARGET_X])
+    dx, dy = landing_offsets(states, episodes, config, base_states)
+    distance = np.hypot(dx, dy) if config.base_box else np.abs(dx)
     orientation_error = orientation_errors(states[:, layout.ANGLE], episodes.data[:, EP_TARGET_FACES])
     success = at_rest & (distance <= config.position_tolerance) & (orientation_error < 0.5 * QUARTER_TURN)
+    if config.base_box:
+        success &= np.abs(dy) <= SUPPORT_TOLERANCE
     terms = {
         "reward_distance": 0.0 - config.distance_weight * distance,
         "reward_orientation": 0.0 - config.orientation_weight * orientation_error,

@@ -6,7 +6,8 @@ import yaml
 
 from agents import algorithms, config
 
-VARIANTS = ("BoxToss-v0", "BoxToss-LongSide-v0", "BoxToss-ShortEnd-v0", "BoxToss-ThisSideUp-v0", "BoxToss-Mixed-v0")
+VARIANTS = ("BoxToss-v0", "BoxToss-LongSide-v0", "BoxToss-ShortEnd-v0", "BoxToss-ThisSideUp-v0", "BoxToss-Mixed-v0",
+            "BoxToss-OnBox-v0")
 
 
 @pytest.mark.parametrize("algo", sorted(algorithms.ALGORITHMS))

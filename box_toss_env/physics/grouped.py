@@ -1,0 +1,132 @@
+"""Many small scenes of colliding boxes in one compiled call: a batch of ``BoxToss-OnBox-v0`` throws.
+
+The colliding kernels (``kernels.make_kernel`` with ``KernelFlags(boxes_collide=True)``) step every body
+of a call together, as one scene. A batch of envs is many such scenes side by side: env i's bodies are
+rows ``i * group_size`` to ``(i + 1) * group_size - 1`` of the arrays (its thrown box first, then the
+boxes it may land on). ``make_grouped_kernel`` compiles a kernel that runs the colliding kernel on each
+consecutive group of rows in turn, so a batch costs one call from Python, and each group's result is
+bit for bit what the colliding kernel gives that group alone (the single env's call).
+
+    run_groups(state, params, settings, stats, group_size)    # state (n_groups * group_size, 6) ...
+
+``GroupedSimulator`` is ``Simulator``'s counterpart: it splits the groups over threads (whole groups per
+thread, so the split never changes a result). A scene whose boxes cannot meet has groups of one body and
+no use for any of this: ``make_simulator`` gives it the plain ``Simulator`` and its kernel, unchanged.
+"""
+
+from __future__ import annotations
+
+import functools
+import types
+
+import numba
+import numpy as np
+
+from . import layout
+from .compilation import ensure_compiled, jit_kernel
+from .kernels import KernelFlags, make_kernel, source_digest
+from .simulate import Simulator, check_threads, thread_pool
+from .validation import check_integer
+
+MAX_GROUP_SIZE = 64
+"""The most bodies one group (one env's scene) may hold."""
+
+
+def _grouped_kernel_source(SOLVER, IMPULSES, PENALTY, FRICTION, DIGEST):
+    """The grouped kernel's Python function for one set of flags (compiled by ``make_grouped_kernel``).
+    It calls ``colliding_kernel``, a global that ``make_grouped_kernel`` binds to the colliding kernel of
+    these flags; the flags themselves are closure constants, so numba's on-disk cache (keyed by the code
+    and the closure's values) keeps one entry per set of flags and finds it again in the next process."""
+
+    def run_groups(state, params, settings, stats, group_size):
+        _ = (SOLVER, IMPULSES, PENALTY, FRICTION, DIGEST)  # part of the on-disk cache key
+        trajectory = np.zeros((0, 0, layout.STATE_SIZE))  # nothing recorded
+        events = np.zeros((0, 0, layout.EVENT_SIZE))
+        for first in range(0, state.shape[0], group_size):
+            last = first + group_size
+            colliding_kernel(state[first:last], params[first:last], settings, stats[first:last],  # noqa: F821
+                             trajectory, events)
+
+    return run_groups
+
+
+@functools.cache
+def make_grouped_kernel(solver: str, use_impulses: bool, use_penalty: bool, use_friction: bool):
+    """``run_groups(state, params, settings, stats, group_size)``: the colliding kernel of these flags
+    (no recording) run on each consecutive group of ``group_size`` rows of the body arrays."""
+    kernel = make_kernel(KernelFlags(solver=solver, use_impulses=use_impulses, use_penalty=use_penalty,
+                                     use_friction=use_friction, record=False, boxes_collide=True))
+    function = _grouped_kernel_source(solver, use_impulses, use_penalty, use_friction, source_digest())
+    # the same code and closure with the colliding kernel as a global (a dispatcher in the closure would
+    # enter numba's cache key as its pickle, which differs in every process: a new cache entry each time)
+    bound = types.FunctionType(function.__code__, {**globals(), "colliding_kernel": kernel}, function.__name__,
+                               function.__defaults__, function.__closure__)
+    bound.__qualname__ = function.__qualname__
+    return jit_kernel(bound)
+
+
+class GroupedSimulator:
+    """``Simulator`` for a batch of scenes of ``group_size`` colliding bodies each (module docstring).
+
+    ``run(state, params, settings, stats)`` advances every group in place: the groups are split into
+    ``threads`` contiguous shares of whole groups run at once (``threads`` in [1,
+    numba.config.NUMBA_NUM_THREADS], default all of them; with ``flags.parallel`` False, one). No
+    recording: a recorded scene (rendering) is one group, which the plain ``Simulator`` runs.
+    """
+
+    def __init__(self, flags: KernelFlags, group_size: int, threads: int | None = None):
+        if not flags.boxes_collide:
+            raise ValueError("GroupedSimulator runs scenes whose boxes collide (flags.boxes_collide=True); "
+                             "independent boxes run on Simulator")
+        if flags.record:
+            raise ValueError("GroupedSimulator does not record trajectories (flags.record must be False); "
+                             "run one recorded scene on Simulator")
+        self.flags = flags
+        self.group_size = check_integer("group_size", group_size, 1, MAX_GROUP_SIZE)
+        self.threads = None if threads is None else check_threads(threads)
+        self.kernel = make_grouped_kernel(flags.solver, flags.use_impulses, flags.use_penalty, flags.use_friction)
+        self._ready = False
+
+    @property
+    def shares(self) -> int:
+        if not self.flags.parallel:
+            return 1
+        return self.threads if self.threads is not None else numba.config.NUMBA_NUM_THREADS
+
+    def run(self, state: np.ndarray, params: np.ndarray, settings: np.ndarray, stats: np.ndarray,
+            trajectory: np.ndarray | None = None, events: np.ndarray | None = None) -> None:
+        """Advance ``state`` (n_groups * group_size, 6) in place and fill ``stats``; ``trajectory``
+        and ``events`` must be None (kept for ``Simulator``'s signature)."""
+        if trajectory is not None or events is not None:
+            raise ValueError("GroupedSimulator does not record: trajectory and events must be None")
+        size = self.group_size
+        if state.shape[0] % size:
+            raise ValueError(f"state must hold whole groups of group_size={size} bodies, got {state.shape[0]} rows")
+        if not self._ready:
+            ensure_compiled(self.kernel, (state, params, settings, stats, size))
+            self._ready = True
+        groups = state.shape[0] // size
+        shares = min(self.shares, groups)
+        if shares <= 1:
+            self.kernel(state, params, settings, stats, size)
+            return
+        edges = [size * (groups * k // shares) for k in range(shares + 1)]
+        pool = thread_pool(shares - 1)
+        futures = [pool.submit(self.kernel, state[a:b], params[a:b], settings, stats[a:b], size)
+                   for a, b in zip(edges[:-2], edges[1:-1], strict=True)]
+        a = edges[-2]
+        try:
+            self.kernel(state[a:], params[a:], settings, stats[a:], size)
+        finally:
+            for future in futures:
+                future.result()
+
+
+def make_simulator(flags: KernelFlags, group_size: int = 1, threads: int | None = None,
+                   start_interpreted: bool = False):
+    """The simulator for a batch of scenes of ``group_size`` bodies each: ``Simulator`` (the plain
+    kernel, its bodies independent, unchanged; ``start_interpreted`` as there) when the boxes cannot
+    meet, ``GroupedSimulator`` when they can (with ``flags.record``, the plain ``Simulator`` on one scene)."""
+    if not flags.boxes_collide or flags.record:
+        return Simulator(flags, threads=threads, start_interpreted=start_interpreted)
+    return GroupedSimulator(flags, group_size, threads)
