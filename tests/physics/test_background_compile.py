@@ -48,7 +48,8 @@ def compiled_and_interpreted(env_id: str, throws: int, **env_kwargs):
     ("BoxToss-v0", 200, {}),
     ("BoxToss-ThisSideUp-v0", 100, {"friction": 0.0}),
     ("BoxToss-v0", 20, {"solver": "seed", "dt": 1 / 1024}),
-], ids=["robust", "robust-frictionless", "seed"])
+    ("BoxToss-OnBox-v0", 6, {}),
+], ids=["robust", "robust-frictionless", "seed", "boxes-collide"])
 def test_the_interpreted_copy_gives_the_compiled_results_bit_for_bit(env_id, throws, env_kwargs):
     (state_c, stats_c), (state_i, stats_i) = compiled_and_interpreted(env_id, throws, **env_kwargs)
     assert np.array_equal(state_c, state_i)
