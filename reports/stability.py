@@ -515,12 +515,21 @@ def run_bodies(scene: Scene, duration: float, order: Callable[[Scene, np.ndarray
 
 def passed_through(scene: Scene, states: np.ndarray, along: int) -> np.ndarray:
     """(T,) True at the grid states where box 1 has just passed through box 0: the component of the line of
-    centres along ``along`` (x or y) changed sign since the previous state while its other component stayed
-    within the two corner radii (so the boxes could not have gone round each other)."""
+    centres along ``along`` (x or y) changed sign since the previous state while the two boxes' extents across
+    it (their projections on the other axis, at their angles of that state) overlapped, so the boxes could not
+    have gone round each other (two boxes thrown side by side, their centres passing at the same height, are
+    not a pass-through)."""
     across = layout.Y if along == layout.X else layout.X
     d_along = states[:, 1, along] - states[:, 0, along]
     d_across = np.abs(states[:, 1, across] - states[:, 0, across])
-    near = d_across < corner_radius(scene.boxes[0]) + corner_radius(scene.boxes[1])
+    extent = np.zeros(states.shape[0])
+    for b, box in enumerate(scene.boxes[:2]):
+        cos, sin = np.abs(np.cos(states[:, b, 2])), np.abs(np.sin(states[:, b, 2]))
+        if across == layout.X:
+            extent += 0.5 * box.length * cos + 0.5 * box.width * sin
+        else:
+            extent += 0.5 * box.length * sin + 0.5 * box.width * cos
+    near = d_across < extent
     flipped = np.zeros(states.shape[0], dtype=bool)
     flipped[1:] = (np.sign(d_along[1:]) != np.sign(d_along[:-1])) & near[1:] & near[:-1]
     return flipped

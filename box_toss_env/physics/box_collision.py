@@ -188,15 +188,15 @@ def floor_contacts(i, pose, trig, half, margin, code, contacts, ids, count):
 
 
 @jit_stage
-def find_contacts(pose, trig, half, bound, reach, contacts, ids):
-    """Every contact of the scene within reach: box i against the floor within reach_i, boxes i and j
+def find_contacts(pose, trig, half, bound, reach, floor_reach, contacts, ids):
+    """Every contact of the scene within reach: box i against the floor within floor_reach_i, boxes i and j
     within reach_i + reach_j, in the order (box 0 and the floor, box 0 and box 1, ..., box 1 and the
     floor, ...), so the keys increase. ``bound[i]`` is the half size (x, y) of box i's bounding box.
     Returns the number of contacts, or -1 if the arrays are too small."""
     n = pose.shape[0]
     count = 0
     for i in range(n):
-        count = floor_contacts(i, pose, trig, half, reach[i], i * (n + 1), contacts, ids, count)
+        count = floor_contacts(i, pose, trig, half, floor_reach[i], i * (n + 1), contacts, ids, count)
         for j in range(i + 1, n):
             margin = reach[i] + reach[j]
             if (abs(pose[j, 0] - pose[i, 0]) <= bound[i, 0] + bound[j, 0] + margin

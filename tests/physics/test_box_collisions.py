@@ -166,6 +166,35 @@ def test_a_fast_box_dropped_on_a_resting_one_stays_above_it():
     assert result.final_state[0, 1] > 0.09
 
 
+@pytest.mark.parametrize("speed", [50.0, 200.0])
+def test_a_box_struck_from_above_is_not_pushed_into_the_floor(speed):
+    # the stability report's body_impacts row: the restitution stage solved the impact without the struck box's
+    # floor contacts, and its floor contacts were found only within its own (resting) reach, so the lower box
+    # went 6 mm (50 m/s) and 1.3 cm (200 m/s) into the floor at dt 2^-11
+    angle = 0.3
+    reach_y = 0.2 * math.sin(angle) + 0.1 * math.cos(angle)
+    boxes = (Box(length=0.4, width=0.2, mass=2.0, position=(0.0, 0.1)),
+             Box(length=0.4, width=0.2, mass=2.0, position=(0.05, 0.7 + reach_y), angle=angle, velocity=(0.0, -speed)))
+    scene = Scene(boxes=boxes, boxes_collide=True, restitution=0.0, friction=0.5, penalty_stiffness=1e5, dt=2.0**-11)
+    states = simulate(scene, duration=0.25, record=True).trajectory.state
+    lower = states[:, 0]
+    bottom = lower[:, 1] - 0.2 * np.abs(np.sin(lower[:, 2])) - 0.1 * np.abs(np.cos(lower[:, 2]))
+    assert -bottom.min() < 2e-4  # measured: 1.2e-5 m (50 m/s), 2.6e-5 m (200 m/s)
+
+
+def test_the_first_impact_of_a_box_dropped_on_a_box_is_the_simultaneous_impulse_lcp():
+    # the corner (2.732 m/s at x = -0.139) slides on the lower box, which sticks at its left floor corner and lifts
+    # its right one: the closed form of the three-contact impulse LCP (Newton e 0.3, Coulomb mu 0.5; docs/
+    # box_collisions.md). Restitution solved alone, without friction and the floor, gave a nearly frictionless
+    # impact: lower box about -0.02 m/s and -0.5 rad/s (the collisions report), (-0.008, -0.02) m/s and 0 rad/s
+    # with the floor kept in it
+    scene = scenes.drop_on_box(dt=2.0**-12)
+    states = simulate(scene, duration=0.3, record=True).trajectory.state
+    first = np.flatnonzero(np.abs(states[:, 0, 3:]).max(axis=1) > 1e-3)[0]
+    np.testing.assert_allclose(states[first, 0, 3:], [-0.0855, 0.1711, 0.8553], atol=0.01)  # measured: 1e-3
+    np.testing.assert_allclose(states[first, 1, 3:], [0.7307, -1.2709, -11.3366], atol=0.02)  # measured: 1.3e-3
+
+
 @pytest.mark.parametrize("name", ["pile", "drop_on_box", "newton_row"])
 def test_no_energy_gained(name):
     # no step gains energy where nothing overlaps (measured: 1.4e-14 J of 77 J at most, rounding) ...

@@ -6,12 +6,9 @@ from reports import stability
 
 # Rows the robust default fails inside its declared range because of an engine issue reported to the lead, with
 # the reason; strict, so an entry must go once the engine is fixed (and the reports regenerated). The push-out
-# (k = 1e2 at fine dt), the energy gain of Newton restitution with friction, and the drift of stacks at coarse
-# steps were fixed in the engine.
-KNOWN_ENGINE_FAILURES: dict[str, str] = {
-    "body_impacts": "a box hitting a box that lies on the floor at 200 m/s pushes it 1.3 cm into the floor at "
-                    "dt 2^-11 (more than the 2 mm allowed; 2.5 to 6 mm at 50 m/s); box-box overlap stays below 1 mm",
-}
+# (k = 1e2 at fine dt), the energy gain of Newton restitution with friction, the drift of stacks at coarse
+# steps and a box struck from above pushed into the floor (body_impacts) were fixed in the engine.
+KNOWN_ENGINE_FAILURES: dict[str, str] = {}
 
 
 @pytest.fixture(scope="module")
