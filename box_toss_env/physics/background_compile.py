@@ -25,7 +25,6 @@ import os
 import pickle
 import subprocess
 import sys
-import time
 import types
 from collections.abc import Callable
 from dataclasses import asdict
@@ -81,8 +80,6 @@ class Compilation:
     keyword arguments that rebuild it) for one set of argument types into numba's on-disk cache."""
 
     def __init__(self, recipe: tuple[str, str, dict], signature: tuple):
-        self.started = time.perf_counter()
-        self.finished: float | None = None
         package_root = str(Path(__file__).resolve().parents[2])  # the directory holding box_toss_env
         env = dict(os.environ)
         env["PYTHONPATH"] = os.pathsep.join(p for p in (package_root, env.get("PYTHONPATH")) if p)
@@ -96,16 +93,13 @@ class Compilation:
             pass
 
     def done(self) -> bool:
-        if self.finished is None and self.process.poll() is not None:
-            self.finished = time.perf_counter()
-        return self.finished is not None
+        return self.process.poll() is not None
 
     def succeeded(self) -> bool:
         return self.done() and self.process.returncode == 0
 
     def wait(self) -> None:
         self.process.wait()
-        self.done()
 
 
 _running: dict[tuple, Compilation] = {}
