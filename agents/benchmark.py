@@ -59,12 +59,26 @@ def ensure_random(root: Path, env_id: str) -> Path:
 
 
 def ensure_ceiling(root: Path, env_id: str) -> dict[str, Any]:
+    """The variant's ceiling sweep, run if it is not saved yet. Each finished budget is kept in
+    ``ceiling.partial.json``, so a killed sweep resumes at the budget it was searching."""
     path = root / env_id / "ceiling.json"
     if not path.exists():
-        print(f"{env_id}: oracle at {len(ceiling.BUDGETS)} search budgets on {ceiling.CEILING_TARGETS} targets ...")
+        partial = path.with_suffix(".partial.json")
+        done = json.loads(partial.read_text()) if partial.exists() else []
+        print(f"{env_id}: oracle at {len(ceiling.BUDGETS)} search budgets on {ceiling.CEILING_TARGETS} targets"
+              f"{f' ({len(done)} done before)' if done else ''} ...")
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps(ceiling.sweep(env_id), indent=2))
+        rows = ceiling.sweep(env_id, done=done, on_row=lambda rows: write_atomically(partial, rows))
+        write_atomically(path, rows)
+        partial.unlink(missing_ok=True)
     return json.loads(path.read_text())
+
+
+def write_atomically(path: Path, rows: list[dict[str, Any]]) -> None:
+    """JSON to a temporary file renamed over ``path``: a kill leaves the old file or the new one."""
+    temporary = path.with_suffix(".tmp")
+    temporary.write_text(json.dumps(rows, indent=2))
+    temporary.replace(path)
 
 
 # -- the table ------------------------------------------------------------------------------------

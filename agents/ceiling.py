@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from collections.abc import Callable
 from typing import Any
 
 import gymnasium as gym
@@ -32,15 +33,23 @@ RISE_TOLERANCE = 0.01  # "stopped rising": the last budget adds at most this muc
 
 
 def sweep(env_id: str, env_kwargs: dict[str, Any] | None = None, budgets=BUDGETS, n_targets: int = CEILING_TARGETS,
-          threads: int | None = None) -> list[dict[str, Any]]:
+          threads: int | None = None, done: list[dict[str, Any]] | None = None,
+          on_row: Callable[[list[dict[str, Any]]], None] | None = None) -> list[dict[str, Any]]:
     """For each budget: the oracle's success, distance and face accuracy on the first ``n_targets``
-    test targets, the throws it simulated per target and its planning seconds."""
+    test targets, the throws it simulated per target and its planning seconds.
+
+    ``done`` are rows of an earlier, interrupted sweep: their budgets are not searched again.
+    ``on_row`` is called with the rows so far after each budget (to save them)."""
+    rows = list(done or [])
+    finished = [row["budget"] for row in rows]
+    todo = [settings for settings in budgets if dataclasses.asdict(settings) | {"threads": None} not in finished]
+    if not todo:
+        return rows
     env = gym.make(env_id, **(env_kwargs or {}))
     seeds = target_seeds(n_targets, TEST_FIRST_SEED)
     observations, infos = draw_targets(env, seeds)
     simulator = ThrowSimulator(env, threads)
-    rows = []
-    for settings in budgets:
+    for settings in todo:
         planner = OraclePlanner(dataclasses.replace(settings, threads=threads))
         start = time.perf_counter()
         actions = planner.plan(simulator, episodes_from_infos(infos))
@@ -50,6 +59,8 @@ def sweep(env_id: str, env_kwargs: dict[str, Any] | None = None, budgets=BUDGETS
                      "throws_per_target": planner.simulated / n_targets, "plan_seconds": seconds,
                      **{key: result[key] for key in ("success_rate", "mean_distance", "median_distance",
                                                      "face_accuracy")}})
+        if on_row is not None:
+            on_row(rows)
     env.close()
     return rows
 
