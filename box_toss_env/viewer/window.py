@@ -54,7 +54,7 @@ NOTICE_TOP_PX = 96
 
 VIEWER_KEYS = (
     ("Space", "pause / run"),
-    (".", "one frame (8 steps)"),
+    (".", "one frame's steps"),
     ("R", "restart"),
     ("S", "solver: seed <-> robust"),
     ("C", "compare seed | robust"),
@@ -152,6 +152,12 @@ class Canvas:
 def notice_lines(job: KernelJob, then: str) -> list[str]:
     """The notice for a kernel being loaded or compiled: what, how long so far, and what follows."""
     return [job.notice, f"{job.elapsed():.1f} s; {then}"]
+
+
+def scene_subtitle(boxes_collide: bool, steps_per_frame: int) -> str:
+    """The viewer panel's second line: what the boxes meet and how many steps each frame draws."""
+    against = "the floor and one another" if boxes_collide else "the floor"
+    return f"boxes against {against}, {steps_per_frame} step{'s' * (steps_per_frame != 1)} a frame"
 
 
 class Panel:
@@ -252,8 +258,7 @@ class ViewerWindow:
         controller = self.controller
         panel = Panel(self.canvas, controller.width_px)
         panel.line(f"Rigid body collisions: {self.scene_name}")
-        against = "the floor and one another" if controller.scene.boxes_collide else "the floor"
-        panel.line(f"boxes against {against}, 8 steps a frame", PANEL_DIM)
+        panel.line(scene_subtitle(controller.scene.boxes_collide, controller.steps_per_frame), PANEL_DIM)
         panel.gap()
         self.button_rects = panel.buttons(
             [(name, "Run" if name == "pause" and controller.paused else label) for name, label in VIEWER_BUTTONS])

@@ -11,7 +11,7 @@ from box_toss_env.physics import scenes
 from box_toss_env.rendering import import_pygame
 from box_toss_env.viewer import PlayController, ViewerController
 from box_toss_env.viewer.controller import ZOOM_STEP
-from box_toss_env.viewer.window import PlayWindow, ViewerWindow
+from box_toss_env.viewer.window import PlayWindow, ViewerWindow, scene_subtitle
 
 os.environ["SDL_VIDEODRIVER"] = "dummy"
 os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
@@ -142,3 +142,13 @@ def test_key_b_switches_boxes_collide(window):
     assert controller.scene.boxes_collide and controller.lanes[0].simulator.flags.boxes_collide
     window.handle(key(pygame.K_b, "b"))
     assert not controller.scene.boxes_collide
+
+
+def test_the_panel_says_how_many_steps_a_frame_draws(monkeypatch):
+    drawn = []
+    monkeypatch.setattr("box_toss_env.viewer.window.Panel.line",
+                        lambda self, text="", *args, **kwargs: drawn.append(text) or pygame.Rect(0, 0, 1, 1))
+    ViewerWindow(ViewerController(scenes.seed_demo(boxes_collide=True), steps_per_frame=3), "seed_demo",
+                 headless=True).draw()
+    assert "boxes against the floor and one another, 3 steps a frame" in drawn
+    assert scene_subtitle(False, 1) == "boxes against the floor, 1 step a frame"
