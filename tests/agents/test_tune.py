@@ -33,11 +33,25 @@ def rows(path: Path) -> list[dict[str, str]]:
         return list(csv.DictReader(file))
 
 
+def checkpoint_recorded(experiment: Path) -> bool:
+    """Whether a trial's checkpoint folder exists and Tune's experiment state names it: Tune writes the
+    folder first and its state up to a second later, and a sweep killed in between resumes without it
+    (its first trial starts again from nothing)."""
+    names = [path.name for path in experiment.glob("trial_*/checkpoint_*")]
+    states = ""
+    for path in experiment.glob("experiment_state-*.json"):
+        try:
+            states += path.read_text()
+        except FileNotFoundError:  # replaced while we looked: the next poll reads the new one
+            pass
+    return any(name in states for name in names)
+
+
 def test_a_killed_two_trial_sweep_resumes_from_its_checkpoints_and_writes_its_table(tmp_path):
     experiment = tmp_path / "sweep" / "BoxToss-v0"
     sweep = agents_tune(*SWEEP, "--runs-dir", str(tmp_path), "--name", "sweep", start_new_session=True)
     deadline = time.monotonic() + 240
-    while not list(experiment.glob("trial_*/checkpoint_*")):  # the first trial reported a training checkpoint
+    while not checkpoint_recorded(experiment):  # the first trial's training checkpoint, in Tune's state
         assert sweep.poll() is None, sweep.stdout.read()[-3000:]
         assert time.monotonic() < deadline, "no checkpoint within 240 s"
         time.sleep(0.1)
