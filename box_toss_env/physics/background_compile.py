@@ -134,11 +134,13 @@ def kernel_recipe(flags) -> tuple[str, str, dict]:
 class InterpretedStart:
     """Runs of ``kernel`` (a compiled kernel whose first argument is the (n, ...) body array) that use
     its interpreted copy while a worker compiles it, then the compiled kernel. ``recipe`` says how the
-    worker rebuilds the kernel (``Compilation``)."""
+    worker rebuilds the kernel (``Compilation``); a run of more than ``max_bodies`` bodies waits for
+    the compiled kernel."""
 
-    def __init__(self, kernel, recipe: tuple[str, str, dict]):
+    def __init__(self, kernel, recipe: tuple[str, str, dict], max_bodies: int = MAX_INTERPRETED_BODIES):
         self.kernel = kernel
         self.recipe = recipe
+        self.max_bodies = max_bodies
         self.compilation: Compilation | None = None
         self.compiled = False  # once True, every run is compiled
 
@@ -148,7 +150,7 @@ class InterpretedStart:
         arrays the kernel writes: if the copy raises (on a state the compiled kernel would carry on with,
         such as NaN, or on code only numba runs), they are put back and False is returned, as when the
         copy does not run: the caller then runs the compiled kernel, which compiles or loads it here."""
-        if self.compiled or args[0].shape[0] > MAX_INTERPRETED_BODIES or not interpreted_start_enabled():
+        if self.compiled or args[0].shape[0] > self.max_bodies or not interpreted_start_enabled():
             self.compiled = True
             return False
         if self.compilation is None:

@@ -22,7 +22,7 @@ import types
 import numba
 import numpy as np
 
-from . import layout
+from . import background_compile, layout
 from .compilation import ensure_compiled, jit_kernel
 from .kernels import KernelFlags, make_kernel, source_digest
 from .simulate import Simulator, check_threads, thread_pool
@@ -30,6 +30,10 @@ from .validation import check_integer
 
 MAX_GROUP_SIZE = 64
 """The most bodies one group (one env's scene) may hold."""
+
+MAX_INTERPRETED_BODIES = 16
+"""The largest batch (bodies) run interpreted while the grouped kernel compiles: a colliding throw costs
+~30 times a floor-only one, so 8 throws onto a box already take about a second in Python."""
 
 
 def _grouped_kernel_source(SOLVER, IMPULSES, PENALTY, FRICTION, DIGEST):
@@ -71,10 +75,13 @@ class GroupedSimulator:
     ``run(state, params, settings, stats)`` advances every group in place: the groups are split into
     ``threads`` contiguous shares of whole groups run at once (``threads`` in [1,
     numba.config.NUMBA_NUM_THREADS], default all of them; with ``flags.parallel`` False, one). No
-    recording: a recorded scene (rendering) is one group, which the plain ``Simulator`` runs.
+    recording: a recorded scene (rendering) is one group, which the plain ``Simulator`` runs. With
+    ``start_interpreted`` (the batched env), a kernel not in the cache yet is compiled by a worker process
+    while runs of up to ``MAX_INTERPRETED_BODIES`` bodies use its interpreted copy (``background_compile``).
     """
 
-    def __init__(self, flags: KernelFlags, group_size: int, threads: int | None = None):
+    def __init__(self, flags: KernelFlags, group_size: int, threads: int | None = None,
+                 start_interpreted: bool = False):
         if not flags.boxes_collide:
             raise ValueError("GroupedSimulator runs scenes whose boxes collide (flags.boxes_collide=True); "
                              "independent boxes run on Simulator")
@@ -84,8 +91,13 @@ class GroupedSimulator:
         self.flags = flags
         self.group_size = check_integer("group_size", group_size, 1, MAX_GROUP_SIZE)
         self.threads = None if threads is None else check_threads(threads)
-        self.kernel = make_grouped_kernel(flags.solver, flags.use_impulses, flags.use_penalty, flags.use_friction)
+        recipe = {"solver": flags.solver, "use_impulses": flags.use_impulses, "use_penalty": flags.use_penalty,
+                  "use_friction": flags.use_friction}
+        self.kernel = make_grouped_kernel(**recipe)
         self._ready = False
+        self._start = (background_compile.InterpretedStart(self.kernel, (__name__, "make_grouped_kernel", recipe),
+                                                           MAX_INTERPRETED_BODIES) if start_interpreted else None)
+        self.interpreted = False  # whether the last run used the kernel's interpreted copy
 
     @property
     def shares(self) -> int:
@@ -103,7 +115,11 @@ class GroupedSimulator:
         if state.shape[0] % size:
             raise ValueError(f"state must hold whole groups of group_size={size} bodies, got {state.shape[0]} rows")
         if not self._ready:
-            ensure_compiled(self.kernel, (state, params, settings, stats, size))
+            args = (state, params, settings, stats, size)
+            self.interpreted = self._start is not None and self._start.run(args, (state, stats))
+            if self.interpreted:
+                return
+            ensure_compiled(self.kernel, args)
             self._ready = True
         groups = state.shape[0] // size
         shares = min(self.shares, groups)
@@ -129,4 +145,4 @@ def make_simulator(flags: KernelFlags, group_size: int = 1, threads: int | None 
     meet, ``GroupedSimulator`` when they can (with ``flags.record``, the plain ``Simulator`` on one scene)."""
     if not flags.boxes_collide or flags.record:
         return Simulator(flags, threads=threads, start_interpreted=start_interpreted)
-    return GroupedSimulator(flags, group_size, threads)
+    return GroupedSimulator(flags, group_size, threads, start_interpreted)

@@ -2,6 +2,7 @@
 worker process compiles the kernel, then with the compiled kernel. The copy must give the compiled
 kernel's results bit for bit, or a run's results would depend on how fast the machine compiles."""
 
+import importlib
 import json
 import math
 import os
@@ -16,7 +17,7 @@ import pytest
 
 import box_toss_env
 from box_toss_env.envs.random_streams import RandomStreams, fill_uniform
-from box_toss_env.physics import background_compile
+from box_toss_env.physics import background_compile, grouped
 from box_toss_env.physics.background_compile import MAX_INTERPRETED_BODIES, InterpretedStart, interpreted_copy
 from box_toss_env.physics.compilation import jit_kernel
 
@@ -56,6 +57,20 @@ def test_the_interpreted_copy_gives_the_compiled_results_bit_for_bit(env_id, thr
     assert np.array_equal(stats_c, stats_i, equal_nan=True)
 
 
+def test_the_interpreted_grouped_kernel_gives_the_batched_on_box_results_bit_for_bit():
+    batch = gym.make_vec("BoxToss-OnBox-v0", num_envs=3)
+    actions = np.random.default_rng(1).uniform(-1, 1, (2, 3, 3)).astype(np.float32)
+    simulator = batch.unwrapped.simulator
+    results = []
+    for kernel in (simulator.kernel, interpreted_copy(simulator.kernel)):
+        simulator.kernel = kernel
+        batch.reset(seed=5)
+        steps = [batch.step(action) for action in actions]  # the second step throws from the first's reset
+        results.append([np.concatenate([step[0].ravel(), step[1]]) for step in steps])
+    assert simulator.interpreted is False and simulator._ready  # the compiled kernel ran first
+    assert np.array_equal(results[0], results[1])
+
+
 def test_the_interpreted_random_streams_draw_what_the_compiled_ones_draw():
     compiled, interpreted = RandomStreams(4), RandomStreams(4)
     for i in range(4):
@@ -93,6 +108,26 @@ def test_interpreted_only_while_a_worker_compiles_and_for_small_batches(monkeypa
     assert not InterpretedStart(floor_of_third, ("unused", "unused", {})).run((large,), (large,))
     monkeypatch.setenv(background_compile.SWITCH, "0")
     assert not InterpretedStart(floor_of_third, ("unused", "unused", {})).run((values,), (values,))
+
+
+def test_a_batch_onto_boxes_runs_interpreted_only_up_to_its_own_smaller_size(monkeypatch):
+    monkeypatch.setenv(background_compile.SWITCH, "1")
+    started = []
+    monkeypatch.setattr(background_compile, "start", lambda kernel, recipe, args: started.append(recipe)
+                        or RunningWorker())
+    monkeypatch.setattr(background_compile, "interpreted_copy", lambda kernel: lambda *args: None)
+    envs = grouped.MAX_INTERPRETED_BODIES // 2
+    small = gym.make_vec("BoxToss-OnBox-v0", num_envs=envs)
+    small.reset(seed=0)
+    small.step(np.zeros((envs, 3), np.float32))
+    assert small.unwrapped.simulator.interpreted
+    assert ("box_toss_env.physics.grouped", "make_grouped_kernel",  # how the worker rebuilds it
+            {"solver": "robust", "use_impulses": True, "use_penalty": True, "use_friction": True}) in started
+    module, factory, kwargs = started[-1]
+    assert getattr(importlib.import_module(module), factory)(**kwargs) is small.unwrapped.simulator.kernel
+    simulator = grouped.GroupedSimulator(small.unwrapped.simulator.flags, 2, start_interpreted=True)
+    state = np.zeros((grouped.MAX_INTERPRETED_BODIES + 2, 6))
+    assert not simulator._start.run((state, None, None, None, 2), ())  # one group too many: compiled
 
 
 def test_a_copy_that_raises_leaves_the_arrays_as_they_were(monkeypatch):
