@@ -9,6 +9,8 @@ directory: the cold run, then the warm run in the same directory. Times are wall
 - ``gym.make`` and ``make_vec``: from ``import gymnasium, box_toss_env`` to the end of the first
   ``step`` (making the env, ``reset`` and one throw); ``make_vec`` once more with the cache holding what
   a ``gym.make`` run compiled (does the batched env reuse the single env's kernel?);
+- the same for ``BoxToss-OnBox-v0`` (its colliding kernel; batched: 8 envs, the most that start
+  interpreted);
 - SB3 ``SubprocVecEnv`` with 4 workers: from creating it (Stable-Baselines3, torch and the package are
   imported in the parent already) to the end of its first ``step``, each worker importing the
   package and throwing once. The same with CartPole-v1 is what SB3's workers cost by themselves
@@ -86,13 +88,15 @@ PROBE = textwrap.dedent("""
         envs.close()
     else:
         from numba.core import event
+        env_id, num_envs = {"make": ("BoxToss-v0", 0), "make_vec": ("BoxToss-v0", 64),
+                            "make_on_box": ("BoxToss-OnBox-v0", 0), "make_vec_on_box": ("BoxToss-OnBox-v0", 8)}[case]
         with event.install_recorder("numba:compile") as recorder:
-            env = gym.make_vec("BoxToss-v0", num_envs=64) if case == "make_vec" else gym.make("BoxToss-v0")
+            env = gym.make_vec(env_id, num_envs=num_envs) if num_envs else gym.make(env_id)
             env.reset(seed=0)
             env.step(env.action_space.sample())
         seconds, cpu = time.perf_counter() - start, time.process_time() - start_cpu
         compiled = sum(1 for _, e in recorder.buffer if e.is_start)  # numba compilations here (loads not counted)
-        simulator = env.unwrapped.simulator if case == "make_vec" else env.unwrapped._simulator
+        simulator = env.unwrapped.simulator if num_envs else env.unwrapped._simulator
         while getattr(simulator, "interpreted", False):  # throwing on, as a training loop would
             env.reset()
             env.step(env.action_space.sample())
@@ -106,6 +110,8 @@ CASES = {
     "make": 'gym.make("BoxToss-v0")',
     "make_vec": 'make_vec("BoxToss-v0", num_envs=64)',
     "make_vec_after_make": "make_vec(64) after a gym.make throw",
+    "make_on_box": 'gym.make("BoxToss-OnBox-v0")',
+    "make_vec_on_box": 'make_vec("BoxToss-OnBox-v0", num_envs=8)',
     "subproc": "SB3 SubprocVecEnv, 4 workers",
     "subproc_cartpole": "the same with CartPole-v1 (SB3's own start)",
 }
