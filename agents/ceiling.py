@@ -38,11 +38,13 @@ def sweep(env_id: str, env_kwargs: dict[str, Any] | None = None, budgets=BUDGETS
     """For each budget: the oracle's success, distance and face accuracy on the first ``n_targets``
     test targets, the throws it simulated per target and its planning seconds.
 
-    ``done`` are rows of an earlier, interrupted sweep: their budgets are not searched again.
-    ``on_row`` is called with the rows so far after each budget (to save them)."""
-    rows = list(done or [])
+    ``done`` are rows of an earlier, interrupted sweep: their budgets are not searched again (rows of
+    budgets not in ``budgets`` are dropped). ``on_row`` is called with the rows so far after each budget
+    (to save them)."""
+    keys = [dataclasses.asdict(settings) | {"threads": None} for settings in budgets]
+    rows = [row for row in done or [] if row["budget"] in keys]
     finished = [row["budget"] for row in rows]
-    todo = [settings for settings in budgets if dataclasses.asdict(settings) | {"threads": None} not in finished]
+    todo = [settings for settings, key in zip(budgets, keys, strict=True) if key not in finished]
     if not todo:
         return rows
     env = gym.make(env_id, **(env_kwargs or {}))

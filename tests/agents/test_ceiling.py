@@ -63,3 +63,9 @@ def test_a_killed_sweep_resumes_at_the_budget_it_was_searching(tmp_path, monkeyp
     assert not partial.exists()
     assert ensure_ceiling(tmp_path, ENV_ID) == rows  # saved: not searched a third time
     assert resumed_with == [1]
+
+
+def test_rows_of_budgets_no_longer_swept_are_dropped(uninterrupted):
+    stale = {**uninterrupted[0], "budget": {**uninterrupted[0]["budget"], "initial": 999}}
+    rows = small_sweep(ENV_ID, done=[stale, uninterrupted[0]])
+    assert [measured(row) for row in rows] == [measured(row) for row in uninterrupted]
