@@ -25,6 +25,7 @@ the first one's compilation and then load its result from the cache, instead of 
 
 from __future__ import annotations
 
+import hashlib
 import os
 import warnings
 from collections.abc import Callable
@@ -72,9 +73,26 @@ def warn_uncached(reason: str) -> None:
                       "keep the compiled code.", CacheWarning, stacklevel=2)
 
 
+def name_variant(function: Callable) -> Callable:
+    """Give a function built by a factory (one per set of flags, the flags in its closure) a
+    qualified name of its own per set, ``<name>_v<digest of the closure's values>``, the same in every
+    process. numba names a compiled function's symbol after its qualified name and a counter of the
+    compiling process; two variants compiled in different processes can get the same symbol, and a
+    process that loads both from the cache links a caller of one (the grouped kernel calling a
+    colliding kernel) to the other's body (numba issue #10486). Closures of anything but bools,
+    ints, floats and strings (whose repr could differ between processes) keep their name."""
+    cells = function.__closure__ or ()
+    values = tuple(cell.cell_contents for cell in cells)
+    if values and all(type(value) in (bool, int, float, str) for value in values):
+        digest = hashlib.sha256(repr(values).encode()).hexdigest()[:12]
+        function.__qualname__ = f"{function.__qualname__}_v{digest}"
+    return function
+
+
 def _make_dispatcher(function: Callable, **options) -> Callable:
     if config.DISABLE_JIT:  # NUMBA_DISABLE_JIT=1: plain Python, as numba.njit would give
         return function
+    name_variant(function)
     dispatcher = EngineDispatcher(py_func=function, locals={}, targetoptions={"nopython": True, **options})
     dispatcher.enable_caching()
     return dispatcher

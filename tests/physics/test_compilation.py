@@ -3,6 +3,7 @@ per stage, numba's cache where it is told to be (or none, with a warning, on a r
 one compilation for processes that need the same kernel at once. Structure, not time: these tests read
 numba's dispatchers, compile events and cache statistics."""
 
+import collections
 import json
 import os
 import shutil
@@ -95,9 +96,11 @@ def test_every_stage_is_compiled_once_for_plain_argument_types(tmp_path):
               if isinstance(value, EngineDispatcher) and value.targetoptions["inline"] != "always"}
     assert len(stages) > 20 and stages <= set(counts)
     assert {name: counts[name] for name in stages if counts[name] != 1} == {}
-    kernels = {name: count for name, count in counts.items() if name.endswith("_kernel.<locals>.run")}
-    assert kernels == {"box_toss_env.physics.robust_solver.make_robust_kernel.<locals>.run": 4,
-                       "box_toss_env.physics.seed_solver.make_seed_kernel.<locals>.run": 4}
+    variants = {name: count for name, count in counts.items() if "_kernel.<locals>.run_v" in name}
+    assert set(variants.values()) == {1}  # each variant compiled once, under a name of its own
+    assert collections.Counter(name.rsplit("_v", 1)[0] for name in variants) == {
+        "box_toss_env.physics.robust_solver.make_robust_kernel.<locals>.run": 4,
+        "box_toss_env.physics.seed_solver.make_seed_kernel.<locals>.run": 4}
 
 
 def test_stages_have_no_python_wrapper_and_kernels_release_the_gil():
@@ -107,6 +110,53 @@ def test_stages_have_no_python_wrapper_and_kernels_release_the_gil():
 
 
 # -- numba's disk cache, in fresh interpreters ------------------------------------------------------
+VARIANT_PROBE = textwrap.dedent("""
+    import json, sys
+    import numpy as np
+    from box_toss_env.physics import KernelFlags, layout, make_settings, scenes, simulate
+    from box_toss_env.physics.grouped import GroupedSimulator
+    step = sys.argv[1]
+    if step == "fill":  # compiles every stage of the colliding seed kernel, then the kernel
+        simulate(scenes.pile(4, seed=1, solver="seed"), duration=0.2)
+    elif step == "frictionless":  # stages from the cache: the kernel is this process's first compilation
+        simulate(scenes.pile(4, seed=1, solver="seed", friction=0.0), duration=0.2)
+    elif step == "without-penalty":  # the same, for another variant
+        simulate(scenes.pile(4, seed=1, solver="seed", use_penalty=False), duration=0.2)
+    else:  # (the variant without penalty loaded, then) the grouped kernel calling the frictionless one
+        if step == "both":
+            simulate(scenes.pile(4, seed=1, solver="seed", use_penalty=False), duration=0.2)
+        scene = scenes.drop_on_box(solver="seed", friction=0.0)
+        state = np.concatenate([scene.initial_state()] * 2)
+        params = np.concatenate([scene.body_params()] * 2)
+        stats = np.zeros((len(state), layout.STATS_SIZE))
+        flags = KernelFlags(solver="seed", use_friction=False, boxes_collide=True)
+        GroupedSimulator(flags, 2, threads=1).run(state, params, make_settings(scene, 256, until_rest=False), stats)
+        print(json.dumps(state.tolist()))
+""")
+
+
+def test_a_kernel_calls_its_own_variant_whatever_other_variants_the_process_loaded(tmp_path):
+    """Two variants of a kernel compiled each as the first function of its process got the same symbol
+    from numba; a process that loaded one and then a grouped kernel calling the other ran the first's
+    body (numba issue #10486; here the grouped kernel moved the boxes as if without penalty). Each
+    variant has a name of its own now (``compilation.name_variant``)."""
+    def run(step: str, cache: Path) -> str:
+        done = subprocess.run([sys.executable, "-c", VARIANT_PROBE, step], capture_output=True, text=True,
+                              timeout=600, env=probe_env(PYTHONPATH=PACKAGE.parent, NUMBA_CACHE_DIR=cache,
+                                                         BOX_TOSS_ENV_START_INTERPRETED=0), cwd=tmp_path)
+        assert done.returncode == 0, done.stderr
+        return done.stdout.strip()
+
+    for step in ("fill", "frictionless", "without-penalty"):
+        run(step, tmp_path)
+    alone = run("grouped", tmp_path)  # compiles the grouped kernel into the cache
+    assert run("both", tmp_path) == alone  # loads it from there after the other variant
+    kernels = {flags: make_kernel(flags).py_func.__qualname__ for flags in (
+        KernelFlags(), KernelFlags(use_friction=False), KernelFlags(solver="seed", boxes_collide=True),
+        KernelFlags(solver="seed", boxes_collide=True, use_penalty=False))}
+    assert len(set(kernels.values())) == len(kernels)
+
+
 
 PROBE = textwrap.dedent("""
     import json, os, sys, time, warnings
