@@ -337,7 +337,7 @@ def solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, use_frict
                 break
         if solved:
             return
-    gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction)
+    gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, IMPULSE, GAUSS_SEIDEL_ITERATIONS)
 
 
 @jit_stage
@@ -363,10 +363,13 @@ def friction_sweep(contacts, ids, count, vel, inv_mass, inv_inertia):
 
 
 @jit_stage
-def gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction):
-    """Projected Gauss-Seidel over the contacts (Box2D's sequential impulses): friction clamped to mu times
-    the normal impulse, then the normal impulse >= 0 with u_rel . n >= target (column TARGET)."""
-    for _ in range(GAUSS_SEIDEL_ITERATIONS):
+def gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, column, iterations):
+    """Projected Gauss-Seidel over the contacts (Box2D's sequential impulses), at most ``iterations`` sweeps:
+    friction clamped to mu times the normal impulse, then the normal impulse >= 0 with u_rel . n >= target
+    (column TARGET), the normal impulses accumulated in ``contacts[:, column]`` and applied to ``vel``. Stage 4
+    runs it on the velocities (IMPULSE, with friction), stage 2 on the penalty's pseudo-velocities
+    (PSEUDO_IMPULSE, without)."""
+    for _ in range(iterations):
         change = 0.0
         total = 0.0
         for c in range(count):
@@ -375,7 +378,7 @@ def gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction)
                 ux, uy = relative_velocity(c, contacts, ids, vel)
                 slip = -ux * ny + uy * nx  # u_rel . t, t = (-ny, nx)
                 before = contacts[c, FRICTION_IMPULSE]
-                limit = contacts[c, FRICTION] * contacts[c, IMPULSE]
+                limit = contacts[c, FRICTION] * contacts[c, column]
                 after = min(max(before - slip * contacts[c, TANGENT_MASS], -limit), limit)
                 contacts[c, FRICTION_IMPULSE] = after
                 dq = after - before
@@ -383,9 +386,9 @@ def gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction)
                     apply_impulse(c, -dq * ny, dq * nx, contacts, ids, vel, inv_mass, inv_inertia)
                 change += abs(dq)
             ux, uy = relative_velocity(c, contacts, ids, vel)
-            before = contacts[c, IMPULSE]
+            before = contacts[c, column]
             after = max(before - (ux * nx + uy * ny - contacts[c, TARGET]) * contacts[c, NORMAL_MASS], 0.0)
-            contacts[c, IMPULSE] = after
+            contacts[c, column] = after
             dp = after - before
             if dp != 0.0:
                 apply_impulse(c, dp * nx, dp * ny, contacts, ids, vel, inv_mass, inv_inertia)
@@ -475,22 +478,8 @@ def correct_penetrations(contacts, ids, count, pose, vel, pseudo, inv_mass, inv_
                 if x[c] != 0.0:
                     apply_impulse(c, x[c] * contacts[c, NX], x[c] * contacts[c, NY], contacts, ids, pseudo, inv_mass,
                                   inv_inertia)
-    for _ in range(0 if solved else PENALTY_ITERATIONS):
-        change = 0.0
-        total = 0.0
-        for c in range(count):
-            nx, ny = contacts[c, NX], contacts[c, NY]
-            ux, uy = relative_velocity(c, contacts, ids, pseudo)
-            before = contacts[c, PSEUDO_IMPULSE]
-            after = max(before - (ux * nx + uy * ny - contacts[c, TARGET]) * contacts[c, NORMAL_MASS], 0.0)
-            contacts[c, PSEUDO_IMPULSE] = after
-            dp = after - before
-            if dp != 0.0:
-                apply_impulse(c, dp * nx, dp * ny, contacts, ids, pseudo, inv_mass, inv_inertia)
-            change += abs(dp)
-            total += after
-        if change <= CONVERGED * total:
-            break
+    if not solved:
+        gauss_seidel(contacts, ids, count, pseudo, inv_mass, inv_inertia, False, PSEUDO_IMPULSE, PENALTY_ITERATIONS)
     for c in range(count):
         ux, uy = relative_velocity(c, contacts, ids, pseudo)
         contacts[c, GAP] += h * (ux * contacts[c, NX] + uy * contacts[c, NY])

@@ -3,6 +3,7 @@
 robust solver's guarantees, validation, and that a scene whose boxes cannot meet compiles nothing
 of it. The bounds are measured figures (docs/box_collisions.md)."""
 
+import dataclasses
 import json
 import math
 import os
@@ -134,6 +135,32 @@ def test_a_row_with_e_1_and_mu_0_passes_momentum_along():
     e = energy(scene, result.trajectory.state)
     assert e.max() <= e[0] * (1 + 1e-12)
     assert e[-1] >= e[0] * (1 - 1e-9)  # measured: 2.5e-12 of it lost
+
+
+def test_a_touching_row_struck_with_e_1_moves_as_one_body():
+    # five boxes touching side by side (gaps 0), struck by a sixth at 1 m/s, e = 1, mu = 0. The row's own
+    # contacts approached at 0 before the impact's substep, so they are resting contacts (no restitution);
+    # the simultaneous solve then treats the row as one body of 5 m: an elastic impact of m on 5 m, the
+    # striker returns at (1 - 5) / 6 v0 = -2/3 m/s and the whole row moves on at 2 / 6 v0 = 1/3 m/s, not
+    # Newton's cradle (docs/box_collisions.md, "Measured")
+    row = scenes.newton_row(n=5, speed=0.0, spacing=0.0)
+    striker = Box(length=0.4, width=0.2, mass=2.0, position=(-0.5, 0.1), velocity=(1.0, 0.0))
+    scene = dataclasses.replace(row, boxes=(striker, *row.boxes))
+    result = simulate(scene, duration=2.0, record=True)
+    states = result.trajectory.state
+    m, _ = masses(scene)
+    momentum = states[..., 3] @ m
+    np.testing.assert_allclose(momentum, m[0] * 1.0, rtol=1e-9, atol=0)  # measured: 0 (exactly 2.0 kg m/s)
+    e = energy(scene, states)
+    kinetic = 0.5 * m[0] * 1.0 ** 2  # [J] all the scene's kinetic energy, the striker's
+    assert e.max() <= e[0] * (1 + 1e-12)  # measured: no rise
+    assert e[-1] >= e[0] - 1e-9 * kinetic  # measured: 6.9e-12 of the kinetic energy lost
+    assert result.max_penetration.max() < 1e-9  # measured: 1.3e-13 m
+    # atol 1e-9: the exact normal solve stops once its impulses change by less than CONVERGED = 1e-9 of their
+    # sum (measured: 3.4e-12 m/s off for the striker, 6.9e-13 m/s for the row)
+    np.testing.assert_allclose(result.final_state[:, 3], [-2 / 3, *[1 / 3] * 5], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(result.final_state[:, 4:], 0.0, atol=1e-9)  # level, not turning
+    np.testing.assert_allclose(np.diff(result.final_state[1:, 0]), 0.4, atol=1e-9)  # still touching
 
 
 def test_the_seed_vertex_test_misses_faces_that_meet_corner_to_corner():
