@@ -157,7 +157,6 @@ def test_a_kernel_calls_its_own_variant_whatever_other_variants_the_process_load
     assert len(set(kernels.values())) == len(kernels)
 
 
-
 PROBE = textwrap.dedent("""
     import json, os, sys, time, warnings
     warnings.simplefilter("always")
