@@ -11,6 +11,7 @@ import warnings
 import gymnasium as gym
 import numpy as np
 import pytest
+from bitwise import assert_identical
 from gymnasium.error import DependencyNotInstalled, ResetNeeded
 
 import box_toss_env  # noqa: F401  (registers the ids)
@@ -45,22 +46,6 @@ def rollout(env, seed, actions):
 
 def random_actions(n, seed=0):
     return list(np.random.default_rng(seed).uniform(-1.0, 1.0, (n, 3)).astype(np.float32))
-
-
-def assert_identical(a, b):
-    """Bit-identical nested episodes (arrays, floats, dicts)."""
-    if isinstance(a, dict):
-        assert a.keys() == b.keys()
-        for key in a:
-            assert_identical(a[key], b[key])
-    elif isinstance(a, (tuple, list)):
-        assert len(a) == len(b)
-        for x, y in zip(a, b, strict=True):
-            assert_identical(x, y)
-    elif isinstance(a, np.ndarray):
-        assert a.dtype == b.dtype and a.tobytes() == b.tobytes()
-    else:
-        assert type(a) is type(b) and (a == b or (a != a and b != b)), (a, b)
 
 
 # -- registration and checkers -----------------------------------------------------------------

@@ -10,6 +10,7 @@ import warnings
 import gymnasium as gym
 import numpy as np
 import pytest
+from bitwise import assert_identical
 
 import box_toss_env  # noqa: F401  (registers the ids)
 from box_toss_env.envs import task
@@ -37,21 +38,6 @@ def rollout(env, seed, actions):
         obs, info = env.reset(seed=seed if k == 0 else None)
         episodes.append((obs, info, env.step(action)))
     return episodes
-
-
-def assert_identical(a, b):
-    if isinstance(a, dict):
-        assert a.keys() == b.keys()
-        for key in a:
-            assert_identical(a[key], b[key])
-    elif isinstance(a, (tuple, list)):
-        assert len(a) == len(b)
-        for x, y in zip(a, b, strict=True):
-            assert_identical(x, y)
-    elif isinstance(a, np.ndarray):
-        assert a.dtype == b.dtype and a.tobytes() == b.tobytes()
-    else:
-        assert type(a) is type(b) and (a == b or (a != a and b != b)), (a, b)
 
 
 # -- registration, spaces, checkers -----------------------------------------------------------------
