@@ -11,7 +11,7 @@ import warnings
 import gymnasium as gym
 import numpy as np
 import pytest
-from bitwise import assert_identical
+from episodes import assert_identical, rollout
 from gymnasium.error import DependencyNotInstalled, ResetNeeded
 
 import box_toss_env  # noqa: F401  (registers the ids)
@@ -33,15 +33,6 @@ STEP_INFO_KEYS = {
     "reward_orientation": float, "reward_success": float, "target_x": float, "mass": float,
     "friction": float, "restitution": float,
 }
-
-
-def rollout(env, seed, actions):
-    """(reset obs, reset info, step results) of one episode per action, the first reset seeded."""
-    episodes = []
-    for k, action in enumerate(actions):
-        obs, info = env.reset(seed=seed if k == 0 else None)
-        episodes.append((obs, info, env.step(action)))
-    return episodes
 
 
 def random_actions(n, seed=0):

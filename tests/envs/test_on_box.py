@@ -10,7 +10,7 @@ import warnings
 import gymnasium as gym
 import numpy as np
 import pytest
-from bitwise import assert_identical
+from episodes import assert_identical, rollout
 
 import box_toss_env  # noqa: F401  (registers the ids)
 from box_toss_env.envs import task
@@ -30,14 +30,6 @@ top's centre; it comes to rest on the base for most targets (test_a_throw_onto_t
 
 def random_actions(seed: int, n: int = N) -> np.ndarray:
     return np.random.default_rng(seed).uniform(-1, 1, (n, 3)).astype(np.float32)
-
-
-def rollout(env, seed, actions):
-    episodes = []
-    for k, action in enumerate(actions):
-        obs, info = env.reset(seed=seed if k == 0 else None)
-        episodes.append((obs, info, env.step(action)))
-    return episodes
 
 
 # -- registration, spaces, checkers -----------------------------------------------------------------

@@ -1,6 +1,15 @@
-"""Bit-identical comparison of nested episodes, shared by the env tests."""
+"""Episodes of a single env and their bit-identical comparison, shared by the env tests."""
 
 import numpy as np
+
+
+def rollout(env, seed, actions):
+    """(reset obs, reset info, step results) of one episode per action, the first reset seeded."""
+    episodes = []
+    for k, action in enumerate(actions):
+        obs, info = env.reset(seed=seed if k == 0 else None)
+        episodes.append((obs, info, env.step(action)))
+    return episodes
 
 
 def assert_identical(a, b):
