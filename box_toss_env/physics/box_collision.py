@@ -26,8 +26,8 @@ end) so the next step can start from its impulse (warm starting).
 
 Box against the floor: every corner within ``margin`` of y = 0.
 
-Broad phase: every pair whose bounding boxes, grown by the margin, overlap (n (n - 1) / 2 tests of
-four comparisons: a few microseconds for a hundred boxes).
+Broad phase: the pairs whose bounding boxes, grown by the margin, overlap, found by sort and sweep
+(``broadphase.candidate_pairs``) and visited in the order an all-pairs loop would visit them.
 """
 
 import math
@@ -188,29 +188,35 @@ def floor_contacts(i, pose, trig, half, margin, code, contacts, ids, count):
 
 
 @jit_stage
-def find_contacts(pose, trig, half, bound, reach, floor_reach, contacts, ids):
-    """Every contact of the scene within reach: box i against the floor within floor_reach_i, boxes i and j
-    within reach_i + reach_j, in the order (box 0 and the floor, box 0 and box 1, ..., box 1 and the
-    floor, ...), so the keys increase. ``bound[i]`` is the half size (x, y) of box i's bounding box.
-    Returns the number of contacts, or -1 if the arrays are too small."""
+def find_contacts(pose, trig, half, reach, floor_reach, pair_keys, n_pairs, awake, contacts, ids):
+    """Every contact of the scene within reach: awake box i against the floor within floor_reach_i, and the
+    boxes of each candidate pair (``pair_keys``: keys i n + j, i < j, increasing, from
+    ``broadphase.candidate_pairs``) within reach_i + reach_j, in the order (box 0 and the floor, box 0 and
+    box 1, ..., box 1 and the floor, ...), so the keys increase. Returns the number of contacts, or -1 if the
+    arrays are too small."""
     n = pose.shape[0]
     count = 0
+    p = 0
     for i in range(n):
-        count = floor_contacts(i, pose, trig, half, floor_reach[i], i * (n + 1), contacts, ids, count)
-        for j in range(i + 1, n):
-            margin = reach[i] + reach[j]
-            if (abs(pose[j, 0] - pose[i, 0]) <= bound[i, 0] + bound[j, 0] + margin
-                    and abs(pose[j, 1] - pose[i, 1]) <= bound[i, 1] + bound[j, 1] + margin):
-                count = box_box_contacts(i, j, pose, trig, half, margin, i * (n + 1) + j + 1, contacts, ids, count)
+        if awake[i]:
+            count = floor_contacts(i, pose, trig, half, floor_reach[i], i * (n + 1), contacts, ids, count)
+        while p < n_pairs and pair_keys[p] // n == i:
+            j = pair_keys[p] - i * n
+            count = box_box_contacts(i, j, pose, trig, half, reach[i] + reach[j], i * (n + 1) + j + 1, contacts, ids,
+                                     count)
+            p += 1
         if count < 0:
             return -1
     return count
 
 
 @jit_stage
-def update_geometry(pose, half, trig, bound):
-    """cos and sin of every box's angle, and the half size of its bounding box."""
+def update_geometry(pose, half, awake, trig, bound):
+    """cos and sin of every awake box's angle, and the half size of its bounding box (a sleeping box keeps
+    those of when it fell asleep: it has not moved since)."""
     for i in range(pose.shape[0]):
+        if not awake[i]:
+            continue
         c = math.cos(pose[i, 2])
         s = math.sin(pose[i, 2])
         trig[i, 0] = c

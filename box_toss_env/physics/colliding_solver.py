@@ -61,10 +61,21 @@ speculative contacts hold at any speed. The bound holds up to a relative speed o
 MAX_SUBSTEPS * TUNNEL_FRACTION * min(hx, hy) / dt (3,300 m/s for 10 cm thick boxes at dt = 1/256 s);
 beyond it the substeps are capped and only the speculative contacts remain (not guaranteed).
 
-What carries over from the floor-only robust solver, and what does not: exact flight and events located
-in time are not kept (a colliding scene is time-stepped; a body out of contact still moves on its exact
-parabola). Sleeping with ``until_rest``: the scene sleeps as a whole once every box has been supported
-(it took a contact impulse) and slower than ``sleep_speed`` at every point for ``sleep_time``.
+What a grid step does before and after the substeps, so that a scene pays only for what moves:
+  0. wake: with ``until_rest``, every sleeping island that an awake body can reach within the step wakes
+     (``islands.wake_touched``); sleeping bodies are left out of everything below;
+  flight: when the last step found no contact at all and at most FLIGHT_LIMIT bodies are awake, the awake
+     bodies fly on their exact parabolas for as many whole steps as none of them can touch the floor
+     (``flight.time_to_contact``) or come near another box (``broadphase.time_apart``), in one jump: a box
+     thrown over a sleeping one costs what a floor throw's flight costs until it gets close;
+  1.-7. the substeps above, over the awake bodies only; contacts come from the sort-and-sweep broadphase
+     (``broadphase.candidate_pairs``), which visits the pairs in the order testing every pair did, so the
+     results are those of the all-pairs search;
+  8. sleep: with ``until_rest``, an island (bodies joined by box-box contacts) whose bodies have all been
+     supported and slower than ``sleep_speed`` at every point for ``sleep_time`` falls asleep
+     (``islands.fall_asleep``: velocities zero, no cost until touched); the run stops once every body sleeps.
+Impacts in a colliding scene are resolved in the substep where the gap closes (not located in time as the
+floor-only solver locates them).
 
 Material of a box-box contact (Box2D's mixing rules): restitution max(e1, e2), friction sqrt(mu1 mu2),
 penalty stiffness min(k1, k2); box-floor contacts use the box's own.
@@ -101,8 +112,11 @@ from .box_collision import (
     find_contacts,
     update_geometry,
 )
+from .broadphase import candidate_pairs, sweep_axis, time_apart
 from .compilation import jit_kernel, jit_stage
 from .contact_solver import penalty_correction_share
+from .flight import flight_state, time_to_contact
+from .islands import fall_asleep, wake_touched
 from .kernel_support import read_settings, record_event, store_state, write_stats
 from .robust_solver import MAX_ROTATION_PER_STEP, energy_limit_scale
 
@@ -118,6 +132,7 @@ MIN_CAPACITY = 16
 DIRECT_LIMIT = 64  # contacts: up to this many, the normal impulses are solved exactly (``normal_lcp``)
 REGULARISATION = 1e-12  # share of W_cc added to the diagonal of the exact solve (redundant contacts)
 LCP_TOLERANCE = 1e-12  # share of the largest |free velocity|: a contact left free may approach by this much
+FLIGHT_LIMIT = 8  # awake bodies at most for which whole steps of free flight are looked for (flight_steps)
 
 
 @jit_stage(inline="always")
@@ -526,6 +541,44 @@ def substeps(vel, radius, smallest_half, dt, gravity):
     return max(max(np.int64(by_speed), np.int64(by_turn)), 1)
 
 
+@jit_stage
+def body_reach(vel, radius, awake, h, gravity, tolerance, reach):
+    """What each awake body can travel in a time h, |v| h + |g| h^2 + |omega| R h (plus the contact
+    tolerance), into ``reach`` (a sleeping body: the tolerance); returns the largest."""
+    fastest = 0.0
+    for b in range(vel.shape[0]):
+        reach[b] = tolerance
+        if awake[b]:
+            reach[b] += h * (math.sqrt(vel[b, 0] ** 2 + vel[b, 1] ** 2) + abs(gravity) * h
+                             + abs(vel[b, 2]) * radius[b])
+            fastest = max(fastest, reach[b])
+    return fastest
+
+
+@jit_stage
+def flight_steps(pose, vel, half, radius, awake, gravity, tolerance, dt, steps_left):
+    """How many whole time steps every awake body can fly on its exact parabola before any of them could
+    touch the floor (``flight.time_to_contact``) or come near another box (``broadphase.time_apart``): the
+    steps that cost a floor throw's flight, nothing per step."""
+    horizon = steps_left * dt
+    for b in range(pose.shape[0]):
+        if awake[b]:
+            tau, _ = time_to_contact(pose[b, 1], pose[b, 2], vel[b, 1], vel[b, 2], half[b, 0], half[b, 1], gravity,
+                                     horizon, tolerance)
+            horizon = min(horizon, tau, time_apart(b, pose, vel, half, radius, awake, gravity, horizon, 0.25 * dt))
+    return min(np.int64(math.floor(horizon / dt)), steps_left)
+
+
+@jit_stage
+def fly(pose, vel, awake, gravity, tau):
+    """Every awake body moved along its exact parabola for a time tau (``flight.flight_state``)."""
+    for b in range(pose.shape[0]):
+        if awake[b]:
+            x, y, a, vx, vy, w = flight_state(pose[b, 0], pose[b, 1], pose[b, 2], vel[b, 0], vel[b, 1], vel[b, 2],
+                                              gravity, tau)
+            pose[b, 0], pose[b, 1], pose[b, 2], vel[b, 0], vel[b, 1], vel[b, 2] = x, y, a, vx, vy, w
+
+
 def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, source_digest: int):
     """Build the robust kernel for scenes whose boxes collide (flags are compile-time, as
     ``robust_solver.make_robust_kernel``'s): ``run(state, params, settings, stats, trajectory, events)``
@@ -556,6 +609,7 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
         impacted = np.zeros(nb, np.int64)
         first_contact = np.full(nb, math.nan)
         n_impacts = np.zeros(nb, np.int64)
+        n_stepped = np.zeros(nb, np.int64)
         max_penetration = np.zeros(nb)
         capacity = max(8 * nb, MIN_CAPACITY)
         contacts = np.zeros((capacity, CONTACT_COLUMNS))
@@ -569,33 +623,74 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
         active = np.zeros(DIRECT_LIMIT, np.bool_)
         index = np.zeros(DIRECT_LIMIT, np.int64)
         lcp_y = np.zeros(DIRECT_LIMIT)
+        # broadphase (sort and sweep) and islands (sleeping)
+        everyone = np.ones(nb, np.bool_)
+        awake = np.ones(nb, np.bool_)
+        island = np.full(nb, -1, np.int64)  # a sleeping body's island (its root body); -1 while awake
+        still_for = np.zeros(nb)  # [s] how long each awake body has been supported and still
+        rest_time = np.full(nb, math.nan)  # when each body last fell asleep
+        parent = np.zeros(nb, np.int64)
+        ready = np.zeros(nb, np.bool_)
+        update_geometry(pose, half, everyone, trig, bound)
+        axis = sweep_axis(pose, everyone)
+        order = np.argsort(pose[:, axis])
+        low = np.zeros(nb)
+        pair_keys = np.zeros(max(4 * nb, MIN_CAPACITY), np.int64)
         n_previous = 0
         h_previous = dt
         status = layout.STATUS_OK
         fail_step = -1
-        rest_time = math.nan
-        still_for = 0.0
+        n_awake = nb
+        in_contact = True  # whether the last step found any contact (no flight in closed form after one)
         if RECORD:
             for b in range(nb):
                 store_state(trajectory, 0, b, pose[b, 0], pose[b, 1], pose[b, 2], vel[b, 0], vel[b, 1], vel[b, 2])
+        count = 0
         n = 0
         while n < max_steps:
+            if n_awake < nb:  # 0. wake the sleeping islands an awake body can reach in this step
+                update_geometry(pose, half, awake, trig, bound)
+                body_reach(vel, radius, awake, dt, gravity, tolerance, reach)
+                while wake_touched(pose, bound, reach, everyone, awake, island, still_for, rest_time, axis, order,
+                                   low, pair_keys) < 0:
+                    pair_keys = np.zeros(2 * pair_keys.shape[0], np.int64)
+                n_awake = 0
+                for b in range(nb):
+                    n_awake += awake[b]
+            if not in_contact and n_awake <= FLIGHT_LIMIT:
+                # flight: whole steps on the exact parabolas while no awake body can touch anything
+                k = flight_steps(pose, vel, half, radius, awake, gravity, tolerance, dt, max_steps - n)
+                if k > 0:
+                    if RECORD:
+                        for row in range(n + 1, n + k + 1):
+                            for b in range(nb):
+                                xr, yr, ar, vxr, vyr, wr = pose[b, 0], pose[b, 1], pose[b, 2], 0.0, 0.0, 0.0
+                                if awake[b]:
+                                    xr, yr, ar, vxr, vyr, wr = flight_state(pose[b, 0], pose[b, 1], pose[b, 2],
+                                                                            vel[b, 0], vel[b, 1], vel[b, 2], gravity,
+                                                                            (row - n) * dt)
+                                store_state(trajectory, row, b, xr, yr, ar, vxr, vyr, wr)
+                    fly(pose, vel, awake, gravity, k * dt)
+                    n += k
+                    in_contact = True  # step once before trying again
+                    continue
             n_sub = substeps(vel, radius, smallest_half, dt, gravity)
             h = dt / n_sub
             for b in range(nb):
                 supported[b] = False
+            in_contact = False
             for sub in range(n_sub):
                 t = n * dt + sub * h
                 # 1. find contacts within what the bodies can travel in the substep
-                update_geometry(pose, half, trig, bound)
-                fastest = 0.0
-                for b in range(nb):
-                    reach[b] = h * (math.sqrt(vel[b, 0] ** 2 + vel[b, 1] ** 2) + abs(gravity) * h
-                                    + abs(vel[b, 2]) * radius[b]) + tolerance
-                    fastest = max(fastest, reach[b])
+                update_geometry(pose, half, awake, trig, bound)
+                fastest = body_reach(vel, radius, awake, h, gravity, tolerance, reach)
                 for b in range(nb):  # a box struck in the substep moves further than its own speed says
                     floor_reach[b] = reach[b] + fastest
-                count = find_contacts(pose, trig, half, bound, reach, floor_reach, contacts, ids)
+                n_pairs = candidate_pairs(pose, bound, reach, awake, awake, axis, order, low, pair_keys)
+                while n_pairs < 0:
+                    pair_keys = np.zeros(2 * pair_keys.shape[0], np.int64)
+                    n_pairs = candidate_pairs(pose, bound, reach, awake, awake, axis, order, low, pair_keys)
+                count = find_contacts(pose, trig, half, reach, floor_reach, pair_keys, n_pairs, awake, contacts, ids)
                 while count < 0:
                     capacity *= 2
                     contacts = np.zeros((capacity, CONTACT_COLUMNS))
@@ -605,7 +700,9 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
                     impulses = np.zeros((capacity, 2))
                     impulses[:n_previous] = previous_impulses[:n_previous]
                     previous_keys, previous_impulses = keys, impulses
-                    count = find_contacts(pose, trig, half, bound, reach, floor_reach, contacts, ids)
+                    count = find_contacts(pose, trig, half, reach, floor_reach, pair_keys, n_pairs, awake, contacts,
+                                          ids)
+                in_contact = in_contact or count > 0
                 prepare_contacts(contacts, ids, count, params, inv_mass, inv_inertia)
                 for c in range(count):
                     depth = -contacts[c, GAP]
@@ -623,9 +720,10 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
                 for c in range(count):
                     ux, uy = relative_velocity(c, contacts, ids, vel)
                     contacts[c, APPROACH] = ux * contacts[c, NX] + uy * contacts[c, NY]
-                # 3. integrate velocities
+                # 3. integrate velocities (a sleeping body does not fall)
                 for b in range(nb):
-                    vel[b, 1] += h * gravity
+                    if awake[b]:
+                        vel[b, 1] += h * gravity
                 # 4. contact velocities: warm start, then Gauss-Seidel with speculative targets
                 for c in range(count):
                     contacts[c, TARGET] = -max(contacts[c, GAP], 0.0) / h
@@ -693,14 +791,16 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
                                 vel[b, 2] *= scale
                 # 7. integrate positions: exact parabola out of contact, symplectic Euler in contact
                 for b in range(nb):
-                    pose[b, 0] += h * vel[b, 0]
-                    pose[b, 1] += h * vel[b, 1]
-                    if not touched[b]:
-                        pose[b, 1] -= 0.5 * h * h * gravity
-                    pose[b, 2] += h * vel[b, 2]
+                    if awake[b]:
+                        pose[b, 0] += h * vel[b, 0]
+                        pose[b, 1] += h * vel[b, 1]
+                        if not touched[b]:
+                            pose[b, 1] -= 0.5 * h * h * gravity
+                        pose[b, 2] += h * vel[b, 2]
             n += 1
             finite = True
             for b in range(nb):
+                n_stepped[b] += awake[b]
                 if RECORD:
                     store_state(trajectory, n, b, pose[b, 0], pose[b, 1], pose[b, 2], vel[b, 0], vel[b, 1],
                                 vel[b, 2])
@@ -711,24 +811,21 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
                 status = layout.STATUS_NONFINITE
                 fail_step = n
                 break
-            if until_rest:
-                still = True
+            if until_rest:  # 8. sleep: the islands whose bodies have all been supported and still for sleep_time
                 for b in range(nb):
-                    speed = math.sqrt(vel[b, 0] ** 2 + vel[b, 1] ** 2) + abs(vel[b, 2]) * radius[b]
-                    still = still and supported[b] and speed <= sleep_speed
-                if still:
-                    still_for += dt
-                    if still_for >= sleep_time:
-                        rest_time = n * dt
-                        for b in range(nb):
-                            vel[b, 0] = 0.0
-                            vel[b, 1] = 0.0
-                            vel[b, 2] = 0.0
+                    if awake[b]:
+                        speed = math.sqrt(vel[b, 0] ** 2 + vel[b, 1] ** 2) + abs(vel[b, 2]) * radius[b]
+                        still_for[b] = still_for[b] + dt if supported[b] and speed <= sleep_speed else 0.0
+                slept = fall_asleep(ids, count, awake, still_for, sleep_time, parent, ready, island, vel)
+                if slept > 0:
+                    n_awake -= slept
+                    for b in range(nb):
+                        if not awake[b] and math.isnan(rest_time[b]):
+                            rest_time[b] = n * dt
                             if RECORD:
                                 store_state(trajectory, n, b, pose[b, 0], pose[b, 1], pose[b, 2], 0.0, 0.0, 0.0)
-                        break
-                else:
-                    still_for = 0.0
+                if n_awake == 0:
+                    break
         for b in range(nb):
             state[b, 0], state[b, 1], state[b, 2] = pose[b, 0], pose[b, 1], pose[b, 2]
             state[b, 3], state[b, 4], state[b, 5] = vel[b, 0], vel[b, 1], vel[b, 2]
@@ -737,7 +834,7 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
                                                    and math.isfinite(pose[b, 2]) and math.isfinite(vel[b, 0])
                                                    and math.isfinite(vel[b, 1]) and math.isfinite(vel[b, 2])):
                 body_status = status
-            write_stats(stats, b, first_contact[b], n_impacts[b], n, max_penetration[b], rest_time, n * dt,
-                        body_status, fail_step if body_status != layout.STATUS_OK else -1, n + 1)
+            write_stats(stats, b, first_contact[b], n_impacts[b], n_stepped[b], max_penetration[b], rest_time[b],
+                        n * dt, body_status, fail_step if body_status != layout.STATUS_OK else -1, n + 1)
 
     return run

@@ -69,3 +69,4 @@ def time_to_contact(y, angle, vy, spin, half_length, half_width, gravity, horizo
             return horizon, False
         tau += step
     return tau, True
+

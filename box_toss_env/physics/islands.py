@@ -1,0 +1,106 @@
+"""Islands and sleeping for scenes whose boxes collide: a box that rests costs nothing until touched.
+
+Bodies joined by box-box contacts form an island (union-find over the contacts of the last substep; the
+floor joins nothing, as in Box2D). With ``until_rest`` each awake body keeps a sleep timer: the time it
+has been supported (it took a contact impulse) with every point slower than ``sleep_speed``
+(|v| + |omega| R <= sleep_speed); an island falls asleep when every one of its bodies has been so for
+``sleep_time``. A sleeping body's velocity is set to zero and it is left out of everything: no contact is
+looked for, no velocity or position integrated, no impulse solved. It keeps the island it fell asleep in
+(the island's root body, ``island``), so that a touch wakes the whole island at once: at the start of
+every grid step, every sleeping body that an awake body can reach within the step (the broadphase's
+test, ``broadphase.candidate_pairs``) wakes with its island, and the test is repeated for the bodies just
+woken. Without ``until_rest`` nothing sleeps.
+"""
+
+import math
+
+from .box_collision import BODY1, BODY2
+from .broadphase import candidate_pairs
+from .compilation import jit_stage
+
+
+@jit_stage
+def find_root(parent, b):
+    """The root of body b's island in the union-find forest ``parent`` (with path halving)."""
+    while parent[b] != b:
+        parent[b] = parent[parent[b]]
+        b = parent[b]
+    return b
+
+
+@jit_stage
+def join_islands(ids, count, awake, parent):
+    """``parent``: a union-find forest in which two awake bodies share a root when a chain of box-box
+    contacts (of the first ``count`` rows of ``ids``) joins them; a body's root is the island's smallest body."""
+    for b in range(awake.shape[0]):
+        parent[b] = b
+    for c in range(count):
+        b2 = ids[c, BODY2]
+        if b2 < 0:
+            continue
+        r1 = find_root(parent, ids[c, BODY1])
+        r2 = find_root(parent, b2)
+        if r1 != r2:
+            parent[max(r1, r2)] = min(r1, r2)
+
+
+@jit_stage
+def fall_asleep(ids, count, awake, still_for, sleep_time, parent, ready, island, vel):
+    """Put to sleep every island (``join_islands``) whose awake bodies have all been still for ``sleep_time``
+    (``still_for``): velocities zero, ``awake`` False, ``island`` the island's root. Returns how many bodies
+    fell asleep."""
+    n = awake.shape[0]
+    join_islands(ids, count, awake, parent)
+    for b in range(n):
+        ready[b] = True
+    for b in range(n):
+        if awake[b] and still_for[b] < sleep_time:
+            ready[find_root(parent, b)] = False
+    slept = 0
+    for b in range(n):
+        if awake[b]:
+            root = find_root(parent, b)
+            if ready[root]:
+                awake[b] = False
+                island[b] = root
+                vel[b, 0] = 0.0
+                vel[b, 1] = 0.0
+                vel[b, 2] = 0.0
+                slept += 1
+    return slept
+
+
+@jit_stage
+def wake_island(label, awake, island, still_for, rest_time):
+    """Wake every sleeping body of island ``label``; returns how many woke."""
+    woken = 0
+    for b in range(awake.shape[0]):
+        if not awake[b] and island[b] == label:
+            awake[b] = True
+            island[b] = -1
+            still_for[b] = 0.0
+            rest_time[b] = math.nan
+            woken += 1
+    return woken
+
+
+@jit_stage
+def wake_touched(pose, bound, reach, everyone, awake, island, still_for, rest_time, axis, order, low, keys):
+    """Wake the sleeping islands that an awake body can reach (the broadphase's test with the awake bodies'
+    ``reach``), again for the bodies just woken, until none wakes. ``everyone``: all True. Returns the number
+    of bodies woken, or -1 if ``keys`` is too short (the caller grows it and calls again)."""
+    n = pose.shape[0]
+    total = 0
+    while True:
+        n_pairs = candidate_pairs(pose, bound, reach, everyone, awake, axis, order, low, keys)
+        if n_pairs < 0:
+            return -1
+        woken = 0
+        for p in range(n_pairs):
+            i = keys[p] // n
+            j = keys[p] - i * n
+            if awake[i] != awake[j]:
+                woken += wake_island(island[j] if awake[i] else island[i], awake, island, still_for, rest_time)
+        if woken == 0:
+            return total
+        total += woken
