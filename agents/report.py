@@ -20,7 +20,7 @@ from agents.config import load_yaml
 from agents.evaluation import TEST_FIRST_SEED, TEST_TARGETS, VALIDATION_FIRST_SEED, Throws, load_policy
 from agents.oracle import OracleSettings
 from agents.training import read_timing
-from benchmarks.readme_section import README, replace_section
+from benchmarks.readme_section import page_for, replace_section
 from box_toss_env.rendering import write_video
 
 RUNS = Path("runs")
@@ -207,7 +207,7 @@ def record_video(run_dir: Path, path: Path, n_throws: int, *, model: str = "fina
 
 
 # -- the README section --------------------------------------------------------------------------
-INTRO = """## Agents: PPO, SAC and TD3, baselines, the ceiling and evaluation (`agents/`)
+INTRO = """# Agents: PPO, SAC and TD3, baselines, the ceiling and evaluation (`agents/`)
 
 ```bash
 python -m agents.main                                    # short PPO run on {env_id} + random and oracle: the table
@@ -320,12 +320,15 @@ GIF_ENV_KWARGS = {"render_width": 360, "render_height": 240, "render_fps": 20}  
 
 
 def write_readme(section: str, name: str = "agents") -> None:
-    """Replace the README's ``<!-- name:start -->`` ... ``<!-- name:end -->`` block (appended if missing)."""
-    if f"<!-- {name}:start -->" not in README.read_text():
-        with open(README, "a") as file:
+    """Replace the ``<!-- name:start -->`` ... ``<!-- name:end -->`` block of the page that holds it (the README
+    for ``benchmark``, a page of docs/ for the others: ``benchmarks.readme_section.SECTION_PAGES``; appended if
+    missing)."""
+    page = page_for(name)
+    if f"<!-- {name}:start -->" not in page.read_text():
+        with open(page, "a") as file:
             file.write(f"\n<!-- {name}:start -->\n<!-- {name}:end -->\n")
     replace_section(name, section)
-    print(f"wrote the {name} section of {README}")
+    print(f"wrote the {name} section of {page}")
 
 
 def write_docs(runs: dict[str, Path], fidelity: list[tuple[str, str, str]], docs: Path = DOCS) -> str:

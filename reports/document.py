@@ -1,6 +1,6 @@
-"""Writing the reports: number formatting, Markdown tables, figures and the README section.
+"""Writing the reports: number formatting, Markdown tables, figures and the reports page's section.
 
-The README holds one section between ``<!-- reports:start -->`` and ``<!-- reports:end -->``; each
+The page docs/reports.md holds one section between ``<!-- reports:start -->`` and ``<!-- reports:end -->``; each
 report command rewrites only its own block inside it (``<!-- reports:NAME:start -->`` ...), so the
 commands can run in any order and every figure in the section comes from a command.
 """
@@ -21,9 +21,9 @@ matplotlib.use("Agg")
 REPO = Path(__file__).resolve().parent.parent
 DOCS = REPO / "docs"
 QUICK_OUT = REPO / "build" / "reports"  # --quick writes here (ignored by git), never into docs/
-README = REPO / "README.md"
+README = DOCS / "reports.md"  # the page that holds the reports section (the README links to it)
 SECTION_START, SECTION_END = "<!-- reports:start -->", "<!-- reports:end -->"
-SECTION_TITLE = "## Precision and stability reports"
+SECTION_TITLE = "# Precision and stability reports"
 
 
 def sci(value: float, digits: int = 2) -> str:
