@@ -88,6 +88,8 @@ def main(argv: list[str] | None = None) -> None:
     print(f"{ENV_ID}: {evaluation.TEST_TARGETS:,} fixed test targets (seeds {evaluation.TEST_FIRST_SEED}-"
           f"{evaluation.TEST_FIRST_SEED + evaluation.TEST_TARGETS - 1}), deterministic policies")
     print(report.text_table(table))
+    if "oracle" in rows:
+        print(report.ceiling_note(ENV_ID))
     if fidelity:
         print("\nphysics fidelity (the same targets under another solver or step; failures: throws the env refused)")
         print(evaluation.format_table(fidelity))

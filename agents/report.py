@@ -16,6 +16,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import error as gym_error
 
+from agents.ceiling import ceiling_of
 from agents.config import load_yaml
 from agents.evaluation import TEST_FIRST_SEED, TEST_TARGETS, VALIDATION_FIRST_SEED, Throws, load_policy
 from agents.oracle import OracleSettings
@@ -25,8 +26,11 @@ from box_toss_env.rendering import write_video
 
 RUNS = Path("runs")
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "agents"  # figures the README shows
+ORACLE_MAX_THROWS = OracleSettings().initial + OracleSettings().iterations * OracleSettings().population
 AGENT_LABELS = {"random": "random actions", "short": "PPO, short (agents.main)", "full": "PPO, full",
-                "oracle": "oracle (plans with the simulator)"}
+                # the oracle at its default search budget, which is not the ceiling (agents.ceiling)
+                "oracle": f"oracle, default search (at most {ORACLE_MAX_THROWS} simulated throws per target)"}
+CEILING_ROOT = RUNS / "benchmark"  # agents.benchmark keeps each variant's ceiling sweep here
 COLOURS = {"random": "tab:gray", "short": "tab:orange", "full": "tab:blue", "oracle": "tab:green"}
 
 
@@ -82,12 +86,13 @@ def markdown_table(rows: list[dict[str, Any]]) -> str:
 
 
 def text_table(rows: list[dict[str, Any]]) -> str:
-    header = (f"{'agent':<36} {'env steps':>10} {'success':>8} {'mean dist':>10} {'median dist':>12} "
+    width = max([36, *(len(row["label"]) for row in rows)])
+    header = (f"{'agent':<{width}} {'env steps':>10} {'success':>8} {'mean dist':>10} {'median dist':>12} "
               f"{'face acc':>9} {'wall time':>10}")
     lines = [header, "-" * len(header)]
     for row in rows:
         steps = f"{row['timesteps']:,}" if row.get("timesteps") else "-"
-        lines.append(f"{row['label']:<36} {steps:>10} {row['success_rate']:>8.1%} {row['mean_distance']:>8.3f} m "
+        lines.append(f"{row['label']:<{width}} {steps:>10} {row['success_rate']:>8.1%} {row['mean_distance']:>8.3f} m "
                      f"{row['median_distance']:>10.3f} m {row['face_accuracy']:>9.1%} "
                      f"{format_seconds(row['wall_seconds']):>10}")
     return "\n".join(lines)
@@ -102,6 +107,21 @@ def breakdown_table(rows: list[dict[str, Any]]) -> str:
         lines.append(f"| {label} | " + " | ".join(f"{row['by_distance'][k]['success_rate']:.1%}" for row in rows)
                      + " |")
     return "\n".join(lines)
+
+
+def ceiling_note(env_id: str, root: Path = CEILING_ROOT) -> str:
+    """What the oracle row is and where the ceiling is: the ceiling's figures if ``agents.benchmark`` has
+    saved the variant's sweep under ``root``, else the command that measures it."""
+    note = (f"oracle: the default search, at most {ORACLE_MAX_THROWS} simulated throws per target; it is not the "
+            "ceiling, which the search reaches as it grows")
+    path = Path(root) / env_id / "ceiling.json"
+    if not path.exists():
+        return f"{note} (python -m agents.benchmark --envs {env_id}; docs/agents/benchmark.md)"
+    sweep = json.loads(path.read_text())
+    top, first = ceiling_of(sweep), sweep[0]
+    return (f"{note}.\nceiling ({path}): {top['success_rate']:.1%} with {top['throws_per_target']:,.0f} simulated "
+            f"throws per target, on the first {top['n']} targets (the first budget of its sweep: "
+            f"{first['success_rate']:.1%} with {first['throws_per_target']:,.0f})")
 
 
 # -- figures -------------------------------------------------------------------------------------
@@ -248,8 +268,8 @@ landed. During training the policy is evaluated on {validation_targets} other fi
 that simulates candidate throws with the env's own engine kernel (all targets' candidates in one call) and
 throws the best; it stops refining a target once a throw lands within {settle:g} m. Its wall time is its
 planning time for all test targets; PPO's is its training time (seed 0, on the shared 2-core machine these
-figures come from). The oracle's default search is not the ceiling: see the benchmark below, where the search
-grows until its success stops rising.
+figures come from). The oracle's default search is not the ceiling: see [the benchmark](docs/agents/benchmark.md),
+where the search grows until its success stops rising.
 
 """
 
