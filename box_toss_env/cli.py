@@ -23,7 +23,7 @@ COMMANDS = {
     "evaluate": ("agents.evaluate", "evaluate a run folder on the fixed test targets: tables, plots, a GIF"),
     "main": ("agents.main", "train PPO on BoxToss-ThisSideUp-v0 and print it beside random throws and the oracle"),
     "view": ("box_toss_env.viewer", "the interactive viewer and play mode (needs the render extra)"),
-    "bench": ("benchmarks", "a benchmark: box-toss bench NAME [options], NAME one of BENCHMARKS"),
+    "bench": ("benchmarks.NAME", "a benchmark: box-toss bench NAME [options], NAME one of those below"),
 }
 BENCHMARKS = {
     "engine": "ns per body-step and us per throw of the engine (docs/engine.md)",
