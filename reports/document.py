@@ -109,12 +109,12 @@ def update_readme(name: str, body: str, readme: Path = README) -> None:
 
 def report_command(name: str, doc: str, run, write_report, argv=None) -> int:
     """The command line of ``python -m reports.NAME``: run the report (``--quick``: a few points, as the
-    tests do) and write it to docs/ (and the README's section) or to ``--out``."""
+    tests do) and write it to docs/ (and its block of docs/reports.md) or to ``--out``."""
     parser = argparse.ArgumentParser(prog=f"python -m reports.{name}", description=doc.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="a few points of each part (what the tests run)")
     parser.add_argument("--out", type=Path, default=None,
                         help=f"output folder (default: docs/, or {QUICK_OUT.relative_to(REPO)} with --quick); the "
-                             "README's reports section is rewritten only for the full report written to docs/")
+                             "section of docs/reports.md is rewritten only for the full report written to docs/")
     args = parser.parse_args(argv)
     out = args.out or (QUICK_OUT if args.quick else DOCS)
     report = run(quick=args.quick)
