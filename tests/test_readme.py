@@ -44,3 +44,12 @@ def test_links_from_the_repository_root_are_made_relative_to_the_page(tmp_path):
     page.write_text("a\n<!-- x:start -->\nold\n<!-- x:end -->\nb\n")
     replace_section("x", "new", page)
     assert page.read_text() == "a\n<!-- x:start -->\nnew\n<!-- x:end -->\nb\n"
+
+
+def test_the_readme_example_runs():
+    code = re.search(r"## A first throw\n\n```python\n(.*?)```", README.read_text(), flags=re.DOTALL)[1]
+    assert len(code.splitlines()) <= 10
+    namespace: dict = {}
+    exec(code, namespace)
+    assert namespace["terminated"] and namespace["venv"].num_envs == 64
+    namespace["venv"].close()
