@@ -2,7 +2,7 @@
 
     python -m agents.main                   # short PPO run on BoxToss-ThisSideUp-v0 (runs/short), random and oracle
     python -m agents.main --full --readme   # also the full run and the physics-fidelity evaluations,
-                                            # then rewrite the README's agents section and docs/agents/
+                                            # then rewrite the agents page (docs/agents.md) and docs/agents/
 
 Everything is evaluated on the same 1,024 fixed test targets (``agents.evaluate``). To train longer,
 change ``n_timesteps`` in ``agents/hyperparams/ppo.yml`` and run ``python -m agents.train``; for every
@@ -53,7 +53,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--runs-dir", type=Path, default=RUNS)
     parser.add_argument("--timesteps", type=int, default=SHORT_TIMESTEPS, help="budget of the short run")
     parser.add_argument("--full", action="store_true", help="also train the full run and evaluate physics fidelity")
-    parser.add_argument("--readme", action="store_true", help="write the results into README.md and docs/agents/")
+    parser.add_argument("--readme", action="store_true", help="write the results into docs/agents.md and docs/agents/")
     parser.add_argument("--no-oracle", action="store_true", help="skip the oracle (it plans for ~20 s)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     args = parser.parse_args(argv)
@@ -88,6 +88,8 @@ def main(argv: list[str] | None = None) -> None:
     print(f"{ENV_ID}: {evaluation.TEST_TARGETS:,} fixed test targets (seeds {evaluation.TEST_FIRST_SEED}-"
           f"{evaluation.TEST_FIRST_SEED + evaluation.TEST_TARGETS - 1}), deterministic policies")
     print(report.text_table(table))
+    if "oracle" in rows:
+        print(report.ceiling_note(ENV_ID))
     if fidelity:
         print("\nphysics fidelity (the same targets under another solver or step; failures: throws the env refused)")
         print(evaluation.format_table(fidelity))

@@ -16,17 +16,21 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import error as gym_error
 
+from agents.ceiling import ceiling_of
 from agents.config import load_yaml
 from agents.evaluation import TEST_FIRST_SEED, TEST_TARGETS, VALIDATION_FIRST_SEED, Throws, load_policy
 from agents.oracle import OracleSettings
 from agents.training import read_timing
-from benchmarks.readme_section import README, replace_section
+from benchmarks.readme_section import page_for, replace_section
 from box_toss_env.rendering import write_video
 
 RUNS = Path("runs")
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "agents"  # figures the README shows
+ORACLE_MAX_THROWS = OracleSettings().initial + OracleSettings().iterations * OracleSettings().population
 AGENT_LABELS = {"random": "random actions", "short": "PPO, short (agents.main)", "full": "PPO, full",
-                "oracle": "oracle (plans with the simulator)"}
+                # the oracle at its default search budget, which is not the ceiling (agents.ceiling)
+                "oracle": f"oracle, default search (at most {ORACLE_MAX_THROWS} simulated throws per target)"}
+CEILING_ROOT = RUNS / "benchmark"  # agents.benchmark keeps each variant's ceiling sweep here
 COLOURS = {"random": "tab:gray", "short": "tab:orange", "full": "tab:blue", "oracle": "tab:green"}
 
 
@@ -82,12 +86,13 @@ def markdown_table(rows: list[dict[str, Any]]) -> str:
 
 
 def text_table(rows: list[dict[str, Any]]) -> str:
-    header = (f"{'agent':<36} {'env steps':>10} {'success':>8} {'mean dist':>10} {'median dist':>12} "
+    width = max([36, *(len(row["label"]) for row in rows)])
+    header = (f"{'agent':<{width}} {'env steps':>10} {'success':>8} {'mean dist':>10} {'median dist':>12} "
               f"{'face acc':>9} {'wall time':>10}")
     lines = [header, "-" * len(header)]
     for row in rows:
         steps = f"{row['timesteps']:,}" if row.get("timesteps") else "-"
-        lines.append(f"{row['label']:<36} {steps:>10} {row['success_rate']:>8.1%} {row['mean_distance']:>8.3f} m "
+        lines.append(f"{row['label']:<{width}} {steps:>10} {row['success_rate']:>8.1%} {row['mean_distance']:>8.3f} m "
                      f"{row['median_distance']:>10.3f} m {row['face_accuracy']:>9.1%} "
                      f"{format_seconds(row['wall_seconds']):>10}")
     return "\n".join(lines)
@@ -102,6 +107,21 @@ def breakdown_table(rows: list[dict[str, Any]]) -> str:
         lines.append(f"| {label} | " + " | ".join(f"{row['by_distance'][k]['success_rate']:.1%}" for row in rows)
                      + " |")
     return "\n".join(lines)
+
+
+def ceiling_note(env_id: str, root: Path = CEILING_ROOT) -> str:
+    """What the oracle row is and where the ceiling is: the ceiling's figures if ``agents.benchmark`` has
+    saved the variant's sweep under ``root``, else the command that measures it."""
+    note = (f"oracle: the default search, at most {ORACLE_MAX_THROWS} simulated throws per target; it is not the "
+            "ceiling, which the search reaches as it grows")
+    path = Path(root) / env_id / "ceiling.json"
+    if not path.exists():
+        return f"{note} (python -m agents.benchmark --envs {env_id}; docs/agents/benchmark.md)"
+    sweep = json.loads(path.read_text())
+    top, first = ceiling_of(sweep), sweep[0]
+    return (f"{note}.\nceiling ({path}): {top['success_rate']:.1%} with {top['throws_per_target']:,.0f} simulated "
+            f"throws per target, on the first {top['n']} targets (the first budget of its sweep: "
+            f"{first['success_rate']:.1%} with {first['throws_per_target']:,.0f})")
 
 
 # -- figures -------------------------------------------------------------------------------------
@@ -207,7 +227,7 @@ def record_video(run_dir: Path, path: Path, n_throws: int, *, model: str = "fina
 
 
 # -- the README section --------------------------------------------------------------------------
-INTRO = """## Agents: PPO, SAC and TD3, baselines, the ceiling and evaluation (`agents/`)
+INTRO = """# Agents: PPO, SAC and TD3, baselines, the ceiling and evaluation (`agents/`)
 
 ```bash
 python -m agents.main                                    # short PPO run on {env_id} + random and oracle: the table
@@ -248,8 +268,8 @@ landed. During training the policy is evaluated on {validation_targets} other fi
 that simulates candidate throws with the env's own engine kernel (all targets' candidates in one call) and
 throws the best; it stops refining a target once a throw lands within {settle:g} m. Its wall time is its
 planning time for all test targets; PPO's is its training time (seed 0, on the shared 2-core machine these
-figures come from). The oracle's default search is not the ceiling: see the benchmark below, where the search
-grows until its success stops rising.
+figures come from). The oracle's default search is not the ceiling: see [the benchmark](docs/agents/benchmark.md),
+where the search grows until its success stops rising.
 
 """
 
@@ -278,6 +298,10 @@ def readme_section(runs: dict[str, Path], fidelity: list[tuple[str, str, str]], 
                           validation_targets=validation_targets(runs),
                           settle=OracleSettings().settle * env.config.position_tolerance, env_id=rows[0]["env_id"]),
              markdown_table(rows), ""]
+    if "oracle" in by_name:
+        lines += [f"The oracle row is its default search (at most {ORACLE_MAX_THROWS} simulated throws per target), "
+                  f"not the ceiling: the ceiling of `{rows[0]['env_id']}`, the search grown until its success stops "
+                  "rising, is in [the benchmark](docs/agents/benchmark.md).", ""]
     if "short" in by_name and "random" in by_name:
         short, random = by_name["short"], by_name["random"]
         lines.append(f"The default run (`python -m agents.main`) lands {short['success_rate']:.1%} of the throws "
@@ -320,12 +344,15 @@ GIF_ENV_KWARGS = {"render_width": 360, "render_height": 240, "render_fps": 20}  
 
 
 def write_readme(section: str, name: str = "agents") -> None:
-    """Replace the README's ``<!-- name:start -->`` ... ``<!-- name:end -->`` block (appended if missing)."""
-    if f"<!-- {name}:start -->" not in README.read_text():
-        with open(README, "a") as file:
+    """Replace the ``<!-- name:start -->`` ... ``<!-- name:end -->`` block of the page that holds it (the README
+    for ``benchmark``, a page of docs/ for the others: ``benchmarks.readme_section.SECTION_PAGES``; appended if
+    missing)."""
+    page = page_for(name)
+    if f"<!-- {name}:start -->" not in page.read_text():
+        with open(page, "a") as file:
             file.write(f"\n<!-- {name}:start -->\n<!-- {name}:end -->\n")
     replace_section(name, section)
-    print(f"wrote the {name} section of {README}")
+    print(f"wrote the {name} section of {page}")
 
 
 def write_docs(runs: dict[str, Path], fidelity: list[tuple[str, str, str]], docs: Path = DOCS) -> str:

@@ -213,8 +213,8 @@ def docs_page(sweep_dir: Path, settings: dict[str, Any], table: str, variants: l
 
 
 def readme_section(sweep_dir: Path, settings: dict[str, Any], table: str, variants: list[dict[str, Any]]) -> str:
-    """The README's section on tuning: the commands, the cluster recipe, the measured sweep."""
-    return f"""## Hyperparameter search: Optuna on Ray Tune (`agents/tune.py`)
+    """The section on tuning (docs/hyperparameter-search.md): the commands, the cluster recipe, the measured sweep."""
+    return f"""# Hyperparameter search: Optuna on Ray Tune (`agents/tune.py`)
 
 ```bash
 pip install -e ".[tune]"                                   # Ray Tune and Optuna

@@ -59,7 +59,8 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
                         help="where sweep folders go (on a cluster: a path every node sees)")
     parser.add_argument("--resume", type=Path, metavar="SWEEP", help="continue a killed sweep")
     parser.add_argument("--report", type=Path, metavar="SWEEP", help="only write the tables of a sweep")
-    parser.add_argument("--readme", action="store_true", help="also write docs/tune.md and the README section")
+    parser.add_argument("--readme", action="store_true",
+                        help="also write docs/tune.md and docs/hyperparameter-search.md")
     return parser.parse_args(argv)
 
 

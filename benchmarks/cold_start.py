@@ -180,7 +180,7 @@ def main() -> None:
     parser.add_argument("--cases", nargs="+", choices=list(CASES), default=list(CASES))
     parser.add_argument("--pythonpath", default=str(REPO), help="where the measured box_toss_env is (default: this "
                                                                 "checkout)")
-    parser.add_argument("--readme", action="store_true", help="also write the figures into README.md")
+    parser.add_argument("--readme", action="store_true", help="also write the figures into docs/cold-start.md")
     args = parser.parse_args()
     results = measure(args.repeats, args.pythonpath, args.cases)
     package = results[args.cases[0]]["cold"][0]["package"]

@@ -1,19 +1,51 @@
-"""Write a command's measured output into README.md between its markers, so every figure the
-README quotes comes from a command (``<!-- NAME:start -->`` ... ``<!-- NAME:end -->``)."""
+"""Write a command's measured output into the documentation page that holds its section, between its
+markers, so every figure the docs quote comes from a command (``<!-- NAME:start -->`` ... ``<!-- NAME:end -->``).
+
+The README is the front page: it holds the ``benchmark`` section only. The other sections live in the pages
+of the documentation site (``docs/``), named in ``SECTION_PAGES``.
+"""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
-README = Path(__file__).resolve().parents[1] / "README.md"
+REPO = Path(__file__).resolve().parents[1]
+README = REPO / "README.md"
+DOCS = REPO / "docs"
+SECTION_PAGES = {
+    "benchmark": README,  # the headline table of the front page (python -m agents.benchmark --report-only --readme)
+    "agents": DOCS / "agents.md",  # python -m agents.main --full --readme
+    "tune": DOCS / "hyperparameter-search.md",  # python -m agents.tune ... --readme
+    "engine-benchmark": DOCS / "engine.md",  # python -m benchmarks.engine --readme
+    "throughput": DOCS / "batched.md",  # python -m benchmarks.throughput --readme
+    "cold-start": DOCS / "cold-start.md",  # python -m benchmarks.cold_start --readme
+    "rllib-sampling": DOCS / "rllib.md",  # python -m benchmarks.rllib_sampling --readme
+    "reports": DOCS / "reports.md",  # python -m reports.precision / stability / collisions
+}
 
 
-def replace_section(name: str, text: str, readme: Path = README) -> None:
-    """Replace what stands between the ``name`` markers of ``readme`` with ``text``."""
+def page_for(name: str) -> Path:
+    """The file that holds section ``name`` (the README for a section not in ``SECTION_PAGES``)."""
+    return SECTION_PAGES.get(name, README)
+
+
+def relink(text: str, page: Path) -> str:
+    """Links written relative to the repository's root (``](docs/...``), made relative to ``page``."""
+    if page.resolve().parent == REPO:
+        return text
+    prefix = os.path.relpath(DOCS, page.resolve().parent).replace(os.sep, "/")
+    return text.replace("](docs/", "](" if prefix == "." else f"]({prefix}/")
+
+
+def replace_section(name: str, text: str, readme: Path | None = None) -> None:
+    """Replace what stands between the ``name`` markers of ``readme`` (default: the page that holds
+    the section) with ``text``."""
+    page = readme if readme is not None else page_for(name)
     start, end = f"<!-- {name}:start -->", f"<!-- {name}:end -->"
-    content = readme.read_text()
+    content = page.read_text()
     if start not in content or end not in content:
-        raise ValueError(f"{readme} has no {start} ... {end} markers")
+        raise ValueError(f"{page} has no {start} ... {end} markers")
     head, rest = content.split(start, 1)
     _, tail = rest.split(end, 1)
-    readme.write_text(f"{head}{start}\n{text.strip()}\n{end}{tail}")
+    page.write_text(f"{head}{start}\n{relink(text.strip(), page)}\n{end}{tail}")

@@ -1,5 +1,5 @@
 """Throughput of BoxToss against the engines a user would pick instead. Prints measured figures,
-writes them to ``docs/throughput.md`` (and README.md with ``--readme``); asserts nothing.
+writes them to ``docs/throughput.md`` (and docs/batched.md with ``--readme``); asserts nothing.
 
     python -m benchmarks.throughput [--quick] [--readme]
 
@@ -135,7 +135,7 @@ def memory_per_env(small: int = 256, large: int = 4096) -> tuple[float, float]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="fewer repeats and throws")
-    parser.add_argument("--readme", action="store_true", help="also write the table into README.md")
+    parser.add_argument("--readme", action="store_true", help="also write the table into docs/batched.md")
     args = parser.parse_args()
     repeats = 2 if args.quick else 5
     import numba

@@ -8,5 +8,5 @@
 ``--quick`` runs a reduced version of each (into ``build/reports/``), which the tests in
 ``tests/reports/`` run so the reports cannot rot. Shared pieces: ``cases`` (scenes, exact answers,
 the seeded throws), ``timing`` (warm-up, then the minimum of repeats), ``document`` (tables,
-figures, the README section).
+figures, the section of docs/reports.md).
 """

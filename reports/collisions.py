@@ -1,7 +1,7 @@
 """Boxes that collide with one another: the named multi-box scenes in our two solvers, pymunk and Box2D,
 and who agrees with whom.
 
-    python -m reports.collisions            # the full report: docs/collisions.md and its README block
+    python -m reports.collisions            # the full report: docs/collisions.md and its block of docs/reports.md
     python -m reports.collisions --quick    # shorter runs, into build/reports/ (the tests run this)
 
 Three stages, each a function:

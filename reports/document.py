@@ -1,6 +1,6 @@
-"""Writing the reports: number formatting, Markdown tables, figures and the README section.
+"""Writing the reports: number formatting, Markdown tables, figures and the reports page's section.
 
-The README holds one section between ``<!-- reports:start -->`` and ``<!-- reports:end -->``; each
+The page docs/reports.md holds one section between ``<!-- reports:start -->`` and ``<!-- reports:end -->``; each
 report command rewrites only its own block inside it (``<!-- reports:NAME:start -->`` ...), so the
 commands can run in any order and every figure in the section comes from a command.
 """
@@ -21,9 +21,9 @@ matplotlib.use("Agg")
 REPO = Path(__file__).resolve().parent.parent
 DOCS = REPO / "docs"
 QUICK_OUT = REPO / "build" / "reports"  # --quick writes here (ignored by git), never into docs/
-README = REPO / "README.md"
+README = DOCS / "reports.md"  # the page that holds the reports section (the README links to it)
 SECTION_START, SECTION_END = "<!-- reports:start -->", "<!-- reports:end -->"
-SECTION_TITLE = "## Precision and stability reports"
+SECTION_TITLE = "# Precision and stability reports"
 
 
 def sci(value: float, digits: int = 2) -> str:
@@ -109,12 +109,12 @@ def update_readme(name: str, body: str, readme: Path = README) -> None:
 
 def report_command(name: str, doc: str, run, write_report, argv=None) -> int:
     """The command line of ``python -m reports.NAME``: run the report (``--quick``: a few points, as the
-    tests do) and write it to docs/ (and the README's section) or to ``--out``."""
+    tests do) and write it to docs/ (and its block of docs/reports.md) or to ``--out``."""
     parser = argparse.ArgumentParser(prog=f"python -m reports.{name}", description=doc.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="a few points of each part (what the tests run)")
     parser.add_argument("--out", type=Path, default=None,
                         help=f"output folder (default: docs/, or {QUICK_OUT.relative_to(REPO)} with --quick); the "
-                             "README's reports section is rewritten only for the full report written to docs/")
+                             "section of docs/reports.md is rewritten only for the full report written to docs/")
     args = parser.parse_args(argv)
     out = args.out or (QUICK_OUT if args.quick else DOCS)
     report = run(quick=args.quick)

@@ -460,7 +460,7 @@ def describe(setting: Setting | None) -> str:
 
 
 def summary_rows(report: PrecisionReport) -> list[list[str]]:
-    """The short table of the README: per solver, the env's dt and the finest dt."""
+    """The short table of docs/reports.md: per solver, the env's dt and the finest dt."""
     rows = []
     default = report.env_default()
     best = recommend(report.throw_results)
@@ -487,7 +487,7 @@ def summary_rows(report: PrecisionReport) -> list[list[str]]:
 
 def write_report(report: PrecisionReport, out: Path, readme: Path | None = None) -> Path:
     """Write ``precision.md`` and its figures into ``out`` (figures in ``out/figures``); with ``readme``,
-    rewrite the report's block of the README's reports section."""
+    rewrite the report's block of docs/reports.md."""
     out.mkdir(parents=True, exist_ok=True)
     figures = out / "figures"
     names = {"work": "precision_work.png", "order": "precision_order.png", "faces": "precision_faces.png"}

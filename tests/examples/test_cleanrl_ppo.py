@@ -1,5 +1,5 @@
 """The CleanRL-style PPO example, our vector ``NormalizeObservation``, and which of Gymnasium's vector
-wrappers work on the native batched env (``AutoresetMode.SAME_STEP``); the README's list comes from here."""
+wrappers work on the native batched env (``AutoresetMode.SAME_STEP``); the list in docs/batched.md comes from here."""
 
 import os
 import pickle
@@ -123,7 +123,7 @@ def test_clip_and_gymnasium_sync_env_final_obs():
     assert info["final_obs"].dtype == object and all(o.dtype == np.float32 for o in info["final_obs"])
 
 
-# -- Gymnasium's vector wrappers on the native env (README: "Gymnasium vector wrappers") -----------
+# -- Gymnasium's vector wrappers on the native env (docs/batched.md: "Gymnasium vector wrappers") -----------
 WORKING = {
     "RecordEpisodeStatistics": lambda e: V.RecordEpisodeStatistics(e),
     "ClipAction": lambda e: V.ClipAction(e),
