@@ -34,8 +34,12 @@ FIDELITY = [(run, tag, label) for run, tag, _, label in FIDELITY_SETTINGS]
 
 
 def free_name(runs_dir: Path, name: str) -> str:
-    """``name``, or ``name-<time>`` if ``runs_dir/name`` already holds a run."""
-    return name if not (runs_dir / name / "config.yml").exists() else f"{name}-{time.strftime('%Y%m%d-%H%M%S')}"
+    """``name``, or ``name-<time>`` (``-2``, ``-3``, ... after it) if ``runs_dir`` already has that folder."""
+    if not (runs_dir / name).exists():
+        return name
+    stamped = f"{name}-{time.strftime('%Y%m%d-%H%M%S')}"
+    return next(candidate for n in range(1, 10_000)
+                if not (runs_dir / (candidate := stamped if n == 1 else f"{stamped}-{n}")).exists())
 
 
 def baseline(algo: str, runs_dir: Path, *, replan: bool = True) -> Path:
