@@ -16,7 +16,7 @@ from pathlib import Path
 import gymnasium as gym
 
 from agents import report
-from agents.config import ConfigError, load_yaml
+from agents.config import ConfigError, OneLineParser, load_yaml
 from agents.evaluation import TEST_FIRST_SEED, TEST_TARGETS, evaluate_run, parse_kwargs
 from agents.policies import UnreadableModelError
 from agents.run_folder import RunFolderError, check_component
@@ -42,7 +42,7 @@ def check_args(args: argparse.Namespace) -> dict:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = OneLineParser(prog="python -m agents.evaluate", description=__doc__.split("\n\n")[0])
     parser.add_argument("run", type=Path, help="run folder (runs/NAME)")
     parser.add_argument("--model", default="final", choices=("final", "best"),
                         help="the model at the end of training, or the one with the best validation success")

@@ -25,13 +25,15 @@ import gymnasium as gym
 import box_toss_env  # noqa: F401  (registers the BoxToss envs)
 from agents import algorithms
 from agents import config as configuration
+from agents.envs import read_env_wrapper
 from agents.policies import UnreadableModelError
 from agents.run_folder import RunFolderError, check_component, check_runs_dir
 from agents.training import RUNS, check_resume, new_run_dir, train, write_run_files
+from box_toss_env.envs.ballistic import DEFAULT_OFFSET_RANGE, DEFAULT_TURN_RANGE, check_command_settings
 
 
 def parse_args(argv: list[str]) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = configuration.OneLineParser(prog="python -m agents.train", description=__doc__.split("\n\n")[0])
     parser.add_argument("--algo", choices=sorted(algorithms.ALGORITHMS), help="algorithm (default: ppo)")
     parser.add_argument("--env", help="env id, a key of the hyperparameter file (default: BoxToss-v0)")
     parser.add_argument("--hyperparams", type=Path, default=configuration.HYPERPARAMS,
@@ -80,9 +82,19 @@ def resolve(args: argparse.Namespace) -> tuple[str, str, int, dict]:
         raise configuration.ConfigError(f"--env {env_id!r} is not registered; BoxToss ids: "
                                         f"{sorted(k for k in gym.registry if k.startswith('BoxToss'))}")
     try:
-        gym.make(env_id, **config["env_kwargs"]).close()  # the env's own checks of env_kwargs
+        env = gym.make(env_id, **config["env_kwargs"])  # the env's own checks of env_kwargs
     except (TypeError, ValueError) as error:
         raise configuration.ConfigError(f"env_kwargs: {error}") from None
+    try:
+        wrapper = read_env_wrapper(config.get("env_wrapper"))
+        if wrapper is not None:  # the wrapper's own checks of its kwargs
+            defaults = {"flight_time_range": None, "offset_range": DEFAULT_OFFSET_RANGE,
+                        "turn_range": DEFAULT_TURN_RANGE}
+            check_command_settings(env.unwrapped.config, **{**defaults, **wrapper[1]})
+    except (TypeError, ValueError) as error:
+        raise configuration.ConfigError(f"env_wrapper: {error}") from None
+    finally:
+        env.close()
     return algo, env_id, seed, config
 
 
