@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import fcntl
 import io
 import os
 import tempfile
@@ -70,6 +71,31 @@ def _umask() -> int:
 
 
 FILE_MODE = 0o666 & ~_umask()  # what open() would have given the file (mkstemp makes it 0o600)
+
+
+LOCK = ".lock"
+_held: dict[Path, Any] = {}  # the locks this process holds, kept open for its lifetime
+
+
+def lock_run(run_dir: Path) -> None:
+    """Hold ``run_dir/.lock`` (an advisory lock, released when the process ends, kill -9 included);
+    a RunFolderError if another process holds it (a training of that run is going on)."""
+    run_dir = Path(run_dir)
+    if run_dir.resolve() in _held:
+        return
+    handle = open(run_dir / LOCK, "a")
+    try:
+        fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        handle.close()
+        raise RunFolderError(f"{run_dir} is in use by another training (it holds {run_dir / LOCK})") from None
+    _held[run_dir.resolve()] = handle
+
+
+def unlock_run(run_dir: Path) -> None:
+    handle = _held.pop(Path(run_dir).resolve(), None)
+    if handle is not None:
+        handle.close()
 
 
 def timestamp() -> str:

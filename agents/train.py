@@ -27,7 +27,7 @@ from agents import algorithms
 from agents import config as configuration
 from agents.envs import read_env_wrapper
 from agents.policies import UnreadableModelError
-from agents.run_folder import RunFolderError, check_component, check_runs_dir
+from agents.run_folder import RunFolderError, check_component, check_runs_dir, lock_run, unlock_run
 from agents.training import RUNS, check_resume, new_run_dir, train, write_run_files
 from box_toss_env.envs.ballistic import DEFAULT_OFFSET_RANGE, DEFAULT_TURN_RANGE, check_command_settings
 
@@ -105,6 +105,7 @@ def main(argv: list[str] | None = None) -> Path:
         algo, env_id, seed, config = resolve(args)
         if args.resume:
             check_resume(args.resume, algo, config)
+            lock_run(args.resume)  # one training of a run at a time
         else:
             check_runs_dir(args.runs_dir)
         run_dir = args.resume or new_run_dir(args.runs_dir, args.name, env_id, algo)
@@ -119,6 +120,8 @@ def main(argv: list[str] | None = None) -> Path:
                        progress_bar=not args.no_progress, final_eval=not args.no_eval)
     except UnreadableModelError as error:
         sys.exit(f"agents.train: {error}")
+    finally:
+        unlock_run(run_dir)
     print(f"trained {timing['timesteps']:,} steps in {timing['wall_seconds']:.1f} s "
           f"(env {timing['env_share']:.0%} of the training loop, validation {timing['eval_seconds']:.1f} s)")
     if not args.no_eval:

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import json
 import re
+import shutil
 import time
 import zipfile
 from collections.abc import Callable
@@ -37,6 +38,7 @@ from agents.envs import TimedVecEnv, find_wrapper, make_training_env, make_vecto
 from agents.evaluation import VALIDATION_FIRST_SEED, evaluate, evaluate_run, scores, target_seeds
 from agents.policies import TrainedPolicy, UnreadableModelError, load_model
 from agents.run_folder import (
+    LOCK,
     AppendingCSVOutput,
     RunFolderError,
     append_line,
@@ -44,9 +46,11 @@ from agents.run_folder import (
     check_component,
     claim_folder,
     csv_line,
+    lock_run,
     read_csv,
     timestamp,
     truncate_csv,
+    unlock_run,
     write_atomic,
 )
 
@@ -135,17 +139,26 @@ def save_model(model, vec_normalize, run_dir: Path, prefix: str = "") -> None:
 
 
 class AtomicCheckpointCallback(BaseCallback):
-    """Every ``save_freq`` env steps: ``save_checkpoint`` and timing.json."""
+    """``save_checkpoint`` (and timing.json) every ``save_freq`` env steps, at the start of a rollout:
+    after the previous rollout's row of progress.csv and the update that followed it, so the
+    checkpoint at T steps has every log row up to T, and a resume from it writes the next at T + rollout."""
 
     def __init__(self, save_freq: int, run_dir: Path, algo: str, clock: RunClock, replay_buffer: bool):
         super().__init__()
         self.save_freq, self.run_dir, self.algo, self.clock = save_freq, run_dir, algo, clock
         self.replay_buffer = replay_buffer
+        self.last = 0
 
-    def _on_step(self) -> bool:
-        if self.n_calls % self.save_freq == 0:
+    def _on_training_start(self) -> None:
+        self.last = self.num_timesteps
+
+    def _on_rollout_start(self) -> None:
+        if self.num_timesteps - self.last >= self.save_freq:
+            self.last = self.num_timesteps
             save_checkpoint(self.model, self.run_dir, self.algo, replay_buffer=self.replay_buffer)
             self.clock.write(self.num_timesteps)
+
+    def _on_step(self) -> bool:
         return True
 
 
@@ -246,15 +259,31 @@ def read_timing(run_dir: Path) -> dict[str, Any] | None:
 
 
 def new_run_dir(runs: Path, name: str | None, env_id: str, algo: str) -> Path:
-    """A fresh folder ``runs/name``, made atomically; without a name ``<algo>-<env id>-<time>``, with
-    ``-2``, ``-3``, ... if another run took it in the same second. An error if a run holds ``name``."""
+    """A fresh folder ``runs/name``, made atomically and locked (``lock_run``) for this process; without
+    a name ``<algo>-<env id>-<time>``, with ``-2``, ``-3``, ... if another run took it in the same second.
+    A named folder left by a run that died before its first checkpoint holds nothing to keep, and is
+    cleared; one that holds a checkpoint, or that a live training holds, is an error."""
     if name is None:
-        return claim_folder(runs, f"{algo}-{env_id}-{timestamp()}")
+        run_dir = claim_folder(runs, f"{algo}-{env_id}-{timestamp()}")
+        lock_run(run_dir)
+        return run_dir
     check_component(name, "--name")
     run_dir = claim_folder(runs, name)
-    if run_dir.name != name:
-        run_dir.rmdir()
-        raise RunFolderError(f"{runs / name} already exists: choose another --name, or --resume {runs / name}")
+    if run_dir.name == name:
+        lock_run(run_dir)
+        return run_dir
+    run_dir.rmdir()
+    run_dir = runs / name
+    taken = RunFolderError(f"{run_dir} already holds a run: choose another --name, or --resume {run_dir}")
+    if not (run_dir / "config.yml").exists():
+        raise taken  # not a run folder, or one being made this instant
+    lock_run(run_dir)  # an error if its training is going on
+    if latest_checkpoint(run_dir, algo) is not None or (run_dir / "model.zip").exists():
+        unlock_run(run_dir)
+        raise taken
+    for path in run_dir.iterdir():  # a run that died before its first checkpoint: nothing to keep
+        if path.name != LOCK:
+            shutil.rmtree(path) if path.is_dir() else path.unlink()
     return run_dir
 
 
@@ -336,9 +365,8 @@ def train(run_dir: Path, config: dict[str, Any], env_id: str, seed: int, algo: s
     clock.timed = find_wrapper(venv, TimedVecEnv)
     validation = ValidationCallback(run_dir, config, env_id, clock, on_validation)
     callbacks = [validation, ClockCallback(clock)]
-    if config.get("checkpoint_freq"):  # first: a checkpoint of this step exists when the validation is reported
-        callbacks.insert(0, AtomicCheckpointCallback(max(int(config["checkpoint_freq"]) // config["n_envs"], 1),
-                                                     run_dir, algo, clock, off_policy))
+    if config.get("checkpoint_freq"):
+        callbacks.insert(0, AtomicCheckpointCallback(int(config["checkpoint_freq"]), run_dir, algo, clock, off_policy))
     remaining = max(int(config["n_timesteps"]) - model.num_timesteps, 0)
     model.learn(remaining, callback=callbacks, progress_bar=progress_bar, reset_num_timesteps=not checkpoint)
     save_checkpoint(model, run_dir, algo, replay_buffer=off_policy)  # where a later --resume starts

@@ -23,6 +23,7 @@ from agents.run_folder import (
     claim_folder,
     read_csv,
     truncate_csv,
+    unlock_run,
     write_atomic,
 )
 from agents.training import latest_checkpoint, new_run_dir
@@ -65,7 +66,7 @@ def test_runs_started_together_get_different_folders(tmp_path):
         folders = list(pool.map(lambda _: claim_folder(tmp_path, "ppo-BoxToss-v0-20260101-000000"), range(16)))
     assert len(set(folders)) == 16 and all(folder.is_dir() for folder in folders)
     assert new_run_dir(tmp_path, None, "BoxToss-v0", "ppo") != new_run_dir(tmp_path, None, "BoxToss-v0", "ppo")
-    with pytest.raises(RunFolderError, match="already exists"):
+    with pytest.raises(RunFolderError, match="already holds a run"):
         new_run_dir(tmp_path, folders[0].name, "BoxToss-v0", "ppo")
 
 
@@ -99,6 +100,27 @@ def tiny_run(tmp_path_factory) -> Path:
     runs = tmp_path_factory.mktemp("runs")
     run(*train_tiny(runs, "tiny", 128))
     return runs / "tiny"
+
+
+def test_a_named_folder_is_cleared_only_if_its_run_died_before_a_checkpoint(tiny_run, tmp_path):
+    dead = tmp_path / "dead"
+    dead.mkdir()
+    (dead / "config.yml").write_text("algo: ppo\n")
+    (dead / "evaluations.csv").write_text("timesteps\n0\n")
+    assert new_run_dir(tmp_path, "dead", "BoxToss-v0", "ppo") == dead and os.listdir(dead) == [".lock"]
+    with pytest.raises(RunFolderError, match="already holds a run"):
+        new_run_dir(tiny_run.parent, "tiny", "BoxToss-v0", "ppo")
+    unlock_run(dead)
+    (dead / "config.yml").write_text("algo: ppo\n")
+    live = subprocess.Popen([sys.executable, "-c", "import sys, time; from agents.run_folder import lock_run; "
+                             f"lock_run({str(dead)!r}); print('locked', flush=True); time.sleep(60)"],
+                            cwd=REPO, stdout=subprocess.PIPE, text=True)
+    try:
+        assert live.stdout.readline().strip() == "locked"
+        one_line_error(run(*train_tiny(tmp_path, "dead", 64), ok=False), "is in use by another training")
+    finally:
+        live.kill()
+        live.wait()
 
 
 def test_a_run_records_what_it_trains(tiny_run):
