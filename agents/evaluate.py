@@ -34,6 +34,8 @@ def check_args(args: argparse.Namespace) -> dict:
         check_component(args.tag, "--tag")
     env_kwargs = parse_kwargs(args.env_kwargs)
     config = load_yaml(args.run / "config.yml")
+    if not isinstance(config, dict) or "env_id" not in config:
+        raise ConfigError(f"{args.run / 'config.yml'} is not a run's configuration (no env_id)")
     try:
         gym.make(config["env_id"], **{**config.get("env_kwargs", {}), **env_kwargs}).close()
     except (TypeError, ValueError) as error:

@@ -11,13 +11,14 @@ variant and algorithm, ``python -m agents.benchmark``.
 
 from __future__ import annotations
 
-import argparse
 import shlex
 import sys
 import time
 from pathlib import Path
 
 from agents import evaluation, report, train
+from agents.config import OneLineParser
+from agents.run_folder import RunFolderError, check_runs_dir
 from agents.training import RUNS
 
 ENV_ID = "BoxToss-ThisSideUp-v0"  # one face drawn per episode must end down: the pose counts
@@ -53,7 +54,7 @@ def baseline(algo: str, runs_dir: Path, *, replan: bool = True) -> Path:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = OneLineParser(prog="python -m agents.main", description=__doc__.split("\n\n")[0])
     parser.add_argument("--runs-dir", type=Path, default=RUNS)
     parser.add_argument("--timesteps", type=int, default=SHORT_TIMESTEPS, help="budget of the short run")
     parser.add_argument("--full", action="store_true", help="also train the full run and evaluate physics fidelity")
@@ -61,6 +62,12 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--no-oracle", action="store_true", help="skip the oracle (it plans for ~20 s)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     args = parser.parse_args(argv)
+    if args.timesteps < 1:
+        parser.error(f"--timesteps must be an integer >= 1, got {args.timesteps}")
+    try:
+        check_runs_dir(args.runs_dir)
+    except RunFolderError as error:
+        parser.error(str(error))
     start = time.perf_counter()
     runs_dir: Path = args.runs_dir
     progress = ["--no-progress"] if args.no_progress else []
