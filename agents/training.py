@@ -350,6 +350,8 @@ def train(run_dir: Path, config: dict[str, Any], env_id: str, seed: int, algo: s
         buffer = checkpoint[0].with_name(f"{algo}_replay_buffer_{checkpoint[2]}_steps.pkl")
         if off_policy and buffer.exists():
             model.load_replay_buffer(buffer)
+        for leftover in [*run_dir.glob(".*.tmp*"), *run_dir.glob("checkpoints/.*.tmp*")]:  # cut by a kill
+            leftover.unlink()
         _, progress_dropped = truncate_csv(run_dir / "logs" / "progress.csv", "time/total_timesteps", checkpoint[2])
         _, evaluations_dropped = truncate_csv(run_dir / "evaluations.csv", "timesteps", checkpoint[2])
         dropped = (f"; dropped the rows written after it: {progress_dropped} of logs/progress.csv, "

@@ -215,3 +215,28 @@ def test_two_runs_started_together_without_a_name_get_two_folders(tmp_path):
         assert process.wait(timeout=300) == 0, process.stderr.read()
     folders = sorted(os.listdir(tmp_path))
     assert len(folders) == 2 and all((tmp_path / folder / "model.zip").exists() for folder in folders)
+
+
+def test_a_kill_during_a_checkpoint_write_leaves_the_previous_checkpoint(tmp_path, monkeypatch):
+    """The model of a checkpoint is written last, to a temporary name: cut short in the middle (as a
+    kill would), the newest complete checkpoint is still the one a resume starts from."""
+    import gymnasium as gym
+    from stable_baselines3 import PPO
+
+    from agents.training import save_checkpoint
+
+    model = PPO("MlpPolicy", gym.make("BoxToss-v0"), n_steps=8, batch_size=8, device="cpu")
+    save_checkpoint(model, tmp_path, "ppo", replay_buffer=False)
+    model.num_timesteps = 64
+    real_save = model.save
+
+    def killed_while_saving(path, *args, **kwargs):
+        real_save(path, *args, **kwargs)
+        Path(path).write_bytes(Path(path).read_bytes()[:100])  # half written
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(model, "save", killed_while_saving)
+    with pytest.raises(KeyboardInterrupt):
+        save_checkpoint(model, tmp_path, "ppo", replay_buffer=False)
+    assert latest_checkpoint(tmp_path, "ppo")[2] == 0
+    assert sorted(path.name for path in (tmp_path / "checkpoints").glob("*.zip")) == ["ppo_0_steps.zip"]
