@@ -14,6 +14,7 @@ import sys
 from pathlib import Path
 
 from agents.evaluation import TEST_TARGETS, evaluate_run, make_baseline_run, parse_kwargs
+from agents.run_folder import RunFolderError, check_component
 from agents.training import RUNS
 
 
@@ -29,6 +30,14 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--runs-dir", type=Path, default=RUNS)
     parser.add_argument("--targets", type=int, default=TEST_TARGETS)
     args = parser.parse_args(argv)
+    try:
+        if args.name is not None:
+            check_component(args.name, "--name")
+        if args.targets < 1:
+            raise RunFolderError(f"--targets must be an integer >= 1, got {args.targets}")
+    except RunFolderError as error:
+        print(f"agents.baselines: {error}", file=sys.stderr)
+        sys.exit(2)
     run_dir = make_baseline_run(args.algo, args.runs_dir / (args.name or args.algo), args.env,
                                 parse_kwargs(args.env_kwargs), parse_kwargs(args.settings),
                                 shlex.join(["python", "-m", "agents.baselines", *argv]))

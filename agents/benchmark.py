@@ -25,7 +25,7 @@ import numpy as np
 from agents import ceiling, report, train
 from agents.algorithms import ALGORITHMS
 from agents.evaluation import TEST_TARGETS, evaluate_run, make_baseline_run
-from agents.training import RUNS, read_timing
+from agents.training import RUNS, latest_checkpoint, read_timing
 
 VARIANTS = ("BoxToss-v0", "BoxToss-LongSide-v0", "BoxToss-ShortEnd-v0", "BoxToss-ThisSideUp-v0", "BoxToss-Mixed-v0",
             "BoxToss-OnBox-v0")
@@ -43,7 +43,7 @@ def ensure_trained(root: Path, env_id: str, algo: str, seed: int) -> Path:
     if report.read_results(path) is not None:
         return path
     args = ["--algo", algo, "--env", env_id, "--seed", str(seed), "--no-progress"]
-    if (path / "config.yml").exists() and (path / "checkpoints").exists():
+    if (path / "config.yml").exists() and latest_checkpoint(path, algo) is not None:
         train.main(["--resume", str(path), "--no-progress"])
     else:
         train.main([*args, "--runs-dir", str(path.parent), "--name", path.name])

@@ -19,11 +19,14 @@ the value is read with ``yaml.safe_load``.
 
 from __future__ import annotations
 
+import argparse
 import ast
 import copy
+import math
 from pathlib import Path
 from typing import Any
 
+import numba
 import numpy as np
 import torch.nn
 import yaml
@@ -56,6 +59,13 @@ EXPRESSION_KEYS = ("policy_kwargs", "normalize", "replay_buffer_kwargs")  # Zoo 
 
 class ConfigError(ValueError):
     """A configuration that cannot run; the message names the key and what is allowed."""
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """A parser whose errors are one line, exit code 2 (argparse would print the whole usage first)."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
 
 
 # -- reading files -------------------------------------------------------------------------------
@@ -236,6 +246,7 @@ def check_config(config: dict[str, Any], algo: str = "ppo") -> None:
     for key in ("n_timesteps", "n_envs"):
         if not isinstance(config.get(key), int) or isinstance(config.get(key), bool) or config[key] < 1:
             raise ConfigError(f"{key} must be an integer >= 1, got {config.get(key)!r}")
+    check_schema(config)
     policy_kwargs = config.get("policy_kwargs", {})
     if not isinstance(policy_kwargs, dict):
         raise ConfigError(f"policy_kwargs must be a mapping, got {policy_kwargs!r}")
@@ -253,6 +264,129 @@ def check_config(config: dict[str, Any], algo: str = "ppo") -> None:
     for key in ("learning_rate", "clip_range"):
         if isinstance(config.get(key), str):
             schedule(key, config[key])
+
+
+# -- the schema: every option's type and range, checked at once before anything is made -----------
+class Rule:
+    """What one configuration key accepts: an integer or a number in [low, high], a boolean, one of
+    ``choices``, a ``lin_<number>`` schedule (``schedule=True``), a list of layer sizes, or a mapping
+    (checked by ``mapping`` rules); ``allowed`` says it in words for the error message."""
+
+    def __init__(self, kind: str, low: float | None = None, high: float | None = None, *, choices: tuple = (),
+                 schedule: bool = False, mapping: dict[str, Rule] | None = None, above: bool = False):
+        self.kind, self.low, self.high, self.choices = kind, low, high, choices
+        self.schedule, self.mapping, self.above = schedule, mapping or {}, above
+
+    @property
+    def allowed(self) -> str:
+        if self.kind == "bool":
+            return "true or false"
+        if self.kind == "layers":
+            return "a list of layer sizes >= 1 (e.g. [64, 64]), or dict(pi=[...], vf=[...])"
+        if self.kind == "mapping":
+            return f"a mapping of {sorted(self.mapping)}" if self.mapping else "a mapping"
+        noun = "an integer" if self.kind == "int" else "a number"
+        bounds = []
+        if self.low is not None:
+            bounds.append(f"{'>' if self.above else '>='} {self.low:g}")
+        if self.high is not None:
+            bounds.append(f"<= {self.high:g}")
+        words = f"{noun} {' and '.join(bounds)}".strip()
+        extra = [repr(choice) for choice in self.choices] + (["'lin_<number>'"] if self.schedule else [])
+        return " or ".join([words, *extra])
+
+    def ok(self, value: Any) -> bool:
+        if value in self.choices and not isinstance(value, bool):
+            return True
+        if self.schedule and isinstance(value, str):
+            prefix, _, start = value.partition("_")
+            number = read_value(start)
+            return prefix == "lin" and isinstance(number, (int, float)) and not isinstance(number, bool) \
+                and math.isfinite(number) and number > 0
+        if self.kind == "bool":
+            return isinstance(value, bool)
+        if self.kind == "layers":
+            if isinstance(value, dict):
+                return bool(value) and set(value) <= {"pi", "vf", "qf"} and all(map(layer_sizes, value.values()))
+            return layer_sizes(value)
+        if self.kind == "mapping":
+            return isinstance(value, dict)
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            return False
+        if self.kind == "int" and not isinstance(value, int):
+            return False
+        if not math.isfinite(value):
+            return False
+        if self.low is not None and (value <= self.low if self.above else value < self.low):
+            return False
+        return self.high is None or value <= self.high
+
+
+def layer_sizes(value: Any) -> bool:
+    return isinstance(value, list) and all(isinstance(n, int) and not isinstance(n, bool) and n >= 1 for n in value)
+
+
+UNIT = (0.0, 1.0)
+SCHEMA: dict[str, Rule] = {
+    # RL Zoo's keys and ours
+    "n_timesteps": Rule("int", 1),
+    "n_envs": Rule("int", 1),
+    "normalize": Rule("bool", mapping={"norm_obs": Rule("bool"), "norm_reward": Rule("bool"),
+                                       "clip_obs": Rule("float", 0, above=True),
+                                       "clip_reward": Rule("float", 0, above=True),
+                                       "gamma": Rule("float", *UNIT), "epsilon": Rule("float", 0, above=True)}),
+    "noise_std": Rule("float", 0),
+    "vec_env_kwargs": Rule("mapping", mapping={"threads": Rule("int", 1, numba.config.NUMBA_NUM_THREADS)}),
+    "torch_threads": Rule("int", 1),
+    "eval_freq": Rule("int", 0),
+    "eval_targets": Rule("int", 1),
+    "checkpoint_freq": Rule("int", 0),
+    # the algorithms' constructor arguments
+    "learning_rate": Rule("float", 0, above=True, schedule=True),
+    "n_steps": Rule("int", 1),
+    "batch_size": Rule("int", 2),
+    "n_epochs": Rule("int", 1),
+    "gamma": Rule("float", *UNIT),
+    "gae_lambda": Rule("float", *UNIT),
+    "clip_range": Rule("float", 0, above=True, schedule=True),
+    "ent_coef": Rule("float", 0, choices=("auto",)),
+    "vf_coef": Rule("float", 0),
+    "max_grad_norm": Rule("float", 0, above=True),
+    "buffer_size": Rule("int", 1),
+    "learning_starts": Rule("int", 0),
+    "tau": Rule("float", *UNIT),
+    "gradient_steps": Rule("int", 1, choices=(-1,)),
+    "policy_delay": Rule("int", 1),
+    "target_policy_noise": Rule("float", 0),
+    "target_noise_clip": Rule("float", 0),
+    "policy_kwargs": Rule("mapping", mapping={"net_arch": Rule("layers"), "log_std_init": Rule("float"),
+                                              "ortho_init": Rule("bool")}),
+}
+"""Every key with a range. ``check_config`` applies it; the bad-option tests are generated from it."""
+
+
+def check_value(key: str, value: Any, rule: Rule) -> None:
+    if rule.mapping and isinstance(value, dict):
+        for name, item in value.items():
+            if name in rule.mapping:
+                check_value(f"{key}.{name}", item, rule.mapping[name])
+        return
+    if not rule.ok(value):
+        allowed = rule.allowed
+        if rule.kind == "bool" and rule.mapping:
+            allowed = f"true, false or a mapping of {sorted(rule.mapping)}"
+        raise ConfigError(f"{key} must be {allowed}, got {value!r}")
+
+
+def check_schema(config: dict[str, Any]) -> None:
+    """A ConfigError naming the first key (dotted into mappings) whose value is out of its range."""
+    for key, rule in SCHEMA.items():
+        if key in config and not (config[key] is None and key in ("policy_kwargs", "vec_env_kwargs")):
+            check_value(key, config[key], rule)
+    if "batch_size" in config and "n_steps" in config and config.get("n_envs"):
+        if config["batch_size"] > config["n_steps"] * config["n_envs"]:
+            raise ConfigError(f"batch_size must be <= n_steps x n_envs = {config['n_steps'] * config['n_envs']} "
+                              f"(the rollout), got {config['batch_size']}")
 
 
 # -- constructor arguments -------------------------------------------------------------------------

@@ -13,13 +13,38 @@ import argparse
 import sys
 from pathlib import Path
 
+import gymnasium as gym
+
 from agents import report
-from agents.evaluation import TEST_FIRST_SEED, TEST_TARGETS, default_tag, evaluate_run, parse_kwargs
+from agents.config import ConfigError, OneLineParser, load_yaml
+from agents.evaluation import TEST_FIRST_SEED, TEST_TARGETS, evaluate_run, parse_kwargs
 from agents.policies import UnreadableModelError
+from agents.run_folder import RunFolderError, check_component
+
+
+def check_args(args: argparse.Namespace) -> dict:
+    """The env kwargs of the command, every option checked first (a ConfigError or RunFolderError)."""
+    if not (args.run / "config.yml").exists():
+        raise ConfigError(f"{args.run} is not a run folder (no config.yml)")
+    for option, value, low in (("--targets", args.targets, 1), ("--first-seed", args.first_seed, 0),
+                               ("--video", args.video, 0)):
+        if value < low:
+            raise ConfigError(f"{option} must be an integer >= {low}, got {value}")
+    if args.tag is not None:
+        check_component(args.tag, "--tag")
+    env_kwargs = parse_kwargs(args.env_kwargs)
+    config = load_yaml(args.run / "config.yml")
+    if not isinstance(config, dict) or "env_id" not in config:
+        raise ConfigError(f"{args.run / 'config.yml'} is not a run's configuration (no env_id)")
+    try:
+        gym.make(config["env_id"], **{**config.get("env_kwargs", {}), **env_kwargs}).close()
+    except (TypeError, ValueError) as error:
+        raise ConfigError(f"--env-kwargs: {error}") from None
+    return env_kwargs
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = OneLineParser(prog="python -m agents.evaluate", description=__doc__.split("\n\n")[0])
     parser.add_argument("run", type=Path, help="run folder (runs/NAME)")
     parser.add_argument("--model", default="final", choices=("final", "best"),
                         help="the model at the end of training, or the one with the best validation success")
@@ -31,14 +56,17 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--video", type=int, default=0, metavar="N", help="also write a GIF of N throws")
     parser.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
     args = parser.parse_args(argv)
-    if not (args.run / "config.yml").exists():
-        sys.exit(f"agents.evaluate: {args.run} is not a run folder (no config.yml)")
     try:
-        results = evaluate_run(args.run, model=args.model, env_kwargs=parse_kwargs(args.env_kwargs), tag=args.tag,
+        env_kwargs = check_args(args)
+    except (ConfigError, RunFolderError) as error:
+        print(f"agents.evaluate: {error}", file=sys.stderr)
+        sys.exit(2)
+    try:
+        results = evaluate_run(args.run, model=args.model, env_kwargs=env_kwargs, tag=args.tag,
                                n_targets=args.targets, first_seed=args.first_seed)
-    except UnreadableModelError as error:
+    except (UnreadableModelError, RunFolderError) as error:
         sys.exit(f"agents.evaluate: {error}")
-    out = args.run / "eval" / (args.tag or default_tag(parse_kwargs(args.env_kwargs), args.model))
+    out = args.run / "eval" / results["tag"]
     if not args.no_plots:
         for path in report.plot_run(args.run, out):
             print(f"figure: {path}")

@@ -23,11 +23,13 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+import yaml
 
 import box_toss_env  # noqa: F401  (registers the BoxToss envs)
 from agents import oracle
-from agents.config import load_yaml, parse_override, save_yaml
+from agents.config import load_yaml, parse_override
 from agents.policies import ConstantPolicy, Policy, RandomPolicy, TrainedPolicy
+from agents.run_folder import RunFolderError, check_component, write_atomic
 from box_toss_env.envs import task
 from box_toss_env.envs.box_toss import EnergyGainError
 from box_toss_env.physics import NonFiniteStateError
@@ -63,9 +65,10 @@ class Throws:
         return ok & (self.face_down >= 0)
 
     def save(self, path: Path) -> None:
+        """``throws.npz``, written atomically."""
         arrays = {name: getattr(self, name) for name in ("seeds", "target_x", "target_faces", "actions", "final_x",
                                                          "face_down", "at_rest", "success", "reward")}
-        np.savez_compressed(path, failure=np.array(self.failure, dtype=str), **arrays)
+        write_atomic(path, lambda file: np.savez_compressed(file, failure=np.array(self.failure, dtype=str), **arrays))
 
     @classmethod
     def load(cls, path: Path) -> Throws:
@@ -223,10 +226,10 @@ def make_baseline_run(algo: str, run_dir: Path, env_id: str = "BoxToss-v0", env_
                       settings: dict[str, Any] | None = None, command: str | None = None) -> Path:
     """A run folder for a baseline (config.yml, command.txt), evaluated like any run."""
     run_dir.mkdir(parents=True, exist_ok=True)
-    save_yaml({"algo": algo, "env_id": env_id, "env_kwargs": env_kwargs or {}, "baseline": settings or {}},
-              run_dir / "config.yml")
+    write_atomic(run_dir / "config.yml", yaml.safe_dump({"algo": algo, "env_id": env_id, "env_kwargs": env_kwargs or {},
+                                                         "baseline": settings or {}}, sort_keys=False))
     if command:
-        (run_dir / "command.txt").write_text(command + "\n")
+        write_atomic(run_dir / "command.txt", command + "\n")
     return run_dir
 
 
@@ -236,7 +239,9 @@ def load_policy(run_dir: Path, model: str = "final") -> tuple[Policy, dict[str, 
     algo = config["algo"]
     if algo in BASELINES:
         return make_baseline(algo, config.get("baseline", {})), config
-    return TrainedPolicy.load(run_dir, algo, model, config.get("hyperparams", {}).get("env_wrapper")), config
+    hyperparams = config.get("hyperparams", {})
+    return TrainedPolicy.load(run_dir, algo, model, hyperparams.get("env_wrapper"),
+                              normalized=bool(hyperparams.get("normalize", True))), config
 
 
 def evaluate_run(run_dir: Path, *, model: str = "final", env_kwargs: dict[str, Any] | None = None,
@@ -244,25 +249,28 @@ def evaluate_run(run_dir: Path, *, model: str = "final", env_kwargs: dict[str, A
                  quiet: bool = False) -> dict[str, Any]:
     """Evaluate the run's policy on the test targets, under the env settings it was trained with,
     updated with ``env_kwargs``; write ``RUN/eval/TAG/`` (results.json, throws.npz) and return the
-    results."""
+    results. The default tag names every setting that differs from the defaults (``default_tag``);
+    a folder holding the results of other settings is never overwritten (a RunFolderError)."""
     run_dir = Path(run_dir)
+    tag = check_component(tag, "--tag") if tag is not None else default_tag(env_kwargs, model, n_targets, first_seed)
     policy, config = load_policy(run_dir, model)
     env_id = config["env_id"]
     kwargs = {**config.get("env_kwargs", {}), **(env_kwargs or {})}
     seeds = target_seeds(n_targets, first_seed)
+    out = run_dir / "eval" / tag
+    settings = {"model": model, "env_id": env_id, "env_kwargs": kwargs, "seeds": [int(seeds[0]), int(seeds[-1])]}
+    check_results_folder(out, settings)
     start = time.perf_counter()
     throws, act_seconds = evaluate(policy, env_id, kwargs, seeds)
     wall = time.perf_counter() - start
     target_x_range = gym.make(env_id, **kwargs).unwrapped.config.target_x_range
     summary = summarize(throws, target_x_range)
-    tag = tag or default_tag(env_kwargs, model)
-    out = run_dir / "eval" / tag
     out.mkdir(parents=True, exist_ok=True)
     results = {"run": run_dir.name, "algo": config["algo"], "model": model, "env_id": env_id, "env_kwargs": kwargs,
                "seeds": [int(seeds[0]), int(seeds[-1])], "act_seconds": act_seconds, "eval_seconds": wall,
-               **summary}
-    (out / "results.json").write_text(json.dumps(results, indent=2))
+               "tag": tag, **summary}
     throws.save(out / "throws.npz")
+    write_atomic(out / "results.json", json.dumps(results, indent=2))
     if not quiet:
         which = "" if config["algo"] in BASELINES else f", {model} model"
         print(f"{run_dir.name} ({config['algo']}{which}) on {env_id}{' ' + str(kwargs) if kwargs else ''}, "
@@ -272,11 +280,34 @@ def evaluate_run(run_dir: Path, *, model: str = "final", env_kwargs: dict[str, A
     return results
 
 
-def default_tag(env_kwargs: dict[str, Any] | None, model: str = "final") -> str:
+def check_results_folder(out: Path, settings: dict[str, Any]) -> None:
+    """A RunFolderError if ``out`` holds the results of an evaluation with other settings."""
+    path = out / "results.json"
+    if not path.exists():
+        return
+    try:
+        held = json.loads(path.read_text())
+    except ValueError:
+        return  # not results: replaced
+    held = {key: held.get(key) for key in settings}
+    if held != json.loads(json.dumps(settings)):
+        differ = ", ".join(f"{key} {held[key]} there, {settings[key]} here" for key in settings
+                           if held[key] != json.loads(json.dumps(settings[key])))
+        raise RunFolderError(f"{out} holds an evaluation with other settings ({differ}); choose another --tag")
+
+
+def default_tag(env_kwargs: dict[str, Any] | None, model: str = "final", n_targets: int = TEST_TARGETS,
+                first_seed: int = TEST_FIRST_SEED) -> str:
+    """"default" for the test targets under the run's own env settings; otherwise the settings that
+    differ (``best-dt=0.000976562-targets=8``), so that no evaluation overwrites another."""
     parts = [] if model == "final" else [model]
     for key, value in sorted((env_kwargs or {}).items()):
         parts.append(f"{key}={value:.6g}" if isinstance(value, float) else f"{key}={value}")
-    return "-".join(parts) or "default"
+    if n_targets != TEST_TARGETS:
+        parts.append(f"targets={n_targets}")
+    if first_seed != TEST_FIRST_SEED:
+        parts.append(f"first_seed={first_seed}")
+    return "-".join(parts).replace("/", "_") or "default"
 
 
 def parse_kwargs(items: list[str] | None) -> dict[str, Any]:

@@ -11,13 +11,14 @@ variant and algorithm, ``python -m agents.benchmark``.
 
 from __future__ import annotations
 
-import argparse
 import shlex
 import sys
 import time
 from pathlib import Path
 
 from agents import evaluation, report, train
+from agents.config import OneLineParser
+from agents.run_folder import RunFolderError, check_runs_dir
 from agents.training import RUNS
 
 ENV_ID = "BoxToss-ThisSideUp-v0"  # one face drawn per episode must end down: the pose counts
@@ -34,8 +35,12 @@ FIDELITY = [(run, tag, label) for run, tag, _, label in FIDELITY_SETTINGS]
 
 
 def free_name(runs_dir: Path, name: str) -> str:
-    """``name``, or ``name-<time>`` if ``runs_dir/name`` already holds a run."""
-    return name if not (runs_dir / name / "config.yml").exists() else f"{name}-{time.strftime('%Y%m%d-%H%M%S')}"
+    """``name``, or ``name-<time>`` (``-2``, ``-3``, ... after it) if ``runs_dir`` already has that folder."""
+    if not (runs_dir / name).exists():
+        return name
+    stamped = f"{name}-{time.strftime('%Y%m%d-%H%M%S')}"
+    return next(candidate for n in range(1, 10_000)
+                if not (runs_dir / (candidate := stamped if n == 1 else f"{stamped}-{n}")).exists())
 
 
 def baseline(algo: str, runs_dir: Path, *, replan: bool = True) -> Path:
@@ -49,7 +54,7 @@ def baseline(algo: str, runs_dir: Path, *, replan: bool = True) -> Path:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = OneLineParser(prog="python -m agents.main", description=__doc__.split("\n\n")[0])
     parser.add_argument("--runs-dir", type=Path, default=RUNS)
     parser.add_argument("--timesteps", type=int, default=SHORT_TIMESTEPS, help="budget of the short run")
     parser.add_argument("--full", action="store_true", help="also train the full run and evaluate physics fidelity")
@@ -57,6 +62,12 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--no-oracle", action="store_true", help="skip the oracle (it plans for ~20 s)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     args = parser.parse_args(argv)
+    if args.timesteps < 1:
+        parser.error(f"--timesteps must be an integer >= 1, got {args.timesteps}")
+    try:
+        check_runs_dir(args.runs_dir)
+    except RunFolderError as error:
+        parser.error(str(error))
     start = time.perf_counter()
     runs_dir: Path = args.runs_dir
     progress = ["--no-progress"] if args.no_progress else []

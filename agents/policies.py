@@ -77,12 +77,17 @@ class TrainedPolicy:
         return actions
 
     @classmethod
-    def load(cls, run_dir: Path, algo: str, which: str = "final", env_wrapper: Any = None) -> TrainedPolicy:
-        """The final model of a run folder (``which="best"``: the best by validation success)."""
+    def load(cls, run_dir: Path, algo: str, which: str = "final", env_wrapper: Any = None,
+             normalized: bool = False) -> TrainedPolicy:
+        """The final model of a run folder (``which="best"``: the best by validation success); a model
+        trained on ``normalized`` observations refuses to load without its statistics."""
         prefix = "" if which == "final" else "best_"
         model = load_model(algo, Path(run_dir) / f"{prefix}model.zip")
         stats = Path(run_dir) / f"{prefix}vecnormalize.pkl"
         vec_normalize = None
+        if normalized and not stats.exists():
+            raise UnreadableModelError(f"{stats} is missing: the model was trained on normalised observations and "
+                                       f"acts at random without their statistics")
         if stats.exists():
             with open(stats, "rb") as file:
                 vec_normalize = pickle.load(file)  # the statistics only (SB3 pickles it without its venv)

@@ -5,44 +5,171 @@
 observation statistics), ``best_model.zip`` / ``best_vecnormalize.pkl`` (best validation success),
 ``evaluations.csv`` (periodic deterministic evaluation on fixed validation targets), ``logs/``
 (TensorBoard and progress.csv), ``checkpoints/`` (with the replay buffer for off-policy algorithms),
-``timing.json`` (wall time over all sessions of the run, and the env's share of it) and
-``eval/default/`` (the final evaluation on the 1,024 test targets).
+``timing.json`` (wall time over all sessions of the run, and the env's share of it, written as training
+goes so that a killed session's time counts too) and ``eval/default/`` (the final evaluation on the 1,024
+test targets).
+
+Nothing completed is ever lost (``agents.run_folder``): every file is written atomically, a checkpoint's
+model is written after its statistics and replay buffer (a checkpoint is complete once its model is
+there), and the logs are appended; ``--resume`` continues from the newest complete checkpoint and drops,
+explicitly, the rows of progress.csv and evaluations.csv written after it, so none is duplicated.
 """
 
 from __future__ import annotations
 
-import csv
 import json
 import re
 import shutil
 import time
+import zipfile
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import torch
-from stable_baselines3.common.callbacks import BaseCallback, CheckpointCallback
-from stable_baselines3.common.logger import configure
+import yaml
+from stable_baselines3.common.callbacks import BaseCallback
+from stable_baselines3.common.logger import Logger, TensorBoardOutputFormat
 
 from agents import algorithms
 from agents import config as configuration
 from agents.envs import TimedVecEnv, find_wrapper, make_training_env, make_vector_env, normalizer_of
 from agents.evaluation import VALIDATION_FIRST_SEED, evaluate, evaluate_run, scores, target_seeds
-from agents.policies import TrainedPolicy, load_model
+from agents.policies import TrainedPolicy, UnreadableModelError, load_model
+from agents.run_folder import (
+    LOCK,
+    AppendingCSVOutput,
+    RunFolderError,
+    append_line,
+    atomic_path,
+    check_component,
+    claim_folder,
+    csv_line,
+    lock_run,
+    read_csv,
+    timestamp,
+    truncate_csv,
+    unlock_run,
+    write_atomic,
+)
 
 RUNS = Path("runs")
 EVAL_COLUMNS = ("timesteps", "wall_seconds", "success_rate", "mean_distance", "median_distance", "face_accuracy",
                 "mean_reward", "failures")
 
 
+class RunClock:
+    """Wall, env and validation seconds over every session of a run, written to timing.json as training
+    goes (at most a second apart, and at each checkpoint and validation): a kill loses about a second."""
+
+    def __init__(self, run_dir: Path, algo: str, previous: dict[str, Any] | None = None):
+        self.path = run_dir / "timing.json"
+        self.algo = algo
+        self.previous = {key: float((previous or {}).get(key, 0.0))
+                         for key in ("wall_seconds", "env_seconds", "eval_seconds")}
+        self.start = time.perf_counter()
+        self.written = 0.0
+        self.timed: TimedVecEnv | None = None
+        self.eval_seconds = 0.0
+
+    def wall(self) -> float:
+        return self.previous["wall_seconds"] + time.perf_counter() - self.start
+
+    def timing(self, timesteps: int) -> dict[str, Any]:
+        timing = {
+            "algo": self.algo,
+            "timesteps": int(timesteps),
+            "wall_seconds": self.wall(),  # everything in model.learn, every session (killed ones too)
+            "env_seconds": self.previous["env_seconds"] + (self.timed.env_seconds if self.timed else 0.0),
+            "eval_seconds": self.previous["eval_seconds"] + self.eval_seconds,  # periodic validation
+            "torch_threads": torch.get_num_threads(),
+        }
+        # the env's share of the training loop (rollouts and updates; periodic validation left out)
+        timing["env_share"] = timing["env_seconds"] / max(timing["wall_seconds"] - timing["eval_seconds"], 1e-9)
+        return timing
+
+    def write(self, timesteps: int, *, every: float = 0.0) -> dict[str, Any] | None:
+        if time.perf_counter() - self.written < every:
+            return None
+        timing = self.timing(timesteps)
+        write_atomic(self.path, json.dumps(timing, indent=2))
+        self.written = time.perf_counter()
+        return timing
+
+
+class ClockCallback(BaseCallback):
+    """Writes the run's timing.json at most a second apart while training."""
+
+    def __init__(self, clock: RunClock):
+        super().__init__()
+        self.clock = clock
+
+    def _on_step(self) -> bool:
+        self.clock.write(self.num_timesteps, every=1.0)
+        return True
+
+
+def save_checkpoint(model, run_dir: Path, algo: str, *, replay_buffer: bool) -> Path:
+    """``checkpoints/<algo>_<steps>_steps.zip`` with its VecNormalize statistics and replay buffer,
+    each file written atomically, the model last: a checkpoint whose model exists is complete."""
+    folder = run_dir / "checkpoints"
+    folder.mkdir(exist_ok=True)
+    steps = model.num_timesteps
+    if replay_buffer and getattr(model, "replay_buffer", None) is not None:
+        with atomic_path(folder / f"{algo}_replay_buffer_{steps}_steps.pkl", ".pkl") as temp:
+            model.save_replay_buffer(temp)
+    vec_normalize = model.get_vec_normalize_env()
+    if vec_normalize is not None:
+        with atomic_path(folder / f"{algo}_vecnormalize_{steps}_steps.pkl") as temp:
+            vec_normalize.save(str(temp))
+    path = folder / f"{algo}_{steps}_steps.zip"
+    with atomic_path(path, ".zip") as temp:
+        model.save(temp)
+    return path
+
+
+def save_model(model, vec_normalize, run_dir: Path, prefix: str = "") -> None:
+    """``<prefix>model.zip`` and ``<prefix>vecnormalize.pkl``, each written atomically."""
+    if vec_normalize is not None:
+        with atomic_path(run_dir / f"{prefix}vecnormalize.pkl") as temp:
+            vec_normalize.save(str(temp))
+    with atomic_path(run_dir / f"{prefix}model.zip", ".zip") as temp:
+        model.save(temp)
+
+
+class AtomicCheckpointCallback(BaseCallback):
+    """``save_checkpoint`` (and timing.json) every ``save_freq`` env steps, at the start of a rollout:
+    after the previous rollout's row of progress.csv and the update that followed it, so the
+    checkpoint at T steps has every log row up to T, and a resume from it writes the next at T + rollout."""
+
+    def __init__(self, save_freq: int, run_dir: Path, algo: str, clock: RunClock, replay_buffer: bool):
+        super().__init__()
+        self.save_freq, self.run_dir, self.algo, self.clock = save_freq, run_dir, algo, clock
+        self.replay_buffer = replay_buffer
+        self.last = 0
+
+    def _on_training_start(self) -> None:
+        self.last = self.num_timesteps
+
+    def _on_rollout_start(self) -> None:
+        if self.num_timesteps - self.last >= self.save_freq:
+            self.last = self.num_timesteps
+            save_checkpoint(self.model, self.run_dir, self.algo, replay_buffer=self.replay_buffer)
+            self.clock.write(self.num_timesteps)
+
+    def _on_step(self) -> bool:
+        return True
+
+
 class ValidationCallback(BaseCallback):
     """Every ``eval_freq`` env steps: the deterministic policy on the fixed validation targets;
     logs the scores, appends them to evaluations.csv, keeps the best model by success rate, then
     passes the row to ``on_validation`` if given (``agents.tuning`` reports it to Ray Tune).
-    ``wall_seconds`` in the file counts training time over every session of the run."""
+    ``wall_seconds`` in the file counts training time over every session of the run. A session
+    starts with a validation unless the file has a row of the steps it starts from."""
 
-    def __init__(self, run_dir: Path, config: dict[str, Any], env_id: str, wall_offset: float = 0.0,
+    def __init__(self, run_dir: Path, config: dict[str, Any], env_id: str, clock: RunClock | None = None,
                  on_validation: Callable[[dict[str, Any]], None] | None = None):
         super().__init__()
         self.run_dir, self.config, self.env_id = run_dir, config, env_id
@@ -52,22 +179,20 @@ class ValidationCallback(BaseCallback):
         self.path = run_dir / "evaluations.csv"
         self.best = -1.0
         self.last = 0
-        self.seconds = 0.0
-        self.start = time.perf_counter()
-        self.wall_offset = wall_offset
+        self.clock = clock or RunClock(run_dir, "")
+
+    @property
+    def seconds(self) -> float:
+        return self.clock.eval_seconds
 
     def _on_training_start(self) -> None:
         self.last = self.num_timesteps
-        if self.path.exists():  # resuming: keep the history, and its best
-            with open(self.path) as file:
-                rows = list(csv.DictReader(file))
-            if rows:
-                self.best = max(float(row["success_rate"]) for row in rows)
-        else:
-            with open(self.path, "w", newline="") as file:
-                csv.writer(file).writerow(EVAL_COLUMNS)
-        self.start = time.perf_counter()
-        if self.num_timesteps == 0:
+        _, rows = read_csv(self.path)
+        if rows:  # resuming: keep the history, and its best
+            self.best = max(float(row["success_rate"]) for row in rows)
+        elif not self.path.exists():
+            write_atomic(self.path, csv_line(list(EVAL_COLUMNS)))
+        if not any(int(row["timesteps"]) == self.num_timesteps for row in rows):
             self.validate()
 
     def _on_step(self) -> bool:
@@ -86,67 +211,109 @@ class ValidationCallback(BaseCallback):
         policy = TrainedPolicy(self.model, vec_normalize, self.config.get("env_wrapper"))
         throws, _ = evaluate(policy, self.env_id, self.config["env_kwargs"], self.seeds)
         result = scores(throws)
-        wall = self.wall_offset + begin - self.start
+        wall = self.clock.wall() - (time.perf_counter() - begin)
         for key in ("success_rate", "mean_distance", "face_accuracy", "mean_reward"):
             self.logger.record(f"eval/{key}", result[key])
         row = {"timesteps": self.num_timesteps, "wall_seconds": wall, **{key: result[key] for key in EVAL_COLUMNS[2:]}}
-        with open(self.path, "a", newline="") as file:
-            csv.writer(file).writerow([row["timesteps"], f"{wall:.2f}"] + [row[key] for key in EVAL_COLUMNS[2:]])
-        if result["success_rate"] > self.best:
+        if result["success_rate"] > self.best:  # the best model first: its row then exists only with it
             self.best = result["success_rate"]
-            self.model.save(self.run_dir / "best_model.zip")
-            if vec_normalize is not None:
-                vec_normalize.save(str(self.run_dir / "best_vecnormalize.pkl"))
-        self.seconds += time.perf_counter() - begin
+            save_model(self.model, vec_normalize, self.run_dir, "best_")
+        append_line(self.path, csv_line([row["timesteps"], f"{wall:.2f}"] + [row[key] for key in EVAL_COLUMNS[2:]]))
+        self.clock.eval_seconds += time.perf_counter() - begin
+        self.clock.write(self.num_timesteps)
         if self.on_validation is not None:
             self.on_validation(row)
 
 
+def model_timesteps(path: Path) -> int | None:
+    """The env steps a saved SB3 model was trained for (from its zip; None if unreadable)."""
+    try:
+        with zipfile.ZipFile(path) as archive:
+            return int(json.loads(archive.read("data"))["num_timesteps"])
+    except (OSError, zipfile.BadZipFile, KeyError, ValueError, TypeError):
+        return None
+
+
 def latest_checkpoint(run_dir: Path, algo: str) -> tuple[Path, Path | None, int] | None:
-    """(model, vecnormalize or None, timesteps) of the newest checkpoint of a run (or None)."""
+    """(model, vecnormalize or None, timesteps) of the newest checkpoint of a run (or None). A run
+    trained before checkpoints were written at its end may have only ``model.zip``."""
     found = []
     for path in (run_dir / "checkpoints").glob(f"{algo}_*_steps.zip"):
         match = re.fullmatch(rf"{algo}_(\d+)_steps\.zip", path.name)
         if match:
-            found.append((int(match.group(1)), path))
-    timing = read_timing(run_dir)
-    if (run_dir / "model.zip").exists() and timing:
-        found.append((timing["timesteps"], run_dir / "model.zip"))
+            found.append((int(match.group(1)), 1, path))
+    if (run_dir / "model.zip").exists() and (steps := model_timesteps(run_dir / "model.zip")) is not None:
+        found.append((steps, 0, run_dir / "model.zip"))
     if not found:
         return None
-    steps, path = max(found)
+    steps, _, path = max(found)
     stats = (run_dir / "vecnormalize.pkl" if path.name == "model.zip"
              else path.with_name(f"{algo}_vecnormalize_{steps}_steps.pkl"))
     return path, (stats if stats.exists() else None), steps
 
 
 def read_timing(run_dir: Path) -> dict[str, Any] | None:
-    """A run's timing.json (None before its training first finished)."""
+    """A run's timing.json (None before its training first started)."""
     path = Path(run_dir) / "timing.json"
     return json.loads(path.read_text()) if path.exists() else None
 
 
 def new_run_dir(runs: Path, name: str | None, env_id: str, algo: str) -> Path:
-    """A fresh folder ``runs/name``; an error if a finished run holds it. A folder left by a run that
-    failed before its first checkpoint holds nothing to keep, and is cleared."""
+    """A fresh folder ``runs/name``, made atomically and locked (``lock_run``) for this process; without
+    a name ``<algo>-<env id>-<time>``, with ``-2``, ``-3``, ... if another run took it in the same second.
+    A named folder left by a run that died before its first checkpoint holds nothing to keep, and is
+    cleared; one that holds a checkpoint, or that a live training holds, is an error."""
     if name is None:
-        name = f"{algo}-{env_id}-{time.strftime('%Y%m%d-%H%M%S')}"
+        run_dir = claim_folder(runs, f"{algo}-{env_id}-{timestamp()}")
+        lock_run(run_dir)
+        return run_dir
+    check_component(name, "--name")
+    run_dir = claim_folder(runs, name)
+    if run_dir.name == name:
+        lock_run(run_dir)
+        return run_dir
+    run_dir.rmdir()
     run_dir = runs / name
-    if (run_dir / "config.yml").exists():
-        if (run_dir / "timing.json").exists() or list((run_dir / "checkpoints").glob("*.zip")):
-            raise configuration.ConfigError(
-                f"{run_dir} already holds a run: choose another --name, or --resume {run_dir}")
-        shutil.rmtree(run_dir)
-    run_dir.mkdir(parents=True, exist_ok=True)
+    taken = RunFolderError(f"{run_dir} already holds a run: choose another --name, or --resume {run_dir}")
+    if not (run_dir / "config.yml").exists():
+        raise taken  # not a run folder, or one being made this instant
+    lock_run(run_dir)  # an error if its training is going on
+    if latest_checkpoint(run_dir, algo) is not None or (run_dir / "model.zip").exists():
+        unlock_run(run_dir)
+        raise taken
+    for path in run_dir.iterdir():  # a run that died before its first checkpoint: nothing to keep
+        if path.name != LOCK:
+            shutil.rmtree(path) if path.is_dir() else path.unlink()
     return run_dir
 
 
+def package_version() -> str:
+    import box_toss_env
+
+    return box_toss_env.__version__
+
+
 def write_run_files(run_dir: Path, algo: str, env_id: str, seed: int, config: dict[str, Any], command: str) -> None:
-    """``config.yml`` (what the run trains) and a line of ``command.txt`` (the command that started it)."""
-    configuration.save_yaml({"algo": algo, "env_id": env_id, "seed": seed, "env_kwargs": config["env_kwargs"],
-                             "hyperparams": config}, run_dir / "config.yml")
-    with open(run_dir / "command.txt", "a") as file:
-        file.write(f"{command}\n")
+    """``config.yml`` (what the run trains, and the package version) and a line of ``command.txt``."""
+    write_atomic(run_dir / "config.yml", yaml.safe_dump(
+        {"algo": algo, "env_id": env_id, "seed": seed, "version": package_version(),
+         "env_kwargs": config["env_kwargs"], "hyperparams": config}, sort_keys=False))
+    append_line(run_dir / "command.txt", command)
+
+
+def check_resume(run_dir: Path, algo: str, config: dict[str, Any]) -> tuple[Path, Path | None, int]:
+    """The checkpoint a resume of ``run_dir`` starts from; a RunFolderError naming the missing file
+    if there is none, or if the run normalises observations and the checkpoint's statistics are gone."""
+    checkpoint = latest_checkpoint(run_dir, algo)
+    if checkpoint is None:
+        raise RunFolderError(f"--resume {run_dir}: no checkpoint to resume from (no {run_dir}/checkpoints/"
+                             f"{algo}_<steps>_steps.zip nor {run_dir}/model.zip); train it afresh")
+    if config.get("normalize", True) and checkpoint[1] is None:
+        missing = (run_dir / "vecnormalize.pkl" if checkpoint[0].name == "model.zip"
+                   else checkpoint[0].with_name(f"{algo}_vecnormalize_{checkpoint[2]}_steps.pkl"))
+        raise RunFolderError(f"--resume {run_dir}: {missing} is missing (the observation statistics of "
+                             f"{checkpoint[0].name}); cannot resume without them")
+    return checkpoint
 
 
 def warm_up_engine(env_id: str, config: dict[str, Any]) -> None:
@@ -163,9 +330,9 @@ def train(run_dir: Path, config: dict[str, Any], env_id: str, seed: int, algo: s
           on_validation: Callable[[dict[str, Any]], None] | None = None) -> dict[str, Any]:
     """Train (or continue) the run in ``run_dir`` up to ``config["n_timesteps"]``; returns the timing.
     ``on_validation`` receives each periodic validation's row of evaluations.csv (a dict)."""
+    checkpoint = check_resume(run_dir, algo, config) if resume else None
     warm_up_engine(env_id, config)
     torch.set_num_threads(int(config.get("torch_threads", 1)))
-    checkpoint = latest_checkpoint(run_dir, algo) if resume else None
     # a resumed run draws new episodes (seeded after the steps already taken), not the first ones again
     env_seed = seed + (checkpoint[2] if checkpoint else 0)
     venv = make_training_env(env_id, config["n_envs"], seed=env_seed, env_kwargs=config["env_kwargs"],
@@ -174,52 +341,39 @@ def train(run_dir: Path, config: dict[str, Any], env_id: str, seed: int, algo: s
                              env_wrapper=config.get("env_wrapper"))
     cls = algorithms.algorithm_class(algo)
     off_policy = algorithms.is_off_policy(algo)
+    (run_dir / "logs").mkdir(exist_ok=True)
     if checkpoint:
         model = load_model(algo, checkpoint[0], env=venv)
+        if model.num_timesteps != checkpoint[2]:
+            raise UnreadableModelError(f"{checkpoint[0]} holds a model of {model.num_timesteps} steps, not "
+                                       f"{checkpoint[2]}")
         buffer = checkpoint[0].with_name(f"{algo}_replay_buffer_{checkpoint[2]}_steps.pkl")
         if off_policy and buffer.exists():
             model.load_replay_buffer(buffer)
-        print(f"resuming {run_dir} from {checkpoint[0]} at {model.num_timesteps} steps")
+        for leftover in [*run_dir.glob(".*.tmp*"), *run_dir.glob("checkpoints/.*.tmp*")]:  # cut by a kill
+            leftover.unlink()
+        _, progress_dropped = truncate_csv(run_dir / "logs" / "progress.csv", "time/total_timesteps", checkpoint[2])
+        _, evaluations_dropped = truncate_csv(run_dir / "evaluations.csv", "timesteps", checkpoint[2])
+        dropped = (f"; dropped the rows written after it: {progress_dropped} of logs/progress.csv, "
+                   f"{evaluations_dropped} of evaluations.csv" if progress_dropped or evaluations_dropped else "")
+        print(f"resuming {run_dir} from {checkpoint[0]} at {model.num_timesteps} steps{dropped}")
     else:
         model = cls(env=venv, seed=seed, device="cpu", verbose=0,
                     **configuration.algorithm_kwargs(config, algo, venv.action_space.shape[0]))
-    model.set_logger(configure(str(run_dir / "logs"), ["csv", "tensorboard"]))
-    # wall time of earlier sessions: the last validation row written before the run stopped
-    previous = read_timing(run_dir) if checkpoint else None
-    evaluations = run_dir / "evaluations.csv"
-    wall_offset = 0.0
-    if checkpoint and evaluations.exists():
-        with open(evaluations) as file:
-            rows = [row for row in csv.DictReader(file) if int(row["timesteps"]) <= checkpoint[2]]
-        wall_offset = float(rows[-1]["wall_seconds"]) if rows else 0.0
-    validation = ValidationCallback(run_dir, config, env_id, wall_offset, on_validation)
-    callbacks = [validation]
-    if config.get("checkpoint_freq"):  # first: a checkpoint of this step exists when the validation is reported
-        callbacks.insert(0, CheckpointCallback(save_freq=max(int(config["checkpoint_freq"]) // config["n_envs"], 1),
-                                               save_path=str(run_dir / "checkpoints"), name_prefix=algo,
-                                               save_vecnormalize=True, save_replay_buffer=off_policy))
+    model.set_logger(Logger(str(run_dir / "logs"), [AppendingCSVOutput(run_dir / "logs" / "progress.csv"),
+                                                     TensorBoardOutputFormat(str(run_dir / "logs"))]))
+    # time of earlier sessions, killed ones included (timing.json is written as training goes)
+    clock = RunClock(run_dir, algo, read_timing(run_dir) if checkpoint else None)
+    clock.timed = find_wrapper(venv, TimedVecEnv)
+    validation = ValidationCallback(run_dir, config, env_id, clock, on_validation)
+    callbacks = [validation, ClockCallback(clock)]
+    if config.get("checkpoint_freq"):
+        callbacks.insert(0, AtomicCheckpointCallback(int(config["checkpoint_freq"]), run_dir, algo, clock, off_policy))
     remaining = max(int(config["n_timesteps"]) - model.num_timesteps, 0)
-    start = time.perf_counter()
     model.learn(remaining, callback=callbacks, progress_bar=progress_bar, reset_num_timesteps=not checkpoint)
-    learn_seconds = time.perf_counter() - start
-    model.save(run_dir / "model.zip")
-    vec_normalize = normalizer_of(venv)
-    if vec_normalize is not None:
-        vec_normalize.save(str(run_dir / "vecnormalize.pkl"))
-    timed = find_wrapper(venv, TimedVecEnv)
-    if previous is None:  # killed before it finished: earlier sessions' time is in the validation rows
-        previous = {"wall_seconds": wall_offset, "env_seconds": 0.0, "eval_seconds": 0.0}
-    timing = {
-        "algo": algo,
-        "timesteps": int(model.num_timesteps),
-        "wall_seconds": previous["wall_seconds"] + learn_seconds,  # everything in model.learn, every session
-        "env_seconds": previous["env_seconds"] + timed.env_seconds,  # inside the vector env's reset and step
-        "eval_seconds": previous["eval_seconds"] + validation.seconds,  # periodic validation
-        "torch_threads": torch.get_num_threads(),
-    }
-    # the env's share of the training loop (rollouts and updates; periodic validation left out)
-    timing["env_share"] = timing["env_seconds"] / max(timing["wall_seconds"] - timing["eval_seconds"], 1e-9)
-    (run_dir / "timing.json").write_text(json.dumps(timing, indent=2))
+    save_checkpoint(model, run_dir, algo, replay_buffer=off_policy)  # where a later --resume starts
+    save_model(model, normalizer_of(venv), run_dir)
+    timing = clock.write(model.num_timesteps)
     venv.close()
     if final_eval:
         evaluate_run(run_dir, quiet=True)

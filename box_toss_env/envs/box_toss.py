@@ -12,6 +12,7 @@ from gymnasium import spaces
 from gymnasium.error import ResetNeeded
 
 from box_toss_env.envs import task
+from box_toss_env.envs.random_streams import check_seed
 from box_toss_env.physics import (
     Box,
     KernelFlags,
@@ -369,8 +370,8 @@ class BoxTossEnv(gym.Env):
     # -- the Gymnasium API ------------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         """Draw a release pose, a target and the dynamics; the box is at rest in the hand.
-        ``options`` is unused."""
-        super().reset(seed=seed)
+        ``options`` is unused. ``seed`` is None or any integer >= 0 (``np.int64`` too), never a bool."""
+        super().reset(seed=check_seed(seed))
         episodes = task.sample_episodes(self.np_random, self.config, self._episodes)
         if self._params_stale or self.config.draws_body_params:
             task.write_body_params(self._params, episodes, self.config)

@@ -37,7 +37,7 @@ from gymnasium.vector.utils import batch_space
 
 from box_toss_env.envs import task
 from box_toss_env.envs.box_toss import BoxTossEnv, EnergyGainError, base_landing_info, check_render_mode_type
-from box_toss_env.envs.random_streams import RandomStreams
+from box_toss_env.envs.random_streams import RandomStreams, check_seeds
 from box_toss_env.physics import Simulator, check_finite_stats, layout
 from box_toss_env.physics.grouped import GroupedSimulator, make_simulator
 from box_toss_env.physics.simulate import check_threads
@@ -117,24 +117,9 @@ class BoxTossVectorEnv(VectorEnv):
 
     # -- episodes ---------------------------------------------------------------------------------
     def _seed(self, seed: int | list[int | None] | None) -> None:
-        expected = f"seed must be None, an int or a list of {self.num_envs} ints or Nones"
-        if seed is None:
-            seeds = [None] * self.num_envs
-        elif isinstance(seed, (int, np.integer)) and not isinstance(seed, (bool, np.bool_)):
-            seeds = [int(seed) + i for i in range(self.num_envs)]
-        elif isinstance(seed, (list, tuple, np.ndarray)):
-            seeds = list(seed)
-            if len(seeds) != self.num_envs:
-                raise ValueError(f"{expected}, got {len(seeds)} seeds")
-            for value in seeds:
-                if value is not None and (isinstance(value, (bool, np.bool_))
-                                          or not isinstance(value, (int, np.integer))):
-                    raise TypeError(f"{expected}, got {type(value).__name__} {value!r} in {seed!r}")
-        else:
-            raise TypeError(f"{expected}, got {type(seed).__name__} {seed!r}")
-        for i, value in enumerate(seeds):
-            if value is not None or not self._streams.seeded[i]:
-                self._streams.seed(i, value)
+        """Every env's stream seeded at once (``random_streams.check_seeds``: the whole list is checked,
+        naming the index of a bad seed, before any stream is touched)."""
+        self._streams.seed_all(check_seeds(seed, self.num_envs))
 
     def _new_episodes(self) -> dict[str, np.ndarray]:
         """Draw every env's next episode (each from its own stream); the boxes are in the hand."""
@@ -259,7 +244,9 @@ class BoxTossVectorEnv(VectorEnv):
         return tuple(frames)
 
     def close_extras(self, **kwargs) -> None:
-        self.env.close()
+        env = self.__dict__.get("env")  # absent when __init__ refused its arguments
+        if env is not None:
+            env.close()
 
     def __getstate__(self):
         state = self.__dict__.copy()

@@ -14,6 +14,8 @@ and outputs rotr64(hi(s) ^ lo(s), hi(s) >> 58); ``random()`` maps an output x to
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 from gymnasium.utils import seeding
 
@@ -65,6 +67,169 @@ def fill_uniform_kernel():
     return fill_uniform
 
 
+# -- seeds -----------------------------------------------------------------------------------------
+def check_seed(seed, name: str = "seed") -> int | None:
+    """``seed`` as a Python int >= 0, or None: any integer type (``np.int64`` too), never a bool; a
+    TypeError or ValueError naming ``name`` otherwise. The single and the vector env both use it."""
+    if seed is None:
+        return None
+    if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer)):
+        raise TypeError(f"{name} must be None or an integer >= 0, got {type(seed).__name__} {seed!r}")
+    if seed < 0:
+        raise ValueError(f"{name} must be None or an integer >= 0, got {seed}")
+    return int(seed)
+
+
+def check_seeds(seed, n: int) -> list[int | None] | np.ndarray | None:
+    """The seed of each of ``n`` envs (``reset(seed=...)`` of a vector env): None (fresh entropy for
+    envs never seeded), an integer s >= 0 (env i gets s + i, as an (n,) uint64 array) or a sequence of
+    ``n`` integers >= 0 or Nones (a list or a 1-D numpy array alike). Every seed is checked before any
+    is used; an error names the index of the first bad one."""
+    expected = f"seed must be None, an int or a list of {n} ints or Nones (ints >= 0)"
+    if seed is None:
+        return None
+    if isinstance(seed, (int, np.integer)) and not isinstance(seed, (bool, np.bool_)):
+        if seed < 0:
+            raise ValueError(f"{expected}, got {seed}")
+        first = int(seed)
+        if first + n <= 2**64:
+            return np.arange(n, dtype=np.uint64) + np.uint64(first)
+        return [first + i for i in range(n)]
+    if isinstance(seed, np.ndarray):
+        if seed.ndim != 1:
+            raise ValueError(f"{expected}, got an array of shape {seed.shape}")
+    elif not isinstance(seed, (list, tuple)):
+        raise TypeError(f"{expected}, got {type(seed).__name__} {seed!r}")
+    if len(seed) != n:
+        raise ValueError(f"{expected}, got {len(seed)} seeds")
+    # all integers (no bool, no None): checked as one array; otherwise one by one
+    array = seed if isinstance(seed, np.ndarray) else None
+    if array is None and not ({type(value) for value in seed} - {int}):
+        array = np.array(seed)
+    if array is not None and array.dtype.kind in "iu":
+        negative = np.flatnonzero(array < 0)
+        if len(negative):
+            raise ValueError(f"{expected}: seed[{negative[0]}] is {array[negative[0]]}")
+        return array.astype(np.uint64)
+    seeds = []
+    for i, value in enumerate(seed):
+        try:
+            seeds.append(check_seed(value, f"seed[{i}]"))
+        except (TypeError, ValueError) as error:
+            raise type(error)(f"{expected}: {error}") from None
+    return seeds
+
+
+INIT_A, MULT_A, INIT_B, MULT_B = 0x43B0D7E5, 0x931E8875, 0x8B51F9DD, 0x58F38DED  # numpy's SeedSequence
+MIX_MULT_L, MIX_MULT_R, XSHIFT, POOL_SIZE = 0xCA01F9DD, 0x4973F715, 16, 4
+MASK_32 = (1 << 32) - 1
+
+
+def seed_sequence_words(entropy: np.ndarray) -> np.ndarray:
+    """The first 4 uint64 of ``np.random.SeedSequence(seed).generate_state(4, np.uint64)`` for each
+    row of ``entropy`` (n, k) uint32 (a seed's 32-bit words, least significant first), for all rows at
+    once: numpy's SeedSequence, vectorised over seeds (its hash constants do not depend on the data)."""
+    n, k = entropy.shape
+    constant = [INIT_A]
+
+    def hashmix(value: np.ndarray) -> np.ndarray:
+        value = value ^ np.uint32(constant[0])
+        constant[0] = (constant[0] * MULT_A) & MASK_32
+        value = value * np.uint32(constant[0])
+        return value ^ (value >> np.uint32(XSHIFT))
+
+    def mix(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        result = np.uint32(MIX_MULT_L) * x - np.uint32(MIX_MULT_R) * y
+        return result ^ (result >> np.uint32(XSHIFT))
+
+    zeros = np.zeros(n, dtype=np.uint32)
+    pool = [hashmix(entropy[:, i] if i < k else zeros) for i in range(POOL_SIZE)]
+    for source in range(POOL_SIZE):
+        for destination in range(POOL_SIZE):
+            if source != destination:
+                pool[destination] = mix(pool[destination], hashmix(pool[source]))
+    for source in range(POOL_SIZE, k):
+        for destination in range(POOL_SIZE):
+            pool[destination] = mix(pool[destination], hashmix(entropy[:, source]))
+    constant = INIT_B
+    words = []
+    for i in range(2 * 4):
+        value = pool[i % POOL_SIZE] ^ np.uint32(constant)
+        constant = (constant * MULT_B) & MASK_32
+        value = value * np.uint32(constant)
+        words.append((value ^ (value >> np.uint32(XSHIFT))).astype(np.uint64))
+    return np.stack([words[2 * i] | (words[2 * i + 1] << np.uint64(32)) for i in range(4)], axis=1)
+
+
+def multiply_add_128(hi, lo, inc_hi, inc_lo):
+    """(hi, lo) * PCG's multiplier + (inc_hi, inc_lo) mod 2^128, on uint64 arrays."""
+    a_lo, a_hi = lo & LOW_32_BITS, lo >> np.uint64(32)
+    b_lo, b_hi = MULTIPLIER_LO & LOW_32_BITS, MULTIPLIER_LO >> np.uint64(32)
+    lo_lo = a_lo * b_lo
+    hi_lo = a_hi * b_lo
+    cross = (lo_lo >> np.uint64(32)) + (hi_lo & LOW_32_BITS) + a_lo * b_hi
+    high = a_hi * b_hi + (hi_lo >> np.uint64(32)) + (cross >> np.uint64(32))
+    low = (cross << np.uint64(32)) | (lo_lo & LOW_32_BITS)
+    high = high + hi * MULTIPLIER_LO + lo * MULTIPLIER_HI
+    new_lo = low + inc_lo
+    return high + inc_hi + (new_lo < low).astype(np.uint64), new_lo
+
+
+def pcg64_states(words: np.ndarray) -> np.ndarray:
+    """PCG64 states (n, 4) (state hi, lo, inc hi, lo) seeded as numpy's ``PCG64(seed_sequence)`` is
+    from ``generate_state(4, np.uint64)`` = ``words`` (n, 4): PCG's srandom, s = 0, inc = 2 seq + 1,
+    step, s += initstate, step."""
+    with np.errstate(over="ignore"):
+        inc_hi = (words[:, 2] << np.uint64(1)) | (words[:, 3] >> np.uint64(63))
+        inc_lo = (words[:, 3] << np.uint64(1)) | np.uint64(1)
+        hi, lo = multiply_add_128(np.zeros_like(inc_hi), np.zeros_like(inc_lo), inc_hi, inc_lo)
+        lo_sum = lo + words[:, 1]
+        hi = hi + words[:, 0] + (lo_sum < lo).astype(np.uint64)
+        hi, lo = multiply_add_128(hi, lo_sum, inc_hi, inc_lo)
+    return np.stack([hi, lo, inc_hi, inc_lo], axis=1)
+
+
+def fresh_states(n: int) -> np.ndarray:
+    """PCG64 states (n, 4) from fresh entropy, 128 bits each, as ``SeedSequence(None)`` draws it."""
+    return pcg64_states(seed_sequence_words(np.frombuffer(os.urandom(16 * n), dtype=np.uint32).reshape(n, 4)))
+
+
+def seeded_states(seeds) -> np.ndarray:
+    """PCG64 states (n, 4) of ``seeding.np_random(seed)`` for each seed (a uint64 array, or a list of
+    ints >= 0 and Nones for fresh entropy), computed for all seeds at once, bit for bit numpy's; seeds
+    of 2^64 and more go through numpy one by one."""
+    if isinstance(seeds, np.ndarray):
+        index, entropy = np.arange(len(seeds)), seeds.astype(np.uint64)
+        states = np.zeros((len(seeds), 4), dtype=np.uint64)
+    else:
+        states = np.zeros((len(seeds), 4), dtype=np.uint64)
+        fresh = [i for i, seed in enumerate(seeds) if seed is None]
+        if fresh:
+            states[fresh] = fresh_states(len(fresh))
+        index = np.array([i for i, seed in enumerate(seeds) if seed is not None and seed < 2**64], dtype=np.int64)
+        entropy = np.array([seeds[i] for i in index], dtype=np.uint64)
+        for i, seed in enumerate(seeds):
+            if seed is not None and seed >= 2**64:
+                states[i] = numpy_state(seed)
+    low = (entropy & np.uint64(MASK_32)).astype(np.uint32)
+    high = (entropy >> np.uint64(32)).astype(np.uint32)
+    one_word = high == 0  # numpy's SeedSequence takes a seed's 32-bit words without the leading zeros
+    if one_word.all():
+        states[index] = pcg64_states(seed_sequence_words(low[:, None]))
+        return states
+    for mask, words in ((one_word, low[:, None]), (~one_word, np.stack([low, high], axis=1))):
+        if mask.any():
+            states[index[mask]] = pcg64_states(seed_sequence_words(words[mask]))
+    return states
+
+
+def numpy_state(seed: int | None) -> tuple[int, int, int, int]:
+    """The PCG64 state of ``seeding.np_random(seed)``, from numpy itself."""
+    generator, _ = seeding.np_random(seed)
+    state = generator.bit_generator.state["state"]
+    return state["state"] >> 64, state["state"] & MASK_64, state["inc"] >> 64, state["inc"] & MASK_64
+
+
 class RandomStreams:
     """``n`` independent PCG64 streams, each seeded as ``gymnasium.utils.seeding.np_random``."""
 
@@ -75,11 +240,23 @@ class RandomStreams:
 
     def seed(self, index: int, seed: int | None) -> None:
         """Start stream ``index`` where ``seeding.np_random(seed)`` starts (fresh entropy for None)."""
-        generator, _ = seeding.np_random(seed)
-        state = generator.bit_generator.state["state"]
-        self.states[index] = (state["state"] >> 64, state["state"] & MASK_64, state["inc"] >> 64,
-                              state["inc"] & MASK_64)
+        self.states[index] = numpy_state(check_seed(seed))
         self.seeded[index] = True
+
+    def seed_all(self, seeds) -> None:
+        """Start every stream where ``seeding.np_random`` starts with its seed (``check_seeds``'s
+        result: None re-seeds with fresh entropy only the streams never seeded), all at once."""
+        if seeds is None:
+            unseeded = np.flatnonzero(~self.seeded)
+            if len(unseeded):
+                self.states[unseeded] = fresh_states(len(unseeded))
+        elif isinstance(seeds, np.ndarray):
+            self.states[:] = seeded_states(seeds)
+        else:
+            keep = np.array([seed is None and self.seeded[i] for i, seed in enumerate(seeds)], dtype=bool)
+            new = seeded_states(seeds)
+            self.states[~keep] = new[~keep]
+        self.seeded[:] = True
 
     def fill_uniform(self, out: np.ndarray) -> np.ndarray:
         """Row i of ``out`` (n, k) gets stream i's next k uniform doubles; returns ``out``."""

@@ -248,8 +248,9 @@ float32 and every throw is simulated, at every combination of them."""
 def check_interval(name: str, value, allowed: Range) -> tuple[float, float]:
     """``value`` as a (low, high) tuple of floats inside ``allowed``, with low <= high; a TypeError
     if it is not a pair of real numbers, a ValueError naming the parameter and the range otherwise."""
-    if isinstance(value, (str, bytes)):
-        raise TypeError(f"{name} must be a (low, high) pair of real numbers, got {type(value).__name__} {value!r}")
+    if not isinstance(value, (tuple, list, np.ndarray)):  # not a dict, set, range or str: no order or not numbers
+        raise TypeError(f"{name} must be a (low, high) pair of real numbers (a tuple or list), "
+                        f"got {type(value).__name__} {value!r}")
     try:
         first, second = value
     except (TypeError, ValueError):
@@ -263,8 +264,9 @@ def check_interval(name: str, value, allowed: Range) -> tuple[float, float]:
 
 def check_scalar_or_interval(name: str, value, interval, allowed: Range) -> tuple[float, float]:
     """``(value, value)``, or the (low, high) ``interval`` (named ``name_range``) when it is given."""
+    scalar = None if value is None and interval is not None else allowed.check(name, value)  # checked in any case
     if interval is None:
-        return (allowed.check(name, value),) * 2
+        return (scalar,) * 2
     return check_interval(f"{name}_range", interval, allowed)
 
 
@@ -445,8 +447,13 @@ def check_actions(actions, shape: tuple[int, ...]) -> np.ndarray:
     if array.shape != shape:
         raise ValueError(f"action must have shape {shape} (speed, launch angle, spin, each in [-1, 1]), "
                          f"got shape {array.shape}")
-    if not np.isfinite(array).all():
-        raise ValueError(f"action must be finite (no NaN or inf), got {array.tolist()}")
+    finite = np.isfinite(array)
+    if not finite.all():
+        if array.ndim == 1:
+            raise ValueError(f"action must be finite (no NaN or inf), got {array.tolist()}")
+        bad = np.flatnonzero(~finite.reshape(len(array), -1).all(axis=1))
+        raise ValueError(f"action must be finite (no NaN or inf): row {bad[0]} is {array[bad[0]].tolist()}"
+                         + (f" ({len(bad)} such rows)" if len(bad) > 1 else ""))
     return np.minimum(np.maximum(array.reshape(-1, ACTION_SIZE), -1.0), 1.0)
 
 

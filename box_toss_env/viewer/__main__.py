@@ -20,8 +20,36 @@ PARAMETER_FLAGS = (("dt", "dt", "time step size [s]"), ("gravity", "gravity", "g
                    ("friction", "friction", "friction coefficient"))
 
 
+# (flag, low, high) of the integer options: sizes in pixels, counts and seeds
+INTEGER_FLAGS = (("width", 100, 10_000), ("height", 100, 10_000), ("steps-per-frame", 1, 10_000),
+                 ("skip", 0, None), ("seed", 0, None))
+
+
+def read_throw(text: str, config) -> list[float]:
+    """``VX,VY,SPIN`` as three finite numbers within the env's limits (a ValueError naming them otherwise)."""
+    try:
+        throw = [float(v) for v in text.split(",")]
+    except ValueError:
+        throw = []
+    if len(throw) != 3 or not all(np.isfinite(throw)):
+        raise ValueError(f"--throw must be VX,VY,SPIN (three finite numbers), got {text!r}")
+    speed = float(np.hypot(throw[0], throw[1]))
+    if speed > config.max_speed or abs(throw[2]) > config.max_spin:
+        raise ValueError(f"--throw {text}: the env throws at speeds up to {config.max_speed:g} m/s (this one "
+                         f"{speed:.3g}) and spins up to {config.max_spin:g} rad/s in magnitude "
+                         f"(this one {throw[2]:.3g})")
+    return throw
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """A parser whose errors are one line (argparse would print the whole usage first)."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
+
+
 def make_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="python -m box_toss_env.viewer",
         description="The seed demo's rigid-body viewer (any named scene), or BoxToss played by hand (--play). "
                     "Keys are listed in the window's panel.",
@@ -68,6 +96,10 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--frames must be at least 1, got {args.frames}")
     if args.throw is not None and not (args.play and args.frames):
         parser.error("--throw is for headless play: --play --frames N --out PATH --throw VX,VY,SPIN")
+    for flag, low, high in INTEGER_FLAGS:
+        value = getattr(args, flag.replace("-", "_"))
+        if value is not None and not low <= value <= (high if high is not None else value):
+            parser.error(f"--{flag} must be an integer in [{low}, {high if high is not None else 'inf'}], got {value}")
     try:
         return run_play(parser, args) if args.play else run_viewer(parser, args)
     except DependencyNotInstalled as error:
@@ -119,17 +151,14 @@ def run_play(parser: argparse.ArgumentParser, args) -> int:
     kwargs = {"render_mode": "rgb_array_list", "render_width": args.width or 720, "render_height": args.height or 480}
     if args.solver is not None:
         kwargs["solver"] = args.solver
-    throw = None
-    if args.throw is not None:
-        try:
-            throw = [float(v) for v in args.throw.split(",")]
-        except ValueError:
-            throw = []
-        if len(throw) != 3:
-            parser.error(f"--throw must be VX,VY,SPIN (three numbers), got {args.throw!r}")
     try:
         env = gym.make(args.env_id, **kwargs)
     except (ValueError, gym.error.Error) as error:
+        parser.error(str(error))
+    try:
+        throw = None if args.throw is None else read_throw(args.throw, env.unwrapped.config)
+    except ValueError as error:
+        env.close()
         parser.error(str(error))
     try:
         headless = args.frames is not None

@@ -49,11 +49,12 @@ def test_train_resume_and_evaluate_a_tiny_run(tmp_path, algo):
     assert len((run_dir / "command.txt").read_text().splitlines()) == 2
 
     out = run("agents.evaluate", str(run_dir), "--targets", "32").stdout
-    results = json.loads((run_dir / "eval" / "default" / "results.json").read_text())
+    # 32 targets are not the 1,024 test targets: their own folder, never eval/default
+    results = json.loads((run_dir / "eval" / "targets=32" / "results.json").read_text())
     assert results["n"] == 32 and results["seeds"] == [10_000, 10_031] and results["algo"] == algo
     assert 0.0 <= results["success_rate"] <= 1.0 and results["mean_distance"] > 0
     assert sum(row["n"] for row in results["by_distance"]) == 32
-    assert (run_dir / "eval" / "default" / "landing_errors.png").exists()
+    assert (run_dir / "eval" / "targets=32" / "landing_errors.png").exists()
     assert "success" in out
 
 

@@ -1,0 +1,204 @@
+"""A run folder as a small database that never loses a row: safe names, atomic files, appended logs.
+
+- A run's folder is made with ``os.mkdir`` (atomic): two runs started in the same second without a
+  name get ``NAME`` and ``NAME-2``, never one folder between them.
+- Names and tags are single path components, so nothing is written outside the runs folder.
+- Every file is written whole or not at all: into a temporary file in the same folder, then
+  ``os.replace`` (a kill leaves the old file or the new one, never half of one).
+- Logs (``logs/progress.csv``, ``evaluations.csv``) are appended a flushed line at a time; on resume
+  the rows after the checkpoint are dropped explicitly (``truncate_csv``), so the log continues
+  exactly where the checkpoint was, without a duplicate. A line cut by a kill is dropped with them.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import fcntl
+import io
+import os
+import tempfile
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any, BinaryIO
+
+from stable_baselines3.common.logger import KVWriter
+
+
+class RunFolderError(ValueError):
+    """A run folder, name or file that cannot be used; the message names it."""
+
+
+# -- names ---------------------------------------------------------------------------------------
+def check_component(value: str, option: str) -> str:
+    """``value`` if it is a single path component (a folder name, not a path), else a RunFolderError."""
+    if (not isinstance(value, str) or value in ("", ".", "..") or "/" in value or "\0" in value
+            or (os.altsep and os.altsep in value) or os.sep in value):
+        raise RunFolderError(f"{option} must be a single folder name (no '/', not '.' or '..'), got {value!r}")
+    return value
+
+
+def check_runs_dir(runs: Path) -> Path:
+    """``runs`` made if absent; a RunFolderError if it (or a parent) is a file."""
+    try:
+        runs.mkdir(parents=True, exist_ok=True)
+    except (FileExistsError, NotADirectoryError):
+        raise RunFolderError(f"--runs-dir {runs} is a file, not a folder") from None
+    except OSError as error:
+        raise RunFolderError(f"--runs-dir {runs} cannot be made: {error.strerror}") from None
+    return runs
+
+
+def claim_folder(runs: Path, base: str) -> Path:
+    """A new folder ``runs/base`` (or ``base-2``, ``base-3``, ...), made atomically: no two callers
+    ever get the same one."""
+    check_runs_dir(runs)
+    for n in range(1, 10_000):
+        path = runs / (base if n == 1 else f"{base}-{n}")
+        try:
+            os.mkdir(path)
+        except FileExistsError:
+            continue
+        return path
+    raise RunFolderError(f"{runs} has 10,000 folders named {base}-N; choose a --name")
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+FILE_MODE = 0o666 & ~_umask()  # what open() would have given the file (mkstemp makes it 0o600)
+
+
+LOCK = ".lock"
+_held: dict[Path, Any] = {}  # the locks this process holds, kept open for its lifetime
+
+
+def lock_run(run_dir: Path) -> None:
+    """Hold ``run_dir/.lock`` (an advisory lock, released when the process ends, kill -9 included);
+    a RunFolderError if another process holds it (a training of that run is going on)."""
+    run_dir = Path(run_dir)
+    if run_dir.resolve() in _held:
+        return
+    handle = open(run_dir / LOCK, "a")
+    try:
+        fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        handle.close()
+        raise RunFolderError(f"{run_dir} is in use by another training (it holds {run_dir / LOCK})") from None
+    _held[run_dir.resolve()] = handle
+
+
+def unlock_run(run_dir: Path) -> None:
+    handle = _held.pop(Path(run_dir).resolve(), None)
+    if handle is not None:
+        handle.close()
+
+
+def timestamp() -> str:
+    return time.strftime("%Y%m%d-%H%M%S")
+
+
+# -- atomic files --------------------------------------------------------------------------------
+@contextlib.contextmanager
+def atomic_path(path: str | Path, suffix: str = "") -> Iterator[Path]:
+    """A temporary path in ``path``'s folder to write to; it replaces ``path`` when the block ends
+    without an error (and is removed otherwise). ``suffix`` keeps an extension a writer insists on."""
+    path = Path(path)
+    handle, temp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=f".tmp{suffix}", dir=path.parent)
+    os.close(handle)
+    os.chmod(temp, FILE_MODE)
+    try:
+        yield Path(temp)
+        with open(temp, "rb+") as file:
+            os.fsync(file.fileno())
+        os.replace(temp, path)
+    finally:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(temp)
+
+
+def write_atomic(path: str | Path, data: str | bytes | Callable[[BinaryIO], Any]) -> None:
+    """``path`` replaced whole by ``data`` (text, bytes, or a function writing to a binary file)."""
+    with atomic_path(path) as temp, open(temp, "wb") as file:
+        if callable(data):
+            data(file)
+        else:
+            file.write(data.encode() if isinstance(data, str) else data)
+
+
+def append_line(path: str | Path, line: str) -> None:
+    """One line appended to ``path`` and flushed to disk (a kill leaves it whole or cut, never reordered)."""
+    with open(path, "a", newline="") as file:
+        file.write(line if line.endswith("\n") else line + "\n")
+        file.flush()
+        os.fsync(file.fileno())
+
+
+def csv_line(values: list[Any]) -> str:
+    buffer = io.StringIO()
+    csv.writer(buffer, lineterminator="\n").writerow(values)
+    return buffer.getvalue()
+
+
+# -- appended CSV logs ---------------------------------------------------------------------------
+def read_csv(path: str | Path) -> tuple[list[str], list[dict[str, str]]]:
+    """(columns, complete rows) of a CSV log; a last line cut by a kill is left out."""
+    path = Path(path)
+    if not path.exists():
+        return [], []
+    text = path.read_text()
+    if text and not text.endswith("\n"):  # a line cut by a kill
+        text = text[: text.rfind("\n") + 1]
+    reader = csv.reader(io.StringIO(text))
+    columns = next(reader, [])
+    rows = [dict(zip(columns, values, strict=True)) for values in reader if len(values) == len(columns)]
+    return columns, rows
+
+
+def truncate_csv(path: str | Path, column: str, last: int) -> tuple[int, int]:
+    """Drop the rows of the CSV log at ``path`` whose ``column`` is above ``last`` (and a cut line):
+    the log then ends where the checkpoint at ``last`` steps was. Returns (rows kept, rows dropped)."""
+    path = Path(path)
+    columns, rows = read_csv(path)
+    if not columns:
+        return 0, 0
+    kept = [row for row in rows if row.get(column) not in (None, "") and float(row[column]) <= last]
+    dropped = len(path.read_text().splitlines()) - 1 - len(kept)
+    if dropped:
+        write_atomic(path, "".join([csv_line(columns)] + [csv_line([row[c] for c in columns]) for row in kept]))
+    return len(kept), dropped
+
+
+class AppendingCSVOutput(KVWriter):
+    """SB3's logger output to ``progress.csv``, appended a flushed row at a time (SB3's own CSV output
+    opens the file with "w", so a resumed run emptied its log). A key not seen before widens the
+    header: the file is then rewritten whole, atomically."""
+
+    def __init__(self, path: str | Path):
+        self.path = Path(path)
+        self.columns, _ = read_csv(self.path)
+
+    def write(self, key_values: dict[str, Any], key_excluded: dict[str, Any], step: int = 0) -> None:
+        values = {key: value for key, value in key_values.items()
+                  if not (key_excluded.get(key) and "csv" in key_excluded[key])}
+        new = [key for key in values if key not in self.columns]
+        if new or not self.path.exists():
+            _, rows = read_csv(self.path)
+            self.columns = self.columns + sorted(new)
+            write_atomic(self.path, "".join([csv_line(self.columns)]
+                                            + [csv_line([row.get(c, "") for c in self.columns]) for row in rows]))
+        append_line(self.path, csv_line([plain(values.get(column, "")) for column in self.columns]))
+
+    def close(self) -> None:
+        pass
+
+
+def plain(value: Any) -> Any:
+    """A logged value as SB3's CSV output writes it (tensors and arrays as numbers)."""
+    if hasattr(value, "item") and getattr(value, "size", 1) == 1:
+        return value.item()
+    return value

@@ -1,0 +1,242 @@
+"""Run folders never lose or mix data: atomic names and files, appended logs, resumes that continue
+exactly at their checkpoint (or refuse, naming why), kills at any point (``kill -9``)."""
+
+import csv
+import json
+import os
+import random
+import signal
+import subprocess
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
+import yaml
+
+from agents.run_folder import (
+    AppendingCSVOutput,
+    RunFolderError,
+    atomic_path,
+    check_component,
+    claim_folder,
+    read_csv,
+    truncate_csv,
+    unlock_run,
+    write_atomic,
+)
+from agents.training import latest_checkpoint, new_run_dir
+
+REPO = Path(__file__).resolve().parents[2]
+# a rollout (n_envs x n_steps), a checkpoint and a validation every 64 throws: rows at 0, 64, 128, ...
+TINY = ["n_envs=4", "n_steps=16", "batch_size=64", "n_epochs=1", "eval_freq=64", "eval_targets=4",
+        "checkpoint_freq=64", "policy_kwargs.net_arch=[8]"]
+
+
+def run(*args: str, ok: bool = True) -> subprocess.CompletedProcess:
+    done = subprocess.run([sys.executable, "-m", *args], cwd=REPO, capture_output=True, text=True, timeout=300)
+    if ok:
+        assert done.returncode == 0, done.stdout + done.stderr
+    return done
+
+
+def train_tiny(runs: Path, name: str, steps: int, *extra: str) -> list[str]:
+    return ["agents.train", "--runs-dir", str(runs), "--name", name, "--no-progress", "--no-eval",
+            "--set", f"n_timesteps={steps}", *TINY, *extra]
+
+
+def one_line_error(done: subprocess.CompletedProcess, message: str, code: int = 2) -> None:
+    """A bad option exits with 2; a run folder that cannot be used as asked (``code=1``) with 1."""
+    assert done.returncode == code, done.stdout + done.stderr
+    assert message in done.stderr and "Traceback" not in done.stderr, done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1, done.stderr
+
+
+# -- names and files -----------------------------------------------------------------------------
+@pytest.mark.parametrize("name", ["../x", "a/b", "..", ".", "", "/abs"])
+def test_names_and_tags_are_single_folder_names(name):
+    with pytest.raises(RunFolderError, match="single folder name"):
+        check_component(name, "--name")
+    assert check_component("short-2", "--name") == "short-2"
+
+
+def test_runs_started_together_get_different_folders(tmp_path):
+    with ThreadPoolExecutor(8) as pool:
+        folders = list(pool.map(lambda _: claim_folder(tmp_path, "ppo-BoxToss-v0-20260101-000000"), range(16)))
+    assert len(set(folders)) == 16 and all(folder.is_dir() for folder in folders)
+    assert new_run_dir(tmp_path, None, "BoxToss-v0", "ppo") != new_run_dir(tmp_path, None, "BoxToss-v0", "ppo")
+    with pytest.raises(RunFolderError, match="already holds a run"):
+        new_run_dir(tmp_path, folders[0].name, "BoxToss-v0", "ppo")
+
+
+def test_a_write_cut_short_leaves_the_old_file(tmp_path):
+    path = tmp_path / "results.json"
+    write_atomic(path, "old")
+    with pytest.raises(KeyboardInterrupt), atomic_path(path) as temp:
+        temp.write_text("half of the ne")
+        raise KeyboardInterrupt  # a kill in the middle of the write
+    assert path.read_text() == "old" and os.listdir(tmp_path) == ["results.json"]
+
+
+def test_logs_are_appended_and_truncated_to_the_checkpoint(tmp_path):
+    path = tmp_path / "progress.csv"
+    output = AppendingCSVOutput(path)
+    output.write({"time/total_timesteps": 64, "a": 1.0}, {})
+    output.write({"time/total_timesteps": 128, "a": 2.0, "b": 3.0}, {})  # a new key widens the header
+    output.write({"time/total_timesteps": 192, "a": 4.0, "b": 5.0}, {})
+    with open(path, "a") as file:
+        file.write("256,6.0")  # a line cut by a kill
+    columns, rows = read_csv(path)
+    assert set(columns) == {"time/total_timesteps", "a", "b"} and [row["a"] for row in rows] == ["1.0", "2.0", "4.0"]
+    assert truncate_csv(path, "time/total_timesteps", 128) == (2, 2)  # 192 and the cut line dropped
+    AppendingCSVOutput(path).write({"time/total_timesteps": 192, "a": 7.0, "b": 8.0}, {})
+    assert [row["time/total_timesteps"] for row in read_csv(path)[1]] == ["64", "128", "192"]
+
+
+# -- the commands --------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def tiny_run(tmp_path_factory) -> Path:
+    runs = tmp_path_factory.mktemp("runs")
+    run(*train_tiny(runs, "tiny", 128))
+    return runs / "tiny"
+
+
+def test_a_named_folder_is_cleared_only_if_its_run_died_before_a_checkpoint(tiny_run, tmp_path):
+    dead = tmp_path / "dead"
+    dead.mkdir()
+    (dead / "config.yml").write_text("algo: ppo\n")
+    (dead / "evaluations.csv").write_text("timesteps\n0\n")
+    assert new_run_dir(tmp_path, "dead", "BoxToss-v0", "ppo") == dead and os.listdir(dead) == [".lock"]
+    with pytest.raises(RunFolderError, match="already holds a run"):
+        new_run_dir(tiny_run.parent, "tiny", "BoxToss-v0", "ppo")
+    unlock_run(dead)
+    (dead / "config.yml").write_text("algo: ppo\n")
+    live = subprocess.Popen([sys.executable, "-c", "import sys, time; from agents.run_folder import lock_run; "
+                             f"lock_run({str(dead)!r}); print('locked', flush=True); time.sleep(60)"],
+                            cwd=REPO, stdout=subprocess.PIPE, text=True)
+    try:
+        assert live.stdout.readline().strip() == "locked"
+        one_line_error(run(*train_tiny(tmp_path, "dead", 64), ok=False), "is in use by another training")
+    finally:
+        live.kill()
+        live.wait()
+
+
+def test_a_run_records_what_it_trains(tiny_run):
+    saved = yaml.safe_load((tiny_run / "config.yml").read_text())
+    assert saved["algo"] == "ppo" and saved["env_id"] == "BoxToss-v0" and saved["version"]
+    assert latest_checkpoint(tiny_run, "ppo")[2] == 128
+
+
+def test_a_resume_that_disagrees_with_the_run_refuses(tiny_run):
+    one_line_error(run("agents.train", "--resume", str(tiny_run), "--algo", "sac", ok=False),
+                   "trained with --algo ppo, not sac")
+    one_line_error(run("agents.train", "--resume", str(tiny_run), "--env", "BoxToss-OnBox-v0", ok=False),
+                   "trained with --env BoxToss-v0")
+
+
+def test_a_resume_without_checkpoint_or_statistics_refuses_naming_the_file(tiny_run, tmp_path):
+    copy = tmp_path / "copy"
+    subprocess.run(["cp", "-r", str(tiny_run), str(copy)], check=True)
+    for path in copy.glob("checkpoints/ppo_vecnormalize_128_steps.pkl"):
+        path.unlink()
+    one_line_error(run("agents.train", "--resume", str(copy), ok=False), "ppo_vecnormalize_128_steps.pkl is missing")
+    (copy / "vecnormalize.pkl").unlink()
+    one_line_error(run("agents.evaluate", str(copy), "--targets", "4", ok=False), "vecnormalize.pkl is missing", 1)
+    for path in list(copy.glob("checkpoints/*")) + [copy / "model.zip"]:
+        path.unlink()
+    one_line_error(run("agents.train", "--resume", str(copy), ok=False), "no checkpoint to resume from")
+
+
+def test_paths_never_escape_the_runs_folder(tiny_run, tmp_path):
+    one_line_error(run(*train_tiny(tmp_path, "../x", 64), ok=False), "--name must be a single folder name")
+    one_line_error(run("agents.evaluate", str(tiny_run), "--tag", "../../x", ok=False),
+                   "--tag must be a single folder name")
+    (tmp_path / "file").write_text("")
+    one_line_error(run(*train_tiny(tmp_path / "file", "x", 64), ok=False), "is a file, not a folder")
+    assert sorted(os.listdir(tmp_path)) == ["file"]
+
+
+def test_evaluations_with_other_settings_never_overwrite_each_other(tiny_run):
+    run("agents.evaluate", str(tiny_run), "--targets", "8", "--no-plots")
+    run("agents.evaluate", str(tiny_run), "--targets", "4", "--no-plots", "--tag", "mine")
+    assert json.loads((tiny_run / "eval" / "targets=8" / "results.json").read_text())["n"] == 8
+    assert not (tiny_run / "eval" / "default").exists()
+    one_line_error(run("agents.evaluate", str(tiny_run), "--targets", "8", "--tag", "mine", ok=False),
+                   "holds an evaluation with other settings", 1)
+    assert json.loads((tiny_run / "eval" / "mine" / "results.json").read_text())["n"] == 4
+
+
+# -- kills ---------------------------------------------------------------------------------------
+def steps_column(path: Path, column: str) -> list[int]:
+    with open(path) as file:
+        return [int(float(row[column])) for row in csv.DictReader(file)]
+
+
+def test_kill_9_at_random_points_then_resume_loses_and_duplicates_nothing(tmp_path):
+    """Killed twice at random moments (checkpoints are written every 64 throws, so a kill often lands in
+    one), then resumed to the end: every rollout's row of progress.csv and every validation's row of
+    evaluations.csv is there exactly once, and the wall time of the killed sessions is counted."""
+    rng = random.Random(int(os.environ.get("KILL_SEED", time.time())))
+    steps = 1024
+    command = [sys.executable, "-m", *train_tiny(tmp_path, "killed", steps)]
+    process = subprocess.Popen(command, cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    run_dir = tmp_path / "killed"
+    walls = []
+    for _ in range(2):
+        while latest_checkpoint(run_dir, "ppo") is None and process.poll() is None:  # training has begun
+            time.sleep(0.05)
+        time.sleep(rng.uniform(0.0, 2.0))
+        process.send_signal(signal.SIGKILL)
+        process.wait()
+        timing = json.loads((run_dir / "timing.json").read_text())
+        walls.append(timing["wall_seconds"])
+        process = subprocess.Popen([sys.executable, "-m", "agents.train", "--resume", str(run_dir), "--no-progress",
+                                    "--no-eval"], cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    assert process.wait(timeout=300) == 0, process.stderr.read()
+    assert steps_column(run_dir / "logs" / "progress.csv", "time/total_timesteps") == list(range(64, steps + 1, 64))
+    assert steps_column(run_dir / "evaluations.csv", "timesteps") == list(range(0, steps + 1, 64))
+    wall = steps_column(run_dir / "evaluations.csv", "wall_seconds")
+    assert wall == sorted(wall)  # wall time never goes backwards
+    assert json.loads((run_dir / "timing.json").read_text())["wall_seconds"] > walls[-1] >= walls[0] > 0
+    # resuming a run that has reached its budget changes nothing
+    before = (run_dir / "logs" / "progress.csv").read_text()
+    run("agents.train", "--resume", str(run_dir), "--no-progress", "--no-eval")
+    assert (run_dir / "logs" / "progress.csv").read_text() == before
+
+
+def test_two_runs_started_together_without_a_name_get_two_folders(tmp_path):
+    command = [sys.executable, "-m", "agents.train", "--runs-dir", str(tmp_path), "--no-progress", "--no-eval",
+               "--set", "n_timesteps=64", *TINY]
+    processes = [subprocess.Popen(command, cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+                 for _ in range(2)]
+    for process in processes:
+        assert process.wait(timeout=300) == 0, process.stderr.read()
+    folders = sorted(os.listdir(tmp_path))
+    assert len(folders) == 2 and all((tmp_path / folder / "model.zip").exists() for folder in folders)
+
+
+def test_a_kill_during_a_checkpoint_write_leaves_the_previous_checkpoint(tmp_path, monkeypatch):
+    """The model of a checkpoint is written last, to a temporary name: cut short in the middle (as a
+    kill would), the newest complete checkpoint is still the one a resume starts from."""
+    import gymnasium as gym
+    from stable_baselines3 import PPO
+
+    from agents.training import save_checkpoint
+
+    model = PPO("MlpPolicy", gym.make("BoxToss-v0"), n_steps=8, batch_size=8, device="cpu")
+    save_checkpoint(model, tmp_path, "ppo", replay_buffer=False)
+    model.num_timesteps = 64
+    real_save = model.save
+
+    def killed_while_saving(path, *args, **kwargs):
+        real_save(path, *args, **kwargs)
+        Path(path).write_bytes(Path(path).read_bytes()[:100])  # half written
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(model, "save", killed_while_saving)
+    with pytest.raises(KeyboardInterrupt):
+        save_checkpoint(model, tmp_path, "ppo", replay_buffer=False)
+    assert latest_checkpoint(tmp_path, "ppo")[2] == 0
+    assert sorted(path.name for path in (tmp_path / "checkpoints").glob("*.zip")) == ["ppo_0_steps.zip"]

@@ -1,0 +1,122 @@
+"""Seeds one way everywhere: any integer type, never a bool, the same rules in the single and the vector
+env; a vector seed list checked whole (naming the bad index) before any env is reseeded; a million envs
+seeded at once, bit for bit as ``gymnasium.utils.seeding.np_random`` seeds each."""
+
+import subprocess
+import sys
+import time
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils import seeding
+
+import box_toss_env  # noqa: F401
+from box_toss_env.envs.box_toss import BoxTossEnv
+from box_toss_env.envs.box_toss_vector import BoxTossVectorEnv
+from box_toss_env.envs.random_streams import RandomStreams, numpy_state, seeded_states
+
+SEEDS = [0, 1, 7, 2**31, 2**32 - 1, 2**32, 2**40 + 7, 2**63 - 1, 2**64 - 1, 2**64, 2**70 + 3, 10**30]
+
+
+def test_seeds_in_bulk_are_numpys_bit_for_bit():
+    states = seeded_states(SEEDS)
+    assert [tuple(int(v) for v in row) for row in states] == [numpy_state(seed) for seed in SEEDS]
+    many = np.arange(2**32 - 300, 2**32 + 300, dtype=np.uint64)  # one and two 32-bit words
+    assert [tuple(int(v) for v in row) for row in seeded_states(many)] == [numpy_state(int(s)) for s in many]
+    streams = RandomStreams(len(SEEDS))
+    streams.seed_all(SEEDS)
+    expected = np.stack([seeding.np_random(seed)[0].random(5) for seed in SEEDS])
+    np.testing.assert_array_equal(streams.fill_uniform(np.zeros((len(SEEDS), 5))), expected)
+
+
+@pytest.mark.parametrize("seed", [5, np.int64(5), np.uint32(5), np.int8(5)])
+def test_any_integer_type_seeds_the_single_and_the_vector_env_alike(seed):
+    single, _ = BoxTossEnv().reset(seed=seed)
+    vector, _ = BoxTossVectorEnv(2).reset(seed=seed)
+    reference, _ = BoxTossEnv().reset(seed=5)
+    np.testing.assert_array_equal(single, reference)
+    np.testing.assert_array_equal(vector[0], reference)
+
+
+@pytest.mark.parametrize("seed, error", [(True, TypeError), (np.bool_(False), TypeError), (-1, ValueError),
+                                         (1.0, TypeError), ("3", TypeError)])
+def test_bools_negatives_and_non_integers_are_refused_by_both(seed, error):
+    with pytest.raises(error, match="seed"):
+        BoxTossEnv().reset(seed=seed)
+    with pytest.raises(error, match="seed"):
+        BoxTossVectorEnv(2).reset(seed=seed)
+
+
+@pytest.mark.parametrize("bad, index", [([10, 11, -1], 2), ([10, True, 12], 1), (np.array([10, -11, 12]), 1),
+                                        ([10, 11, 2.5], 2)])
+def test_a_bad_seed_list_names_its_index_and_reseeds_nothing(bad, index):
+    envs = BoxTossVectorEnv(3)
+    envs.reset(seed=[1, 2, 3])
+    before = envs._streams.states.copy()
+    with pytest.raises((TypeError, ValueError), match=rf"seed\[{index}\]"):
+        envs.reset(seed=bad)
+    np.testing.assert_array_equal(envs._streams.states, before)
+
+
+def test_numpy_array_seeds_are_lists_and_ints_count_up():
+    envs = BoxTossVectorEnv(3)
+    by_list, _ = envs.reset(seed=[10, 11, 12])
+    by_array, _ = envs.reset(seed=np.array([10, 11, 12]))
+    by_int, _ = envs.reset(seed=10)
+    np.testing.assert_array_equal(by_list, by_array)
+    np.testing.assert_array_equal(by_list, by_int)
+    kept, _ = envs.reset(seed=[None, 11, None])  # None keeps an env's stream going
+    assert not np.array_equal(kept[0], by_list[0]) and np.array_equal(kept[1], by_list[1])
+
+
+def test_a_million_envs_are_seeded_at_once_far_faster_than_one_generator_each():
+    """A million envs in 0.3-0.5 s on the shared 2-core machine (23 s before, one Generator per env);
+    timed against numpy's own seeding so that the machine's load does not matter."""
+    streams = RandomStreams(10**6)
+    start = time.perf_counter()
+    streams.seed_all(np.arange(10**6, dtype=np.uint64))
+    bulk = (time.perf_counter() - start) / 10**6
+    start = time.perf_counter()
+    for seed in range(2000):
+        numpy_state(seed)
+    one_by_one = (time.perf_counter() - start) / 2000
+    assert bulk < one_by_one / 10
+
+
+@pytest.mark.parametrize("mass", [1e300, float("nan"), "x"])
+def test_a_scalar_mass_is_checked_beside_a_mass_range(mass):
+    with pytest.raises((TypeError, ValueError), match="^mass must be"):
+        BoxTossEnv(mass=mass, mass_range=(1.0, 2.0))
+
+
+@pytest.mark.parametrize("value", [{1.0: 2.0}, {1.0, 2.0}, range(1, 3)])
+def test_ranges_must_be_pairs_not_dicts_sets_or_ranges(value):
+    with pytest.raises(TypeError, match="^mass_range must be a \\(low, high\\) pair"):
+        BoxTossEnv(mass_range=value)
+
+
+def test_a_non_finite_action_row_is_named_without_the_whole_batch():
+    envs = BoxTossVectorEnv(5000)
+    envs.reset(seed=0)
+    actions = np.zeros((5000, 3), dtype=np.float32)
+    actions[1234, 1] = np.nan
+    with pytest.raises(ValueError, match=r"row 1234 is \[0.0, nan, 0.0\]") as error:
+        envs.step(actions)
+    assert len(str(error.value)) < 200
+
+
+def test_a_failing_make_vec_prints_nothing_at_exit():
+    code = ("import gymnasium as gym, box_toss_env\n"
+            "for kwargs in ({'num_envs': 0}, {'num_envs': 2, 'mass': -1}, {'num_envs': 2, 'threads': 99}):\n"
+            "    try:\n        gym.make_vec('BoxToss-v0', vectorization_mode='vector_entry_point', **kwargs)\n"
+            "    except ValueError:\n        pass\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0 and done.stderr == "", done.stderr
+
+
+def test_gymnasium_make_accepts_numpy_seeds_too():
+    env = gym.make("BoxToss-v0")
+    first, _ = env.reset(seed=np.int64(3))
+    again, _ = env.reset(seed=3)
+    np.testing.assert_array_equal(first, again)
