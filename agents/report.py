@@ -254,9 +254,12 @@ and on a box (`BoxToss-OnBox-v0`, touching down on the base's top) the algorithm
 offset and lean from a throw that lands a target face flat on the target, see the environment section);
 evaluation maps a policy's commands to the env's actions the same way, so every agent is scored on the env's
 own throws. Each run folder `runs/NAME/` keeps `config.yml` (algorithm, resolved
-hyperparameters, env kwargs, seed), `command.txt`, `model.zip` and `vecnormalize.pkl`, the best model by
-validation success, `evaluations.csv`, TensorBoard logs, checkpoints (with the replay buffer for SAC and TD3),
-`timing.json` and `eval/*/results.json`.
+hyperparameters, env kwargs, seed, package version), `command.txt`, `model.zip` and `vecnormalize.pkl`, the best
+model by validation success, `evaluations.csv` and `logs/progress.csv` (appended, never rewritten: a resume drops
+the rows after its checkpoint), TensorBoard logs, checkpoints (with the replay buffer for SAC and TD3; a final one
+at the end of every session), `timing.json` (written as training goes, so a killed run's time counts) and
+`eval/*/results.json` (an evaluation with other settings, `--targets 8` say, goes to `eval/targets=8`, never over
+another); what a run folder guarantees is in [docs/agents/run_folders.md](docs/agents/run_folders.md).
 
 The main job trains on `{env_id}`, where the face counts: each episode draws one face that must end down.
 Every agent is scored on the same {targets} test targets: target i is what
