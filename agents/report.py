@@ -259,7 +259,7 @@ model by validation success, `evaluations.csv` and `logs/progress.csv` (appended
 the rows after its checkpoint), TensorBoard logs, checkpoints (with the replay buffer for SAC and TD3; a final one
 at the end of every session), `timing.json` (written as training goes, so a killed run's time counts) and
 `eval/*/results.json` (an evaluation with other settings, `--targets 8` say, goes to `eval/targets=8`, never over
-another); what a run folder guarantees is in [docs/agents/run_folders.md](docs/agents/run_folders.md).
+another); what a run folder guarantees is in [run folders](docs/agents/run_folders.md).
 
 The main job trains on `{env_id}`, where the face counts: each episode draws one face that must end down.
 Every agent is scored on the same {targets} test targets: target i is what
