@@ -7,8 +7,9 @@ The initial state of a drop is the least-squares fit of its free flight up to th
 Our engine runs all the drops of a split as one scene of independent boxes, each with its own restitution
 and friction, with the step ``FRAME / substeps`` (the poses compared on the 250 Hz frames).
 
-The material is fitted on the training half (odd drop numbers) by a grid search over restitution and
-friction of the mean error over the first ``FIT_FRAMES`` frames, refined once around the best point; the
+The material is fitted on the training half (odd drop numbers; the first ``FIT_DROPS`` of them, the same for
+every engine) by a grid search over restitution and friction (0, 0.2, ..., 1) of the mean error over the first
+``FIT_FRAMES`` frames, refined once on a grid of 0.04 around the best point; the
 effective gravity, when fitted, is the median free-flight acceleration of the training drops. Everything
 is reported on the held-out half (even drop numbers).
 """
@@ -21,15 +22,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from box_toss_env.physics import Box, NonFiniteStateError, Scene, simulate
+from box_toss_env import physics
+from box_toss_env.physics import Box, NonFiniteStateError, Scene
 
 from . import data
 
 HORIZONS = (20, 50, 150)  # frames after the start
 FIT_FRAMES = 50
+FIT_DROPS = 60
 MASS = 0.05  # [kg] the square's mass does not change rigid impacts; with STIFFNESS it sets the penalty's rate
 STIFFNESS = 1e3  # [N/m] a resting square sinks m g / k = 0.5 mm under the penalty
-COARSE = np.linspace(0.0, 1.0, 11)
+COARSE = np.linspace(0.0, 1.0, 6)
 EARTH = -9.81
 
 
@@ -42,11 +45,17 @@ class Material:
 
 @dataclass(frozen=True)
 class Model:
-    """One way of simulating the drops: an engine (ours: solver name) and its step as frames / substeps."""
+    """One way of simulating the drops: an engine ("ours" with a solver, or a name in
+    ``benchmarks.other_engines.ENGINES``) and its step, ``substeps`` steps a frame."""
 
-    name: str
+    engine: str = "ours"
     solver: str = "robust"
     substeps: int = 1
+
+    @property
+    def name(self) -> str:
+        engine = f"ours, {self.solver}" if self.engine == "ours" else self.engine
+        return f"{engine}, dt = 4 ms / {self.substeps}" if self.substeps > 1 else f"{engine}, dt = 4 ms"
 
     @property
     def dt(self) -> float:
@@ -72,6 +81,35 @@ def measured(drops: list[data.Drop], frames: int) -> np.ndarray:
     return out
 
 
+def simulate(states: np.ndarray, material: Material | list[Material], model: Model,
+             frames: int = max(HORIZONS)) -> tuple[np.ndarray, float]:
+    """(n, frames + 1, 3) poses on the frames from ``states`` (n, 6) with ``model``, and the wall time of the
+    stepping [s]; nan poses where a run diverged."""
+    if model.engine == "ours":
+        return simulate_ours(states, material, model, frames)
+    return simulate_other(states, material, model, frames)
+
+
+def simulate_other(states, material, model, frames):
+    """As ``simulate``, with an engine of ``benchmarks.other_engines``: one toss per drop, stepped from Python
+    (the wall time includes reading the state after every step, as ``record=True`` does there)."""
+    from benchmarks.other_engines import ENGINES, Toss
+
+    engine = ENGINES[model.engine]
+    materials = material if isinstance(material, list) else [material] * len(states)
+    out = np.full((len(states), frames + 1, 3), np.nan)
+    seconds = 0.0
+    for k, (s, m) in enumerate(zip(states, materials, strict=True)):
+        toss = Toss(length=data.SIDE, width=data.SIDE, mass=MASS, x=s[0], y=s[1], angle=s[2], vx=s[3], vy=s[4],
+                    omega=s[5], gravity=m.gravity, restitution=m.restitution, friction=m.friction)
+        result = engine.simulate_toss(toss, model.dt, frames * model.substeps, record=True)
+        seconds += result.wall_seconds
+        poses = result.states[::model.substeps, :3]
+        if np.isfinite(poses).all():
+            out[k] = poses
+    return out, seconds
+
+
 def simulate_ours(states: np.ndarray, material: Material | list[Material], model: Model,
                   frames: int = max(HORIZONS)) -> tuple[np.ndarray, float]:
     """(n, frames + 1, 3) poses on the frames from ``states`` with our engine, and the run's wall time [s]
@@ -84,7 +122,7 @@ def simulate_ours(states: np.ndarray, material: Material | list[Material], model
     scene = Scene(boxes=boxes, dt=model.dt, gravity=gravity, penalty_stiffness=STIFFNESS, solver=model.solver)
     begin = time.perf_counter()
     try:
-        result = simulate(scene, steps=frames * model.substeps, record=True)
+        result = physics.simulate(scene, steps=frames * model.substeps, record=True)
     except NonFiniteStateError:
         return np.full((len(states), frames + 1, 3), np.nan), time.perf_counter() - begin
     seconds = time.perf_counter() - begin
@@ -117,7 +155,7 @@ def fit_material(drops: list[data.Drop], model: Model, gravity: float = EARTH,
         points = [Material(float(e), float(mu), gravity) for e in restitutions for mu in frictions]
         # every grid point's drops in one scene: one compiled run per grid, not one per point
         n = len(states)
-        predicted, _ = simulate_ours(np.tile(states, (len(points), 1)), [p for p in points for _ in range(n)],
+        predicted, _ = simulate(np.tile(states, (len(points), 1)), [p for p in points for _ in range(n)],
                                      model, FIT_FRAMES)
         losses = [loss(predicted[k * n:(k + 1) * n], truth) for k in range(len(points))]
         best = int(np.argmin(losses))
@@ -154,9 +192,19 @@ class Evaluation:
         return float(np.nanmean(self.position[:, 1:frames + 1])), float(np.nanmean(self.angle[:, 1:frames + 1]))
 
 
-def evaluate(drops: list[data.Drop], model: Model, material: Material, frames: int = max(HORIZONS)) -> Evaluation:
+def evaluate(drops: list[data.Drop], model: Model, material: Material, frames: int = max(HORIZONS),
+             floorless: bool = False) -> Evaluation:
+    """``model`` with ``material`` on ``drops``; ``floorless``: the free-flight parabola instead (no floor, the
+    baseline that shows when the impacts start to matter)."""
     states, truth = initial_states(drops), measured(drops, frames)
-    predicted, seconds = simulate_ours(states, material, model, frames)
+    if floorless:
+        t = np.arange(frames + 1) * data.FRAME
+        predicted = np.stack([states[:, [0]] + states[:, [3]] * t,
+                              states[:, [1]] + states[:, [4]] * t + 0.5 * material.gravity * t**2,
+                              states[:, [2]] + states[:, [5]] * t], axis=2)
+        seconds = 0.0
+    else:
+        predicted, seconds = simulate(states, material, model, frames)
     position, angle = errors(predicted, truth)
     return Evaluation(model, material, position, angle, seconds, frames * model.substeps)
 

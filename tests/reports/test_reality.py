@@ -8,7 +8,7 @@ import re
 import numpy as np
 import pytest
 
-from reports.reality import data, download, synthetic
+from reports.reality import data, download, error, report, synthetic
 
 N_DROPS = 24
 E, MU = 0.4, 0.3
@@ -115,3 +115,45 @@ def test_download_rejects_a_bad_out_in_one_line(tmp_path, capsys):
         download.main(["--out", str(tmp_path / "file")])
     with pytest.raises(SystemExit, match="--out: .* does not exist"):
         download.main(["--out", str(tmp_path / "none"), "--check"])
+
+
+def test_the_fit_finds_the_material_the_fixture_was_made_with(fixture):
+    folder, _ = fixture
+    drops, _ = data.load(folder)
+    train, held = error.split(drops)
+    assert {d.number % 2 for d in train} == {1} and {d.number % 2 for d in held} == {0}
+    material, value = error.fit_material(train, error.Model())
+    assert material.restitution == pytest.approx(E, abs=0.05) and material.friction == pytest.approx(MU, abs=0.05)
+    evaluation = error.evaluate(held, error.Model(), material)
+    position, angle = evaluation.at(20)
+    assert position < 3e-3 and angle < math.radians(5)  # the engine against itself, from a fitted initial state
+    wrong = error.evaluate(held, error.Model(), error.Material(0.0, 10.0))
+    assert wrong.mean_over(50)[0] > 5 * evaluation.mean_over(50)[0]
+
+
+def test_the_noise_floor_is_the_fixture_noise(fixture):
+    folder, _ = fixture
+    drops, _ = data.load(folder)
+    noise = error.noise_floor(drops)
+    sigma = 3e-5  # synthetic.write_drops' default
+    assert noise["rest position"] == pytest.approx(math.sqrt(2) * sigma, rel=0.5)
+    assert noise["flight position"] == pytest.approx(math.sqrt(2) * sigma, rel=0.5)
+
+
+def test_the_report_command_writes_the_page_and_figures(fixture, tmp_path, capsys):
+    folder, _ = fixture
+    assert report.main(["--data", str(folder), "--quick", "--out", str(tmp_path)]) == 0
+    page = (tmp_path / "reality.md").read_text()
+    assert "Quick run" in page and "## What it teaches" in page and "ours, robust, dt = 4 ms |" in page
+    assert (tmp_path / "figures" / "reality_error_time.png").stat().st_size > 10_000
+    assert (tmp_path / "figures" / "reality_work.png").stat().st_size > 10_000
+    assert "wrote" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("make", ["missing", "empty"])
+def test_the_report_command_rejects_bad_data_in_one_line(tmp_path, make):
+    path = tmp_path / "drops"
+    if make == "empty":
+        path.mkdir()
+    with pytest.raises(SystemExit, match=r"^python -m reports.reality: error: --data: [^\n]*$"):
+        report.main(["--data", str(path), "--quick", "--out", str(tmp_path / "out")])
