@@ -45,8 +45,8 @@ class Material:
 
 @dataclass(frozen=True)
 class Model:
-    """One way of simulating the drops: an engine ("ours" with a solver, or a name in
-    ``benchmarks.other_engines.ENGINES``) and its step, ``substeps`` steps a frame."""
+    """One way of simulating the drops: an engine ("ours" with a solver, or a name in ``other_engines()``) and
+    its step, ``substeps`` steps a frame."""
 
     engine: str = "ours"
     solver: str = "robust"
@@ -90,12 +90,21 @@ def simulate(states: np.ndarray, material: Material | list[Material], model: Mod
     return simulate_other(states, material, model, frames)
 
 
+def other_engines() -> dict:
+    """``benchmarks.other_engines.ENGINES`` and Box2D v3 (``box2d_v3``), by name."""
+    from benchmarks.other_engines import ENGINES
+
+    from .box2d_v3 import Box2DV3Engine
+
+    return {**ENGINES, Box2DV3Engine.name: Box2DV3Engine()}
+
+
 def simulate_other(states, material, model, frames):
     """As ``simulate``, with an engine of ``benchmarks.other_engines``: one toss per drop, stepped from Python
     (the wall time includes reading the state after every step, as ``record=True`` does there)."""
-    from benchmarks.other_engines import ENGINES, Toss
+    from benchmarks.other_engines import Toss
 
-    engine = ENGINES[model.engine]
+    engine = other_engines()[model.engine]
     materials = material if isinstance(material, list) else [material] * len(states)
     out = np.full((len(states), frames + 1, 3), np.nan)
     seconds = 0.0

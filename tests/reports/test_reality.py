@@ -157,3 +157,21 @@ def test_the_report_command_rejects_bad_data_in_one_line(tmp_path, make):
         path.mkdir()
     with pytest.raises(SystemExit, match=r"^python -m reports.reality: error: --data: [^\n]*$"):
         report.main(["--data", str(path), "--quick", "--out", str(tmp_path / "out")])
+
+
+def test_box2d_v3_builds_the_square_as_the_other_engines_do():
+    pytest.importorskip("pyb2d3")
+    from benchmarks.other_engines import Toss
+    from reports.reality.box2d_v3 import Box2DV3Engine
+
+    toss = Toss(length=data.SIDE, width=data.SIDE, mass=0.05, x=0.0, y=0.2, angle=0.3, vx=0.5, vy=-1.0, omega=2.0,
+                restitution=0.4, friction=0.2)
+    engine = Box2DV3Engine()
+    mass, moment = engine.mass_properties(toss)
+    assert mass == pytest.approx(toss.mass, rel=1e-6) and moment == pytest.approx(toss.moment, rel=1e-6)
+    states = engine.simulate_toss(toss, data.FRAME, 150, record=True).states
+    t = 10 * data.FRAME  # in free flight: symplectic Euler below the parabola by |g| t h / 2, h = dt / 4 substeps
+    assert states[10, 0] == pytest.approx(0.5 * t, abs=1e-6)
+    assert states[10, 1] == pytest.approx(0.2 - t - 0.5 * 9.81 * t**2 - 0.5 * 9.81 * t * data.FRAME / 4, abs=1e-5)
+    assert states[10, 2] == pytest.approx(0.3 + 2.0 * t, abs=1e-5)
+    assert abs(data.lowest_corner(states[-1, 1], states[-1, 2])) < 6e-3  # landed and at rest on the floor
