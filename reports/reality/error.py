@@ -192,6 +192,7 @@ class Evaluation:
     angle: np.ndarray  # (n, frames + 1) [rad]
     seconds: float  # wall time of the run [s]
     steps: int  # time steps per drop
+    predicted: np.ndarray | None = None  # (n, frames + 1, 3) the simulated poses
 
     def at(self, frame: int, statistic=np.nanmedian) -> tuple[float, float]:
         return float(statistic(self.position[:, frame])), float(statistic(self.angle[:, frame]))
@@ -215,7 +216,7 @@ def evaluate(drops: list[data.Drop], model: Model, material: Material, frames: i
     else:
         predicted, seconds = simulate(states, material, model, frames)
     position, angle = errors(predicted, truth)
-    return Evaluation(model, material, position, angle, seconds, frames * model.substeps)
+    return Evaluation(model, material, position, angle, seconds, frames * model.substeps, predicted)
 
 
 def noise_floor(drops: list[data.Drop]) -> dict[str, float]:
@@ -242,3 +243,13 @@ def noise_floor(drops: list[data.Drop]) -> dict[str, float]:
         "flight position": float(np.median(flight_position)),
         "flight angle": float(np.median(flight_angle)),
     }
+
+
+def first_bounce(poses: np.ndarray, impact: int) -> tuple[float, float, float]:
+    """Centre vertical velocity before and after the impact at frame ``impact`` of ``poses`` (T, 3), each the mean
+    over two frames that exclude the impact frame's neighbours (frames impact-3..impact-1, impact+1..impact+3),
+    and the spin after it [m/s, m/s, rad/s]."""
+    before = (poses[impact - 1, 1] - poses[impact - 3, 1]) / (2 * data.FRAME)
+    after = (poses[impact + 3, 1] - poses[impact + 1, 1]) / (2 * data.FRAME)
+    spin = (poses[impact + 3, 2] - poses[impact + 1, 2]) / (2 * data.FRAME)
+    return float(before), float(after), float(spin)
