@@ -76,8 +76,15 @@ def download(out: Path, timeout: float = 30.0) -> dict[str, str]:
     return verify(out, expected)
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line naming the option (no usage block)."""
+
+    def error(self, message):
+        raise SystemExit(f"{self.prog}: error: {message}")
+
+
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m reports.reality.download", description=__doc__.split("\n\n")[0])
+    parser = OneLineParser(prog="python -m reports.reality.download", description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", type=Path, required=True, help="folder for the traj_N.csv files")
     parser.add_argument("--check", action="store_true", help="only check the files already in --out")
     args = parser.parse_args(argv)

@@ -9,7 +9,6 @@ computed here from the data; the page says which drops were dropped and why.
 
 from __future__ import annotations
 
-import argparse
 import math
 import time
 from dataclasses import dataclass, field
@@ -20,6 +19,7 @@ import numpy as np
 from .. import document
 from ..document import DOCS, QUICK_OUT, REPO, table
 from . import data, error
+from .download import OneLineParser
 from .error import HORIZONS, Evaluation, Material, Model
 
 OUR_MODELS = (Model("ours", "robust", 1), Model("ours", "robust", 4),
@@ -414,7 +414,7 @@ def write_report(report: Report, out: Path, quick: bool = False) -> Path:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m reports.reality", description=__doc__.split("\n\n")[0])
+    parser = OneLineParser(prog="python -m reports.reality", description=__doc__.split("\n\n")[0])
     parser.add_argument("--data", type=Path, required=True, help="folder of the measured traj_N.csv files")
     parser.add_argument("--quick", action="store_true", help=f"{QUICK_DROPS} drops, our engine only (the tests)")
     parser.add_argument("--out", type=Path, default=None,

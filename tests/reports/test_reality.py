@@ -175,3 +175,21 @@ def test_box2d_v3_builds_the_square_as_the_other_engines_do():
     assert states[10, 1] == pytest.approx(0.2 - t - 0.5 * 9.81 * t**2 - 0.5 * 9.81 * t * data.FRAME / 4, abs=1e-5)
     assert states[10, 2] == pytest.approx(0.3 + 2.0 * t, abs=1e-5)
     assert abs(data.lowest_corner(states[-1, 1], states[-1, 2])) < 6e-3  # landed and at rest on the floor
+
+
+def test_the_committed_page_is_the_command_output():
+    """docs/reality.md is written by the command (not by hand): its figures exist and its tables have the rows the
+    command writes for the full report."""
+    page = (report.REPO / "docs" / "reality.md").read_text()
+    assert page.startswith("# Error against reality") and "Quick run" not in page
+    for figure in re.findall(r"\(figures/([\w.]+\.png)\)", page):
+        assert (report.REPO / "docs" / "figures" / figure).is_file()
+    for model in report.OUR_MODELS:
+        assert f"| {model.name} |" in page
+
+
+def test_a_missing_option_is_a_one_line_error():
+    with pytest.raises(SystemExit, match=r"^python -m reports.reality: error: .*--data$"):
+        report.main([])
+    with pytest.raises(SystemExit, match=r"^python -m reports.reality.download: error: .*--out$"):
+        download.main([])
