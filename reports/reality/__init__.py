@@ -1,0 +1,9 @@
+"""Error against reality: our engine, and the engines a user would pick instead, on measured drops of a real
+square (DAIRLab/ImpactModeling, BSD-3; docs/reality.md).
+
+    python -m reports.reality.download --out DIR   # the 500 measured drops, checked against square_drops.sha256
+    python -m reports.reality --data DIR           # docs/reality.md and its figures
+
+``data`` reads and cleans a folder of the measured files, ``error`` simulates from the measured states and
+fits the material, ``synthetic`` writes drops in the same format from our engine (the tests' fixture).
+"""

@@ -1,0 +1,103 @@
+"""Download the measured square drops into a local folder and check them against the committed checksums.
+
+    python -m reports.reality.download --out data/square-drops
+
+Each ``traj_N.csv`` (N = 1..500) is read from the repository's raw URL at the pinned commit ``COMMIT`` of
+DAIRLab/ImpactModeling (BSD-3-Clause, Copyright (c) 2020, Dynamic Autonomy and Intelligent Robotics Lab;
+the licence is saved beside the files as LICENSE) and kept only if its SHA-256 equals the one in
+``square_drops.sha256`` (computed from that commit). Files already present with the right checksum are not
+downloaded again. The data are not part of this repository: keep them outside it, or in an ignored folder.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import sys
+import urllib.error
+import urllib.request
+from pathlib import Path
+
+REPOSITORY = "DAIRLab/ImpactModeling"
+COMMIT = "f6c28898845da6d48efdd6c1c696db2fb3716edf"
+FOLDER = "Wang/Wang-Mason%20Square/dice-data-processed"
+RAW = f"https://raw.githubusercontent.com/{REPOSITORY}/{COMMIT}"
+MANIFEST = Path(__file__).with_name("square_drops.sha256")
+
+
+def manifest(path: Path = MANIFEST) -> dict[str, str]:
+    """File name -> SHA-256 hex digest, from a ``sha256sum``-format file."""
+    entries = {}
+    for line in path.read_text().splitlines():
+        if line.strip():
+            digest, name = line.split()
+            entries[name] = digest
+    return entries
+
+
+def sha256(path: Path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def verify(folder: Path, expected: dict[str, str] | None = None) -> dict[str, str]:
+    """Name -> what is wrong ("missing" or "checksum") for each manifest file not present intact in ``folder``."""
+    expected = manifest() if expected is None else expected
+    problems = {}
+    for name, digest in expected.items():
+        path = Path(folder) / name
+        if not path.is_file():
+            problems[name] = "missing"
+        elif sha256(path) != digest:
+            problems[name] = "checksum"
+    return problems
+
+
+def download(out: Path, timeout: float = 30.0) -> dict[str, str]:
+    """Download every manifest file not already intact in ``out``; returns the problems left (see ``verify``)."""
+    out.mkdir(parents=True, exist_ok=True)
+    expected = manifest()
+    for name in verify(out, expected):
+        try:
+            with urllib.request.urlopen(f"{RAW}/{FOLDER}/{name}", timeout=timeout) as response:
+                body = response.read()
+        except (urllib.error.URLError, TimeoutError) as error:
+            print(f"{name}: {error}", file=sys.stderr)
+            continue
+        if hashlib.sha256(body).hexdigest() == expected[name]:
+            (out / name).write_bytes(body)
+        else:
+            print(f"{name}: checksum differs from {MANIFEST.name}, not saved", file=sys.stderr)
+    if not (out / "LICENSE").exists():
+        try:
+            with urllib.request.urlopen(f"{RAW}/LICENSE", timeout=timeout) as response:
+                (out / "LICENSE").write_bytes(response.read())
+        except (urllib.error.URLError, TimeoutError) as error:
+            print(f"LICENSE: {error}", file=sys.stderr)
+    return verify(out, expected)
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line naming the option (no usage block)."""
+
+    def error(self, message):
+        raise SystemExit(f"{self.prog}: error: {message}")
+
+
+def main(argv=None) -> int:
+    parser = OneLineParser(prog="python -m reports.reality.download", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--out", type=Path, required=True, help="folder for the traj_N.csv files")
+    parser.add_argument("--check", action="store_true", help="only check the files already in --out")
+    args = parser.parse_args(argv)
+    if args.out.exists() and not args.out.is_dir():
+        raise SystemExit(f"{parser.prog}: error: --out: {args.out} is not a folder")
+    if args.check and not args.out.is_dir():
+        raise SystemExit(f"{parser.prog}: error: --out: {args.out} does not exist")
+    problems = verify(args.out) if args.check else download(args.out)
+    total = len(manifest())
+    print(f"{args.out}: {total - len(problems)} of {total} files intact"
+          + (f"; {len(problems)} missing or wrong, e.g. {next(iter(problems))}" if problems else ""))
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
