@@ -162,14 +162,9 @@ def seed_sequence_words(entropy: np.ndarray) -> np.ndarray:
 
 
 def multiply_add_128(hi, lo, inc_hi, inc_lo):
-    """(hi, lo) * PCG's multiplier + (inc_hi, inc_lo) mod 2^128, on uint64 arrays."""
-    a_lo, a_hi = lo & LOW_32_BITS, lo >> np.uint64(32)
-    b_lo, b_hi = MULTIPLIER_LO & LOW_32_BITS, MULTIPLIER_LO >> np.uint64(32)
-    lo_lo = a_lo * b_lo
-    hi_lo = a_hi * b_lo
-    cross = (lo_lo >> np.uint64(32)) + (hi_lo & LOW_32_BITS) + a_lo * b_hi
-    high = a_hi * b_hi + (hi_lo >> np.uint64(32)) + (cross >> np.uint64(32))
-    low = (cross << np.uint64(32)) | (lo_lo & LOW_32_BITS)
+    """(hi, lo) * PCG's multiplier + (inc_hi, inc_lo) mod 2^128, on uint64 arrays (``multiply_64x64``'s
+    Python source, which works on arrays as it does on scalars)."""
+    high, low = getattr(multiply_64x64, "py_func", multiply_64x64)(lo, MULTIPLIER_LO)
     high = high + hi * MULTIPLIER_LO + lo * MULTIPLIER_HI
     new_lo = low + inc_lo
     return high + inc_hi + (new_lo < low).astype(np.uint64), new_lo
