@@ -132,11 +132,6 @@ def pile_cost(n: int, solver: str = "robust", settle: float = 2.0, steps: int = 
             "settled_state": settled, "moving_at_end": int(np.sum(np.abs(state[:, 3:]).max(axis=1) > 1e-2))}
 
 
-def pile_costs(sizes=PILE_SIZES, repeats: int = 3) -> list[dict]:
-    """``pile_cost`` for piles of 1, 10 and 100 boxes, robust solver."""
-    return [pile_cost(n, repeats=repeats) for n in sizes]
-
-
 NEVER_SLEEP = 1e6  # [s] a sleep_time no pile run reaches
 PILE_SETTLE = 2.0  # [s] as ``pile_cost``
 PILE_STEPS, QUICK_PILE_STEPS = 256, 64

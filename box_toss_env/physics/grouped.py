@@ -31,7 +31,7 @@ from .validation import check_integer
 MAX_GROUP_SIZE = 64
 """The most bodies one group (one env's scene) may hold."""
 
-MAX_INTERPRETED_BODIES = 16
+MAX_INTERPRETED_GROUPED_BODIES = 16
 """The largest batch (bodies) run interpreted while the grouped kernel compiles: a colliding throw costs
 ~30 times a floor-only one, so 8 throws onto a box already take 0.6-1.1 s in Python (measured beside the
 compiling worker on 2 cores)."""
@@ -78,7 +78,7 @@ class GroupedSimulator:
     numba.config.NUMBA_NUM_THREADS], default all of them; with ``flags.parallel`` False, one). No
     recording: a recorded scene (rendering) is one group, which the plain ``Simulator`` runs. With
     ``start_interpreted`` (the batched env), a kernel not in the cache yet is compiled by a worker process
-    while runs of up to ``MAX_INTERPRETED_BODIES`` bodies use its interpreted copy (``background_compile``).
+    while runs of up to ``MAX_INTERPRETED_GROUPED_BODIES`` bodies use its interpreted copy (``background_compile``).
     """
 
     def __init__(self, flags: KernelFlags, group_size: int, threads: int | None = None,
@@ -96,8 +96,9 @@ class GroupedSimulator:
                   "use_friction": flags.use_friction}
         self.kernel = make_grouped_kernel(**recipe)
         self._ready = False
-        self._start = (background_compile.InterpretedStart(self.kernel, (__name__, "make_grouped_kernel", recipe),
-                                                           MAX_INTERPRETED_BODIES) if start_interpreted else None)
+        recipe_call = (__name__, "make_grouped_kernel", recipe)
+        self._start = (background_compile.InterpretedStart(self.kernel, recipe_call, MAX_INTERPRETED_GROUPED_BODIES)
+                       if start_interpreted else None)
         self.interpreted = False  # whether the last run used the kernel's interpreted copy
 
     @property

@@ -5,7 +5,6 @@ a wrong type is a TypeError, a value outside its range (``ranges``, docs/ranges.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -155,10 +154,3 @@ class Scene:
             )
         return params
 
-
-def box_from_state(template: Box, state_row) -> Box:
-    """A copy of ``template`` placed at one row of a state array."""
-    x, y, angle, vx, vy, spin = (float(v) for v in state_row)
-    if not all(math.isfinite(v) for v in (x, y, angle, vx, vy, spin)):
-        raise ValueError(f"state must be finite, got {tuple(state_row)}")
-    return replace(template, position=(x, y), angle=angle, velocity=(vx, vy), spin=spin)

@@ -116,7 +116,7 @@ def test_a_batch_onto_boxes_runs_interpreted_only_up_to_its_own_smaller_size(mon
     monkeypatch.setattr(background_compile, "start", lambda kernel, recipe, args: started.append(recipe)
                         or RunningWorker())
     monkeypatch.setattr(background_compile, "interpreted_copy", lambda kernel: lambda *args: None)
-    envs = grouped.MAX_INTERPRETED_BODIES // 2
+    envs = grouped.MAX_INTERPRETED_GROUPED_BODIES // 2
     small = gym.make_vec("BoxToss-OnBox-v0", num_envs=envs)
     small.reset(seed=0)
     small.step(np.zeros((envs, 3), np.float32))
@@ -126,7 +126,7 @@ def test_a_batch_onto_boxes_runs_interpreted_only_up_to_its_own_smaller_size(mon
     module, factory, kwargs = started[-1]
     assert getattr(importlib.import_module(module), factory)(**kwargs) is small.unwrapped.simulator.kernel
     simulator = grouped.GroupedSimulator(small.unwrapped.simulator.flags, 2, start_interpreted=True)
-    state = np.zeros((grouped.MAX_INTERPRETED_BODIES + 2, 6))
+    state = np.zeros((grouped.MAX_INTERPRETED_GROUPED_BODIES + 2, 6))
     assert not simulator._start.run((state, None, None, None, 2), ())  # one group too many: compiled
 
 
