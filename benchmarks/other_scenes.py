@@ -66,6 +66,7 @@ from .other_engines import (
     PYMUNK_COLLISION_SLOP,
     PYMUNK_FLOOR_HALF_LENGTH,
     _import,
+    _importable,
 )
 
 STATE_SIZE = 6  # x, y, angle, vx, vy, spin
@@ -115,10 +116,10 @@ def one_material(scene: Scene, engine: str, why: str) -> tuple[float, float]:
     return pairs.pop()
 
 
-def build_pymunk(scene: Scene, sleep: bool = True, state: np.ndarray | None = None
+def build_pymunk(scene: Scene, sleep: bool = True, state: np.ndarray | None = None, dt: float | None = None
                  ) -> tuple[Callable[[], object], Callable[[np.ndarray], None]]:
     """A pymunk space of ``scene``: (step, read_states into an (n, 6) array). pymunk does not sleep by default
-    (``sleep_time_threshold`` infinite), so ``sleep`` changes nothing."""
+    (``sleep_time_threshold`` infinite), so ``sleep`` changes nothing; ``dt`` replaces the scene's step."""
     pymunk = _import("pymunk", "pymunk")
     space = pymunk.Space()
     space.gravity = (0.0, scene.gravity)
@@ -157,13 +158,15 @@ def build_pymunk(scene: Scene, sleep: bool = True, state: np.ndarray | None = No
             p, v = body.position, body.velocity
             row[:] = (p.x, p.y, body.angle, v.x, v.y, body.angular_velocity)
 
-    dt = scene.dt
+    dt = scene.dt if dt is None else dt
     return lambda: space.step(dt), read_states
 
 
-def build_box2d(scene: Scene, sleep: bool = True, state: np.ndarray | None = None
+def build_box2d(scene: Scene, sleep: bool = True, state: np.ndarray | None = None, dt: float | None = None
                 ) -> tuple[Callable[[], object], Callable[[np.ndarray], None]]:
-    """A Box2D world of ``scene``: (step, read_states into an (n, 6) array); ``sleep``: Box2D's ``doSleep``."""
+    """A Box2D 2.3 world of ``scene``: (step, read_states into an (n, 6) array). ``sleep=False`` keeps every
+    body awake: ``doSleep=False`` on the world alone does not (bodies still fall asleep), so each body also
+    gets ``sleepingAllowed=False``. ``dt`` replaces the scene's step."""
     Box2D = _import("Box2D", "box2d")
     world = Box2D.b2World(gravity=(0.0, scene.gravity), doSleep=sleep)
     skin = Box2D.b2_polygonRadius
@@ -192,6 +195,9 @@ def build_box2d(scene: Scene, sleep: bool = True, state: np.ndarray | None = Non
         body.massData = Box2D.b2MassData(mass=box.mass, center=(0.0, 0.0), I=box.inertia)
         body.linearVelocity = (vx, vy)
         body.angularVelocity = spin
+        if not sleep:
+            body.sleepingAllowed = False
+            body.awake = True
         bodies.append(body)
 
     def read_states(out: np.ndarray) -> None:
@@ -199,29 +205,93 @@ def build_box2d(scene: Scene, sleep: bool = True, state: np.ndarray | None = Non
             p, v = body.position, body.linearVelocity
             row[:] = (p.x, p.y, body.angle, v.x, v.y, body.angularVelocity)
 
-    dt, velocity_iterations, position_iterations = scene.dt, *BOX2D_ITERATIONS
+    dt = scene.dt if dt is None else dt
+    velocity_iterations, position_iterations = BOX2D_ITERATIONS
     return lambda: world.Step(dt, velocity_iterations, position_iterations), read_states
 
 
-SCENE_ENGINES: dict[str, Callable] = {"pymunk": build_pymunk, "box2d": build_box2d}
-"""Builders by engine name: ``build(scene, sleep, state) -> (step, read_states)``."""
+BOX2D3_SUBSTEPS = 4  # Box2D v3's documented default (b2World_Step(world, 1/60, 4) in its manual and samples)
+BOX2D3_DT = 1 / 60  # [s] its documented default step
+BOX2D3_FLOOR_HALF_LENGTH = 1.0e3  # [m] float32 engine, as Box2D 2.3
+
+
+def build_box2d3(scene: Scene, sleep: bool = True, state: np.ndarray | None = None, dt: float | None = None,
+                 substeps: int = BOX2D3_SUBSTEPS) -> tuple[Callable[[], object], Callable[[np.ndarray], None]]:
+    """A Box2D v3 world (pyb2d3, float32) of ``scene``: (step, read_states into an (n, 6) array).
+
+    Box2D v3 at its defaults but for gravity: soft-step solver with ``substeps`` substeps per step
+    (``world.step(dt, 4)``), contact hertz 30, restitution only above 1 m/s of approach, sleeping on.
+    ``dt`` replaces the scene's step (None: the scene's). ``sleep=False`` turns sleeping off on the world and
+    on every body (``enable_sleep=False``). Skin: v3 polygons have radius 0 (``b2MakeBox``) and its contacts
+    are speculative, with no skin, so each box is the plain L x W polygon and the floor a segment on y = 0:
+    surfaces meet where ours do. Mixing as 2.3 (and as documented for v3's default callbacks): friction
+    ``sqrt(mu_a mu_b)``, restitution ``max(e_a, e_b)``, so the floor gets mu and e = 0. Mass and moment come
+    from the density m / (L W) on the full box: m and m (L^2 + W^2) / 12, to float32 rounding.
+    """
+    b2 = _import("pyb2d3", "pyb2d3")
+    mixed = set(materials(scene))
+    if len({mu for _, mu in mixed}) > 1:
+        raise UnsupportedScene(f"box2d3 needs one friction for every box (it mixes sqrt(mu_a mu_b), so no floor "
+                               f"friction gives each box its own); this scene has {sorted(mixed)}")
+    if boxes_collide(scene) and len(mixed) > 1:
+        one_material(scene, "box2d3", "that collide (it mixes restitution as max(e_a, e_b))")
+    floor_mu = next(iter(mixed))[1]
+    world = b2.World(gravity=(0.0, scene.gravity))
+    world.sleeping_enabled = sleep
+    ground = world.create_static_body(position=(0.0, 0.0))
+    half = BOX2D3_FLOOR_HALF_LENGTH
+    ground.create_segment_shape(b2.shape_def(material=b2.surface_material(friction=floor_mu, restitution=0.0)),
+                                b2.segment((-half, 0.0), (half, 0.0)))
+    group = 0 if boxes_collide(scene) else -1  # a shared negative group never collides with itself
+    bodies = []
+    start = scene.initial_state() if state is None else np.asarray(state, dtype=float)
+    for box, (e, mu), (x, y, angle, vx, vy, spin) in zip(scene.boxes, materials(scene), start, strict=True):
+        body = world.create_dynamic_body(position=(float(x), float(y)), rotation=float(angle),
+                                         linear_velocity=(float(vx), float(vy)), angular_velocity=float(spin),
+                                         enable_sleep=sleep)
+        shape = b2.shape_def(density=box.mass / (box.length * box.width),
+                             material=b2.surface_material(friction=mu, restitution=e))
+        if group:
+            shape.filter = b2.make_filter(group_index=group)
+        body.create_polygon_shape(shape, b2.box(box.length / 2, box.width / 2))
+        bodies.append(body)
+
+    def read_states(out: np.ndarray) -> None:
+        for row, body in zip(out, bodies, strict=True):
+            p, v = body.position, body.linear_velocity
+            row[:] = (p.x, p.y, body.angle, v.x, v.y, body.angular_velocity)
+
+    dt = scene.dt if dt is None else dt
+    return lambda: world.step(dt, substeps), read_states
+
+
+SCENE_ENGINES: dict[str, Callable] = {"pymunk": build_pymunk, "box2d": build_box2d, "box2d3": build_box2d3}
+"""Builders by engine name: ``build(scene, sleep, state, dt) -> (step, read_states)``."""
+
+SCENE_ENGINE_MODULES = {"pymunk": "pymunk", "box2d": "Box2D", "box2d3": "pyb2d3"}
+"""The module each engine of SCENE_ENGINES imports (for ``pytest.importorskip`` and availability)."""
+
+DEFAULT_DT = {"pymunk": 1 / 60, "box2d": 1 / 60, "box2d3": BOX2D3_DT}
+"""[s] each engine's own default step, as its manual and samples use it (pymunk's and Box2D 2.3's
+examples step at 60 Hz as well)."""
 
 
 def available_scene_engines() -> list[str]:
     """Names in SCENE_ENGINES whose package imports."""
-    return [name for name in SCENE_ENGINES if ENGINES[name].available()]
+    return [name for name in SCENE_ENGINES if _importable(SCENE_ENGINE_MODULES[name])]
 
 
 def simulate_scene(engine: str, scene: Scene, steps: int, record: bool = True, sleep: bool = True,
-                   state: np.ndarray | None = None) -> SceneRun:
+                   state: np.ndarray | None = None, dt: float | None = None) -> SceneRun:
     """Build ``scene`` in ``engine`` and step it ``steps`` times of ``scene.dt``, timing the loop alone
     (with ``record``, reading every box's state after each step is inside the loop: time without it).
     ``sleep=False`` keeps every body awake (Box2D's ``doSleep``; pymunk never sleeps by default);
     ``state`` (n, 6) starts the boxes there instead of at the scene's initial state (e.g. a pile settled
-    by another engine, which may overlap a little: no check is made)."""
+    by another engine, which may overlap a little: no check is made); ``dt`` steps at that instead of
+    ``scene.dt`` (e.g. ``DEFAULT_DT[engine]``)."""
     if steps < 0:
         raise ValueError(f"steps must be >= 0, got {steps}")
-    step, read_states = SCENE_ENGINES[engine](scene, sleep, state)
+    step, read_states = SCENE_ENGINES[engine](scene, sleep, state, dt)
     n = scene.n_bodies
     states = None
     if record:
