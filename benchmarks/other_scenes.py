@@ -62,7 +62,6 @@ from box_toss_env.physics import Scene
 
 from .other_engines import (
     BOX2D_FLOOR_HALF_LENGTH,
-    ENGINES,
     PYMUNK_COLLISION_SLOP,
     PYMUNK_FLOOR_HALF_LENGTH,
     _import,
