@@ -350,13 +350,11 @@ def plot(rows: list[Row], path: Path = FIGURE) -> None:
     plt.close(fig)
 
 
-def write_docs(text: str, page: Path = DOCS_PAGE) -> None:
-    """Put ``text`` between the page's markers (creating the page around them if it does not exist)."""
+def write_docs(text: str, page: Path = DOCS_PAGE, marker: str = MARKER) -> None:
+    """Put ``text`` between the page's ``marker`` markers."""
     from benchmarks.readme_section import replace_section
 
-    if not page.exists():
-        page.write_text(f"# Engine scale\n\n<!-- {MARKER}:start -->\n<!-- {MARKER}:end -->\n")
-    replace_section(MARKER, text, readme=page)
+    replace_section(marker, text, readme=page)
 
 
 def report(args: argparse.Namespace, log: Callable[[str], None]) -> str:

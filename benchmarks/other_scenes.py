@@ -1,5 +1,5 @@
-"""Any box_toss_env ``Scene`` (several boxes, their material, dt, gravity) as a pymunk space and as a
-Box2D world, stepped for N steps, states back in our layout.
+"""Any box_toss_env ``Scene`` (several boxes, their material, dt, gravity) as a pymunk space, a Box2D 2.3
+world and a Box2D v3 world, stepped for N steps, states back in our layout.
 
 ``benchmarks.other_engines`` throws one box; this module builds a whole scene the same way, so the
 multi-box comparison (``reports.collisions``) and the pile benchmark (``benchmarks.engine``) run the
@@ -26,6 +26,7 @@ call). Each engine runs with its documented defaults except where the scene says
 - **What the scene cannot set** (and so differs between engines): our penalty stiffness, restitution
   threshold, sleep settings and penetration slop have no counterpart; each engine uses its own
   (``simulate_scene(..., sleep=False)`` turns Box2D's sleeping off, for runs where no engine may sleep).
+  ``simulate_scene(..., dt=DEFAULT_DT[engine])`` steps at the engine's own default instead of the scene's.
 - **pymunk**: 10 solver iterations (its default), no sleeping (its default), collision slop 1 mm
   (``PYMUNK_COLLISION_SLOP``: pymunk's default 0.1 is meant for pixels). pymunk multiplies the two
   shapes' elasticities and frictions. With boxes that collide, every shape (the floor included) gets
@@ -41,7 +42,15 @@ call). Each engine runs with its documented defaults except where the scene says
   so skins meet where our boxes' surfaces meet (corners rounded to 1 cm); boxes need sides > 2 cm.
   Its compiled-in limits (2 m of travel per step, restitution only above 1 m/s of approach, up to
   ``b2_linearSlop`` = 5 mm of overlap left at each contact, so a stack of n boxes sits up to
-  about 5n mm low) are listed in ``other_engines``.
+  about 5n mm low) are listed in ``other_engines``. ``doSleep=False`` on the world does not keep 2.3's
+  bodies awake; ``sleep=False`` also sets every body's ``sleepingAllowed=False``.
+- **Box2D v3** (pyb2d3, float32): ``world.step(dt, 4)`` (its default 4 substeps), its defaults otherwise
+  (soft contacts of 30 Hz, restitution only above 1 m/s of approach, sleeping on; ``sleep=False`` turns
+  sleeping off on the world and on every body). No skin: v3 polygons have radius 0 and contacts are
+  speculative, so each box is its plain L x W polygon and the floor a segment on y = 0; a resting 20 cm box
+  sits about 0.1 mm low. Friction ``sqrt(mu_a mu_b)``, restitution ``max(e_a, e_b)``, as 2.3 (floor: mu, e = 0).
+  Its soft contacts push overlapping boxes apart after restitution is applied, so boxes part up to ~9% faster
+  than e says (tests/benchmarks/test_other_scenes.py).
 - **MuJoCo** is not built here: its soft contacts are the subject of ``other_engines``' single-box
   comparison; the multi-box comparison is between impulse engines.
 
@@ -115,14 +124,14 @@ def one_material(scene: Scene, engine: str, why: str) -> tuple[float, float]:
     return pairs.pop()
 
 
-def build_pymunk(scene: Scene, sleep: bool = True, state: np.ndarray | None = None, dt: float | None = None
-                 ) -> tuple[Callable[[], object], Callable[[np.ndarray], None]]:
+def build_pymunk(scene: Scene, sleep: bool = True, state: np.ndarray | None = None, dt: float | None = None,
+                 iterations: int = PYMUNK_ITERATIONS) -> tuple[Callable[[], object], Callable[[np.ndarray], None]]:
     """A pymunk space of ``scene``: (step, read_states into an (n, 6) array). pymunk does not sleep by default
     (``sleep_time_threshold`` infinite), so ``sleep`` changes nothing; ``dt`` replaces the scene's step."""
     pymunk = _import("pymunk", "pymunk")
     space = pymunk.Space()
     space.gravity = (0.0, scene.gravity)
-    space.iterations = PYMUNK_ITERATIONS
+    space.iterations = iterations
     space.collision_slop = PYMUNK_COLLISION_SLOP
     collide = boxes_collide(scene)
     if collide:  # every pair multiplies two sqrt's back to the scene's value

@@ -93,3 +93,17 @@ def test_docs_and_plot_are_written_between_markers(tmp_path):
     rows = [engine_scale.Row("pile 1", 1, "ours", 1 / 256, mode, 10, 1e-3) for mode in ("awake", "settled")]
     engine_scale.plot(rows, path=tmp_path / "scale.png")
     assert (tmp_path / "scale.png").stat().st_size > 0
+
+
+def test_the_pareto_rows_turn_every_knob_with_finite_figures(tmp_path):
+    from benchmarks import pile_pareto
+
+    rows = pile_pareto.pareto_rows(window=0.02, pile=3)
+    engines = {row[1] for row in rows}
+    assert engine_scale.OURS in engines and engines <= {engine_scale.OURS, *available_scene_engines()}
+    assert {row[0] for row in rows} == {"pyramid", "pile 3"}
+    for case, engine, knob, cost, penetration, drift in rows:
+        assert math.isfinite(cost) and cost > 0, (case, engine, knob)
+        assert 0 <= penetration < 0.1 and 0 <= drift < 1, (case, engine, knob)
+    pile_pareto.plot(rows, path=tmp_path / "pareto.png")
+    assert (tmp_path / "pareto.png").stat().st_size > 0
