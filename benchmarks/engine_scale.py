@@ -19,7 +19,9 @@ exact initial state) and is timed over ``WINDOW`` s of simulated time, its stepp
 - **awake**: nobody may sleep (ours ``sleep_time`` 1e6 s; Box2D sleeping off on the world and on every
   body; pymunk never sleeps), so every step solves every contact;
 - **settled**: each engine's own sleeping allowed (ours ``until_rest=True``: the run stops once every box
-  has lain still ``sleep_time``; Box2D's islands sleep after 0.5 s; pymunk does not sleep by default).
+  has lain still ``sleep_time``, and its figures divide by the whole window, the steps skipped at rest
+  included, as a sleeping Box2D island's steps are; Box2D's islands sleep after 0.5 s; pymunk does not
+  sleep by default).
 
 Figures: ns per body-step = wall / (steps n); us per body per simulated second = wall / (n T), T the
 simulated time covered, which puts engines with different steps on one scale. Each engine runs at its
@@ -398,7 +400,11 @@ def main(argv=None) -> None:
 
 
 def budget_seconds(text: str) -> float:
-    value = float(text)
+    """--budget's type: seconds in [0.1, 600] (argparse prints the message with the option's name)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
     if not 0.1 <= value <= 600:
         raise argparse.ArgumentTypeError(f"must be in [0.1, 600] s, got {text}")
     return value
