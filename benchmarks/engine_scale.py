@@ -71,6 +71,7 @@ OUR_SETTLE_MAX = 100  # piles up to this many boxes are settled by our engine (a
 BUDGET, QUICK_BUDGET = 5.0, 1.5  # [s] of wall time per (case, engine, mode)
 NEVER_SLEEP = 1e6  # [s] our sleep_time in awake runs
 ONBOX_THROWS, QUICK_ONBOX_THROWS = 400, 100
+BATCH, BATCHES, QUICK_BATCHES = 256, 3, 1  # make_vec(BATCH, threads=1), batch steps timed
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 DOCS_PAGE = DOCS / "engine_scale.md"
@@ -267,24 +268,34 @@ def scale_rows(sizes=PILE_SIZES, engines: list[str] | None = None, window: float
     return rows, settlers
 
 
-def onbox_rows(throws: int) -> list[tuple[str, float, float, float]]:
-    """(env id, engine kernel us per throw, bodies, us per body per simulated second) for BoxToss-v0 and
-    BoxToss-OnBox-v0 at their defaults, random actions (``env_throughput.kernel_seconds_per_throw``)."""
+def onbox_rows(throws: int, batches: int) -> list[tuple[str, float, float, float, float]]:
+    """(env id, bodies, engine kernel us per throw, us per body per simulated second, us per throw of a
+    ``make_vec(256, threads=1)`` batch, env included) for BoxToss-v0 and BoxToss-OnBox-v0 at their defaults,
+    random actions, until rest (``env_throughput.kernel_seconds_per_throw``; ``batches`` batch steps timed)."""
     import gymnasium as gym
 
     from benchmarks.env_throughput import kernel_seconds_per_throw
 
     out = []
+    actions = np.random.default_rng(0).uniform(-1.0, 1.0, (max(throws, BATCH * (batches + 1)), 3)).astype(np.float32)
     for env_id in ("BoxToss-v0", "BoxToss-OnBox-v0"):
         env = gym.make(env_id)
         env.reset(seed=0)
-        actions = np.random.default_rng(0).uniform(-1.0, 1.0, (throws, 3)).astype(np.float32)
-        kernel_seconds_per_throw(env, actions[: min(20, throws)])  # compile / load, untimed
-        seconds = kernel_seconds_per_throw(env, actions)
-        simulated = simulated_seconds_per_throw(env, actions)
+        kernel_seconds_per_throw(env, actions[:20])  # compile / load, untimed
+        seconds = kernel_seconds_per_throw(env, actions[:throws])
+        simulated = simulated_seconds_per_throw(env, actions[:throws])
         bodies = env.unwrapped._state.shape[0]
-        out.append((env_id, 1e6 * seconds, bodies, 1e6 * seconds / (bodies * simulated)))
         env.close()
+        envs = gym.make_vec(env_id, num_envs=BATCH, vectorization_mode="vector_entry_point", threads=1)
+        envs.reset(seed=0)
+        batch_actions = actions[: BATCH * (batches + 1)].reshape(-1, BATCH, 3)
+        envs.step(batch_actions[0])  # warm-up
+        begin = time.perf_counter()
+        for step_actions in batch_actions[1:]:
+            envs.step(step_actions)
+        batched = (time.perf_counter() - begin) / (batches * BATCH)
+        envs.close()
+        out.append((env_id, bodies, 1e6 * seconds, 1e6 * seconds / (bodies * simulated), 1e6 * batched))
     return out
 
 
@@ -368,7 +379,8 @@ def report(args: argparse.Namespace, log: Callable[[str], None]) -> str:
     budget = args.budget if args.budget is not None else (QUICK_BUDGET if quick else BUDGET)
     engines = [e for e in ENGINE_ORDER if e == OURS or e in available_scene_engines()]
     rows, settlers = scale_rows(sizes, engines, window, budget, log)
-    onbox = onbox_rows(QUICK_ONBOX_THROWS if quick else ONBOX_THROWS)
+    log("OnBox throws")
+    onbox = onbox_rows(QUICK_ONBOX_THROWS if quick else ONBOX_THROWS, QUICK_BATCHES if quick else BATCHES)
     lines = [f"`python -m benchmarks.engine_scale{' --quick' if quick else ''}`: numba {numba.__version__}, "
              f"one thread for every engine; {load_text()}.", "",
              f"Window {window:g} s of simulated time per case, per-case budget {budget:g} s of wall time: "
@@ -376,9 +388,12 @@ def report(args: argparse.Namespace, log: Callable[[str], None]) -> str:
              "Settled: sleeping allowed (ours until rest, so fewer steps when everyone sleeps). Piles settled "
              f"{SETTLE:g} s first by " + ", ".join(f"{case}: {who}" for case, who in settlers.items()) + ".", ""]
     lines += table(rows)
-    lines += ["", "Our engine per throw (kernel alone, until rest, random actions):", "",
-              "| env | bodies | us per throw | us/body/sim-s |", "|---|---:|---:|---:|"]
-    lines += [f"| {env_id} | {bodies} | {micros:,.0f} | {per:,.1f} |" for env_id, micros, bodies, per in onbox]
+    lines += ["", "Our engine per throw (until rest, random actions): the kernel alone, one env, and a batch of "
+              f"`make_vec({BATCH}, threads=1)` with the env's own work included:", "",
+              "| env | bodies | kernel us per throw | kernel us/body/sim-s | batched us per throw |",
+              "|---|---:|---:|---:|---:|"]
+    lines += [f"| {env_id} | {bodies} | {micros:,.0f} | {per:,.1f} | {batched:,.0f} |"
+              for env_id, bodies, micros, per, batched in onbox]
     if quick:
         lines += ["", "(quick run: shorter window, smaller budget, no 5,000-box pile)"]
     plot(rows)

@@ -34,17 +34,19 @@ def test_box2d3_a_dropped_box_comes_to_rest_on_a_long_side(sleep):
     assert np.abs(final[3:]).max() < 1e-2
 
 
-def test_box2d23_awake_runs_keep_every_body_awake():
-    """doSleep=False alone lets Box2D 2.3 bodies fall asleep; each body's sleepingAllowed=False keeps them awake."""
+@pytest.mark.parametrize("allowed", [True, False])
+def test_box2d23_needs_sleeping_allowed_false_to_keep_a_body_awake(allowed):
+    """Why ``build_box2d(sleep=False)`` sets every body's sleepingAllowed: doSleep=False alone lets a Box2D 2.3
+    body resting on the floor fall asleep."""
     Box2D = pytest.importorskip("Box2D")
     world = Box2D.b2World(gravity=(0.0, -9.81), doSleep=False)
     world.CreateStaticBody(position=(0.0, 0.0)).CreateEdgeFixture(vertices=[(-10.0, 0.0), (10.0, 0.0)])
     body = world.CreateDynamicBody(position=(0.0, 0.11))
     body.CreatePolygonFixture(box=(0.19, 0.09), density=1.0)
-    body.sleepingAllowed = False
+    body.sleepingAllowed = allowed
     for _ in range(240):
         world.Step(1 / 60, 8, 3)
-    assert body.awake
+    assert body.awake is not allowed
 
 
 def test_the_scale_rows_cover_every_engine_with_finite_positive_figures():
