@@ -165,7 +165,8 @@ def pile_comparison(sizes=PILE_SIZES, steps: int = PILE_STEPS, settle: float = P
     """(method, boxes, ns per body-step or nan, note) on the same piles in every engine: ``scenes.pile(n)``
     settled for ``settle`` s by our robust solver with nobody sleeping, then ``steps`` steps from that state
     timed in each method, nobody sleeping (``sleep_time`` NEVER_SLEEP, Box2D's sleeping off), so every step
-    solves the pile's contacts. Ours: single thread on raw arrays; pymunk and Box2D stepped from Python as
+    solves the pile's contacts (every engine at the scene's dt; ``benchmarks.engine_scale`` runs each at its own).
+    Ours: single thread on raw arrays; pymunk, Box2D 2.3 and v3 stepped from Python as
     their users would (the loop alone, a fresh world per repeat). A method that blows the pile apart (its
     energy at the end above 1.1 times the settled pile's) has no figure: it has no contacts left to solve.
     Beside them, ``pile_cost``: the robust solver with its default sleeping."""

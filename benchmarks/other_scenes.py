@@ -1,5 +1,5 @@
-"""Any box_toss_env ``Scene`` (several boxes, their material, dt, gravity) as a pymunk space and as a
-Box2D world, stepped for N steps, states back in our layout.
+"""Any box_toss_env ``Scene`` (several boxes, their material, dt, gravity) as a pymunk space, a Box2D 2.3
+world and a Box2D v3 world, stepped for N steps, states back in our layout.
 
 ``benchmarks.other_engines`` throws one box; this module builds a whole scene the same way, so the
 multi-box comparison (``reports.collisions``) and the pile benchmark (``benchmarks.engine``) run the
@@ -26,6 +26,7 @@ call). Each engine runs with its documented defaults except where the scene says
 - **What the scene cannot set** (and so differs between engines): our penalty stiffness, restitution
   threshold, sleep settings and penetration slop have no counterpart; each engine uses its own
   (``simulate_scene(..., sleep=False)`` turns Box2D's sleeping off, for runs where no engine may sleep).
+  ``simulate_scene(..., dt=DEFAULT_DT[engine])`` steps at the engine's own default instead of the scene's.
 - **pymunk**: 10 solver iterations (its default), no sleeping (its default), collision slop 1 mm
   (``PYMUNK_COLLISION_SLOP``: pymunk's default 0.1 is meant for pixels). pymunk multiplies the two
   shapes' elasticities and frictions. With boxes that collide, every shape (the floor included) gets
@@ -41,7 +42,18 @@ call). Each engine runs with its documented defaults except where the scene says
   so skins meet where our boxes' surfaces meet (corners rounded to 1 cm); boxes need sides > 2 cm.
   Its compiled-in limits (2 m of travel per step, restitution only above 1 m/s of approach, up to
   ``b2_linearSlop`` = 5 mm of overlap left at each contact, so a stack of n boxes sits up to
-  about 5n mm low) are listed in ``other_engines``.
+  about 5n mm low) are listed in ``other_engines``. ``doSleep=False`` on the world does not keep 2.3's
+  bodies awake; ``sleep=False`` also sets every body's ``sleepingAllowed=False``.
+- **Box2D v3** (pyb2d3, float32): ``world.step(dt, 4)`` (its default 4 substeps), its defaults otherwise
+  (soft contacts of 30 Hz, restitution only above 1 m/s of approach, sleeping on; ``sleep=False`` turns
+  sleeping off on the world and on every body). No skin: v3 polygons have radius 0 and contacts are
+  speculative, so each box is its plain L x W polygon and the floor a segment on y = 0; a resting 20 cm box
+  sits about 0.1 mm low. Friction ``sqrt(mu_a mu_b)``, restitution ``max(e_a, e_b)``, as 2.3 (floor: mu, e = 0).
+  Its soft contacts push overlapping boxes apart after restitution is applied, so boxes part up to ~9% faster
+  than e says (tests/benchmarks/test_other_scenes.py). Checked with pyb2d3 0.11 at 60 Hz and 4 substeps: a box
+  of mu 0.8 on a floor of mu 0.2 slides as mu 0.40 (the sqrt); e 0.5 on e 0 rebounds as e 0 on e 0.5 (the
+  max), but a flat 3 m/s landing on the floor rebounds at 1.06 m/s, not 1.5 (e 0.35: restitution is applied
+  per contact point, once per step, after the soft solve); mass 2 kg and moment m (L^2 + W^2) / 12 to 1e-6.
 - **MuJoCo** is not built here: its soft contacts are the subject of ``other_engines``' single-box
   comparison; the multi-box comparison is between impulse engines.
 
@@ -62,10 +74,10 @@ from box_toss_env.physics import Scene
 
 from .other_engines import (
     BOX2D_FLOOR_HALF_LENGTH,
-    ENGINES,
     PYMUNK_COLLISION_SLOP,
     PYMUNK_FLOOR_HALF_LENGTH,
     _import,
+    _importable,
 )
 
 STATE_SIZE = 6  # x, y, angle, vx, vy, spin
@@ -115,14 +127,14 @@ def one_material(scene: Scene, engine: str, why: str) -> tuple[float, float]:
     return pairs.pop()
 
 
-def build_pymunk(scene: Scene, sleep: bool = True, state: np.ndarray | None = None
-                 ) -> tuple[Callable[[], object], Callable[[np.ndarray], None]]:
+def build_pymunk(scene: Scene, sleep: bool = True, state: np.ndarray | None = None, dt: float | None = None,
+                 iterations: int = PYMUNK_ITERATIONS) -> tuple[Callable[[], object], Callable[[np.ndarray], None]]:
     """A pymunk space of ``scene``: (step, read_states into an (n, 6) array). pymunk does not sleep by default
-    (``sleep_time_threshold`` infinite), so ``sleep`` changes nothing."""
+    (``sleep_time_threshold`` infinite), so ``sleep`` changes nothing; ``dt`` replaces the scene's step."""
     pymunk = _import("pymunk", "pymunk")
     space = pymunk.Space()
     space.gravity = (0.0, scene.gravity)
-    space.iterations = PYMUNK_ITERATIONS
+    space.iterations = iterations
     space.collision_slop = PYMUNK_COLLISION_SLOP
     collide = boxes_collide(scene)
     if collide:  # every pair multiplies two sqrt's back to the scene's value
@@ -157,13 +169,15 @@ def build_pymunk(scene: Scene, sleep: bool = True, state: np.ndarray | None = No
             p, v = body.position, body.velocity
             row[:] = (p.x, p.y, body.angle, v.x, v.y, body.angular_velocity)
 
-    dt = scene.dt
+    dt = scene.dt if dt is None else dt
     return lambda: space.step(dt), read_states
 
 
-def build_box2d(scene: Scene, sleep: bool = True, state: np.ndarray | None = None
+def build_box2d(scene: Scene, sleep: bool = True, state: np.ndarray | None = None, dt: float | None = None
                 ) -> tuple[Callable[[], object], Callable[[np.ndarray], None]]:
-    """A Box2D world of ``scene``: (step, read_states into an (n, 6) array); ``sleep``: Box2D's ``doSleep``."""
+    """A Box2D 2.3 world of ``scene``: (step, read_states into an (n, 6) array). ``sleep=False`` keeps every
+    body awake: ``doSleep=False`` on the world alone does not (bodies still fall asleep), so each body also
+    gets ``sleepingAllowed=False``. ``dt`` replaces the scene's step."""
     Box2D = _import("Box2D", "box2d")
     world = Box2D.b2World(gravity=(0.0, scene.gravity), doSleep=sleep)
     skin = Box2D.b2_polygonRadius
@@ -192,6 +206,9 @@ def build_box2d(scene: Scene, sleep: bool = True, state: np.ndarray | None = Non
         body.massData = Box2D.b2MassData(mass=box.mass, center=(0.0, 0.0), I=box.inertia)
         body.linearVelocity = (vx, vy)
         body.angularVelocity = spin
+        if not sleep:
+            body.sleepingAllowed = False
+            body.awake = True
         bodies.append(body)
 
     def read_states(out: np.ndarray) -> None:
@@ -199,29 +216,93 @@ def build_box2d(scene: Scene, sleep: bool = True, state: np.ndarray | None = Non
             p, v = body.position, body.linearVelocity
             row[:] = (p.x, p.y, body.angle, v.x, v.y, body.angularVelocity)
 
-    dt, velocity_iterations, position_iterations = scene.dt, *BOX2D_ITERATIONS
+    dt = scene.dt if dt is None else dt
+    velocity_iterations, position_iterations = BOX2D_ITERATIONS
     return lambda: world.Step(dt, velocity_iterations, position_iterations), read_states
 
 
-SCENE_ENGINES: dict[str, Callable] = {"pymunk": build_pymunk, "box2d": build_box2d}
-"""Builders by engine name: ``build(scene, sleep, state) -> (step, read_states)``."""
+BOX2D3_SUBSTEPS = 4  # Box2D v3's documented default (b2World_Step(world, 1/60, 4) in its manual and samples)
+BOX2D3_DT = 1 / 60  # [s] its documented default step
+BOX2D3_FLOOR_HALF_LENGTH = 1.0e3  # [m] float32 engine, as Box2D 2.3
+
+
+def build_box2d3(scene: Scene, sleep: bool = True, state: np.ndarray | None = None, dt: float | None = None,
+                 substeps: int = BOX2D3_SUBSTEPS) -> tuple[Callable[[], object], Callable[[np.ndarray], None]]:
+    """A Box2D v3 world (pyb2d3, float32) of ``scene``: (step, read_states into an (n, 6) array).
+
+    Box2D v3 at its defaults but for gravity: soft-step solver with ``substeps`` substeps per step
+    (``world.step(dt, 4)``), contact hertz 30, restitution only above 1 m/s of approach, sleeping on.
+    ``dt`` replaces the scene's step (None: the scene's). ``sleep=False`` turns sleeping off on the world and
+    on every body (``enable_sleep=False``). Skin: v3 polygons have radius 0 (``b2MakeBox``) and its contacts
+    are speculative, with no skin, so each box is the plain L x W polygon and the floor a segment on y = 0:
+    surfaces meet where ours do. Mixing as 2.3 (and as documented for v3's default callbacks): friction
+    ``sqrt(mu_a mu_b)``, restitution ``max(e_a, e_b)``, so the floor gets mu and e = 0. Mass and moment come
+    from the density m / (L W) on the full box: m and m (L^2 + W^2) / 12, to float32 rounding.
+    """
+    b2 = _import("pyb2d3", "pyb2d3")
+    mixed = set(materials(scene))
+    if len({mu for _, mu in mixed}) > 1:
+        raise UnsupportedScene(f"box2d3 needs one friction for every box (it mixes sqrt(mu_a mu_b), so no floor "
+                               f"friction gives each box its own); this scene has {sorted(mixed)}")
+    if boxes_collide(scene) and len(mixed) > 1:
+        one_material(scene, "box2d3", "that collide (it mixes restitution as max(e_a, e_b))")
+    floor_mu = next(iter(mixed))[1]
+    world = b2.World(gravity=(0.0, scene.gravity))
+    world.sleeping_enabled = sleep
+    ground = world.create_static_body(position=(0.0, 0.0))
+    half = BOX2D3_FLOOR_HALF_LENGTH
+    ground.create_segment_shape(b2.shape_def(material=b2.surface_material(friction=floor_mu, restitution=0.0)),
+                                b2.segment((-half, 0.0), (half, 0.0)))
+    group = 0 if boxes_collide(scene) else -1  # a shared negative group never collides with itself
+    bodies = []
+    start = scene.initial_state() if state is None else np.asarray(state, dtype=float)
+    for box, (e, mu), (x, y, angle, vx, vy, spin) in zip(scene.boxes, materials(scene), start, strict=True):
+        body = world.create_dynamic_body(position=(float(x), float(y)), rotation=float(angle),
+                                         linear_velocity=(float(vx), float(vy)), angular_velocity=float(spin),
+                                         enable_sleep=sleep)
+        shape = b2.shape_def(density=box.mass / (box.length * box.width),
+                             material=b2.surface_material(friction=mu, restitution=e))
+        if group:
+            shape.filter = b2.make_filter(group_index=group)
+        body.create_polygon_shape(shape, b2.box(box.length / 2, box.width / 2))
+        bodies.append(body)
+
+    def read_states(out: np.ndarray) -> None:
+        for row, body in zip(out, bodies, strict=True):
+            p, v = body.position, body.linear_velocity
+            row[:] = (p.x, p.y, body.angle, v.x, v.y, body.angular_velocity)
+
+    dt = scene.dt if dt is None else dt
+    return lambda: world.step(dt, substeps), read_states
+
+
+SCENE_ENGINES: dict[str, Callable] = {"pymunk": build_pymunk, "box2d": build_box2d, "box2d3": build_box2d3}
+"""Builders by engine name: ``build(scene, sleep, state, dt) -> (step, read_states)``."""
+
+SCENE_ENGINE_MODULES = {"pymunk": "pymunk", "box2d": "Box2D", "box2d3": "pyb2d3"}
+"""The module each engine of SCENE_ENGINES imports (for ``pytest.importorskip`` and availability)."""
+
+DEFAULT_DT = {"pymunk": 1 / 60, "box2d": 1 / 60, "box2d3": BOX2D3_DT}
+"""[s] each engine's own default step, as its manual and samples use it (pymunk's and Box2D 2.3's
+examples step at 60 Hz as well)."""
 
 
 def available_scene_engines() -> list[str]:
     """Names in SCENE_ENGINES whose package imports."""
-    return [name for name in SCENE_ENGINES if ENGINES[name].available()]
+    return [name for name in SCENE_ENGINES if _importable(SCENE_ENGINE_MODULES[name])]
 
 
 def simulate_scene(engine: str, scene: Scene, steps: int, record: bool = True, sleep: bool = True,
-                   state: np.ndarray | None = None) -> SceneRun:
+                   state: np.ndarray | None = None, dt: float | None = None) -> SceneRun:
     """Build ``scene`` in ``engine`` and step it ``steps`` times of ``scene.dt``, timing the loop alone
     (with ``record``, reading every box's state after each step is inside the loop: time without it).
     ``sleep=False`` keeps every body awake (Box2D's ``doSleep``; pymunk never sleeps by default);
     ``state`` (n, 6) starts the boxes there instead of at the scene's initial state (e.g. a pile settled
-    by another engine, which may overlap a little: no check is made)."""
+    by another engine, which may overlap a little: no check is made); ``dt`` steps at that instead of
+    ``scene.dt`` (e.g. ``DEFAULT_DT[engine]``)."""
     if steps < 0:
         raise ValueError(f"steps must be >= 0, got {steps}")
-    step, read_states = SCENE_ENGINES[engine](scene, sleep, state)
+    step, read_states = SCENE_ENGINES[engine](scene, sleep, state, dt)
     n = scene.n_bodies
     states = None
     if record:

@@ -333,7 +333,7 @@ def run_scene(spec: CollisionScene, methods, quick: bool, log=print) -> SceneRes
 
 def run(quick: bool = False, log=print) -> CollisionReport:
     with Stopwatch() as watch:
-        engines = tuple(available_scene_engines())
+        engines = tuple(name for name in available_scene_engines() if name in OTHER_ENGINES)
         missing = tuple(name for name in OTHER_ENGINES if name not in engines)
         methods = (*SOLVERS, *engines)
         results = [run_scene(spec, methods, quick, log) for spec in collision_scenes()]

@@ -6,8 +6,7 @@ import numpy as np
 import pytest
 
 from benchmarks import engine
-from benchmarks.other_engines import ENGINES
-from benchmarks.other_scenes import SCENE_ENGINES, simulate_scene
+from benchmarks.other_scenes import SCENE_ENGINE_MODULES, SCENE_ENGINES, simulate_scene
 from box_toss_env.physics import scenes, simulate
 
 
@@ -25,7 +24,7 @@ def test_pile_comparison_runs_every_method_on_tiny_piles():
 
 @pytest.mark.parametrize("name", list(SCENE_ENGINES))
 def test_other_engines_start_from_the_settled_pile(name):
-    pytest.importorskip(ENGINES[name].module)
+    pytest.importorskip(SCENE_ENGINE_MODULES[name])
     scene = scenes.pile(3)
     settled = simulate(scene, duration=0.2).final_state
     run = simulate_scene(name, scene, 0, state=settled)
