@@ -18,10 +18,10 @@ from gymnasium import error as gym_error
 
 from agents.ceiling import ceiling_of
 from agents.config import load_yaml
+from agents.doc_sections import page_for, replace_section
 from agents.evaluation import TEST_FIRST_SEED, TEST_TARGETS, VALIDATION_FIRST_SEED, Throws, load_policy
 from agents.oracle import OracleSettings
 from agents.training import read_timing
-from benchmarks.readme_section import page_for, replace_section
 from box_toss_env.rendering import write_video
 
 RUNS = Path("runs")
@@ -348,7 +348,7 @@ GIF_ENV_KWARGS = {"render_width": 360, "render_height": 240, "render_fps": 20}  
 
 def write_readme(section: str, name: str = "agents") -> None:
     """Replace the ``<!-- name:start -->`` ... ``<!-- name:end -->`` block of the page that holds it (the README
-    for ``benchmark``, a page of docs/ for the others: ``benchmarks.readme_section.SECTION_PAGES``; appended if
+    for ``benchmark``, a page of docs/ for the others: ``agents.doc_sections.SECTION_PAGES``; appended if
     missing)."""
     page = page_for(name)
     if f"<!-- {name}:start -->" not in page.read_text():

@@ -36,7 +36,7 @@ import tempfile
 import textwrap
 from pathlib import Path
 
-from benchmarks.readme_section import replace_section
+from agents.doc_sections import replace_section
 
 REPO = Path(__file__).resolve().parent.parent
 

@@ -18,8 +18,8 @@ import time
 
 import numpy as np
 
+from agents.doc_sections import replace_section
 from benchmarks.other_scenes import UnsupportedScene, available_scene_engines, simulate_scene
-from benchmarks.readme_section import replace_section
 from box_toss_env.physics import (
     Box,
     NonFiniteStateError,

@@ -23,9 +23,9 @@ import gymnasium as gym
 import numpy as np
 import ray
 
+from agents.doc_sections import replace_section
 from agents.rllib_envs import VECTORIZE_MODES, make_env, register_rllib_envs
 from agents.rllib_ppo import make_config
-from benchmarks.readme_section import replace_section
 
 ENV_ID = "BoxToss-v0"
 LABELS = {"native": "native batched env (vector entry point)", "sync": "RLlib's default (SyncVectorEnv)"}

@@ -26,9 +26,9 @@ import numpy as np
 from gymnasium.vector import AutoresetMode
 
 import box_toss_env  # noqa: F401  (registers BoxToss-v0)
+from agents.doc_sections import replace_section
 from benchmarks.env_throughput import throws_per_second
 from benchmarks.other_engines import ENGINES, Toss, missing_engines, steps_for_duration
-from benchmarks.readme_section import replace_section
 from box_toss_env.envs.box_toss_vector import BoxTossVectorEnv
 from box_toss_env.physics import Simulator, layout, make_settings, scenes
 

@@ -1,12 +1,12 @@
 """The README is the front page: its test command is .ci/run's, line for line, and the sections that commands
-rewrite (``<!-- NAME:start -->`` ... ``<!-- NAME:end -->``) are in the pages ``benchmarks.readme_section`` names."""
+rewrite (``<!-- NAME:start -->`` ... ``<!-- NAME:end -->``) are in the pages ``agents.doc_sections`` names."""
 
 import re
 from pathlib import Path
 
 import pytest
 
-from benchmarks.readme_section import DOCS, README, SECTION_PAGES, page_for, relink, replace_section
+from agents.doc_sections import DOCS, README, SECTION_PAGES, page_for, relink, replace_section
 
 REPO = Path(__file__).resolve().parents[1]
 

@@ -5,7 +5,7 @@ from pathlib import Path
 
 AGENTS = Path(__file__).resolve().parents[2] / "agents"
 LAYERS = {
-    "algorithms": 0, "config": 1, "envs": 0, "rllib_envs": 0,
+    "algorithms": 0, "config": 1, "doc_sections": 0, "run_folder": 0, "envs": 0, "rllib_envs": 0,
     "policies": 2, "oracle": 2, "search_space": 2,
     "evaluation": 3,
     "training": 4, "ceiling": 4,
