@@ -21,7 +21,10 @@ def test_ci_runs_the_readme_test_command_line_for_line():
     ci = (REPO / ".ci" / "run").read_text().splitlines()
     start = ci.index(command[0])
     assert ci[start:start + len(command)] == command
-    assert "ruff check ." in command[0] and "mkdocs build --strict" in command[1]
+    # one command a line, so that under .ci/run's set -e any failing one stops CI (in an && list, only the last's
+    # failure would)
+    assert not any("&&" in line or line.endswith("\\") for line in command)
+    assert {"ruff check .", "mkdocs build --strict", "pytest"} <= set(command)
 
 
 def test_readme_is_a_front_page():
