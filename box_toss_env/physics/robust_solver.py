@@ -260,6 +260,255 @@ def is_finite_state(x, y, angle, vx, vy, spin):
             and math.isfinite(vy) and math.isfinite(spin))
 
 
+# What ``advance_box`` keeps of a box between calls: one row per box, MEMORY_SIZE columns
+IN_FLIGHT, LOCATED, LOADED, LIFT, STILL_FOR, FIRST_CONTACT, REST_TIME, MAX_PENETRATION, N_IMPACTS, N_STEPS, TIME, \
+    STATUS, FAIL_STEP = range(13)
+MEMORY_SIZE = 13
+
+
+@jit_stage
+def start_memory(memory, i, time):
+    """Box i's row of ``advance_box``'s memory for a box starting (in flight) at ``time``."""
+    memory[i, :] = 0.0
+    memory[i, IN_FLIGHT] = 1.0
+    memory[i, LOCATED] = -1.0
+    memory[i, FIRST_CONTACT] = math.nan
+    memory[i, REST_TIME] = math.nan
+    memory[i, TIME] = time
+    memory[i, FAIL_STEP] = -1.0
+
+
+@jit_stage
+def advance_box(i, state, params, memory, n, n_end, dt, gravity, until_rest, threshold, sleep_speed, sleep_time,
+                slop, use_penalty, use_friction, record, corners, k, ids, trajectory, events):
+    """Box i against the floor alone, from grid step n (its time ``memory[i, TIME]``) to grid step ``n_end``,
+    or until it falls asleep or its state stops being finite: the stage script of this module's docstring.
+    What a box carries from one call to the next (its mode, the located corner, its time, its counts) is its
+    row of ``memory`` (``start_memory``), so a box advanced in pieces goes on as one advanced in one call
+    (the floor-only kernel calls it once per box; the colliding kernel for a box that no other can reach).
+    ``corners``, ``k``, ``ids``: work arrays (``contact_solver``). Returns the grid step reached."""
+    x, y, angle, vx, vy, spin = (state[i, 0], state[i, 1], state[i, 2],
+                                 state[i, 3], state[i, 4], state[i, 5])
+    hx = params[i, layout.HALF_LENGTH]
+    hy = params[i, layout.HALF_WIDTH]
+    inv_mass = 1.0 / params[i, layout.MASS]
+    inv_inertia = 1.0 / params[i, layout.INERTIA]
+    restitution = params[i, layout.RESTITUTION]
+    friction = params[i, layout.FRICTION]
+    stiffness = params[i, layout.STIFFNESS]
+    radius = math.sqrt(hx * hx + hy * hy)
+    tolerance = CONTACT_TOLERANCE * (1.0 + radius)
+    simultaneous = SIMULTANEOUS_TOLERANCE * (1.0 + radius)
+    end_time = n_end * dt
+    in_flight = memory[i, IN_FLIGHT] != 0.0
+    located = np.int64(memory[i, LOCATED])
+    loaded = np.int64(memory[i, LOADED])
+    lift = memory[i, LIFT]
+    still_for = memory[i, STILL_FOR]
+    first_contact = memory[i, FIRST_CONTACT]
+    rest_time = memory[i, REST_TIME]
+    max_penetration = memory[i, MAX_PENETRATION]
+    n_impacts = np.int64(memory[i, N_IMPACTS])
+    n_steps = np.int64(memory[i, N_STEPS])
+    t = memory[i, TIME]
+    status = layout.STATUS_OK
+    fail_step = -1
+    cos_a = math.cos(angle)
+    sin_a = math.sin(angle)
+    while n < n_end:
+        if in_flight:
+            # ---- flight: closed form up to the first contact ----
+            tau, touched = time_to_contact(y, angle, vy, spin, hx, hy, gravity, end_time - t, tolerance)
+            # grid rows passed in this flight: up to the end, or to the last one before the contact
+            last = n_end if not touched else min(np.int64(math.floor((t + tau) / dt)), n_end)
+            if record:
+                for row in range(n + 1, last + 1):
+                    xr, yr, ar, vxr, vyr, wr = flight_state(x, y, angle, vx, vy, spin, gravity, row * dt - t)
+                    store_state(trajectory, row, i, xr, yr, ar, vxr, vyr, wr)
+            x, y, angle, vx, vy, spin = flight_state(x, y, angle, vx, vy, spin, gravity, tau)
+            cos_a = math.cos(angle)
+            sin_a = math.sin(angle)
+            if not touched:
+                n = n_end
+                t = end_time
+                if not is_finite_state(x, y, angle, vx, vy, spin):
+                    status = layout.STATUS_NONFINITE
+                    fail_step = n
+                break
+            t = t + tau
+            if math.isnan(first_contact):
+                first_contact = t
+            # ---- impact at the contact instant ----
+            vx, vy, spin, touching, approach, leaves = resolve_impact(
+                y, cos_a, sin_a, vx, vy, spin, hx, hy, inv_mass, inv_inertia, restitution,
+                friction if use_friction else 0.0, threshold, simultaneous, corners, k)
+            if touching > 0 and approach > threshold:
+                if record:
+                    record_event(events, i, n_impacts, t, approach, touching)
+                n_impacts += 1
+            if not is_finite_state(x, y, angle, vx, vy, spin):
+                status = layout.STATUS_NONFINITE
+                fail_step = np.int64(math.floor(t / dt))
+                break
+            n = max(n, last)  # rows up to n hold the flight
+            if leaves:
+                continue
+            in_flight = False
+            if (n + 1) * dt <= t and n < n_end:  # the contact fell on grid point n + 1
+                n += 1
+                if record:
+                    store_state(trajectory, n, i, x, y, angle, vx, vy, spin)
+            if n >= n_end:
+                t = end_time
+                break
+            h = (n + 1) * dt - t  # a partial step brings the box back onto the grid
+        else:
+            h = dt
+        # ---- one contact step on the grid, split where the box turns fast and at impacts ----
+        n_sub = min(max(np.int64(math.ceil(abs(spin) * h / MAX_ROTATION_PER_STEP)), 1), MAX_SUBSTEPS)
+        h_sub = h / n_sub
+        held = False
+        located_impacts = 0
+        elapsed = 0.0  # time advanced in this step
+        for _ in range(n_sub):
+            left = h_sub
+            while left > 0.0:
+                # 0. impact at this instant: a touching corner approaching faster than the threshold
+                vx, vy, spin, touching, approach = contact_impact(
+                    y, cos_a, sin_a, vx, vy, spin, hx, hy, inv_mass, inv_inertia, restitution,
+                    friction if use_friction else 0.0, threshold, tolerance + lift, located, loaded, corners, k)
+                if approach > 0.0:
+                    if record:
+                        record_event(events, i, n_impacts, t + elapsed, approach, touching)
+                    n_impacts += 1
+                piece = left
+                located = -1
+                vx0, vy0, spin0 = vx, vy, spin
+                for attempt in range(2):
+                    vx, vy, spin = vx0, vy0, spin0
+                    kinetic_before = kinetic_energy(vx, vy, spin, inv_mass, inv_inertia)
+                    # no point moves faster than sqrt(2 KE (1/m + R^2 / I)) once gravity has acted
+                    # (Cauchy-Schwarz; contact impulses never add kinetic energy)
+                    reach = tolerance + piece * math.sqrt(
+                        2.0 * kinetic_energy(vx, vy + gravity * piece, spin, inv_mass, inv_inertia)
+                        * (inv_mass + radius * radius * inv_inertia))
+                    n_corners = contact_corners(y, cos_a, sin_a, vy, spin, hx, hy, gravity, piece, reach,
+                                                corners, ids)
+                    normal_velocities(vy, spin, corners, n_corners, APPROACH)
+                    # 1. integrate velocities
+                    vy = vy + gravity * piece
+                    # 2. contact velocities: each corner may close its gap but not pass it
+                    for c in range(n_corners):
+                        corners[TARGET, c] = -max(y + corners[RY, c], 0.0) / piece
+                    vx, vy, spin = solve_contact_velocities(vx, vy, spin, corners, n_corners,
+                                                            friction if use_friction else 0.0, inv_mass,
+                                                            inv_inertia, FRICTION_ITERATIONS, k)
+                    if attempt == 1:
+                        break
+                    # 3. an impact inside the piece: a corner off the floor stopped while approaching
+                    # faster than the threshold arrives after gap / approach; the piece is redone up to
+                    # that instant, where the impact is resolved (0.), not on the grid
+                    arrival = piece
+                    hit = -1
+                    for c in range(n_corners):
+                        gap = y + corners[RY, c]
+                        if (corners[IMPULSE, c] > 0.0 and corners[APPROACH, c] < -threshold
+                                and gap > tolerance and gap < -arrival * corners[APPROACH, c]):
+                            arrival = -gap / corners[APPROACH, c]
+                            hit = ids[c]
+                    if hit < 0 or located_impacts >= MAX_LOCATED_IMPACTS:
+                        break
+                    located_impacts += 1
+                    located = hit
+                    piece = arrival
+                loaded = 0
+                for c in range(n_corners):
+                    if corners[IMPULSE, c] > 0.0:
+                        loaded |= 1 << ids[c]
+                held = held or loaded != 0
+                # 4. no energy gained: the velocities scaled where the step would gain (energy_limit_scale)
+                scale = energy_limit_scale(kinetic_before, kinetic_energy(vx, vy, spin, inv_mass,
+                                                                          inv_inertia),
+                                           -gravity * piece * vy / inv_mass)
+                vx, vy, spin = scale * vx, scale * vy, scale * spin
+                # 5. integrate positions
+                x = x + piece * vx
+                y = y + piece * vy
+                angle = angle + piece * spin
+                cos_a = math.cos(angle)
+                sin_a = math.sin(angle)
+                first, second = lowest_face(cos_a, sin_a, hx, hy)
+                rx1, ry1 = vertex_offset(first, cos_a, sin_a, hx, hy)
+                penetration = -(y + ry1)
+                max_penetration = max(max_penetration, penetration)
+                # 6. penalty: implicit correction of what penetrates beyond the slop, at the lowest corner
+                # and its neighbours; the potential energy it returns is taken from the kinetic energy
+                if use_penalty and penetration > slop + tolerance:
+                    below = 0
+                    for corner in (first, (first + 1) % 4, (first + 3) % 4):
+                        place_corner(corners, below, corner, cos_a, sin_a, hx, hy)
+                        corners[DEPTH, below] = -(y + corners[RY, below]) - slop
+                        if corners[DEPTH, below] > 0.0:
+                            below += 1
+                    lifted = y
+                    y, angle = correct_penetration(y, angle, corners, below, stiffness, piece, inv_mass,
+                                                   inv_inertia, k)
+                    cos_a = math.cos(angle)
+                    sin_a = math.sin(angle)
+                    kinetic = kinetic_energy(vx, vy, spin, inv_mass, inv_inertia)
+                    rise = -gravity * (y - lifted) / inv_mass
+                    if rise > 0.0 and kinetic > 0.0:
+                        scale = math.sqrt(max(1.0 - rise / kinetic, 0.0))
+                        vx, vy, spin = scale * vx, scale * vy, scale * spin
+                held = held or penetration > 0.0
+                lift = h_sub * h_sub * spin * spin * radius  # how far a rotating substep lifts a held corner
+                elapsed += piece
+                left = left - piece if piece < left else 0.0
+        first, second = lowest_face(cos_a, sin_a, hx, hy)
+        rx1, ry1 = vertex_offset(first, cos_a, sin_a, hx, hy)
+        rx2, ry2 = vertex_offset(second, cos_a, sin_a, hx, hy)
+        n_steps += 1
+        n += 1
+        t = n * dt
+        if record:
+            store_state(trajectory, n, i, x, y, angle, vx, vy, spin)
+        if not is_finite_state(x, y, angle, vx, vy, spin):
+            status = layout.STATUS_NONFINITE
+            fail_step = n
+            break
+        if until_rest:
+            if lies_still(y, ry1, ry2, rx1, rx2, vx, vy, spin, hx, hy, sleep_speed):
+                still_for += h
+                if still_for >= sleep_time:
+                    vx, vy, spin = 0.0, 0.0, 0.0
+                    rest_time = t
+                    if record:
+                        store_state(trajectory, n, i, x, y, angle, vx, vy, spin)
+                    break
+            else:
+                still_for = 0.0
+        if not held:
+            in_flight = True
+            located = -1
+            loaded = 0
+    state[i, 0], state[i, 1], state[i, 2] = x, y, angle
+    state[i, 3], state[i, 4], state[i, 5] = vx, vy, spin
+    memory[i, IN_FLIGHT] = 1.0 if in_flight else 0.0
+    memory[i, LOCATED] = located
+    memory[i, LOADED] = loaded
+    memory[i, LIFT] = lift
+    memory[i, STILL_FOR] = still_for
+    memory[i, FIRST_CONTACT] = first_contact
+    memory[i, REST_TIME] = rest_time
+    memory[i, MAX_PENETRATION] = max_penetration
+    memory[i, N_IMPACTS] = n_impacts
+    memory[i, N_STEPS] = n_steps
+    memory[i, TIME] = t
+    memory[i, STATUS] = status
+    memory[i, FAIL_STEP] = fail_step
+    return n
+
+
 def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, source_digest: int):
     """Build the robust kernel for exactly the stages a scene uses (flags are compile-time).
 
@@ -274,220 +523,19 @@ def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, sour
         # source must be a closure value, or a kernel compiled with an older stage would be loaded
         _ = DIGEST
         dt, gravity, max_steps, until_rest, threshold, sleep_speed, sleep_time, slop = read_settings(settings)
-        end_time = max_steps * dt
+        corners = np.zeros((CORNER_ROWS, MAX_CORNERS))  # the corner work array (contact_solver)
+        k = np.zeros((MAX_CORNERS, MAX_CORNERS))  # their Delassus matrix
+        ids = np.zeros(MAX_CORNERS, np.int64)  # which corner of the box each column is
+        memory = np.zeros((state.shape[0], MEMORY_SIZE))
         for i in range(state.shape[0]):
-            x, y, angle, vx, vy, spin = (state[i, 0], state[i, 1], state[i, 2],
-                                         state[i, 3], state[i, 4], state[i, 5])
-            hx = params[i, layout.HALF_LENGTH]
-            hy = params[i, layout.HALF_WIDTH]
-            inv_mass = 1.0 / params[i, layout.MASS]
-            inv_inertia = 1.0 / params[i, layout.INERTIA]
-            restitution = params[i, layout.RESTITUTION]
-            friction = params[i, layout.FRICTION]
-            stiffness = params[i, layout.STIFFNESS]
-            radius = math.sqrt(hx * hx + hy * hy)
-            tolerance = CONTACT_TOLERANCE * (1.0 + radius)
-            simultaneous = SIMULTANEOUS_TOLERANCE * (1.0 + radius)
-            first_contact = math.nan
-            rest_time = math.nan
-            max_penetration = 0.0
-            n_impacts = 0
-            n_steps = 0
-            status = layout.STATUS_OK
-            fail_step = -1
-            still_for = 0.0
-            corners = np.zeros((CORNER_ROWS, MAX_CORNERS))  # the corner work array (contact_solver)
-            k = np.zeros((MAX_CORNERS, MAX_CORNERS))  # their Delassus matrix
-            ids = np.zeros(MAX_CORNERS, np.int64)  # which corner of the box each column is
-            located = -1  # the corner a piece of a contact step was shortened to bring to the floor, or -1
-            loaded = 0  # bit c: corner c carried load in the last piece of a contact step
-            lift = 0.0  # [m] a corner held in the last piece may end this far above the floor (second order)
             if RECORD:
-                store_state(trajectory, 0, i, x, y, angle, vx, vy, spin)
-            n = 0  # last grid step reached (and recorded)
-            t = 0.0
-            in_flight = True
-            cos_a = math.cos(angle)
-            sin_a = math.sin(angle)
-            while n < max_steps:
-                if in_flight:
-                    # ---- flight: closed form up to the first contact ----
-                    tau, touched = time_to_contact(y, angle, vy, spin, hx, hy, gravity, end_time - t, tolerance)
-                    # grid rows passed in this flight: up to the end, or to the last one before the contact
-                    last = max_steps if not touched else min(np.int64(math.floor((t + tau) / dt)), max_steps)
-                    if RECORD:
-                        for row in range(n + 1, last + 1):
-                            xr, yr, ar, vxr, vyr, wr = flight_state(x, y, angle, vx, vy, spin, gravity, row * dt - t)
-                            store_state(trajectory, row, i, xr, yr, ar, vxr, vyr, wr)
-                    x, y, angle, vx, vy, spin = flight_state(x, y, angle, vx, vy, spin, gravity, tau)
-                    cos_a = math.cos(angle)
-                    sin_a = math.sin(angle)
-                    if not touched:
-                        n = max_steps
-                        t = end_time
-                        if not is_finite_state(x, y, angle, vx, vy, spin):
-                            status = layout.STATUS_NONFINITE
-                            fail_step = n
-                        break
-                    t = t + tau
-                    if math.isnan(first_contact):
-                        first_contact = t
-                    # ---- impact at the contact instant ----
-                    vx, vy, spin, touching, approach, leaves = resolve_impact(
-                        y, cos_a, sin_a, vx, vy, spin, hx, hy, inv_mass, inv_inertia, restitution,
-                        friction if FRICTION else 0.0, threshold, simultaneous, corners, k)
-                    if touching > 0 and approach > threshold:
-                        if RECORD:
-                            record_event(events, i, n_impacts, t, approach, touching)
-                        n_impacts += 1
-                    if not is_finite_state(x, y, angle, vx, vy, spin):
-                        status = layout.STATUS_NONFINITE
-                        fail_step = np.int64(math.floor(t / dt))
-                        break
-                    n = max(n, last)  # rows up to n hold the flight
-                    if leaves:
-                        continue
-                    in_flight = False
-                    if (n + 1) * dt <= t and n < max_steps:  # the contact fell on grid point n + 1
-                        n += 1
-                        if RECORD:
-                            store_state(trajectory, n, i, x, y, angle, vx, vy, spin)
-                    if n >= max_steps:
-                        t = end_time
-                        break
-                    h = (n + 1) * dt - t  # a partial step brings the box back onto the grid
-                else:
-                    h = dt
-                # ---- one contact step on the grid, split where the box turns fast and at impacts ----
-                n_sub = min(max(np.int64(math.ceil(abs(spin) * h / MAX_ROTATION_PER_STEP)), 1), MAX_SUBSTEPS)
-                h_sub = h / n_sub
-                held = False
-                located_impacts = 0
-                elapsed = 0.0  # time advanced in this step
-                for _ in range(n_sub):
-                    left = h_sub
-                    while left > 0.0:
-                        # 0. impact at this instant: a touching corner approaching faster than the threshold
-                        vx, vy, spin, touching, approach = contact_impact(
-                            y, cos_a, sin_a, vx, vy, spin, hx, hy, inv_mass, inv_inertia, restitution,
-                            friction if FRICTION else 0.0, threshold, tolerance + lift, located, loaded, corners, k)
-                        if approach > 0.0:
-                            if RECORD:
-                                record_event(events, i, n_impacts, t + elapsed, approach, touching)
-                            n_impacts += 1
-                        piece = left
-                        located = -1
-                        vx0, vy0, spin0 = vx, vy, spin
-                        for attempt in range(2):
-                            vx, vy, spin = vx0, vy0, spin0
-                            kinetic_before = kinetic_energy(vx, vy, spin, inv_mass, inv_inertia)
-                            # no point moves faster than sqrt(2 KE (1/m + R^2 / I)) once gravity has acted
-                            # (Cauchy-Schwarz; contact impulses never add kinetic energy)
-                            reach = tolerance + piece * math.sqrt(
-                                2.0 * kinetic_energy(vx, vy + gravity * piece, spin, inv_mass, inv_inertia)
-                                * (inv_mass + radius * radius * inv_inertia))
-                            n_corners = contact_corners(y, cos_a, sin_a, vy, spin, hx, hy, gravity, piece, reach,
-                                                        corners, ids)
-                            normal_velocities(vy, spin, corners, n_corners, APPROACH)
-                            # 1. integrate velocities
-                            vy = vy + gravity * piece
-                            # 2. contact velocities: each corner may close its gap but not pass it
-                            for c in range(n_corners):
-                                corners[TARGET, c] = -max(y + corners[RY, c], 0.0) / piece
-                            vx, vy, spin = solve_contact_velocities(vx, vy, spin, corners, n_corners,
-                                                                    friction if FRICTION else 0.0, inv_mass,
-                                                                    inv_inertia, FRICTION_ITERATIONS, k)
-                            if attempt == 1:
-                                break
-                            # 3. an impact inside the piece: a corner off the floor stopped while approaching
-                            # faster than the threshold arrives after gap / approach; the piece is redone up to
-                            # that instant, where the impact is resolved (0.), not on the grid
-                            arrival = piece
-                            hit = -1
-                            for c in range(n_corners):
-                                gap = y + corners[RY, c]
-                                if (corners[IMPULSE, c] > 0.0 and corners[APPROACH, c] < -threshold
-                                        and gap > tolerance and gap < -arrival * corners[APPROACH, c]):
-                                    arrival = -gap / corners[APPROACH, c]
-                                    hit = ids[c]
-                            if hit < 0 or located_impacts >= MAX_LOCATED_IMPACTS:
-                                break
-                            located_impacts += 1
-                            located = hit
-                            piece = arrival
-                        loaded = 0
-                        for c in range(n_corners):
-                            if corners[IMPULSE, c] > 0.0:
-                                loaded |= 1 << ids[c]
-                        held = held or loaded != 0
-                        # 4. no energy gained: the velocities scaled where the step would gain (energy_limit_scale)
-                        scale = energy_limit_scale(kinetic_before, kinetic_energy(vx, vy, spin, inv_mass,
-                                                                                  inv_inertia),
-                                                   -gravity * piece * vy / inv_mass)
-                        vx, vy, spin = scale * vx, scale * vy, scale * spin
-                        # 5. integrate positions
-                        x = x + piece * vx
-                        y = y + piece * vy
-                        angle = angle + piece * spin
-                        cos_a = math.cos(angle)
-                        sin_a = math.sin(angle)
-                        first, second = lowest_face(cos_a, sin_a, hx, hy)
-                        rx1, ry1 = vertex_offset(first, cos_a, sin_a, hx, hy)
-                        penetration = -(y + ry1)
-                        max_penetration = max(max_penetration, penetration)
-                        # 6. penalty: implicit correction of what penetrates beyond the slop, at the lowest corner
-                        # and its neighbours; the potential energy it returns is taken from the kinetic energy
-                        if PENALTY and penetration > slop + tolerance:
-                            below = 0
-                            for corner in (first, (first + 1) % 4, (first + 3) % 4):
-                                place_corner(corners, below, corner, cos_a, sin_a, hx, hy)
-                                corners[DEPTH, below] = -(y + corners[RY, below]) - slop
-                                if corners[DEPTH, below] > 0.0:
-                                    below += 1
-                            lifted = y
-                            y, angle = correct_penetration(y, angle, corners, below, stiffness, piece, inv_mass,
-                                                           inv_inertia, k)
-                            cos_a = math.cos(angle)
-                            sin_a = math.sin(angle)
-                            kinetic = kinetic_energy(vx, vy, spin, inv_mass, inv_inertia)
-                            rise = -gravity * (y - lifted) / inv_mass
-                            if rise > 0.0 and kinetic > 0.0:
-                                scale = math.sqrt(max(1.0 - rise / kinetic, 0.0))
-                                vx, vy, spin = scale * vx, scale * vy, scale * spin
-                        held = held or penetration > 0.0
-                        lift = h_sub * h_sub * spin * spin * radius  # how far a rotating substep lifts a held corner
-                        elapsed += piece
-                        left = left - piece if piece < left else 0.0
-                first, second = lowest_face(cos_a, sin_a, hx, hy)
-                rx1, ry1 = vertex_offset(first, cos_a, sin_a, hx, hy)
-                rx2, ry2 = vertex_offset(second, cos_a, sin_a, hx, hy)
-                n_steps += 1
-                n += 1
-                t = n * dt
-                if RECORD:
-                    store_state(trajectory, n, i, x, y, angle, vx, vy, spin)
-                if not is_finite_state(x, y, angle, vx, vy, spin):
-                    status = layout.STATUS_NONFINITE
-                    fail_step = n
-                    break
-                if until_rest:
-                    if lies_still(y, ry1, ry2, rx1, rx2, vx, vy, spin, hx, hy, sleep_speed):
-                        still_for += h
-                        if still_for >= sleep_time:
-                            vx, vy, spin = 0.0, 0.0, 0.0
-                            rest_time = t
-                            if RECORD:
-                                store_state(trajectory, n, i, x, y, angle, vx, vy, spin)
-                            break
-                    else:
-                        still_for = 0.0
-                if not held:
-                    in_flight = True
-                    located = -1
-                    loaded = 0
-            state[i, 0], state[i, 1], state[i, 2] = x, y, angle
-            state[i, 3], state[i, 4], state[i, 5] = vx, vy, spin
-            write_stats(stats, i, first_contact, n_impacts, n_steps, max_penetration, rest_time, t,
-                        status, fail_step, n + 1)
+                store_state(trajectory, 0, i, state[i, 0], state[i, 1], state[i, 2], state[i, 3], state[i, 4],
+                            state[i, 5])
+            start_memory(memory, i, 0.0)
+            n = advance_box(i, state, params, memory, 0, max_steps, dt, gravity, until_rest, threshold, sleep_speed,
+                            sleep_time, slop, PENALTY, FRICTION, RECORD, corners, k, ids, trajectory, events)
+            write_stats(stats, i, memory[i, FIRST_CONTACT], np.int64(memory[i, N_IMPACTS]),
+                        np.int64(memory[i, N_STEPS]), memory[i, MAX_PENETRATION], memory[i, REST_TIME],
+                        memory[i, TIME], np.int64(memory[i, STATUS]), np.int64(memory[i, FAIL_STEP]), n + 1)
 
     return run
