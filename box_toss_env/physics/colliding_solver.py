@@ -63,19 +63,22 @@ beyond it the substeps are capped and only the speculative contacts remain (not 
 
 What a grid step does before and after the substeps, so that a scene pays only for what moves:
   0. wake: with ``until_rest``, every sleeping island that an awake body can reach within the step wakes
-     (``islands.wake_touched``); sleeping bodies are left out of everything below;
-  flight: when the last step found no contact at all and at most FLIGHT_LIMIT bodies are awake, the awake
-     bodies fly on their exact parabolas for as many whole steps as none of them can touch the floor
-     (``flight.time_to_contact``) or come near another box (``broadphase.time_apart``), in one jump: a box
-     thrown over a sleeping one costs what a floor throw's flight costs until it gets close;
+     (``islands.wake_touched``; bodies placed at rest sleep from the start, ``islands.sleep_placed``);
+     sleeping bodies are left out of everything below;
+  alone: while at most ALONE_LIMIT bodies are awake, the whole steps for which no two boxes can meet
+     (``steps_alone``: on the exact parabolas while every awake body flies, or by a bound on every point's
+     speed from the body's energy, ``energy_speed``, while they bounce or slide on the floor apart) are
+     taken by each awake body alone against the floor with the floor-only solver (``robust_solver.advance_box``:
+     flight in closed form, impacts located in time, its own sleep), in one jump: a box thrown over a
+     sleeping one, or settling on the floor beside it, costs what a floor throw costs until they get close;
   1.-7. the substeps above, over the awake bodies only; contacts come from the sort-and-sweep broadphase
      (``broadphase.candidate_pairs``), which visits the pairs in the order testing every pair did, so the
      results are those of the all-pairs search;
   8. sleep: with ``until_rest``, an island (bodies joined by box-box contacts) whose bodies have all been
      supported and slower than ``sleep_speed`` at every point for ``sleep_time`` falls asleep
      (``islands.fall_asleep``: velocities zero, no cost until touched); the run stops once every body sleeps.
-Impacts in a colliding scene are resolved in the substep where the gap closes (not located in time as the
-floor-only solver locates them).
+Impacts between boxes are resolved in the substep where the gap closes (not located in time as the
+floor-only solver locates a box's impacts with the floor).
 
 Material of a box-box contact (Box2D's mixing rules): restitution max(e1, e2), friction sqrt(mu1 mu2),
 penalty stiffness min(k1, k2); box-floor contacts use the box's own.
@@ -112,13 +115,27 @@ from .box_collision import (
     find_contacts,
     update_geometry,
 )
-from .broadphase import candidate_pairs, sweep_axis, time_apart
+from .broadphase import box_bound, candidate_pairs, sweep_axis, time_apart
 from .compilation import jit_kernel, jit_stage
-from .contact_solver import penalty_correction_share
-from .flight import flight_state, time_to_contact
-from .islands import fall_asleep, wake_touched
+from .contact_solver import CORNER_ROWS, MAX_CORNERS, penalty_correction_share
+from .flight import time_to_contact
+from .islands import fall_asleep, sleep_placed, wake_touched
 from .kernel_support import read_settings, record_event, store_state, write_stats
-from .robust_solver import MAX_ROTATION_PER_STEP, energy_limit_scale
+from .robust_solver import (
+    FIRST_CONTACT,
+    IN_FLIGHT,
+    MAX_PENETRATION,
+    MAX_ROTATION_PER_STEP,
+    MEMORY_SIZE,
+    N_IMPACTS,
+    N_STEPS,
+    REST_TIME,
+    STATUS,
+    STILL_FOR,
+    advance_box,
+    energy_limit_scale,
+    start_memory,
+)
 
 TUNNEL_FRACTION = 0.5  # [-] of the smallest half extent: the most any point moves in one substep
 MAX_SUBSTEPS = 256
@@ -132,7 +149,8 @@ MIN_CAPACITY = 16
 DIRECT_LIMIT = 64  # contacts: up to this many, the normal impulses are solved exactly (``normal_lcp``)
 REGULARISATION = 1e-12  # share of W_cc added to the diagonal of the exact solve (redundant contacts)
 LCP_TOLERANCE = 1e-12  # share of the largest |free velocity|: a contact left free may approach by this much
-FLIGHT_LIMIT = 8  # awake bodies at most for which whole steps of free flight are looked for (flight_steps)
+ALONE_LIMIT = 8  # awake bodies at most for which whole steps alone against the floor are looked for (steps_alone)
+ALONE_LOWEST = 0.5  # [share of the smaller half extent] a box's centre is taken never to sink below this height
 
 
 @jit_stage(inline="always")
@@ -556,27 +574,131 @@ def body_reach(vel, radius, awake, h, gravity, tolerance, reach):
 
 
 @jit_stage
-def flight_steps(pose, vel, half, radius, awake, gravity, tolerance, dt, steps_left):
-    """How many whole time steps every awake body can fly on its exact parabola before any of them could
-    touch the floor (``flight.time_to_contact``) or come near another box (``broadphase.time_apart``): the
-    steps that cost a floor throw's flight, nothing per step."""
-    horizon = steps_left * dt
-    for b in range(pose.shape[0]):
-        if awake[b]:
-            tau, _ = time_to_contact(pose[b, 1], pose[b, 2], vel[b, 1], vel[b, 2], half[b, 0], half[b, 1], gravity,
-                                     horizon, tolerance)
-            horizon = min(horizon, tau, time_apart(b, pose, vel, half, radius, awake, gravity, horizon, 0.25 * dt))
-    return min(np.int64(math.floor(horizon / dt)), steps_left)
+def energy_speed(vel, b, params, y, gravity):
+    """A bound on the speed of every point of body b from now on, while it meets only the floor:
+    sqrt(2 E (1/m + R^2 / I)) with E its kinetic energy plus m |g| (y - ALONE_LOWEST min(hx, hy)), the
+    potential energy it can give up before its centre reaches that height. By Cauchy-Schwarz
+    (|v| + |omega| R)^2 <= (m |v|^2 + I omega^2) (1/m + R^2 / I), and the floor's contacts never add energy
+    (``robust_solver``: impulses, the energy limit and the penalty's energy all take, never give)."""
+    mass = params[b, layout.MASS]
+    half = min(params[b, layout.HALF_LENGTH], params[b, layout.HALF_WIDTH])
+    energy = (body_kinetic_energy(vel, b, params)
+              + mass * abs(gravity) * max(y - ALONE_LOWEST * half, 0.0))
+    radius2 = params[b, layout.HALF_LENGTH] ** 2 + params[b, layout.HALF_WIDTH] ** 2
+    return math.sqrt(2.0 * energy * (1.0 / mass + radius2 / params[b, layout.INERTIA]))
 
 
 @jit_stage
-def fly(pose, vel, awake, gravity, tau):
-    """Every awake body moved along its exact parabola for a time tau (``flight.flight_state``)."""
+def steps_alone(pose, vel, half, radius, awake, params, gravity, tolerance, dt, steps_left):
+    """How many whole time steps every awake body can be advanced alone against the floor
+    (``robust_solver.advance_box``: flight in closed form, impacts located in time) before any two boxes could
+    meet; the larger of two safe counts:
+      - flight: no awake body touches the floor (``flight.time_to_contact``) and each stays apart from every
+        other box on the exact parabolas (``broadphase.time_apart``), the steps a thrown box flies;
+      - energy: every body stays within its circumscribed circle (radius R) of its centre, and no point moves
+        faster than ``energy_speed``, so the gap max(|dx| - R - b'_x, |dy| - R - b'_y) between an awake box's
+        circle and another box's bounds (its circle if awake, its box if asleep) closes no faster than the
+        sum of their speed bounds: a box bouncing or sliding on the floor far from the others."""
+    horizon = steps_left * dt
+    flight = horizon
     for b in range(pose.shape[0]):
         if awake[b]:
-            x, y, a, vx, vy, w = flight_state(pose[b, 0], pose[b, 1], pose[b, 2], vel[b, 0], vel[b, 1], vel[b, 2],
-                                              gravity, tau)
-            pose[b, 0], pose[b, 1], pose[b, 2], vel[b, 0], vel[b, 1], vel[b, 2] = x, y, a, vx, vy, w
+            tau, _ = time_to_contact(pose[b, 1], pose[b, 2], vel[b, 1], vel[b, 2], half[b, 0], half[b, 1], gravity,
+                                     flight, tolerance)
+            flight = min(flight, tau)
+            if flight < dt:
+                break
+            flight = min(flight, time_apart(b, pose, vel, half, radius, awake, gravity, flight, 0.25 * dt))
+            if flight < dt:
+                break
+    energy = horizon
+    if flight < horizon:
+        for b in range(pose.shape[0]):
+            if not awake[b]:
+                continue
+            speed_b = energy_speed(vel, b, params, pose[b, 1], gravity)
+            for o in range(pose.shape[0]):
+                if o == b or (awake[o] and o < b):  # a pair of awake boxes once
+                    continue
+                speed = speed_b
+                if awake[o]:
+                    ox = oy = radius[o]
+                    speed += energy_speed(vel, o, params, pose[o, 1], gravity)
+                else:
+                    ox, oy = box_bound(math.cos(pose[o, 2]), math.sin(pose[o, 2]), half[o, 0], half[o, 1])
+                gap = max(abs(pose[o, 0] - pose[b, 0]) - radius[b] - ox, abs(pose[o, 1] - pose[b, 1]) - radius[b] - oy)
+                if gap <= speed * dt:
+                    return np.int64(math.floor(flight / dt))
+                if speed > 0.0:
+                    energy = min(energy, gap / speed)
+    return min(np.int64(math.floor(max(flight, energy) / dt)), steps_left)
+
+
+@jit_stage
+def advance_alone(k, n, state_pose, vel, params, awake, supported, alone, memory, stepped, n_impacts, first_contact,
+                  max_penetration, still_for, island, rest_time, work, dt, gravity, until_rest, threshold,
+                  sleep_speed, sleep_time, slop, use_penalty, use_friction, record, corners, delassus, corner_ids,
+                  trajectory, events):
+    """Every awake body advanced alone against the floor for k grid steps from step n
+    (``robust_solver.advance_box``, its memory row carried on while the body stays alone: ``alone``), a body
+    that falls asleep on the floor taking an island of its own; the trajectory rows of the others filled.
+    Returns (the step reached, the number of bodies that fell asleep, the failing body or -1)."""
+    nb = state_pose.shape[0]
+    reached = n
+    slept = 0
+    for b in range(nb):
+        if not awake[b]:
+            continue
+        if not alone[b]:  # a body that the colliding substeps moved starts a new memory row from their state
+            start_memory(memory, b, n * dt)
+            memory[b, IN_FLIGHT] = 0.0 if supported[b] else 1.0
+            memory[b, N_IMPACTS] = n_impacts[b]
+            memory[b, N_STEPS] = stepped[b]
+            memory[b, FIRST_CONTACT] = first_contact[b]
+            memory[b, MAX_PENETRATION] = max_penetration[b]
+            alone[b] = True
+        for c in range(3):
+            work[b, c] = state_pose[b, c]
+            work[b, 3 + c] = vel[b, c]
+        end = advance_box(b, work, params, memory, n, n + k, dt, gravity, until_rest, threshold, sleep_speed,
+                          sleep_time, slop, use_penalty, use_friction, record, corners, delassus, corner_ids,
+                          trajectory, events)
+        for c in range(3):
+            state_pose[b, c] = work[b, c]
+            vel[b, c] = work[b, 3 + c]
+        n_impacts[b] = np.int64(memory[b, N_IMPACTS])
+        stepped[b] = np.int64(memory[b, N_STEPS])
+        first_contact[b] = memory[b, FIRST_CONTACT]
+        max_penetration[b] = memory[b, MAX_PENETRATION]
+        still_for[b] = memory[b, STILL_FOR]
+        if memory[b, STATUS] != layout.STATUS_OK:
+            return end, slept, b
+        if not math.isnan(memory[b, REST_TIME]):
+            awake[b] = False
+            island[b] = b
+            rest_time[b] = memory[b, REST_TIME]
+            slept += 1
+        reached = max(reached, end)
+    if slept > 0 and count_awake(awake) == 0:
+        k = reached - n  # every body sleeps: the run ends where the last fell asleep
+    if record:
+        for b in range(nb):
+            first = n + 1
+            if not awake[b] and not math.isnan(rest_time[b]) and rest_time[b] > n * dt:
+                first = np.int64(round(rest_time[b] / dt)) + 1  # advance_box recorded it up to its rest
+            elif awake[b]:
+                continue
+            for row in range(first, n + k + 1):
+                store_state(trajectory, row, b, state_pose[b, 0], state_pose[b, 1], state_pose[b, 2], 0.0, 0.0, 0.0)
+    return n + k, slept, -1
+
+
+@jit_stage
+def count_awake(awake):
+    count = 0
+    for b in range(awake.shape[0]):
+        count += awake[b]
+    return count
 
 
 def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, source_digest: int):
@@ -641,13 +763,26 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
         status = layout.STATUS_OK
         fail_step = -1
         n_awake = nb
-        in_contact = True  # whether the last step found any contact (no flight in closed form after one)
+        memory = np.zeros((nb, MEMORY_SIZE))  # advance_box's rows for the bodies advanced alone
+        alone = np.zeros(nb, np.bool_)  # whether a body's memory row holds on (advanced alone since the substeps)
+        work = np.zeros((nb, 6))
+        corners = np.zeros((CORNER_ROWS, MAX_CORNERS))  # advance_box's work arrays (contact_solver)
+        corner_delassus = np.zeros((MAX_CORNERS, MAX_CORNERS))
+        corner_ids = np.zeros(MAX_CORNERS, np.int64)
         if RECORD:
             for b in range(nb):
                 store_state(trajectory, 0, b, pose[b, 0], pose[b, 1], pose[b, 2], vel[b, 0], vel[b, 1], vel[b, 2])
+        if until_rest:  # bodies placed at rest sleep from the start
+            slept = sleep_placed(pose, vel, half, bound, reach, everyone, awake, island, rest_time, ready, sleep_speed,
+                                 tolerance, axis, order, low, pair_keys)
+            while slept < 0:
+                pair_keys = np.zeros(2 * pair_keys.shape[0], np.int64)
+                slept = sleep_placed(pose, vel, half, bound, reach, everyone, awake, island, rest_time, ready,
+                                     sleep_speed, tolerance, axis, order, low, pair_keys)
+            n_awake -= slept
         count = 0
         n = 0
-        while n < max_steps:
+        while n < max_steps and n_awake > 0:
             if n_awake < nb:  # 0. wake the sleeping islands an awake body can reach in this step
                 update_geometry(pose, half, awake, trig, bound)
                 body_reach(vel, radius, awake, dt, gravity, tolerance, reach)
@@ -657,28 +792,30 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
                 n_awake = 0
                 for b in range(nb):
                     n_awake += awake[b]
-            if not in_contact and n_awake <= FLIGHT_LIMIT:
-                # flight: whole steps on the exact parabolas while no awake body can touch anything
-                k = flight_steps(pose, vel, half, radius, awake, gravity, tolerance, dt, max_steps - n)
+            if n_awake <= ALONE_LIMIT:
+                # alone: whole steps of each awake body against the floor alone while no two boxes can meet
+                k = steps_alone(pose, vel, half, radius, awake, params, gravity, tolerance, dt, max_steps - n)
                 if k > 0:
-                    if RECORD:
-                        for row in range(n + 1, n + k + 1):
-                            for b in range(nb):
-                                xr, yr, ar, vxr, vyr, wr = pose[b, 0], pose[b, 1], pose[b, 2], 0.0, 0.0, 0.0
-                                if awake[b]:
-                                    xr, yr, ar, vxr, vyr, wr = flight_state(pose[b, 0], pose[b, 1], pose[b, 2],
-                                                                            vel[b, 0], vel[b, 1], vel[b, 2], gravity,
-                                                                            (row - n) * dt)
-                                store_state(trajectory, row, b, xr, yr, ar, vxr, vyr, wr)
-                    fly(pose, vel, awake, gravity, k * dt)
-                    n += k
-                    in_contact = True  # step once before trying again
+                    n, slept, failed = advance_alone(
+                        k, n, pose, vel, params, awake, supported, alone, memory, n_stepped, n_impacts, first_contact,
+                        max_penetration, still_for, island, rest_time, work, dt, gravity, until_rest, threshold,
+                        sleep_speed, sleep_time, slop, PENALTY, FRICTION_ON, RECORD, corners, corner_delassus,
+                        corner_ids, trajectory, events)
+                    n_previous = 0  # the contacts of the substeps before are gone
+                    if failed >= 0:
+                        status = layout.STATUS_NONFINITE
+                        fail_step = n
+                        break
+                    n_awake -= slept
+                    if n_awake == 0:
+                        break
                     continue
             n_sub = substeps(vel, radius, smallest_half, dt, gravity)
             h = dt / n_sub
             for b in range(nb):
                 supported[b] = False
-            in_contact = False
+            for b in range(nb):
+                alone[b] = False
             for sub in range(n_sub):
                 t = n * dt + sub * h
                 # 1. find contacts within what the bodies can travel in the substep
@@ -702,7 +839,6 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
                     previous_keys, previous_impulses = keys, impulses
                     count = find_contacts(pose, trig, half, reach, floor_reach, pair_keys, n_pairs, awake, contacts,
                                           ids)
-                in_contact = in_contact or count > 0
                 prepare_contacts(contacts, ids, count, params, inv_mass, inv_inertia)
                 for c in range(count):
                     depth = -contacts[c, GAP]

@@ -9,7 +9,9 @@ looked for, no velocity or position integrated, no impulse solved. It keeps the 
 (the island's root body, ``island``), so that a touch wakes the whole island at once: at the start of
 every grid step, every sleeping body that an awake body can reach within the step (the broadphase's
 test, ``broadphase.candidate_pairs``) wakes with its island, and the test is repeated for the bodies just
-woken. Without ``until_rest`` nothing sleeps.
+woken. Without ``until_rest`` nothing sleeps. A body placed at rest (zero velocity, lying on a face on the
+floor, touching no other box, ``sleep_placed``) sleeps from the start, as the resting base of
+``BoxToss-OnBox-v0``: stepping it would only find it at rest ``sleep_time`` later.
 """
 
 import math
@@ -17,6 +19,7 @@ import math
 from .box_collision import BODY1, BODY2
 from .broadphase import candidate_pairs
 from .compilation import jit_stage
+from .kernel_support import is_lying_still
 
 
 @jit_stage
@@ -104,3 +107,33 @@ def wake_touched(pose, bound, reach, everyone, awake, island, still_for, rest_ti
         if woken == 0:
             return total
         total += woken
+
+
+@jit_stage
+def sleep_placed(pose, vel, half, bound, reach, everyone, awake, island, rest_time, ready, sleep_speed, tolerance,
+                 axis, order, low, keys):
+    """Put to sleep, each in an island of its own, the bodies placed at rest: zero velocity, lying on a face
+    on the floor (``kernel_support.is_lying_still``) and in no candidate pair with another box within the
+    contact tolerance (the broadphase's test). Returns how many, or -1 if ``keys`` is too short (the caller
+    grows it and calls again)."""
+    n = pose.shape[0]
+    for b in range(n):
+        reach[b] = tolerance
+    n_pairs = candidate_pairs(pose, bound, reach, everyone, everyone, axis, order, low, keys)
+    if n_pairs < 0:
+        return -1
+    for b in range(n):
+        ready[b] = (vel[b, 0] == 0.0 and vel[b, 1] == 0.0 and vel[b, 2] == 0.0
+                    and is_lying_still(pose[b, 1], pose[b, 2], 0.0, 0.0, 0.0, half[b, 0], half[b, 1], sleep_speed))
+    for p in range(n_pairs):
+        i = keys[p] // n
+        ready[i] = False
+        ready[keys[p] - i * n] = False
+    slept = 0
+    for b in range(n):
+        if ready[b]:
+            awake[b] = False
+            island[b] = b
+            rest_time[b] = 0.0
+            slept += 1
+    return slept

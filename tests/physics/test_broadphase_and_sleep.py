@@ -1,5 +1,6 @@
 """The multi-body engine at scale: the sort-and-sweep broadphase finds exactly the pairs that testing every
-pair finds, islands fall asleep and wake, and free flight is taken in closed form beside other boxes."""
+pair finds, islands fall asleep and wake, bodies placed at rest sleep from the start, and a box that no other
+can reach is advanced by the floor-only solver: free flight in closed form, impacts with the floor located."""
 
 import math
 
@@ -114,3 +115,58 @@ def test_free_flight_beside_a_sleeping_box_is_the_exact_parabola():
     expected_y = 1.5 + 3.0 * t - 0.5 * 9.81 * t**2
     np.testing.assert_allclose(states[:, 1, 1], expected_y, atol=1e-12)
     np.testing.assert_allclose(states[:, 1, 2], 0.3 + 4.0 * t, atol=1e-12)
+
+
+def thrown_and_resting(distance: float, **scene):
+    resting = Box(length=0.4, width=0.2, mass=2.0, position=(distance, 0.1))
+    thrown = Box(length=0.3, width=0.1, mass=1.0, position=(0.0, 1.2), angle=0.4, velocity=(1.5, 2.0), spin=-6.0)
+    return Scene(boxes=(thrown, resting), restitution=0.4, friction=0.5, penalty_stiffness=1e5, dt=1 / 128, **scene)
+
+
+def test_a_box_no_other_can_reach_moves_as_it_does_on_the_floor_alone():
+    # thrown 10 m from a resting box: flight, impacts, sliding and rest as in the floor-only scene, to rounding
+    # (the flight is taken in pieces of whole steps between the checks that no box is near)
+    alone = simulate(thrown_and_resting(10.0), duration=4.0, until_rest=True, record=True)
+    beside = simulate(thrown_and_resting(10.0, boxes_collide=True), duration=4.0, until_rest=True, record=True)
+    assert np.all(beside.at_rest) and beside.rest_time[0] == alone.rest_time[0] > 1.0
+    assert beside.n_impacts[0] == alone.n_impacts[0] >= 2
+    assert beside.first_contact_time[0] == pytest.approx(alone.first_contact_time[0], abs=1e-12)
+    steps = len(alone.trajectory.state)
+    np.testing.assert_allclose(beside.trajectory.state[:steps, 0], alone.trajectory.state[:, 0], atol=1e-9)
+    np.testing.assert_array_equal(beside.trajectory.state[:, 1, :3], np.broadcast_to([10.0, 0.1, 0.0], (len(
+        beside.trajectory.state), 3)))
+
+
+def test_bodies_placed_at_rest_sleep_from_the_start_and_others_do_not():
+    stack = scenes.stack(n=2).boxes  # at rest, but on one another: stepped until they have been still a while
+    lone = Box(length=0.4, width=0.2, mass=2.0, position=(3.0, 0.1))
+    creeping = Box(length=0.4, width=0.2, mass=2.0, position=(6.0, 0.1), velocity=(1e-9, 0.0))
+    tilted = Box(length=0.4, width=0.2, mass=2.0, position=(9.0, 0.1 + 1e-3), angle=0.01)
+    scene = scenes.stack(n=2).replace(boxes=(*stack, lone, creeping, tilted))
+    result = simulate(scene, duration=2.0, until_rest=True)
+    assert np.all(result.at_rest)
+    assert result.rest_time[2] == 0.0 and result.n_steps[2] == 0
+    assert np.all(result.rest_time[[0, 1, 3, 4]] >= scene.sleep_time)
+    assert np.array_equal(result.final_state[2], lone_state := np.array([3.0, 0.1, 0.0, 0.0, 0.0, 0.0]))
+    assert np.array_equal(simulate(scene.replace(boxes=(lone,)), duration=1.0, until_rest=True).final_state[0],
+                          lone_state)
+    # without until_rest nothing sleeps: the same box is stepped
+    assert simulate(scene, duration=0.2).n_steps[2] > 0
+
+
+@pytest.mark.parametrize("speed", [1.0, 4.0, 12.0])
+def test_boxes_sliding_at_one_another_are_handed_to_the_substeps_before_they_meet(speed):
+    # two boxes slide at one another on the floor, each alone against the floor while the energy bound keeps
+    # them apart; they must meet in the colliding substeps: no overlap, the left box stays left, momentum turned
+    left = Box(length=0.4, width=0.2, mass=2.0, position=(-1.0, 0.1), velocity=(speed, 0.0))
+    right = Box(length=0.4, width=0.2, mass=1.0, position=(1.0, 0.1), velocity=(-speed, 0.0))
+    scene = Scene(boxes=(left, right), boxes_collide=True, restitution=0.5, friction=0.02, penalty_stiffness=1e5,
+                  dt=1 / 128)
+    result = simulate(scene, duration=3.0, until_rest=True, record=True)
+    states = result.trajectory.state
+    gap = states[:, 1, 0] - states[:, 0, 0] - 0.4
+    assert gap.min() > -1e-6 and np.all(result.max_penetration < 1e-6)
+    assert result.n_impacts[0] == result.n_impacts[1] == 1  # they met once (starting on the floor, no other impact)
+    met = int(result.impacts[1][0, 0] * 128)
+    assert gap[met] < 2 * speed / 128 + 1e-3  # within a step's travel of one another then
+    assert np.all(states[met + 1:, 1, 3] >= 0.0) and states[met + 1, 1, 3] > 0.0  # the heavier box drove it back
