@@ -170,3 +170,13 @@ def test_boxes_sliding_at_one_another_are_handed_to_the_substeps_before_they_mee
     met = int(result.impacts[1][0, 0] * 128)
     assert gap[met] < 2 * speed / 128 + 1e-3  # within a step's travel of one another then
     assert np.all(states[met + 1:, 1, 3] >= 0.0) and states[met + 1, 1, 3] > 0.0  # the heavier box drove it back
+
+
+@pytest.mark.parametrize("name", ["flat_drop", "corner_impact", "toss", "bouncing", "slide"])
+def test_one_box_in_a_colliding_scene_is_the_floor_only_solver_bit_for_bit(name):
+    scene = getattr(scenes, name)()
+    alone = simulate(scene, duration=3.0, until_rest=True)
+    colliding = simulate(scene.replace(boxes_collide=True), duration=3.0, until_rest=True)
+    assert np.array_equal(colliding.final_state, alone.final_state)
+    assert np.array_equal(colliding.rest_time, alone.rest_time, equal_nan=True)
+    assert np.array_equal(colliding.n_impacts, alone.n_impacts)
