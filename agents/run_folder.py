@@ -17,6 +17,7 @@ import csv
 import fcntl
 import io
 import os
+import shutil
 import tempfile
 import time
 from collections.abc import Callable, Iterator
@@ -128,6 +129,19 @@ def write_atomic(path: str | Path, data: str | bytes | Callable[[BinaryIO], Any]
             data(file)
         else:
             file.write(data.encode() if isinstance(data, str) else data)
+
+
+def copy_atomic(source: str | Path, destination: str | Path) -> None:
+    """``destination`` replaced whole by the current content of ``source``: a hard link to it where the
+    file system allows (no bytes copied; ``source`` is itself only ever replaced, never written in place,
+    so the link keeps today's content), a copy otherwise."""
+    destination = Path(destination)
+    with atomic_path(destination) as temp:
+        try:
+            os.unlink(temp)
+            os.link(source, temp)
+        except OSError:
+            shutil.copyfile(source, temp)
 
 
 def append_line(path: str | Path, line: str) -> None:

@@ -117,7 +117,8 @@ def snapshot(run_dir: Path, algo: str, destination: Path) -> None:
     newest = latest_checkpoint(run_dir, algo)
     keep = {path.name for path in (newest[0], newest[1]) if path is not None} if newest else set()
     if newest:
-        keep.add(f"{algo}_replay_buffer_{newest[2]}_steps.pkl")
+        keep |= {f"{algo}_replay_buffer_{newest[2]}_steps.pkl", f"{algo}_best_model_{newest[2]}_steps.zip",
+                 f"{algo}_best_vecnormalize_{newest[2]}_steps.pkl"}
 
     def ignore(directory: str, names: list[str]) -> list[str]:
         return [name for name in names if Path(directory).name == "checkpoints" and name not in keep]
