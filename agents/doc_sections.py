@@ -10,6 +10,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from box_toss_env.files import write_atomic
+
 REPO = Path(__file__).resolve().parents[1]
 README = REPO / "README.md"
 DOCS = REPO / "docs"
@@ -48,4 +50,4 @@ def replace_section(name: str, text: str, readme: Path | None = None) -> None:
         raise ValueError(f"{page} has no {start} ... {end} markers")
     head, rest = content.split(start, 1)
     _, tail = rest.split(end, 1)
-    page.write_text(f"{head}{start}\n{relink(text.strip(), page)}\n{end}{tail}")
+    write_atomic(page, f"{head}{start}\n{relink(text.strip(), page)}\n{end}{tail}")

@@ -41,6 +41,7 @@ from agents.config import ConfigError
 from agents.evaluation import search_objective
 from agents.search_space import Dimension
 from agents.training import latest_checkpoint, train, write_run_files
+from box_toss_env.files import write_atomic
 
 OBJECTIVE = "objective"
 PRUNERS = ("asha", "median", "none")
@@ -214,7 +215,7 @@ class WallClock(tune.Callback):
     def write(self) -> None:
         walls = self.read()
         walls[self.key] = self.previous + time.perf_counter() - self.start
-        self.path.write_text(json.dumps(walls, indent=2))
+        write_atomic(self.path, json.dumps(walls, indent=2))
 
     def on_trial_result(self, iteration, trials, trial, result, **info) -> None:
         self.write()
