@@ -21,6 +21,7 @@ SECTION_PAGES = {
     "tune": DOCS / "hyperparameter-search.md",  # python -m agents.tune ... --readme
     "engine-benchmark": DOCS / "engine.md",  # python -m benchmarks.engine --readme
     "throughput": DOCS / "batched.md",  # python -m benchmarks.throughput --readme
+    "vector-reset": DOCS / "batched.md",  # python -m benchmarks.vector_reset --readme
     "cold-start": DOCS / "cold-start.md",  # python -m benchmarks.cold_start --readme
     "rllib-sampling": DOCS / "rllib.md",  # python -m benchmarks.rllib_sampling --readme
     "reports": DOCS / "reports.md",  # python -m reports.precision / stability / collisions

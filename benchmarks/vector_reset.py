@@ -1,7 +1,7 @@
 """The first reset of a big native batched env: ``gymnasium.make_vec("BoxToss-v0", num_envs=N)`` then
 ``reset(seed=0)``, each measured in a fresh process. Prints measured figures; asserts nothing.
 
-    python -m benchmarks.vector_reset [--envs 1000000] [--repeats 3]
+    python -m benchmarks.vector_reset [--envs 1000000] [--repeats 3] [--readme]
 
 Each repeat runs in a new Python process (what a user's first reset is), which first resets a
 5,000-env batch so that numba's one-time start and the loading of the compiled kernels from its cache
@@ -17,9 +17,12 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import statistics
 import subprocess
 import sys
+
+from agents.doc_sections import replace_section
 
 ONE_RUN = r"""
 import json, os, sys, time
@@ -59,6 +62,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--envs", type=int, default=10**6, help="envs in the batch (default 1,000,000)")
     parser.add_argument("--repeats", type=int, default=3, help="fresh processes (default 3)")
+    parser.add_argument("--readme", action="store_true", help="also write the table into docs/batched.md")
     args = parser.parse_args()
     if args.envs < 1:
         parser.error(f"--envs must be >= 1, got {args.envs}")
@@ -71,9 +75,12 @@ def main() -> None:
         if done.returncode != 0:
             sys.exit(f"the measuring process failed:\n{done.stderr}")
         runs.append(json.loads(done.stdout.strip().splitlines()[-1]))
-    print(f"make_vec('BoxToss-v0', num_envs={args.envs:,}) and its resets, {args.repeats} fresh processes: "
-          "median [min-max] seconds")
-    print(f"{'stage':42s} {'wall':>22s} {'CPU user':>22s} {'CPU system':>22s}")
+    load = ", ".join(f"{value:.1f}" for value in os.getloadavg())
+    lines = [f"Measured by `python -m benchmarks.vector_reset` on {os.cpu_count()} cores: "
+             f"`make_vec(\"BoxToss-v0\", num_envs={args.envs:,})` and its resets in {args.repeats} fresh processes, "
+             f"median [min-max] seconds; load average {load} at the end (a shared machine: wall time above CPU time "
+             "is other jobs' share of the cores).", "",
+             "| stage | wall | CPU, user | CPU, system |", "|---|---:|---:|---:|"]
     for stage in runs[0]:
         cells = []
         for key in ("wall", "user", "system"):
@@ -81,7 +88,11 @@ def main() -> None:
             scale, unit = (1e6, " us") if "per env" in stage else (1.0, "")
             cells.append(f"{statistics.median(values) * scale:.2f} [{min(values) * scale:.2f}-"
                          f"{max(values) * scale:.2f}]{unit}")
-        print(f"{stage:42s} {cells[0]:>22s} {cells[1]:>22s} {cells[2]:>22s}")
+        lines.append(f"| {stage} | {' | '.join(cells)} |")
+    report = "\n".join(lines)
+    print(report)
+    if args.readme:
+        replace_section("vector-reset", report)
 
 
 if __name__ == "__main__":

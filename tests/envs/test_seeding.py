@@ -106,13 +106,24 @@ def test_the_compiled_seeding_of_large_batches_is_numpys_bit_for_bit():
     assert streams.states[0].tolist() == list(numpy_state(7))
 
 
-def test_a_large_vector_env_draws_what_single_envs_seeded_alike_draw():
-    """A batch large enough for the compiled seeding: env i's first episode is the single env's with seed s + i."""
+@pytest.mark.parametrize("kwargs", [{}, {"target_face": "exact"}, {"target_face": "mixed"}, {"base_box": True}])
+def test_a_large_vector_env_draws_what_single_envs_seeded_alike_draw(kwargs):
+    """A batch large enough for the compiled seeding, its episodes drawn in place (the target faces too):
+    env i's first two episodes are the single env's with seed s + i (its first only with a base box, whose
+    4,096 colliding throws take long)."""
     n = random_streams.COMPILED_SEEDING_MIN
-    observations, _ = BoxTossVectorEnv(n).reset(seed=2**32 - 5)
-    for i in (0, 4, 5, n - 1):
-        single, _ = BoxTossEnv().reset(seed=2**32 - 5 + i)
-        np.testing.assert_array_equal(observations[i], single)
+    envs = BoxTossVectorEnv(n, **kwargs)
+    observations, info = envs.reset(seed=2**32 - 5)
+    actions = np.zeros((n, 3))
+    following = None if kwargs.get("base_box") else envs.step(actions)[0]
+    for i in (0, 4, 5, 1234, n - 1):
+        single = BoxTossEnv(**kwargs)
+        first, single_info = single.reset(seed=2**32 - 5 + i)
+        np.testing.assert_array_equal(observations[i], first)
+        assert info["target_faces"][i].tolist() == single_info["target_faces"].tolist()
+        if following is not None:
+            single.step(actions[i])
+            np.testing.assert_array_equal(following[i], single.reset()[0])
     fresh = BoxTossVectorEnv(n)
     fresh.reset()
     assert len({tuple(row) for row in fresh._streams.states.tolist()}) == n
