@@ -34,6 +34,7 @@ from stable_baselines3.common.noise import NormalActionNoise
 
 from agents import algorithms
 from agents.envs import read_env_wrapper
+from box_toss_env.files import write_atomic
 
 HYPERPARAMS = Path(__file__).parent / "hyperparams"
 PROJECT_FILE = "project.yml"
@@ -194,8 +195,7 @@ def expression(value: Any) -> str:
 
 
 def save_yaml(data: Any, path: str | Path) -> None:
-    with open(path, "w") as file:
-        yaml.safe_dump(data, file, sort_keys=False)
+    write_atomic(path, yaml.safe_dump(data, sort_keys=False))
 
 
 def load_yaml(path: str | Path) -> Any:

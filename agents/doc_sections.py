@@ -10,6 +10,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from box_toss_env.files import write_atomic
+
 REPO = Path(__file__).resolve().parents[1]
 README = REPO / "README.md"
 DOCS = REPO / "docs"
@@ -19,6 +21,7 @@ SECTION_PAGES = {
     "tune": DOCS / "hyperparameter-search.md",  # python -m agents.tune ... --readme
     "engine-benchmark": DOCS / "engine.md",  # python -m benchmarks.engine --readme
     "throughput": DOCS / "batched.md",  # python -m benchmarks.throughput --readme
+    "vector-reset": DOCS / "batched.md",  # python -m benchmarks.vector_reset --readme
     "cold-start": DOCS / "cold-start.md",  # python -m benchmarks.cold_start --readme
     "rllib-sampling": DOCS / "rllib.md",  # python -m benchmarks.rllib_sampling --readme
     "reports": DOCS / "reports.md",  # python -m reports.precision / stability / collisions
@@ -48,4 +51,4 @@ def replace_section(name: str, text: str, readme: Path | None = None) -> None:
         raise ValueError(f"{page} has no {start} ... {end} markers")
     head, rest = content.split(start, 1)
     _, tail = rest.split(end, 1)
-    page.write_text(f"{head}{start}\n{relink(text.strip(), page)}\n{end}{tail}")
+    write_atomic(page, f"{head}{start}\n{relink(text.strip(), page)}\n{end}{tail}")

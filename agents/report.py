@@ -22,6 +22,7 @@ from agents.doc_sections import page_for, replace_section
 from agents.evaluation import TEST_FIRST_SEED, TEST_TARGETS, VALIDATION_FIRST_SEED, Throws, load_policy
 from agents.oracle import OracleSettings
 from agents.training import read_timing
+from box_toss_env.files import save_figure, write_atomic
 from box_toss_env.rendering import write_video
 
 RUNS = Path("runs")
@@ -156,7 +157,7 @@ def plot_learning_curves(curves: dict[str, dict[str, np.ndarray]], path: Path,
     fig.suptitle("Deterministic policy on fixed validation targets")
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
     return path
 
@@ -189,7 +190,7 @@ def plot_landing_errors(throws: dict[str, Throws], path: Path, target_x_range: t
     fig.legend(*ax_cdf.get_legend_handles_labels(), loc="lower center", ncol=5, fontsize=8, frameon=False)
     fig.tight_layout(rect=(0, 0.06, 1, 1))
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
     return path
 
@@ -352,8 +353,7 @@ def write_readme(section: str, name: str = "agents") -> None:
     missing)."""
     page = page_for(name)
     if f"<!-- {name}:start -->" not in page.read_text():
-        with open(page, "a") as file:
-            file.write(f"\n<!-- {name}:start -->\n<!-- {name}:end -->\n")
+        write_atomic(page, page.read_text() + f"\n<!-- {name}:start -->\n<!-- {name}:end -->\n")
     replace_section(name, section)
     print(f"wrote the {name} section of {page}")
 

@@ -3,8 +3,8 @@
 - A run's folder is made with ``os.mkdir`` (atomic): two runs started in the same second without a
   name get ``NAME`` and ``NAME-2``, never one folder between them.
 - Names and tags are single path components, so nothing is written outside the runs folder.
-- Every file is written whole or not at all: into a temporary file in the same folder, then
-  ``os.replace`` (a kill leaves the old file or the new one, never half of one).
+- Every file is written whole or not at all (``box_toss_env.files``): into a temporary file in the
+  same folder, then ``os.replace`` (a kill leaves the old file or the new one, never half of one).
 - Logs (``logs/progress.csv``, ``evaluations.csv``) are appended a flushed line at a time; on resume
   the rows after the checkpoint are dropped explicitly (``truncate_csv``), so the log continues
   exactly where the checkpoint was, without a duplicate. A line cut by a kill is dropped with them.
@@ -12,18 +12,18 @@
 
 from __future__ import annotations
 
-import contextlib
 import csv
 import fcntl
 import io
 import os
-import tempfile
+import shutil
 import time
-from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Any, BinaryIO
+from typing import Any
 
 from stable_baselines3.common.logger import KVWriter
+
+from box_toss_env.files import atomic_path, write_atomic  # noqa: F401  (write_atomic: re-exported)
 
 
 class RunFolderError(ValueError):
@@ -64,15 +64,6 @@ def claim_folder(runs: Path, base: str) -> Path:
     raise RunFolderError(f"{runs} has 10,000 folders named {base}-N; choose a --name")
 
 
-def _umask() -> int:
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
-
-
-FILE_MODE = 0o666 & ~_umask()  # what open() would have given the file (mkstemp makes it 0o600)
-
-
 LOCK = ".lock"
 _held: dict[Path, Any] = {}  # the locks this process holds, kept open for its lifetime
 
@@ -102,32 +93,18 @@ def timestamp() -> str:
     return time.strftime("%Y%m%d-%H%M%S")
 
 
-# -- atomic files --------------------------------------------------------------------------------
-@contextlib.contextmanager
-def atomic_path(path: str | Path, suffix: str = "") -> Iterator[Path]:
-    """A temporary path in ``path``'s folder to write to; it replaces ``path`` when the block ends
-    without an error (and is removed otherwise). ``suffix`` keeps an extension a writer insists on."""
-    path = Path(path)
-    handle, temp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=f".tmp{suffix}", dir=path.parent)
-    os.close(handle)
-    os.chmod(temp, FILE_MODE)
-    try:
-        yield Path(temp)
-        with open(temp, "rb+") as file:
-            os.fsync(file.fileno())
-        os.replace(temp, path)
-    finally:
-        with contextlib.suppress(FileNotFoundError):
+# -- atomic files (``box_toss_env.files``) -----------------------------------------------------
+def copy_atomic(source: str | Path, destination: str | Path) -> None:
+    """``destination`` replaced whole by the current content of ``source``: a hard link to it where the
+    file system allows (no bytes copied; ``source`` is itself only ever replaced, never written in place,
+    so the link keeps today's content), a copy otherwise."""
+    destination = Path(destination)
+    with atomic_path(destination) as temp:
+        try:
             os.unlink(temp)
-
-
-def write_atomic(path: str | Path, data: str | bytes | Callable[[BinaryIO], Any]) -> None:
-    """``path`` replaced whole by ``data`` (text, bytes, or a function writing to a binary file)."""
-    with atomic_path(path) as temp, open(temp, "wb") as file:
-        if callable(data):
-            data(file)
-        else:
-            file.write(data.encode() if isinstance(data, str) else data)
+            os.link(source, temp)
+        except OSError:
+            shutil.copyfile(source, temp)
 
 
 def append_line(path: str | Path, line: str) -> None:

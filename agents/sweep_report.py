@@ -28,6 +28,7 @@ from agents import search_space
 from agents.evaluation import search_objective
 from agents.search_space import Dimension
 from agents.training import read_timing
+from box_toss_env.files import atomic_path, write_atomic
 
 TRIAL_COLUMNS = ("trial", "status", "timesteps", "validation_success", "best_validation_success", "mean_distance",
                  "objective", "test_success", "train_seconds", "overrides", "run")
@@ -127,14 +128,14 @@ def write_experiment_tables(experiment: Path, n_timesteps: int, space: dict[str,
                             sweep_name: str) -> list[dict[str, Any]]:
     """``trials.csv``, ``trials.md`` and (when a trial finished) ``best.yml`` of one experiment."""
     rows = experiment_rows(experiment, n_timesteps, space)
-    with open(experiment / "trials.csv", "w", newline="") as file:
+    with atomic_path(experiment / "trials.csv") as temp, open(temp, "w", newline="") as file:
         writer = csv.DictWriter(file, fieldnames=TRIAL_COLUMNS, extrasaction="ignore")
         writer.writeheader()
         writer.writerows(rows)
-    (experiment / "trials.md").write_text(trials_markdown(rows) + "\n")
+    write_atomic(experiment / "trials.md", trials_markdown(rows) + "\n")
     best = best_trial(rows)
     if best is not None:
-        (experiment / "best.yml").write_text(best_entry(best, sweep_name))
+        write_atomic(experiment / "best.yml", best_entry(best, sweep_name))
     return rows
 
 

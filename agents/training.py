@@ -18,6 +18,7 @@ explicitly, the rows of progress.csv and evaluations.csv written after it, so no
 from __future__ import annotations
 
 import json
+import os
 import re
 import shutil
 import time
@@ -45,6 +46,7 @@ from agents.run_folder import (
     atomic_path,
     check_component,
     claim_folder,
+    copy_atomic,
     csv_line,
     lock_run,
     read_csv,
@@ -110,12 +112,26 @@ class ClockCallback(BaseCallback):
         return True
 
 
+BEST_FILES = ("best_model.zip", "best_vecnormalize.pkl")
+
+
+def best_snapshot(run_dir: Path, algo: str, steps: int, name: str) -> Path:
+    """Where the checkpoint at ``steps`` keeps the run's ``name`` (one of ``BEST_FILES``) as it was then:
+    ``checkpoints/<algo>_best_model_<steps>_steps.zip``, ``..._best_vecnormalize_<steps>_steps.pkl``."""
+    stem, suffix = name.rsplit(".", 1)
+    return run_dir / "checkpoints" / f"{algo}_{stem}_{steps}_steps.{suffix}"
+
+
 def save_checkpoint(model, run_dir: Path, algo: str, *, replay_buffer: bool) -> Path:
-    """``checkpoints/<algo>_<steps>_steps.zip`` with its VecNormalize statistics and replay buffer,
-    each file written atomically, the model last: a checkpoint whose model exists is complete."""
+    """``checkpoints/<algo>_<steps>_steps.zip`` with its VecNormalize statistics, replay buffer and the
+    run's best model as it is at this checkpoint (``best_snapshot``: a hard link where possible), each
+    file written atomically, the model last: a checkpoint whose model exists is complete."""
     folder = run_dir / "checkpoints"
     folder.mkdir(exist_ok=True)
     steps = model.num_timesteps
+    for name in BEST_FILES:
+        if (run_dir / name).exists():
+            copy_atomic(run_dir / name, best_snapshot(run_dir, algo, steps, name))
     if replay_buffer and getattr(model, "replay_buffer", None) is not None:
         with atomic_path(folder / f"{algo}_replay_buffer_{steps}_steps.pkl", ".pkl") as temp:
             model.save_replay_buffer(temp)
@@ -188,7 +204,7 @@ class ValidationCallback(BaseCallback):
     def _on_training_start(self) -> None:
         self.last = self.num_timesteps
         _, rows = read_csv(self.path)
-        if rows:  # resuming: keep the history, and its best
+        if rows and (self.run_dir / "best_model.zip").exists():  # resuming: keep the history, and its best
             self.best = max(float(row["success_rate"]) for row in rows)
         elif not self.path.exists():
             write_atomic(self.path, csv_line(list(EVAL_COLUMNS)))
@@ -223,6 +239,33 @@ class ValidationCallback(BaseCallback):
         self.clock.write(self.num_timesteps)
         if self.on_validation is not None:
             self.on_validation(row)
+
+
+def restore_best(run_dir: Path, algo: str, steps: int) -> str:
+    """On a resume from the checkpoint at ``steps``: ``best_model.zip`` and ``best_vecnormalize.pkl``
+    put back as they were at that checkpoint (its ``best_snapshot``), so the best model is one of the
+    validation rows kept, never one of the rows the resume dropped. A checkpoint written before these
+    snapshots existed has none: a best model trained beyond ``steps`` is then removed (the next
+    validation saves one). Returns what was done, for the resume's message ("" if nothing)."""
+    snapshots = {name: best_snapshot(run_dir, algo, steps, name) for name in BEST_FILES}
+    if snapshots["best_model.zip"].exists():
+        changed = False
+        for name, snapshot in snapshots.items():
+            current = run_dir / name
+            if snapshot.exists() and not (current.exists() and os.path.samefile(snapshot, current)):
+                copy_atomic(snapshot, current)
+                changed = True
+            elif not snapshot.exists() and current.exists():
+                current.unlink()
+                changed = True
+        return f"; best_model.zip put back as it was at {steps} steps" if changed else ""
+    trained = model_timesteps(run_dir / "best_model.zip") if (run_dir / "best_model.zip").exists() else None
+    if trained is not None and trained <= steps:
+        return ""
+    removed = [name for name in BEST_FILES if (run_dir / name).exists()]
+    for name in removed:
+        (run_dir / name).unlink()
+    return f"; removed {' and '.join(removed)} (saved after {steps} steps)" if removed else ""
 
 
 def model_timesteps(path: Path) -> int | None:
@@ -356,6 +399,7 @@ def train(run_dir: Path, config: dict[str, Any], env_id: str, seed: int, algo: s
         _, evaluations_dropped = truncate_csv(run_dir / "evaluations.csv", "timesteps", checkpoint[2])
         dropped = (f"; dropped the rows written after it: {progress_dropped} of logs/progress.csv, "
                    f"{evaluations_dropped} of evaluations.csv" if progress_dropped or evaluations_dropped else "")
+        dropped += restore_best(run_dir, algo, checkpoint[2])
         print(f"resuming {run_dir} from {checkpoint[0]} at {model.num_timesteps} steps{dropped}")
     else:
         model = cls(env=venv, seed=seed, device="cpu", verbose=0,

@@ -29,6 +29,7 @@ import box_toss_env  # noqa: F401  (registers the BoxToss envs)
 from agents import algorithms, search_space, sweep_report, tuning
 from agents import config as configuration
 from agents.report import write_readme
+from box_toss_env.files import write_atomic
 
 RUNS = Path("runs") / "tune"
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "tune.md"
@@ -141,7 +142,7 @@ def report(sweep_dir: Path, readme: bool) -> str:
     if readme:
         settings = configuration.load_yaml(sweep_dir / "sweep.yml")
         section = sweep_report.readme_section(sweep_dir, settings, table, variants)
-        DOCS.write_text(sweep_report.docs_page(sweep_dir, settings, table, variants))
+        write_atomic(DOCS, sweep_report.docs_page(sweep_dir, settings, table, variants))
         write_readme(section, "tune")
     return table
 

@@ -41,6 +41,7 @@ from agents.config import ConfigError
 from agents.evaluation import search_objective
 from agents.search_space import Dimension
 from agents.training import latest_checkpoint, train, write_run_files
+from box_toss_env.files import write_atomic
 
 OBJECTIVE = "objective"
 PRUNERS = ("asha", "median", "none")
@@ -117,7 +118,8 @@ def snapshot(run_dir: Path, algo: str, destination: Path) -> None:
     newest = latest_checkpoint(run_dir, algo)
     keep = {path.name for path in (newest[0], newest[1]) if path is not None} if newest else set()
     if newest:
-        keep.add(f"{algo}_replay_buffer_{newest[2]}_steps.pkl")
+        keep |= {f"{algo}_replay_buffer_{newest[2]}_steps.pkl", f"{algo}_best_model_{newest[2]}_steps.zip",
+                 f"{algo}_best_vecnormalize_{newest[2]}_steps.pkl"}
 
     def ignore(directory: str, names: list[str]) -> list[str]:
         return [name for name in names if Path(directory).name == "checkpoints" and name not in keep]
@@ -213,7 +215,7 @@ class WallClock(tune.Callback):
     def write(self) -> None:
         walls = self.read()
         walls[self.key] = self.previous + time.perf_counter() - self.start
-        self.path.write_text(json.dumps(walls, indent=2))
+        write_atomic(self.path, json.dumps(walls, indent=2))
 
     def on_trial_result(self, iteration, trials, trial, result, **info) -> None:
         self.write()

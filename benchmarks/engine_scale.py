@@ -50,6 +50,7 @@ from benchmarks.other_scenes import (
     available_scene_engines,
     simulate_scene,
 )
+from box_toss_env.files import save_figure
 from box_toss_env.physics import Box, Scene, Simulator, layout, make_settings, scenes, simulate
 
 OUR_DT: dict[str, float] = {"pile": 1 / 256, "wide pile": 1 / 256, "pyramid": 1 / 256}
@@ -359,7 +360,7 @@ def plot(rows: list[Row], path: Path = FIGURE) -> None:
     ax.legend(fontsize=8)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path, dpi=120)
     plt.close(fig)
 
 

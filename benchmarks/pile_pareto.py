@@ -22,6 +22,7 @@ import numpy as np
 
 from benchmarks import engine_scale
 from benchmarks.other_scenes import BOX2D3_DT, available_scene_engines, build_box2d3, build_pymunk
+from box_toss_env.files import save_figure
 from box_toss_env.physics import Scene, scenes
 
 OUR_DTS = (1 / 64, 1 / 128, 1 / 256, 1 / 512)  # [s]
@@ -111,7 +112,7 @@ def plot(rows, path: Path = FIGURE) -> None:
             ax.legend(fontsize=8)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
 
 

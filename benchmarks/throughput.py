@@ -30,6 +30,7 @@ from agents.doc_sections import replace_section
 from benchmarks.env_throughput import throws_per_second
 from benchmarks.other_engines import ENGINES, Toss, missing_engines, steps_for_duration
 from box_toss_env.envs.box_toss_vector import BoxTossVectorEnv
+from box_toss_env.files import write_atomic
 from box_toss_env.physics import Simulator, layout, make_settings, scenes
 
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "throughput.md"
@@ -178,7 +179,7 @@ def main() -> None:
     report = "\n".join(lines)
     print(report)
     DOCS.parent.mkdir(exist_ok=True)
-    DOCS.write_text("# Throughput\n\n" + report + "\n")
+    write_atomic(DOCS, "# Throughput\n\n" + report + "\n")
     if args.readme:
         replace_section("throughput", report)
 

@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks.other_scenes import PYMUNK_ITERATIONS, UnsupportedScene, available_scene_engines, simulate_scene
+from box_toss_env.files import write_atomic
 from box_toss_env.physics import NonFiniteStateError, Scene, face_down, scenes, simulate
 
 from . import document
@@ -530,7 +531,7 @@ def readme_block(report: CollisionReport) -> str:
 def write_report(report: CollisionReport, out: Path, readme: Path | None = None) -> Path:
     out.mkdir(parents=True, exist_ok=True)
     path = out / "collisions.md"
-    path.write_text(markdown(report))
+    write_atomic(path, markdown(report))
     if readme is not None:
         document.update_readme("collisions", readme_block(report), readme)
     return path

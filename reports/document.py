@@ -16,6 +16,9 @@ from pathlib import Path
 
 import matplotlib
 
+from box_toss_env import files
+from box_toss_env.files import write_atomic
+
 matplotlib.use("Agg")
 
 REPO = Path(__file__).resolve().parent.parent
@@ -81,7 +84,7 @@ def load() -> str:
 
 def save_figure(figure, path: Path) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
-    figure.savefig(path, dpi=110, bbox_inches="tight", metadata={"Software": None})
+    files.save_figure(figure, path, dpi=110, bbox_inches="tight", metadata={"Software": None})
     import matplotlib.pyplot as plt
 
     plt.close(figure)
@@ -104,7 +107,7 @@ def update_readme(name: str, body: str, readme: Path = README) -> None:
     blocks[name] = body.strip()
     names = [n for n in BLOCK_ORDER if n in blocks] + sorted(n for n in blocks if n not in BLOCK_ORDER)
     inner = "\n".join(f"<!-- reports:{n}:start -->\n{blocks[n]}\n<!-- reports:{n}:end -->" for n in names)
-    readme.write_text(f"{text[:start]}{SECTION_START}\n{SECTION_TITLE}\n\n{inner}\n{text[end:]}")
+    write_atomic(readme, f"{text[:start]}{SECTION_START}\n{SECTION_TITLE}\n\n{inner}\n{text[end:]}")
 
 
 def report_command(name: str, doc: str, run, write_report, argv=None) -> int:

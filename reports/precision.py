@@ -27,6 +27,7 @@ import numpy as np
 
 from benchmarks.other_engines import ENGINES, INSTALL_HINT, missing_engines
 from box_toss_env.envs import task
+from box_toss_env.files import write_atomic
 from box_toss_env.physics import Simulator, layout, make_settings
 
 from . import document
@@ -495,7 +496,7 @@ def write_report(report: PrecisionReport, out: Path, readme: Path | None = None)
     plot_orders(report, figures / names["order"])
     plot_faces(report, figures / names["faces"])
     path = out / "precision.md"
-    path.write_text(markdown(report, names))
+    write_atomic(path, markdown(report, names))
     if readme is not None:
         document.update_readme("precision", readme_block(report), readme)
     return path

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from box_toss_env.files import write_atomic
 from box_toss_env.physics import Box, NonFiniteStateError, Scene, Simulator, layout, make_settings, scenes, simulate
 
 from . import cases, document, fuzz
@@ -965,7 +966,7 @@ def write_report(report: StabilityReport, out: Path, readme: Path | None = None)
     figure = "stability_map.png"
     plot_map(report, out / "figures" / figure)
     path = out / "stability.md"
-    path.write_text(markdown(report, figure))
+    write_atomic(path, markdown(report, figure))
     if readme is not None:
         document.update_readme("stability", readme_block(report), readme)
     return path

@@ -81,7 +81,6 @@ class BoxTossVectorEnv(VectorEnv):
         n = self.num_envs
         bodies = n * self.config.bodies_per_env  # env i's bodies: consecutive rows, its thrown box first
         self._episodes = task.Episodes.empty(n, self.config.episode_size)
-        self._uniforms = np.zeros((n, self.config.episode_size))  # the variates each episode is drawn from
         self._params = np.zeros((bodies, layout.PARAM_SIZE))
         self._state = np.zeros((bodies, layout.STATE_SIZE))
         self._stats = np.zeros((bodies, layout.STATS_SIZE))
@@ -123,7 +122,8 @@ class BoxTossVectorEnv(VectorEnv):
 
     def _new_episodes(self) -> dict[str, np.ndarray]:
         """Draw every env's next episode (each from its own stream); the boxes are in the hand."""
-        episodes = task.episodes_from_uniforms(self._streams.fill_uniform(self._uniforms), self.config,
+        # the uniform variates each episode is drawn from, drawn in place (no second batch-sized array)
+        episodes = task.episodes_from_uniforms(self._streams.fill_uniform(self._episodes.data), self.config,
                                                self._episodes)
         if self._params_stale or self.config.draws_body_params:
             task.write_body_params(self._params, episodes, self.config)

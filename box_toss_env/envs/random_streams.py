@@ -20,7 +20,7 @@ import numpy as np
 from gymnasium.utils import seeding
 
 from box_toss_env.physics.background_compile import InterpretedStart
-from box_toss_env.physics.compilation import jit_kernel, jit_stage
+from box_toss_env.physics.compilation import ensure_compiled, jit_kernel, jit_stage
 
 MULTIPLIER_HI = np.uint64(2549297995355413924)  # PCG_DEFAULT_MULTIPLIER_128, high and low 64 bits
 MULTIPLIER_LO = np.uint64(4865540595714422341)
@@ -93,7 +93,9 @@ def check_seeds(seed, n: int) -> list[int | None] | np.ndarray | None:
             raise ValueError(f"{expected}, got {seed}")
         first = int(seed)
         if first + n <= 2**64:
-            return np.arange(n, dtype=np.uint64) + np.uint64(first)
+            seeds = np.arange(n, dtype=np.uint64)
+            seeds += np.uint64(first)
+            return seeds
         return [first + i for i in range(n)]
     if isinstance(seed, np.ndarray):
         if seed.ndim != 1:
@@ -184,37 +186,124 @@ def pcg64_states(words: np.ndarray) -> np.ndarray:
     return np.stack([hi, lo, inc_hi, inc_lo], axis=1)
 
 
-def fresh_states(n: int) -> np.ndarray:
-    """PCG64 states (n, 4) from fresh entropy, 128 bits each, as ``SeedSequence(None)`` draws it."""
-    return pcg64_states(seed_sequence_words(np.frombuffer(os.urandom(16 * n), dtype=np.uint32).reshape(n, 4)))
+SEED_SEQUENCE_WORDS = 4  # entropy words a row holds: a seed's 2 (low, high), fresh entropy's 4
 
 
-def seeded_states(seeds) -> np.ndarray:
+def seed_sequence_constants() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The (xor, multiplier) pairs of SeedSequence's hashes, in the order numpy applies them: 16 for
+    mixing the pool (4 to take the entropy in, 12 to mix every word into every other), 8 to draw the 8
+    32-bit output words. They do not depend on the data (numpy's ``_seed_sequence`` constants)."""
+    def chain(init: int, mult: int, count: int) -> tuple[np.ndarray, np.ndarray]:
+        xors, mults, constant = [], [], init
+        for _ in range(count):
+            xors.append(constant)
+            constant = (constant * mult) & MASK_32
+            mults.append(constant)
+        return np.array(xors, dtype=np.uint64), np.array(mults, dtype=np.uint64)
+
+    return (*chain(INIT_A, MULT_A, POOL_SIZE * POOL_SIZE), *chain(INIT_B, MULT_B, 2 * 4))
+
+
+POOL_XOR, POOL_MULT, OUTPUT_XOR, OUTPUT_MULT = seed_sequence_constants()
+MASK_32_U64 = np.uint64(MASK_32)
+SHIFT_32 = np.uint64(32)
+XSHIFT_U64 = np.uint64(XSHIFT)
+
+
+@jit_kernel
+def seed_states_kernel(entropy, states):
+    """``states`` (n, 4) <- for each row of ``entropy`` (n, m <= 4) uint32 (a seed's 32-bit words, least
+    significant first, zeros above its highest), the PCG64 state numpy seeds from
+    ``SeedSequence(words)``: ``seed_sequence_words`` then ``pcg64_states``, one row at a time in one
+    compiled pass (no temporary arrays). A seed's leading zero words may be kept: with at most 4
+    words SeedSequence hashes a missing word as a 0."""
+    pool = np.zeros(POOL_SIZE, dtype=np.uint64)
+    words = np.zeros(2 * 4, dtype=np.uint64)
+    for i in range(entropy.shape[0]):
+        for j in range(POOL_SIZE):
+            value = np.uint64(entropy[i, j]) if j < entropy.shape[1] else np.uint64(0)
+            value = ((value ^ POOL_XOR[j]) * POOL_MULT[j]) & MASK_32_U64
+            pool[j] = value ^ (value >> XSHIFT_U64)
+        h = POOL_SIZE
+        for source in range(POOL_SIZE):
+            for destination in range(POOL_SIZE):
+                if source != destination:
+                    hashed = ((pool[source] ^ POOL_XOR[h]) * POOL_MULT[h]) & MASK_32_U64
+                    hashed ^= hashed >> XSHIFT_U64
+                    h += 1
+                    mixed = (np.uint64(MIX_MULT_L) * pool[destination] - np.uint64(MIX_MULT_R) * hashed) & MASK_32_U64
+                    pool[destination] = mixed ^ (mixed >> XSHIFT_U64)
+        for j in range(2 * 4):
+            value = ((pool[j % POOL_SIZE] ^ OUTPUT_XOR[j]) * OUTPUT_MULT[j]) & MASK_32_U64
+            words[j] = value ^ (value >> XSHIFT_U64)
+        # PCG64's srandom: s = 0, inc = 2 seq + 1, step, s += initstate, step (as ``pcg64_states``)
+        init_hi, init_lo = words[0] | (words[1] << SHIFT_32), words[2] | (words[3] << SHIFT_32)
+        seq_hi, seq_lo = words[4] | (words[5] << SHIFT_32), words[6] | (words[7] << SHIFT_32)
+        inc_hi = (seq_hi << np.uint64(1)) | (seq_lo >> np.uint64(63))
+        inc_lo = (seq_lo << np.uint64(1)) | np.uint64(1)
+        hi, lo = inc_hi, inc_lo  # 0 * M + inc
+        lo_sum = lo + init_lo
+        hi = hi + init_hi + (np.uint64(1) if lo_sum < lo else np.uint64(0))
+        high, low = multiply_64x64(lo_sum, MULTIPLIER_LO)
+        high = high + hi * MULTIPLIER_LO + lo_sum * MULTIPLIER_HI
+        lo = low + inc_lo
+        states[i, STATE_HI] = high + inc_hi + (np.uint64(1) if lo < low else np.uint64(0))
+        states[i, STATE_LO] = lo
+        states[i, INC_HI] = inc_hi
+        states[i, INC_LO] = inc_lo
+
+
+COMPILED_SEEDING_MIN = 4096
+"""Batches of at least this many seeds are seeded by ``seed_states_kernel`` (compiled, or loaded from
+numba's cache, at its first use); smaller ones by the numpy code, which needs no compilation and takes
+a few milliseconds at most. Both give numpy's states bit for bit."""
+
+
+def states_from_entropy(entropy: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """PCG64 states (n, 4) seeded from ``entropy`` (n, m <= 4) uint32, each row as ``SeedSequence`` of
+    its words (least significant first; leading zero words make no difference); written into ``out``
+    (a C-contiguous (n, 4) uint64 array) if given."""
+    entropy = np.ascontiguousarray(entropy, dtype=np.uint32)
+    if len(entropy) < COMPILED_SEEDING_MIN:
+        states = pcg64_states(seed_sequence_words(entropy))
+        if out is None:
+            return states
+        out[...] = states
+        return out
+    states = np.empty((len(entropy), 4), dtype=np.uint64) if out is None else out
+    ensure_compiled(seed_states_kernel, (entropy, states))
+    seed_states_kernel(entropy, states)
+    return states
+
+
+def seed_words(seeds: np.ndarray) -> np.ndarray:
+    """(n, 2) uint32: the low and high 32-bit words of each uint64 seed (a view where possible)."""
+    return np.ascontiguousarray(seeds, dtype="<u8").view("<u4").reshape(len(seeds), 2)
+
+
+def fresh_states(n: int, out: np.ndarray | None = None) -> np.ndarray:
+    """PCG64 states (n, 4) from fresh entropy, 128 bits each, as ``SeedSequence(None)`` draws it
+    (written into ``out`` if given)."""
+    return states_from_entropy(np.frombuffer(os.urandom(16 * n), dtype=np.uint32).reshape(n, 4), out)
+
+
+def seeded_states(seeds, out: np.ndarray | None = None) -> np.ndarray:
     """PCG64 states (n, 4) of ``seeding.np_random(seed)`` for each seed (a uint64 array, or a list of
     ints >= 0 and Nones for fresh entropy), computed for all seeds at once, bit for bit numpy's; seeds
-    of 2^64 and more go through numpy one by one."""
+    of 2^64 and more go through numpy one by one. A uint64 array's states are written into ``out`` if
+    given (a C-contiguous (n, 4) uint64 array)."""
     if isinstance(seeds, np.ndarray):
-        index, entropy = np.arange(len(seeds)), seeds.astype(np.uint64)
-        states = np.zeros((len(seeds), 4), dtype=np.uint64)
-    else:
-        states = np.zeros((len(seeds), 4), dtype=np.uint64)
-        fresh = [i for i, seed in enumerate(seeds) if seed is None]
-        if fresh:
-            states[fresh] = fresh_states(len(fresh))
-        index = np.array([i for i, seed in enumerate(seeds) if seed is not None and seed < 2**64], dtype=np.int64)
-        entropy = np.array([seeds[i] for i in index], dtype=np.uint64)
-        for i, seed in enumerate(seeds):
-            if seed is not None and seed >= 2**64:
-                states[i] = numpy_state(seed)
-    low = (entropy & np.uint64(MASK_32)).astype(np.uint32)
-    high = (entropy >> np.uint64(32)).astype(np.uint32)
-    one_word = high == 0  # numpy's SeedSequence takes a seed's 32-bit words without the leading zeros
-    if one_word.all():
-        states[index] = pcg64_states(seed_sequence_words(low[:, None]))
-        return states
-    for mask, words in ((one_word, low[:, None]), (~one_word, np.stack([low, high], axis=1))):
-        if mask.any():
-            states[index[mask]] = pcg64_states(seed_sequence_words(words[mask]))
+        return states_from_entropy(seed_words(seeds), out)
+    states = np.zeros((len(seeds), 4), dtype=np.uint64)
+    fresh = [i for i, seed in enumerate(seeds) if seed is None]
+    if fresh:
+        states[fresh] = fresh_states(len(fresh))
+    index = np.array([i for i, seed in enumerate(seeds) if seed is not None and seed < 2**64], dtype=np.int64)
+    if len(index):
+        states[index] = states_from_entropy(seed_words(np.array([seeds[i] for i in index], dtype=np.uint64)))
+    for i, seed in enumerate(seeds):
+        if seed is not None and seed >= 2**64:
+            states[i] = numpy_state(seed)
     return states
 
 
@@ -242,11 +331,14 @@ class RandomStreams:
         """Start every stream where ``seeding.np_random`` starts with its seed (``check_seeds``'s
         result: None re-seeds with fresh entropy only the streams never seeded), all at once."""
         if seeds is None:
-            unseeded = np.flatnonzero(~self.seeded)
-            if len(unseeded):
-                self.states[unseeded] = fresh_states(len(unseeded))
+            if not self.seeded.any():  # the first reset: every stream, written in place
+                fresh_states(len(self.states), self.states)
+            else:
+                unseeded = np.flatnonzero(~self.seeded)
+                if len(unseeded):
+                    self.states[unseeded] = fresh_states(len(unseeded))
         elif isinstance(seeds, np.ndarray):
-            self.states[:] = seeded_states(seeds)
+            seeded_states(seeds, self.states)
         else:
             keep = np.array([seed is None and self.seeded[i] for i, seed in enumerate(seeds)], dtype=bool)
             new = seeded_states(seeds)

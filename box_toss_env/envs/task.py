@@ -353,11 +353,13 @@ def episodes_from_uniforms(u: np.ndarray, config: TaskConfig, out: Episodes) -> 
     """The episodes (written into ``out`` and returned) that the uniform variates ``u`` (n,
     episode_size) in [0, 1) stand for: each value is uniform over its range (release x, height and
     angle, target x, mass, friction, restitution; with a base box its length and height); the
-    target faces follow ``config.target_face`` (see ``TARGET_FACE_KINDS``)."""
+    target faces follow ``config.target_face`` (see ``TARGET_FACE_KINDS``). ``u`` may be ``out.data``
+    itself (the episodes are then drawn in place)."""
     low, span = config.episode_low_span
+    faces = target_face_sets(config.target_face, u[:, U_TARGET_KIND], u[:, U_TARGET_FACE])  # before u changes
     np.multiply(u, span, out=out.data)
     out.data += low
-    out.data[:, EP_TARGET_FACES] = target_face_sets(config.target_face, u[:, U_TARGET_KIND], u[:, U_TARGET_FACE])
+    out.data[:, EP_TARGET_FACES] = faces
     return out
 
 

@@ -1,4 +1,5 @@
-"""Write lists of (H, W, 3) uint8 frames to GIF (Pillow) or MP4 (imageio with imageio-ffmpeg)."""
+"""Write lists of (H, W, 3) uint8 frames to GIF (Pillow) or MP4 (imageio with imageio-ffmpeg), each file
+written whole or not at all (``box_toss_env.files.atomic_path``)."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ from pathlib import Path
 import numpy as np
 from gymnasium.error import DependencyNotInstalled
 
+from box_toss_env.files import atomic_path
 from box_toss_env.rendering.dependency import RENDER_INSTALL_HINT
 
 GIF_MIN_DELAY_CS = 2
@@ -37,14 +39,15 @@ def write_gif(frames: Iterable[np.ndarray], path: str | Path, fps: float) -> Pat
         )
     path = Path(path)
     images = [image_module.fromarray(frame) for frame in frames]
-    images[0].save(
-        path,
-        format="GIF",
-        save_all=True,
-        append_images=images[1:],
-        duration=[int(delay) * 10 for delay in delays_cs],  # [ms]
-        loop=0,
-    )
+    with atomic_path(path) as temp:  # written whole or not at all
+        images[0].save(
+            temp,
+            format="GIF",
+            save_all=True,
+            append_images=images[1:],
+            duration=[int(delay) * 10 for delay in delays_cs],  # [ms]
+            loop=0,
+        )
     return path
 
 
@@ -64,11 +67,15 @@ def write_video(frames: Iterable[np.ndarray], path: str | Path, fps: float) -> P
     imageio = _import_ffmpeg_writer(path)
     height, width = frames[0].shape[:2]
     padding = ((0, height % 2), (0, width % 2), (0, 0))
-    with imageio.get_writer(
-        path, format="FFMPEG", mode="I", fps=fps, codec="libx264", pixelformat="yuv420p", macro_block_size=1
-    ) as writer:
-        for frame in frames:
-            writer.append_data(np.pad(frame, padding, mode="edge"))
+    with atomic_path(path) as temp:  # written whole or not at all
+        writer = imageio.get_writer(
+            temp, format="FFMPEG", mode="I", fps=fps, codec="libx264", pixelformat="yuv420p", macro_block_size=1
+        )
+        try:
+            for frame in frames:
+                writer.append_data(np.pad(frame, padding, mode="edge"))
+        finally:  # imageio's writer closes only on success: ffmpeg would go on writing after an error
+            writer.close()
     return path
 
 

@@ -9,6 +9,7 @@ import sys
 import numpy as np
 from gymnasium.error import DependencyNotInstalled
 
+from box_toss_env.files import atomic_path
 from box_toss_env.physics.scene import SOLVERS
 from box_toss_env.physics.scenes import SCENES
 from box_toss_env.viewer.controller import STEPS_PER_FRAME, ViewerController
@@ -136,7 +137,9 @@ def run_viewer(parser: argparse.ArgumentParser, args) -> int:
         return 0
     paths, states = window.write_frames(args.frames, args.out, skip=args.skip)
     if args.states:
-        np.save(args.states, states)
+        destination = args.states if args.states.endswith(".npy") else args.states + ".npy"  # as np.save names it
+        with atomic_path(destination) as temp:
+            np.save(temp, states)
     print(f"wrote {len(paths)} frame(s): {paths[0]}" + (f" ... {paths[-1]}" if len(paths) > 1 else ""))
     return 0
 

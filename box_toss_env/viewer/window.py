@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from box_toss_env.files import atomic_path
 from box_toss_env.physics import Simulator, layout
 from box_toss_env.rendering import SceneRenderer, import_pygame
 from box_toss_env.viewer.controller import PARAMETER_BY_NAME, ROW_LABELS, ROWS, ZOOM_STEP, ViewerController
@@ -138,7 +139,8 @@ class Canvas:
         return rect
 
     def save(self, path: Path) -> None:
-        self.pygame.image.save(self.surface, str(path))
+        with atomic_path(path) as temp:  # the format follows the suffix, which the temporary name keeps
+            self.pygame.image.save(self.surface, str(temp))
 
     def present(self) -> None:
         if not self.headless:
@@ -641,7 +643,9 @@ class PlayWindow:
             shots = [shots[k] for k in np.unique(np.rint(np.linspace(0, len(shots) - 1, n_frames)).astype(int))]
         paths = output_paths(out, len(shots))
         for shot, path in zip(shots, paths, strict=True):
-            self.pygame.image.save(shot(), str(path))
+            surface = shot()
+            with atomic_path(path) as temp:
+                self.pygame.image.save(surface, str(temp))
         return paths
 
     def _drawn(self, playback_index: int | None) -> Any:

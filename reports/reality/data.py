@@ -34,6 +34,8 @@ from pathlib import Path
 
 import numpy as np
 
+from box_toss_env.files import write_atomic
+
 FPS = 250.0  # [Hz]
 FRAME = 1.0 / FPS  # [s]
 FRAMES = 200
@@ -222,4 +224,4 @@ def load(folder: Path) -> tuple[list[Drop], Cleaning]:
 def write_csv(path: Path, table: np.ndarray) -> None:
     """One drop in the files' format (header ``x,z,th,vx,vz,vth``, 17 significant digits)."""
     lines = [",".join(COLUMNS)] + [",".join(repr(float(v)) for v in row) for row in table]
-    Path(path).write_text("\n".join(lines) + "\n")
+    write_atomic(path, "\n".join(lines) + "\n")

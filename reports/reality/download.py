@@ -18,6 +18,8 @@ import urllib.error
 import urllib.request
 from pathlib import Path
 
+from box_toss_env.files import write_atomic
+
 REPOSITORY = "DAIRLab/ImpactModeling"
 COMMIT = "f6c28898845da6d48efdd6c1c696db2fb3716edf"
 FOLDER = "Wang/Wang-Mason%20Square/dice-data-processed"
@@ -64,13 +66,13 @@ def download(out: Path, timeout: float = 30.0) -> dict[str, str]:
             print(f"{name}: {error}", file=sys.stderr)
             continue
         if hashlib.sha256(body).hexdigest() == expected[name]:
-            (out / name).write_bytes(body)
+            write_atomic(out / name, body)
         else:
             print(f"{name}: checksum differs from {MANIFEST.name}, not saved", file=sys.stderr)
     if not (out / "LICENSE").exists():
         try:
             with urllib.request.urlopen(f"{RAW}/LICENSE", timeout=timeout) as response:
-                (out / "LICENSE").write_bytes(response.read())
+                write_atomic(out / "LICENSE", response.read())
         except (urllib.error.URLError, TimeoutError) as error:
             print(f"LICENSE: {error}", file=sys.stderr)
     return verify(out, expected)

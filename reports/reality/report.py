@@ -16,6 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
+from box_toss_env.files import write_atomic
+
 from .. import document
 from ..document import DOCS, QUICK_OUT, REPO, table
 from . import data, error
@@ -409,7 +411,7 @@ def write_report(report: Report, out: Path, quick: bool = False) -> Path:
     plot_time(report, out / "figures" / figures["time"])
     plot_work(report, out / "figures" / figures["work"])
     path = out / "reality.md"
-    path.write_text(markdown(report, figures, quick))
+    write_atomic(path, markdown(report, figures, quick))
     return path
 
 

@@ -2,9 +2,11 @@
 exactly at their checkpoint (or refuse, naming why), kills at any point (``kill -9``)."""
 
 import csv
+import hashlib
 import json
 import os
 import random
+import shutil
 import signal
 import subprocess
 import sys
@@ -26,7 +28,7 @@ from agents.run_folder import (
     unlock_run,
     write_atomic,
 )
-from agents.training import latest_checkpoint, new_run_dir
+from agents.training import latest_checkpoint, model_timesteps, new_run_dir, restore_best
 
 REPO = Path(__file__).resolve().parents[2]
 # a rollout (n_envs x n_steps), a checkpoint and a validation every 64 throws: rows at 0, 64, 128, ...
@@ -217,26 +219,125 @@ def test_two_runs_started_together_without_a_name_get_two_folders(tmp_path):
     assert len(folders) == 2 and all((tmp_path / folder / "model.zip").exists() for folder in folders)
 
 
-def test_a_kill_during_a_checkpoint_write_leaves_the_previous_checkpoint(tmp_path, monkeypatch):
-    """The model of a checkpoint is written last, to a temporary name: cut short in the middle (as a
-    kill would), the newest complete checkpoint is still the one a resume starts from."""
-    import gymnasium as gym
-    from stable_baselines3 import PPO
+# a training whose checkpoint write at KILL_STEPS steps stops (and waits for its kill -9) at KILL_POINT:
+# "half" with half of the model's zip in its temporary file, "rename" with the whole model written to its
+# temporary file but not yet renamed; the marker file says the training got there
+PAUSING_TRAIN = r"""
+import os, sys, time
+from pathlib import Path
 
-    from agents.training import save_checkpoint
+import stable_baselines3.common.base_class as base_class
 
-    model = PPO("MlpPolicy", gym.make("BoxToss-v0"), n_steps=8, batch_size=8, device="cpu")
-    save_checkpoint(model, tmp_path, "ppo", replay_buffer=False)
-    model.num_timesteps = 64
-    real_save = model.save
+from agents import run_folder, train
 
-    def killed_while_saving(path, *args, **kwargs):
-        real_save(path, *args, **kwargs)
-        Path(path).write_bytes(Path(path).read_bytes()[:100])  # half written
-        raise KeyboardInterrupt
+point, steps, marker = os.environ["KILL_POINT"], os.environ["KILL_STEPS"], Path(os.environ["KILL_MARKER"])
+model_name = f"ppo_{steps}_steps.zip"
 
-    monkeypatch.setattr(model, "save", killed_while_saving)
-    with pytest.raises(KeyboardInterrupt):
-        save_checkpoint(model, tmp_path, "ppo", replay_buffer=False)
-    assert latest_checkpoint(tmp_path, "ppo")[2] == 0
-    assert sorted(path.name for path in (tmp_path / "checkpoints").glob("*.zip")) == ["ppo_0_steps.zip"]
+
+def pause(what):
+    marker.write_text(what)
+    while True:
+        time.sleep(1)
+
+
+real_save, real_replace = base_class.save_to_zip_file, run_folder.os.replace
+
+
+def save_to_zip_file(path, *args, **kwargs):
+    real_save(path, *args, **kwargs)
+    if point == "half" and Path(path).name.startswith(f".{model_name}."):
+        Path(path).write_bytes(Path(path).read_bytes()[: Path(path).stat().st_size // 2])
+        pause(str(path))
+
+
+def replace(source, destination):
+    if point == "rename" and Path(destination).name == model_name:
+        pause(str(source))
+    real_replace(source, destination)
+
+
+base_class.save_to_zip_file, run_folder.os.replace = save_to_zip_file, replace
+train.main(sys.argv[1:])
+"""
+
+
+def file_digests(folder: Path) -> dict[str, str]:
+    return {path.name: hashlib.sha256(path.read_bytes()).hexdigest() for path in sorted(folder.iterdir())}
+
+
+def train_until_killed(args: list[str], point: str, steps: int, marker: Path) -> str:
+    """Run agents.train with ``args``; kill -9 it once its checkpoint at ``steps`` is paused at ``point``.
+    Returns what it printed."""
+    env = {**os.environ, "KILL_POINT": point, "KILL_STEPS": str(steps), "KILL_MARKER": str(marker)}
+    marker.unlink(missing_ok=True)
+    process = subprocess.Popen([sys.executable, "-c", PAUSING_TRAIN, *args], cwd=REPO, env=env,
+                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    deadline = time.monotonic() + 240
+    while not marker.exists():
+        assert process.poll() is None, process.stdout.read()
+        assert time.monotonic() < deadline, "the training never reached the checkpoint write"
+        time.sleep(0.05)
+    process.send_signal(signal.SIGKILL)
+    process.wait()
+    return process.stdout.read()
+
+
+def best_model_row(run_dir: Path) -> tuple[int, int]:
+    """(steps of best_model.zip, steps of the first row of evaluations.csv with the best success rate)."""
+    rows = read_csv(run_dir / "evaluations.csv")[1]
+    best = max(float(row["success_rate"]) for row in rows)
+    first = next(int(row["timesteps"]) for row in rows if float(row["success_rate"]) == best)
+    return model_timesteps(run_dir / "best_model.zip"), first
+
+
+def test_a_kill_9_inside_a_checkpoint_write_leaves_the_previous_checkpoint_and_loses_nothing(tmp_path):
+    """kill -9 lands inside a checkpoint's write, where a test hook holds the training: once with half of
+    the model's zip written to its temporary file, once with all of it written but not yet renamed. Each
+    time the previous checkpoint is the newest complete one, byte for byte as it was, and the resume starts
+    from it; in the end every rollout and validation has exactly one row, and no temporary file is left."""
+    steps = 192  # checkpoints at 64 and 128, and at the end
+    run_dir, checkpoints, marker = tmp_path / "killed", tmp_path / "killed" / "checkpoints", tmp_path / "paused"
+    train_until_killed(train_tiny(tmp_path, "killed", steps)[1:], "half", 128, marker)
+    half = Path(marker.read_text())
+    assert half.parent == checkpoints and half.exists() and latest_checkpoint(run_dir, "ppo")[2] == 64
+    assert not (checkpoints / "ppo_128_steps.zip").exists()
+    before = {name: digest for name, digest in file_digests(checkpoints).items() if "_64_" in name}
+    assert {"ppo_64_steps.zip", "ppo_vecnormalize_64_steps.pkl"} <= set(before)
+
+    printed = train_until_killed(["--resume", str(run_dir), "--no-progress", "--no-eval"], "rename", 192, marker)
+    assert "at 64 steps" in printed, printed
+    whole = Path(marker.read_text())
+    assert whole.exists() and model_timesteps(whole) == 192 and latest_checkpoint(run_dir, "ppo")[2] == 128
+    assert {name: digest for name, digest in file_digests(checkpoints).items() if "_64_" in name} == before
+
+    done = run("agents.train", "--resume", str(run_dir), "--no-progress", "--no-eval")
+    assert "at 128 steps" in done.stdout, done.stdout
+    assert steps_column(run_dir / "logs" / "progress.csv", "time/total_timesteps") == list(range(64, steps + 1, 64))
+    assert steps_column(run_dir / "evaluations.csv", "timesteps") == list(range(0, steps + 1, 64))
+    assert not list(run_dir.glob("**/.*.tmp*"))
+    assert model_timesteps(checkpoints / "ppo_64_steps.zip") == 64
+    assert best_model_row(run_dir)[0] == best_model_row(run_dir)[1]
+
+
+def test_a_resume_puts_back_the_best_model_of_its_checkpoint(tiny_run, tmp_path):
+    """A validation after the newest checkpoint may have saved best_model.zip before a kill; the resume
+    drops that validation's row, so it puts back the best model as it was at the checkpoint: the best model
+    is always the first row of evaluations.csv with the best success rate."""
+    run_dir = tmp_path / "run"
+    subprocess.run(["cp", "-r", str(tiny_run), str(run_dir)], check=True)
+    for path in run_dir.glob("checkpoints/*_128_steps.*"):
+        path.unlink()  # killed before the checkpoint at 128: the newest is at 64
+    snapshot = run_dir / "checkpoints" / "ppo_best_model_64_steps.zip"
+    assert snapshot.exists() and model_timesteps(snapshot) <= 64
+    (run_dir / "best_model.zip").unlink()
+    shutil.copyfile(run_dir / "model.zip", run_dir / "best_model.zip")  # as if the validation at 128 were best
+    (run_dir / "model.zip").unlink()
+    assert model_timesteps(run_dir / "best_model.zip") == 128
+    done = run("agents.train", "--resume", str(run_dir), "--no-progress", "--no-eval")
+    assert "best_model.zip put back as it was at 64 steps" in done.stdout, done.stdout
+    assert best_model_row(run_dir)[0] == best_model_row(run_dir)[1] <= 64
+    # a checkpoint from before these snapshots: a best model saved after it is removed, not kept
+    shutil.copyfile(run_dir / "model.zip", run_dir / "best_model.zip")  # 128 steps; no snapshot at 96
+    assert restore_best(run_dir, "ppo", 96) == ("; removed best_model.zip and best_vecnormalize.pkl "
+                                                "(saved after 96 steps)")
+    assert not (run_dir / "best_model.zip").exists() and not (run_dir / "best_vecnormalize.pkl").exists()
