@@ -16,23 +16,10 @@ import gymnasium as gym
 import numpy as np
 
 from box_toss_env.envs import task
-from box_toss_env.envs.functional import BoxTossFunctional
+from box_toss_env.envs.functional import BoxTossFunctional, episodes_from_reset_infos
 
-
-def episodes_from_infos(reset_infos: list[dict[str, Any]]) -> task.Episodes:
-    """The episodes (release pose, target, dynamics, and the base box's size where there is one) that
-    ``reset`` drew, rebuilt from its infos."""
-    base_box = bool(reset_infos) and "base_length" in reset_infos[0]
-    episodes = task.Episodes.empty(len(reset_infos), task.EPISODE_SIZE_WITH_BASE if base_box else task.EPISODE_SIZE)
-    data = episodes.data
-    for i, info in enumerate(reset_infos):
-        data[i, task.EP_RELEASE] = info["release_x"], info["release_y"], info["release_angle"]
-        data[i, task.EP_TARGET_X] = info["target_x"]
-        data[i, task.EP_TARGET_FACES] = info["target_faces"]
-        data[i, task.EP_DYNAMICS] = info["mass"], info["friction"], info["restitution"]
-        if base_box:
-            data[i, task.EP_BASE_LENGTH], data[i, task.EP_BASE_HEIGHT] = info["base_length"], info["base_height"]
-    return episodes
+episodes_from_infos = episodes_from_reset_infos
+"""The episodes that ``reset`` drew, rebuilt from its infos (``envs.functional.episodes_from_reset_infos``)."""
 
 
 class ThrowSimulator:

@@ -316,8 +316,8 @@ class BoxTossEnv(gym.Env):
         spin) and its named terms (see Rewards); ``step`` returns exactly this. With a base box,
         ``base_state`` is where the base ended (default: where it stands at reset)."""
         batch = dataclasses.replace(self._batch, state=np.zeros_like(self._state))
-        self.core.thrown(batch.state)[:] = np.asarray(final_state, dtype=np.float64).reshape(1, layout.STATE_SIZE)
-        base = self.core.base(batch.state)
+        batch.thrown_state[:] = np.asarray(final_state, dtype=np.float64).reshape(1, layout.STATE_SIZE)
+        base = batch.base_state
         if base is not None and base_state is None:
             task.write_base_states(base, self._episodes)  # where the base stands at reset
         elif base is not None:

@@ -5,11 +5,12 @@
 
 Env i behaves exactly like a single ``BoxToss-v0`` seeded the same way: it owns its own random
 stream (``reset(seed=s)`` seeds env i with s + i, as Gymnasium's vector envs do; ``random_streams``
-keeps all of them in one array) and draws its episodes with the same batch-first task functions
-(``task``), and all throws go through the single env's compiled engine kernel, run over shares of
-the batch on ``threads`` threads at once (default: ``numba.config.NUMBA_NUM_THREADS``, the cores
-available); results do not depend on the thread count. The task logic, the reward, the drawing and
-the compiled code are the single env's, not a copy: whichever of the two throws first compiles
+keeps all of them in one array), and its throws are the single env's throw over a batch of
+``num_envs`` (``functional.BoxTossFunctional``, ``self.core``, the same object as ``self.env.core``): all
+throws go through the single env's compiled engine kernel, run over shares of the batch on ``threads``
+threads at once (default: ``numba.config.NUMBA_NUM_THREADS``, the cores available); results do not depend on
+the thread count. The task logic, the reward, the drawing and the compiled code are the single env's, not a
+copy: whichever of the two throws first compiles
 the kernel (or loads it from numba's cache) for both. With a base box (``BoxToss-OnBox-v0``) each env is a
 scene of two colliding boxes, rows 2i and 2i + 1 of the engine's arrays, and the batch runs the single env's
 colliding kernel on each env's pair in one compiled call (``physics.grouped``, whole envs per thread).

@@ -29,7 +29,7 @@ own row: the same episode and action give the same bits at any batch size and on
 from __future__ import annotations
 
 import dataclasses
-import math
+import functools
 from dataclasses import dataclass
 from typing import Any
 
@@ -42,6 +42,21 @@ from box_toss_env.physics.grouped import GroupedSimulator
 from box_toss_env.physics.grouped import make_simulator as make_grouped_simulator
 from box_toss_env.physics.kernels import KernelFlags
 from box_toss_env.physics.ranges import check_step_count
+
+
+# the columns the reset's and the step's info read
+def _columns(*pairs: tuple[str, int]) -> tuple[tuple[str, ...], np.ndarray]:
+    return tuple(name for name, _ in pairs), np.array([column for _, column in pairs], dtype=np.intp)
+
+
+RESET_INFO = _columns(("target_x", task.EP_TARGET_X), ("release_x", task.EP_RELEASE_X),
+                      ("release_y", task.EP_RELEASE_Y), ("release_angle", task.EP_RELEASE_ANGLE),
+                      ("mass", task.EP_MASS), ("friction", task.EP_FRICTION), ("restitution", task.EP_RESTITUTION))
+RESET_INFO_WITH_BASE = _columns(*zip(*RESET_INFO, strict=True), ("base_length", task.EP_BASE_LENGTH),
+                                ("base_height", task.EP_BASE_HEIGHT))
+STEP_STATS = np.array([layout.FIRST_CONTACT_TIME, layout.END_TIME, layout.MAX_PENETRATION, layout.N_IMPACTS,
+                       layout.N_STEPS], dtype=np.intp)
+STEP_EPISODE = np.array([task.EP_TARGET_X, task.EP_MASS, task.EP_FRICTION, task.EP_RESTITUTION], dtype=np.intp)
 
 
 class EnergyGainError(FloatingPointError):
@@ -76,6 +91,30 @@ class ThrowBatch:
     def n(self) -> int:
         """The number of throws."""
         return len(self.episodes.data)
+
+    @functools.cached_property
+    def bodies_per_throw(self) -> int:
+        """Engine bodies per throw: the thrown box, and the base box where there is one."""
+        return len(self.state) // self.n
+
+    @functools.cached_property
+    def thrown_state(self) -> np.ndarray:
+        """(n, 6) the thrown boxes' states: a view of ``state``."""
+        return self.state[::self.bodies_per_throw]
+
+    @functools.cached_property
+    def base_state(self) -> np.ndarray | None:
+        """(n, 6) the base boxes' states (a view of ``state``), or None without base boxes."""
+        return self.state[1::2] if self.bodies_per_throw == 2 else None
+
+    @functools.cached_property
+    def thrown_stats(self) -> np.ndarray:
+        """(n, layout.STATS_SIZE) what the engine recorded of the thrown boxes: a view of ``stats``."""
+        return self.stats[::self.bodies_per_throw]
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickled without the cached views: they are views of ``state`` and ``stats`` again after unpickling."""
+        return {field.name: getattr(self, field.name) for field in dataclasses.fields(self)}
 
     def copy(self) -> ThrowBatch:
         """A deep copy (the functional way to keep a state before a method writes into it)."""
@@ -145,14 +184,6 @@ class BoxTossFunctional:
         return make_grouped_simulator(dataclasses.replace(self.flags, parallel=True, record=record),
                                       self.config.bodies_per_env, threads=threads, start_interpreted=start_interpreted)
 
-    def thrown(self, array: np.ndarray) -> np.ndarray:
-        """The thrown boxes' rows (n, ...) of an engine array of the batch: a view."""
-        return task.thrown_rows(array, self.config)
-
-    def base(self, array: np.ndarray) -> np.ndarray | None:
-        """The base boxes' rows (n, ...) of an engine array (a view), or None without a base box."""
-        return task.base_rows(array, self.config) if self.config.base_box else None
-
     # -- 1. initial: episodes drawn, boxes in the hand ---------------------------------------------
     def initial(self, rng: np.random.Generator, batch: ThrowBatch) -> ThrowBatch:
         """Draw every throw's episode from ``rng`` (one call, ``rng.random``) and put the boxes in the
@@ -174,23 +205,18 @@ class BoxTossFunctional:
         return self._write_states(batch, None)
 
     def _write_states(self, batch: ThrowBatch, throws: np.ndarray | None) -> ThrowBatch:
-        task.write_initial_states(self.thrown(batch.state), batch.episodes, throws)
-        if self.config.base_box:
-            task.write_base_states(self.base(batch.state), batch.episodes)
+        task.write_initial_states(batch.thrown_state, batch.episodes, throws)
+        if batch.base_state is not None:
+            task.write_base_states(batch.base_state, batch.episodes)
         return batch
 
     def reset_info(self, batch: ThrowBatch) -> dict[str, np.ndarray]:
         """The reset's info as (n,) arrays (``target_faces`` (n, 4) int8): ``BoxTossEnv.reset``'s keys."""
         data = batch.episodes.data
-        info = {"target_x": data[:, task.EP_TARGET_X].copy(),
-                "target_faces": data[:, task.EP_TARGET_FACES].astype(np.int8)}
-        columns = {"release_x": task.EP_RELEASE_X, "release_y": task.EP_RELEASE_Y,
-                   "release_angle": task.EP_RELEASE_ANGLE, "mass": task.EP_MASS, "friction": task.EP_FRICTION,
-                   "restitution": task.EP_RESTITUTION}
-        if self.config.base_box:
-            columns.update(base_length=task.EP_BASE_LENGTH, base_height=task.EP_BASE_HEIGHT)
-        info.update({key: data[:, column].copy() for key, column in columns.items()})
-        return info
+        names, columns = RESET_INFO_WITH_BASE if self.config.base_box else RESET_INFO
+        info = dict(zip(names, data.take(columns, axis=1).T, strict=True))  # one copy, a row per key
+        info["target_faces"] = data[:, task.EP_TARGET_FACES].astype(np.int8)
+        return {name: info[name] for name in ("target_x", "target_faces", *names[1:])}
 
     # -- 2. and 3. transition: launch and simulate ------------------------------------------------
     def check_actions(self, actions, shape: tuple[int, ...]) -> np.ndarray:
@@ -218,18 +244,17 @@ class BoxTossFunctional:
     # -- 4. observation and reward ------------------------------------------------------------------
     def observation(self, batch: ThrowBatch) -> np.ndarray:
         """A new float32 (n, obs_size) array of every throw's observation (``task.observe``)."""
-        return task.observe(self.thrown(batch.state), batch.episodes, self.config, self.base(batch.state))
+        return task.observe(batch.thrown_state, batch.episodes, self.config, batch.base_state)
 
     def at_rest(self, batch: ThrowBatch) -> np.ndarray:
         """(n,) bool: which boxes came to rest (the others reached ``max_sim_time``)."""
-        return ~np.isnan(self.thrown(batch.stats)[:, layout.REST_TIME])
+        return ~np.isnan(batch.thrown_stats[:, layout.REST_TIME])
 
     def landing(self, batch: ThrowBatch, at_rest: np.ndarray | None = None):
         """(reward, terms, success, distance, orientation error) of where the boxes are, (n,) arrays
         (``task.reward_terms``); ``at_rest`` defaults to what the engine recorded."""
         at_rest = self.at_rest(batch) if at_rest is None else at_rest
-        return task.reward_terms(self.thrown(batch.state), at_rest, batch.episodes, self.config,
-                                 self.base(batch.state))
+        return task.reward_terms(batch.thrown_state, at_rest, batch.episodes, self.config, batch.base_state)
 
     def reward(self, batch: ThrowBatch) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         """The reward (n,) and its named terms (``task.REWARD_TERMS``), whose sum it is."""
@@ -247,7 +272,7 @@ class BoxTossFunctional:
 
     def check_finite(self, batch: ThrowBatch) -> None:
         """Raise the engine's ``NonFiniteStateError`` if a throw diverged."""
-        if np.any(batch.stats[:, layout.STATUS] != layout.STATUS_OK):
+        if (batch.stats[:, layout.STATUS] != layout.STATUS_OK).any():
             check_finite_stats(batch.stats, self.solver)
 
     def outside_bounds(self, observations: np.ndarray) -> np.ndarray:
@@ -264,34 +289,34 @@ class BoxTossFunctional:
 
     def score(self, batch: ThrowBatch) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         """The reward (n,) and the step's info as (n,) arrays: ``BoxTossEnv.step``'s keys, in its order."""
-        state, stats = self.thrown(batch.state), self.thrown(batch.stats)
         at_rest = self.at_rest(batch)
         reward, terms, success, distance, orientation_error = self.landing(batch, at_rest)
-        angle = state[:, layout.ANGLE]
-        flight_time, end_time = stats[:, layout.FIRST_CONTACT_TIME], stats[:, layout.END_TIME].copy()
-        data = batch.episodes.data
+        # a few grouped copies (a row per key), not one numpy call per key: the single env pays each call
+        x, y, angle = batch.thrown_state[:, layout.X:layout.ANGLE + 1].T.copy()
+        first_contact, end_time, penetration, impacts, steps = batch.thrown_stats.take(STEP_STATS, axis=1).T
+        target_x, mass, friction, restitution = batch.episodes.data.take(STEP_EPISODE, axis=1).T
         info = {
-            "final_x": state[:, layout.X].copy(),
-            "final_y": state[:, layout.Y].copy(),
-            "final_angle": (angle + math.pi) % (2.0 * math.pi) - math.pi,
+            "final_x": x,
+            "final_y": y,
+            "final_angle": task.wrap_angles(angle),
             "face_down": task.faces_down(angle),
             "at_rest": at_rest,
             "success": success,
             "distance": distance,
             "orientation_error": orientation_error,
-            "flight_time": np.where(np.isnan(flight_time), end_time, flight_time),
-            "n_impacts": stats[:, layout.N_IMPACTS].astype(np.int64),
-            "n_steps": stats[:, layout.N_STEPS].astype(np.int64),
-            "max_penetration": stats[:, layout.MAX_PENETRATION].copy(),
+            "flight_time": np.where(np.isnan(first_contact), end_time, first_contact),
+            "n_impacts": impacts.astype(np.int64),
+            "n_steps": steps.astype(np.int64),
+            "max_penetration": penetration,
             "sim_time": end_time,
             **terms,
-            "target_x": data[:, task.EP_TARGET_X].copy(),
-            "mass": data[:, task.EP_MASS].copy(),
-            "friction": data[:, task.EP_FRICTION].copy(),
-            "restitution": data[:, task.EP_RESTITUTION].copy(),
+            "target_x": target_x,
+            "mass": mass,
+            "friction": friction,
+            "restitution": restitution,
         }
-        if self.config.base_box:
-            info.update(base_landing_info(self.base(batch.state), state, batch.episodes, self.config))
+        if batch.base_state is not None:
+            info.update(base_landing_info(batch.base_state, batch.thrown_state, batch.episodes, self.config))
         return reward, info
 
     def bounds_message(self, observation: np.ndarray) -> str:
@@ -333,6 +358,19 @@ def base_landing_info(base_states: np.ndarray, states: np.ndarray, episodes: tas
             "on_base": on_base}
 
 
+def episodes_from_reset_infos(reset_infos: list[dict[str, Any]]) -> task.Episodes:
+    """The episodes (release pose, target, dynamics, and the base box's size where there is one) that
+    ``reset`` drew, rebuilt from its infos (one per throw, each as ``BoxTossEnv.reset`` returns it):
+    the inverse of ``BoxTossFunctional.reset_info``."""
+    base_box = bool(reset_infos) and "base_length" in reset_infos[0]
+    names, columns = RESET_INFO_WITH_BASE if base_box else RESET_INFO
+    episodes = task.Episodes.empty(len(reset_infos), task.EPISODE_SIZE_WITH_BASE if base_box else task.EPISODE_SIZE)
+    for row, info in zip(episodes.data, reset_infos, strict=True):
+        row[columns] = [info[name] for name in names]
+        row[task.EP_TARGET_FACES] = info["target_faces"]
+    return episodes
+
+
 def first_of(info: dict[str, np.ndarray]) -> dict[str, Any]:
     """One throw's info from a batch's: Python scalars (the first row of an array of rows)."""
-    return {key: value[0].item() if value.ndim == 1 else value[0] for key, value in info.items()}
+    return {key: value.item(0) if value.ndim == 1 else value[0] for key, value in info.items()}

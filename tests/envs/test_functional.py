@@ -2,6 +2,7 @@
 every argument is declared once (``envs.arguments``). tests/agents/test_one_throw.py has the oracle."""
 
 import inspect
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -41,7 +42,7 @@ def test_a_batch_result_does_not_depend_on_the_batch_size():
     simulator = core.make_simulator(parallel=True)
     core.transition(big, actions(8), simulator)
     core.transition(small, actions(8)[5:6], simulator)
-    np.testing.assert_array_equal(core.thrown(big.state)[5], core.thrown(small.state)[0])
+    np.testing.assert_array_equal(big.thrown_state[5], small.thrown_state[0])
 
 
 def test_every_argument_is_declared_once_and_read_from_the_declaration():
@@ -56,3 +57,11 @@ def test_every_argument_is_declared_once_and_read_from_the_declaration():
     with pytest.raises(TypeError, match="unexpected keyword argument 'render_fps'"):
         BoxTossFunctional(render_fps=30)  # rendering is the env's, not the throw's
     assert BoxTossVectorEnv(2, box_length=0.3).config.half_length == 0.15
+
+
+def test_the_example_of_the_functional_page_runs():
+    text = (Path(__file__).parents[2] / "docs" / "functional.md").read_text()
+    example = text.split("```python\n")[1].split("```")[0]
+    namespace = {}
+    exec(compile(example, "docs/functional.md", "exec"), namespace)  # noqa: S102  (our own page)
+    assert namespace["reward"].shape == (256,) and set(namespace["info"]) >= {"success", "distance"}
