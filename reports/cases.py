@@ -259,8 +259,8 @@ def exact_cases() -> tuple[ExactCase, ...]:
 @dataclass
 class Throws:
     """``n`` BoxToss-v0 throws: release poses, targets and dynamics drawn by the env's own sampling
-    (``task.sample_episodes``) and one fixed action each, uniform in [-1, 1]^3, from one seeded
-    generator. ``run`` simulates them as the env does: until each box rests (at most
+    (``BoxTossFunctional.initial``, as ``task.sample_episodes``) and one fixed action each, uniform in
+    [-1, 1]^3, from one seeded generator. ``run`` simulates them as the env does: until each box rests (at most
     ``max_sim_time``), one row per throw in one engine call."""
 
     config: task.TaskConfig

@@ -214,9 +214,10 @@ class BoxTossFunctional:
         """The reset's info as (n,) arrays (``target_faces`` (n, 4) int8): ``BoxTossEnv.reset``'s keys."""
         data = batch.episodes.data
         names, columns = RESET_INFO_WITH_BASE if self.config.base_box else RESET_INFO
-        info = dict(zip(names, data.take(columns, axis=1).T, strict=True))  # one copy, a row per key
-        info["target_faces"] = data[:, task.EP_TARGET_FACES].astype(np.int8)
-        return {name: info[name] for name in ("target_x", "target_faces", *names[1:])}
+        rows = data.take(columns, axis=1).T  # one copy, a row per key
+        info = {"target_x": rows[0], "target_faces": data[:, task.EP_TARGET_FACES].astype(np.int8)}
+        info.update(zip(names[1:], rows[1:], strict=True))
+        return info
 
     # -- 2. and 3. transition: launch and simulate ------------------------------------------------
     def check_actions(self, actions, shape: tuple[int, ...]) -> np.ndarray:
