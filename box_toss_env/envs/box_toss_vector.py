@@ -19,7 +19,7 @@ Episodes are one step long, so envs reset in the step they end (``AutoresetMode.
 observation returned by ``step`` is the next episode's first one, and the final observation and info
 are in ``info["final_obs"]`` and ``info["final_info"]`` (with their ``_final_obs``/``_final_info``
 masks). With Gymnasium's default ``NEXT_STEP`` every other step would be an empty reset step.
-For Stable-Baselines3 wrap it in ``box_toss_env.vector.sb3_adapter.SB3VecEnvAdapter``.
+For Stable-Baselines3 wrap it in ``box_toss_env.wrappers.sb3_adapter.SB3VecEnvAdapter``.
 
 The engine's threads are Python threads running the compiled kernel without the GIL; numba's own
 threading layer (OpenMP or TBB) is not used.
