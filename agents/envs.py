@@ -27,8 +27,8 @@ from stable_baselines3.common.vec_env import VecEnv, VecEnvWrapper, VecMonitor, 
 
 import box_toss_env  # noqa: F401  (registers the BoxToss envs)
 from box_toss_env.envs.ballistic import ballistic_actions
-from box_toss_env.vector.ballistic import BallisticThrowsVector
-from box_toss_env.vector.sb3_adapter import SB3VecEnvAdapter
+from box_toss_env.wrappers.ballistic import BallisticThrowsVector
+from box_toss_env.wrappers.sb3_adapter import SB3VecEnvAdapter
 
 BALLISTIC = "box_toss_env.envs.ballistic.BallisticThrows"
 ENV_WRAPPERS = {BALLISTIC: "ballistic throw commands (flight time, landing offset, lean from the prior)"}

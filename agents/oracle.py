@@ -9,7 +9,6 @@ every iteration simulates all candidates of all unsolved targets in one engine c
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
@@ -17,58 +16,32 @@ import gymnasium as gym
 import numpy as np
 
 from box_toss_env.envs import task
-from box_toss_env.physics import layout
-from box_toss_env.physics.grouped import make_simulator
+from box_toss_env.envs.functional import BoxTossFunctional, episodes_from_reset_infos
 
-
-def episodes_from_infos(reset_infos: list[dict[str, Any]]) -> task.Episodes:
-    """The episodes (release pose, target, dynamics, and the base box's size where there is one) that
-    ``reset`` drew, rebuilt from its infos."""
-    base_box = bool(reset_infos) and "base_length" in reset_infos[0]
-    episodes = task.Episodes.empty(len(reset_infos), task.EPISODE_SIZE_WITH_BASE if base_box else task.EPISODE_SIZE)
-    data = episodes.data
-    for i, info in enumerate(reset_infos):
-        data[i, task.EP_RELEASE] = info["release_x"], info["release_y"], info["release_angle"]
-        data[i, task.EP_TARGET_X] = info["target_x"]
-        data[i, task.EP_TARGET_FACES] = info["target_faces"]
-        data[i, task.EP_DYNAMICS] = info["mass"], info["friction"], info["restitution"]
-        if base_box:
-            data[i, task.EP_BASE_LENGTH], data[i, task.EP_BASE_HEIGHT] = info["base_length"], info["base_height"]
-    return episodes
+episodes_from_infos = episodes_from_reset_infos
+"""The episodes that ``reset`` drew, rebuilt from its infos (``envs.functional.episodes_from_reset_infos``)."""
 
 
 class ThrowSimulator:
-    """Many throws of one env's task in one call of the env's own engine kernel and settings."""
+    """Many throws of one env's task in one engine call: the env's own throw (``env.unwrapped.core``,
+    ``envs.functional.BoxTossFunctional``) over a batch of candidates, on its compiled kernel and settings."""
 
     def __init__(self, env: gym.Env, threads: int | None = None):
-        unwrapped = env.unwrapped
-        self.config = unwrapped.config
-        self.settings = unwrapped.engine_settings  # the env's solver settings (dt, sleep, ...): throws as the env's
-        self.simulator = make_simulator(dataclasses.replace(unwrapped.flags, parallel=True, record=False),
-                                        self.config.bodies_per_env, threads=threads)
-        self.low, self.high = unwrapped.observation_space.low, unwrapped.observation_space.high
+        self.core: BoxTossFunctional = env.unwrapped.core
+        self.config = self.core.config
+        self.settings = self.core.settings  # the env's solver settings (dt, sleep, ...): throws as the env's
+        self.simulator = self.core.make_simulator(parallel=True, threads=threads)
+        self.low, self.high = self.core.observation_low, self.core.observation_high
 
     def rewards(self, episodes: task.Episodes, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(reward, success, distance) of throwing ``actions`` (n, 3) in ``episodes`` (n rows); a
         throw the env would refuse (non-finite state, energy gain) gets reward -inf."""
-        n = len(actions)
-        config = self.config
-        bodies = n * config.bodies_per_env  # each throw's bodies in consecutive rows (with a base box, two)
-        params = task.write_body_params(np.zeros((bodies, layout.PARAM_SIZE)), episodes, config)
-        all_states = np.zeros((bodies, layout.STATE_SIZE))
-        states, base = task.thrown_rows(all_states, config), task.base_rows(all_states, config)
-        throws = task.actions_to_throws(task.check_actions(actions, (n, task.ACTION_SIZE)), config)
-        task.write_initial_states(states, episodes, throws)
-        if config.base_box:
-            task.write_base_states(base, episodes)
-        all_stats = np.zeros((bodies, layout.STATS_SIZE))
-        self.simulator.run(all_states, params, self.settings, all_stats)
-        stats = task.thrown_rows(all_stats, config)
-        refused = (all_stats[:, layout.STATUS] != layout.STATUS_OK).reshape(n, -1).any(axis=1)
-        at_rest = ~np.isnan(stats[:, layout.REST_TIME])
+        core = self.core
+        batch = core.transition(core.for_episodes(episodes), actions, self.simulator)
+        refused = core.failed(batch)
         with np.errstate(invalid="ignore"):
-            reward, _, success, distance, _ = task.reward_terms(states, at_rest, episodes, config, base)
-            refused |= task.outside_bounds(task.observe(states, episodes, config, base), self.low, self.high)
+            reward, _, success, distance, _ = core.landing(batch)
+            refused |= core.outside_bounds(core.observation(batch))
         reward[refused] = -np.inf
         success[refused] = False
         return reward, success, distance

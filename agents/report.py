@@ -248,7 +248,7 @@ tensorboard --logdir runs
 box_toss_env --conf-file agents/hyperparams/ppo.yml` and `python -m rl_zoo3.enjoy ...`); the settings only our
 scripts use (engine and torch threads, validation and checkpoints) are in `agents/hyperparams/project.yml`.
 Our training runs the algorithm on the batched vector env (`gymnasium.make_vec`, all envs thrown in one engine
-call, through `box_toss_env.vector.sb3_adapter.SB3VecEnvAdapter`), with observations normalised by
+call, through `box_toss_env.wrappers.sb3_adapter.SB3VecEnvAdapter`), with observations normalised by
 `VecNormalize` and one torch thread. Where a face counts (`BoxToss-ShortEnd-v0`, `-ThisSideUp-v0`, `-Mixed-v0`)
 and on a box (`BoxToss-OnBox-v0`, touching down on the base's top) the algorithms act in ballistic commands
 (`env_wrapper: box_toss_env.envs.ballistic.BallisticThrows` in the hyperparameter files: flight time, landing

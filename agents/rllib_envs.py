@@ -8,7 +8,7 @@
 engine threads of the batched env. RLlib calls the creator once per env (its default vectorisation,
 ``gym_env_vectorize_mode="sync"``: a ``SyncVectorEnv`` of single envs), or once per env runner with
 ``num_envs`` added (``"vector_entry_point"``): then the creator returns the native batched env, seen
-with ``NEXT_STEP`` autoreset (``box_toss_env.vector.next_step``), which RLlib's env runners expect.
+with ``NEXT_STEP`` autoreset (``box_toss_env.wrappers.next_step``), which RLlib's env runners expect.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import gymnasium as gym
 from ray.tune.registry import register_env
 
 import box_toss_env  # noqa: F401  (registers the BoxToss envs with Gymnasium)
-from box_toss_env.vector.next_step import NextStepAutoreset
+from box_toss_env.wrappers.next_step import NextStepAutoreset
 
 ENV_IDS = ("BoxToss-v0", "BoxToss-LongSide-v0", "BoxToss-ShortEnd-v0", "BoxToss-ThisSideUp-v0", "BoxToss-Mixed-v0",
            "BoxToss-OnBox-v0")

@@ -15,6 +15,7 @@ kernel alone (the same throws re-run on raw arrays), so Python overhead is visib
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import statistics
 import time
 
@@ -22,7 +23,6 @@ import gymnasium as gym
 import numpy as np
 
 import box_toss_env  # noqa: F401  (registers BoxToss-v0)
-from box_toss_env.envs import task
 
 
 def throws_per_second(env: gym.Env, actions: np.ndarray) -> float:
@@ -36,21 +36,20 @@ def throws_per_second(env: gym.Env, actions: np.ndarray) -> float:
 def kernel_seconds_per_throw(env: gym.Env, actions: np.ndarray) -> float:
     """Wall time of the engine kernel alone for the same kind of throws [s]."""
     unwrapped = env.unwrapped
-    states = []
+    core = unwrapped.core  # the env's throw (envs.functional): it rebuilds each throw's initial state
+    batches = []
     for action in actions:
         unwrapped.reset()
         unwrapped.step(action)  # draws the episode; its initial state is rebuilt below
-        state = unwrapped._state.copy()
-        throws = task.actions_to_throws(task.check_actions(action, (3,)), unwrapped.config)
-        task.write_initial_states(state[:1], unwrapped._episodes, throws)
-        if unwrapped.config.base_box:
-            task.write_base_states(state[1:], unwrapped._episodes)
-        states.append((state, unwrapped._params.copy()))
+        batch = dataclasses.replace(unwrapped._batch, state=unwrapped._batch.state.copy(),
+                                    params=unwrapped._batch.params.copy())
+        batches.append(core.launch(batch, core.check_actions(action, (3,))))
     stats = unwrapped._stats.copy()
+    simulator = unwrapped._simulator
     start = time.perf_counter()
-    for state, params in states:
-        unwrapped._simulator.run(state, params, unwrapped.engine_settings, stats)
-    return (time.perf_counter() - start) / len(states)
+    for batch in batches:
+        simulator.run(batch.state, batch.params, core.settings, stats)
+    return (time.perf_counter() - start) / len(batches)
 
 
 def main() -> None:

@@ -13,7 +13,7 @@ because every BoxToss episode is ONE throw:
 - The native env resets in the step an episode ends (``AutoresetMode.SAME_STEP``), so every step is
   a throw (with Gymnasium's ``NEXT_STEP`` every other step would be an empty reset step). Gymnasium's
   ``NormalizeObservation``/``TransformObservation`` refuse SAME_STEP; we use
-  ``box_toss_env.vector.normalize.NormalizeObservation`` (it also normalises ``info["final_obs"]``).
+  ``box_toss_env.wrappers.normalize.NormalizeObservation`` (it also normalises ``info["final_obs"]``).
 - Every step terminates, so GAE reduces to ``advantage = reward - value`` (the next value is always
   masked by ``done``); the loop is kept as in CleanRL, gamma and lambda change nothing.
 - A narrow initial policy (log std -2.5, std 0.08 of the action range): with std 1 the throws scatter
@@ -38,7 +38,7 @@ import torch.optim as optim
 from torch.distributions.normal import Normal
 
 import box_toss_env  # noqa: F401  (registers BoxToss-v0)
-from box_toss_env.vector.normalize import NormalizeObservation
+from box_toss_env.wrappers.normalize import NormalizeObservation
 
 
 @dataclasses.dataclass

@@ -7,7 +7,6 @@ Every scene is built from a named scene of ``box_toss_env.physics.scenes`` where
 
 from __future__ import annotations
 
-import inspect
 import math
 from dataclasses import dataclass, replace
 from functools import cached_property
@@ -15,12 +14,12 @@ from functools import cached_property
 import numpy as np
 
 from benchmarks.other_engines import Toss
-from box_toss_env.envs import BoxTossEnv, task
-from box_toss_env.physics import Box, KernelFlags, Scene, Simulator, layout, make_settings, scenes
+from box_toss_env.envs import arguments, task
+from box_toss_env.envs.functional import BoxTossFunctional
+from box_toss_env.physics import Box, Scene, layout, scenes
 
-ENV_DEFAULTS = {name: parameter.default for name, parameter in inspect.signature(BoxTossEnv.__init__).parameters.items()
-                if parameter.default is not inspect.Parameter.empty}
-"""BoxToss-v0's keyword defaults, read from the env (``solver``, ``dt``, ``penalty_stiffness``, ...)."""
+ENV_DEFAULTS = arguments.ENV_DEFAULTS
+"""BoxToss-v0's keyword defaults, read from their declaration (``solver``, ``dt``, ``penalty_stiffness``, ...)."""
 
 STIFFNESS = float(ENV_DEFAULTS["penalty_stiffness"])
 """Penalty stiffness of every report scene that does not vary it: the env's default [N/m]."""
@@ -260,8 +259,8 @@ def exact_cases() -> tuple[ExactCase, ...]:
 @dataclass
 class Throws:
     """``n`` BoxToss-v0 throws: release poses, targets and dynamics drawn by the env's own sampling
-    (``task.sample_episodes``) and one fixed action each, uniform in [-1, 1]^3, from one seeded
-    generator. ``run`` simulates them as the env does: until each box rests (at most
+    (``BoxTossFunctional.initial``, as ``task.sample_episodes``) and one fixed action each, uniform in
+    [-1, 1]^3, from one seeded generator. ``run`` simulates them as the env does: until each box rests (at most
     ``max_sim_time``), one row per throw in one engine call."""
 
     config: task.TaskConfig
@@ -273,28 +272,24 @@ class Throws:
     def n(self) -> int:
         return self.initial.shape[0]
 
-    def scene(self, solver: str, dt: float) -> Scene:
-        """The env's scene settings (thresholds, sleep) for ``solver`` and ``dt``."""
-        return Scene(dt=dt, solver=solver, gravity=-self.config.gravity,
-                     penalty_stiffness=self.config.penalty_stiffness)
+    def core(self, solver: str, dt: float) -> BoxTossFunctional:
+        """BoxToss-v0's throw (its default arguments) with ``solver`` and ``dt``: the env's engine settings
+        (thresholds, sleep), kernel flags and step count."""
+        return BoxTossFunctional(solver=solver, dt=dt)
 
     def max_steps(self, dt: float) -> int:
         return max(1, math.ceil(self.config.max_sim_time / dt - 1e-9))
 
-    def simulator(self, solver: str, parallel: bool = False) -> Simulator:
-        return Simulator(KernelFlags(solver=solver, use_impulses=True, use_penalty=self.config.penalty_stiffness > 0,
-                                     use_friction=self.config.friction_range[1] > 0.0, record=False, parallel=parallel))
-
     def runner(self, solver: str, dt: float, parallel: bool = False):
         """A closure simulating every throw from its initial state, and the (state, stats) it fills."""
-        simulator = self.simulator(solver, parallel)
-        settings = make_settings(self.scene(solver, dt), self.max_steps(dt), until_rest=True)
+        core = self.core(solver, dt)
+        simulator = core.make_simulator(parallel=parallel)
         state = self.initial.copy()
         stats = np.zeros((self.n, layout.STATS_SIZE))
 
         def run():
             state[:] = self.initial
-            simulator.run(state, self.params, settings, stats)
+            simulator.run(state, self.params, core.settings, stats)
 
         return run, state, stats
 
@@ -320,15 +315,14 @@ class Throws:
 
 
 def seeded_throws(n: int = 256, seed: int = 2024) -> Throws:
-    """``n`` throws of BoxToss-v0 with its default arguments (see ``Throws``)."""
-    config = BoxTossEnv().config
+    """``n`` throws of BoxToss-v0 with its default arguments (see ``Throws``): the env's own throw
+    (``BoxTossFunctional``) draws the episodes and launches the boxes."""
+    core = BoxTossFunctional()
     rng = np.random.default_rng(seed)
-    episodes = task.sample_episodes(rng, config, task.Episodes.empty(n))
+    batch = core.initial(rng, core.empty(n))
     actions = rng.uniform(-1.0, 1.0, size=(n, task.ACTION_SIZE))
-    throws = task.actions_to_throws(actions, config)
-    initial = task.write_initial_states(np.zeros((n, layout.STATE_SIZE)), episodes, throws)
-    params = task.write_body_params(np.zeros((n, layout.PARAM_SIZE)), episodes, config)
-    return Throws(config=config, initial=initial, params=params, seed=seed)
+    core.launch(batch, core.check_actions(actions, (n, task.ACTION_SIZE)))
+    return Throws(config=core.config, initial=batch.state.copy(), params=batch.params.copy(), seed=seed)
 
 
 # -- report-only scenes of the stability matrix ---------------------------------------------------------

@@ -33,7 +33,7 @@ against the slide that changes slowly with the flight time, whatever the release
 where the centre's parabola meets h(phi), before bounces and slides, which the command's offset and
 lean learn to allow for.
 
-``BallisticThrows`` wraps one env; ``box_toss_env.vector.BallisticThrowsVector`` wraps a vector env;
+``BallisticThrows`` wraps one env; ``box_toss_env.wrappers.ballistic.BallisticThrowsVector`` wraps a vector env;
 ``ballistic_actions`` is the mapping itself, batch-first, for policies that act on raw observations.
 """
 

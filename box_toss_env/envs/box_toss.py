@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import math
+import textwrap
 from typing import Any
 
 import gymnasium as gym
@@ -12,18 +14,15 @@ from gymnasium import spaces
 from gymnasium.error import ResetNeeded
 
 from box_toss_env.envs import task
-from box_toss_env.envs.random_streams import check_seed
-from box_toss_env.physics import (
-    Box,
-    KernelFlags,
-    Scene,
-    Simulator,
-    check_finite_stats,
-    face_down,
-    layout,
-    make_settings,
+from box_toss_env.envs.arguments import CORE_ARGUMENTS, ENV_ARGUMENTS, arguments_table, with_defaults
+from box_toss_env.envs.functional import (  # noqa: F401  (EnergyGainError, base_landing_info: their old home)
+    BoxTossFunctional,
+    EnergyGainError,
+    base_landing_info,
+    first_of,
 )
-from box_toss_env.physics.ranges import check_step_count
+from box_toss_env.envs.random_streams import check_seed
+from box_toss_env.physics import Simulator, layout
 from box_toss_env.physics.validation import check_integer
 
 RENDER_MODES = ("human", "rgb_array", "rgb_array_list")
@@ -43,12 +42,6 @@ def check_render_mode_type(render_mode) -> None:
     if render_mode is not None and not isinstance(render_mode, str):
         raise TypeError(f"render_mode must be None or one of {RENDER_MODES}, got {type(render_mode).__name__} "
                         f"{render_mode!r}")
-
-
-class EnergyGainError(FloatingPointError):
-    """A throw ended outside the observation bounds: the solver created energy or let the box sink
-    through the floor (``solver="seed"`` with a time step too large for the penalty stiffness, or no
-    penalty at all). The message says which. Nothing is clipped."""
 
 
 class BoxTossEnv(gym.Env):
@@ -164,44 +157,13 @@ class BoxTossEnv(gym.Env):
 
     ``gymnasium.make("BoxToss-v0", **kwargs)``; every argument is validated when the env is made: a
     ``TypeError`` names an argument of the wrong type (a string, a bool or a complex number for a number),
-    a ``ValueError`` names one outside its allowed range. The ranges are in docs/ranges.md
-    (``task.ENV_RANGES``).
+    a ``ValueError`` names one outside its allowed range, and an unknown name is a ``TypeError``. The table is
+    generated from the one declaration of the arguments (``envs.arguments.ENV_ARGUMENTS``), which the
+    validation reads too; the rules that tie arguments together are in docs/ranges.md.
 
-    | Argument               | Default           | Meaning                                                         |
-    |------------------------|-------------------|-----------------------------------------------------------------|
-    | ``box_length``         | 0.4               | box size along its local x [m] (faces 1 and 3 are its ends)     |
-    | ``box_width``          | 0.2               | box size along its local y [m]                                  |
-    | ``mass``               | 2.0               | box mass [kg]; inertia is that of a uniform box                 |
-    | ``friction``           | 0.5               | Coulomb friction coefficient with the floor                     |
-    | ``restitution``        | 0.3               | coefficient of restitution with the floor, in [0, 1]            |
-    | ``penalty_stiffness``  | 1e5               | stiffness of the penetration correction [N/m]                   |
-    | ``gravity``            | 9.81              | gravitational acceleration, pointing down [m/s^2]               |
-    | ``release_x_range``    | (-0.1, 0.1)       | release x of the box's centre [m]                               |
-    | ``release_height_range`` | (1.2, 1.6)      | release height of the centre [m], above the corner radius       |
-    | ``release_angle_range``| (-0.3, 0.3)       | release angle [rad], within [-pi, pi]                           |
-    | ``target_x_range``     | (1.0, 4.0)        | target x [m]                                                    |
-    | ``target_face``        | "any"             | "any", "long_side", "short_end", "exact" or "mixed"             |
-    | ``max_speed``          | 8.0               | launch speed at action[0] = 1 [m/s]                             |
-    | ``launch_angle_range`` | (-pi/4, pi/2)     | launch direction at action[1] = -1 and +1 [rad]                 |
-    | ``max_spin``           | 20.0              | spin at action[2] = 1 [rad/s]                                   |
-    | ``position_tolerance`` | 0.1               | success radius around the target [m]                            |
-    | ``distance_weight``    | 1.0               | weight of the distance term [1/m]                               |
-    | ``orientation_weight`` | 0.5               | weight of the orientation term [1/rad]                          |
-    | ``success_bonus``      | 1.0               | reward added on success                                         |
-    | ``mass_range``         | None              | (low, high) [kg]: draw the mass per episode (replaces ``mass``) |
-    | ``friction_range``     | None              | (low, high): draw the friction per episode                      |
-    | ``restitution_range``  | None              | (low, high) in [0, 1]: draw the restitution per episode         |
-    | ``observe_dynamics``   | False             | append mass, friction, restitution to the observation           |
-    | ``base_box``           | False             | a base box to come to rest on (see "A base box to land on")      |
-    | ``base_length_range``  | None: (0.6, 1.0)  | with ``base_box``: the base box's length, drawn per episode [m]  |
-    | ``base_height_range``  | None: (0.2, 0.5)  | with ``base_box``: its height, drawn per episode [m]             |
-    | ``base_mass``          | None: 10.0        | with ``base_box``: its mass [kg]                                 |
-    | ``solver``             | "robust"          | "robust" (the engine's default) or "seed" (the explicit scheme) |
-    | ``dt``                 | 1/128             | solver time step [s] (docs/precision.md: the cheapest accurate one) |
-    | ``max_sim_time``       | 10.0              | simulated time after which a throw ends anyway [s]              |
-    | ``render_mode``        | None              | None, "human", "rgb_array" or "rgb_array_list"                  |
-    | ``render_fps``         | 30                | frame rate of "human" playback and "rgb_array_list" frames      |
-    | ``render_width``, ``render_height`` | 600, 400 | frame size [px]                                            |
+    ARGUMENTS_TABLE
+
+    and ``render_mode``: None, "human", "rgb_array" or "rgb_array_list" (Gymnasium's argument, first).
 
     Registered variants: ``BoxToss-LongSide-v0`` (``target_face="long_side"``),
     ``BoxToss-ShortEnd-v0`` (``"short_end"``), ``BoxToss-ThisSideUp-v0`` (``"exact"``),
@@ -261,96 +223,36 @@ class BoxTossEnv(gym.Env):
 
     metadata = {"render_modes": RenderModes(RENDER_MODES), "render_fps": 30}
 
-    def __init__(
-        self,
-        render_mode: str | None = None,
-        *,
-        box_length: float = 0.4,
-        box_width: float = 0.2,
-        mass: float = 2.0,
-        friction: float = 0.5,
-        restitution: float = 0.3,
-        penalty_stiffness: float = 1e5,
-        gravity: float = 9.81,
-        release_x_range: tuple[float, float] = (-0.1, 0.1),
-        release_height_range: tuple[float, float] = (1.2, 1.6),
-        release_angle_range: tuple[float, float] = (-0.3, 0.3),
-        target_x_range: tuple[float, float] = (1.0, 4.0),
-        target_face: str = "any",
-        max_speed: float = 8.0,
-        launch_angle_range: tuple[float, float] = (-0.25 * math.pi, 0.5 * math.pi),
-        max_spin: float = 20.0,
-        position_tolerance: float = 0.1,
-        distance_weight: float = 1.0,
-        orientation_weight: float = 0.5,
-        success_bonus: float = 1.0,
-        mass_range: tuple[float, float] | None = None,
-        friction_range: tuple[float, float] | None = None,
-        restitution_range: tuple[float, float] | None = None,
-        observe_dynamics: bool = False,
-        base_box: bool = False,
-        base_length_range: tuple[float, float] | None = None,
-        base_height_range: tuple[float, float] | None = None,
-        base_mass: float | None = None,
-        solver: str = "robust",
-        dt: float = 1 / 128,
-        max_sim_time: float = 10.0,
-        render_fps: float = 30,
-        render_width: int = 600,
-        render_height: int = 400,
-    ):
+    def __init__(self, render_mode: str | None = None, **kwargs: Any):
         check_render_mode_type(render_mode)
         if render_mode is not None and render_mode not in RENDER_MODES:
             raise ValueError(f"render_mode must be None or one of {RENDER_MODES}, got {render_mode!r}")
         self.render_mode = render_mode
-        self.config = task.make_task_config(
-            box_length=box_length, box_width=box_width, gravity=gravity, mass=mass, friction=friction,
-            restitution=restitution, penalty_stiffness=penalty_stiffness, mass_range=mass_range,
-            friction_range=friction_range, restitution_range=restitution_range,
-            release_x_range=release_x_range, release_height_range=release_height_range,
-            release_angle_range=release_angle_range, target_x_range=target_x_range, target_face=target_face,
-            max_speed=max_speed, launch_angle_range=launch_angle_range, max_spin=max_spin,
-            position_tolerance=position_tolerance, distance_weight=distance_weight,
-            orientation_weight=orientation_weight, success_bonus=success_bonus,
-            observe_dynamics=observe_dynamics, max_sim_time=max_sim_time, base_box=base_box,
-            base_length_range=base_length_range, base_height_range=base_height_range, base_mass=base_mass)
-        config = self.config
-        # the engine validates the solver settings (dt, solver, material) and names what is wrong
-        scene = Scene(
-            boxes=(Box(length=box_length, width=box_width, mass=config.mass_range[1],
-                       position=(config.release_x_range[0], config.release_height_range[0])),),
-            dt=dt, gravity=-config.gravity, restitution=config.restitution_range[1],
-            friction=config.friction_range[1], penalty_stiffness=config.penalty_stiffness, solver=solver)
-        self.solver = scene.solver
-        self.dt = scene.dt
-        self.max_steps = max(1, check_step_count("max_sim_time", config.max_sim_time, scene.dt))
-        # with a base box the thrown box and the base are one scene of colliding boxes (the colliding kernel);
-        # without one, the floor-only kernel, which compiles no box-box contact at all
-        self.flags = KernelFlags(solver=scene.solver, use_impulses=True, use_penalty=scene.has_penalty,
-                                 use_friction=config.friction_range[1] > 0.0, record=False, parallel=False,
-                                 boxes_collide=config.base_box)
-        self._settings = make_settings(scene, self.max_steps, until_rest=True)
-        self.render_fps = task.ENV_RANGES["render_fps"].check("render_fps", render_fps)
-        self.render_size = (_check_pixels("render_width", render_width),
-                            _check_pixels("render_height", render_height))
+        args = with_defaults(kwargs, owner=type(self).__name__)
+        # the throw itself, batch-first (a batch of one here): the one copy of the task and of the step
+        self.core = BoxTossFunctional(**{name: args[name] for name in CORE_ARGUMENTS})
+        self.config = config = self.core.config
+        self.solver, self.dt, self.max_steps, self.flags = (self.core.solver, self.core.dt, self.core.max_steps,
+                                                            self.core.flags)
+        self._settings = self.core.settings
+        self.render_fps = task.ENV_RANGES["render_fps"].check("render_fps", args["render_fps"])
+        self.render_size = (_check_pixels("render_width", args["render_width"]),
+                            _check_pixels("render_height", args["render_height"]))
         self.metadata = {**self.metadata, "render_fps": self.render_fps}
 
         self.action_space = spaces.Box(-1.0, 1.0, shape=(task.ACTION_SIZE,), dtype=np.float32)
-        low, high = task.observation_bounds(config, self.max_steps * self.dt)
-        self.observation_space = spaces.Box(low, high, dtype=np.float32)
+        self.observation_space = spaces.Box(self.core.observation_low, self.core.observation_high, dtype=np.float32)
 
         # per-episode arrays, allocated once: a throw only writes its six initial numbers. The engine's
         # arrays hold the thrown box in row 0 and, with base_box, the base box in row 1
-        bodies = config.bodies_per_env
-        self._episodes = task.Episodes.empty(1, config.episode_size)
-        self._params = np.zeros((bodies, layout.PARAM_SIZE))
-        self._state = np.zeros((bodies, layout.STATE_SIZE))
-        self._stats = np.zeros((bodies, layout.STATS_SIZE))
+        self._batch = self.core.empty(1)
+        self._episodes, self._params, self._state, self._stats = (self._batch.episodes, self._batch.params,
+                                                                  self._batch.state, self._batch.stats)
         self._records = render_mode in ("human", "rgb_array_list")
+        bodies = config.bodies_per_env
         self._trajectory = np.zeros((self.max_steps + 1, bodies, layout.STATE_SIZE)) if self._records else None
         self._events = np.zeros((bodies, layout.MAX_EVENTS, layout.EVENT_SIZE)) if self._records else None
         self._needs_reset = True
-        self._params_stale = True  # body parameters are written at the first reset, then per reset if drawn
         self._renderer = None
         # "rgb_array_list" draws when render() asks: the hand and the throw not returned yet, and the result
         self._hand_unseen = self._throw_unseen = False
@@ -364,7 +266,7 @@ class BoxTossEnv(gym.Env):
         return self._settings.copy()
 
     def _build_simulator(self) -> Simulator:
-        self._simulator = Simulator(dataclasses.replace(self.flags, record=self._records), start_interpreted=True)
+        self._simulator = self.core.make_simulator(record=self._records, start_interpreted=True)
         return self._simulator
 
     # -- the Gymnasium API ------------------------------------------------------------------------
@@ -372,132 +274,56 @@ class BoxTossEnv(gym.Env):
         """Draw a release pose, a target and the dynamics; the box is at rest in the hand.
         ``options`` is unused. ``seed`` is None or any integer >= 0 (``np.int64`` too), never a bool."""
         super().reset(seed=check_seed(seed))
-        episodes = task.sample_episodes(self.np_random, self.config, self._episodes)
-        if self._params_stale or self.config.draws_body_params:
-            task.write_body_params(self._params, episodes, self.config)
-            self._params_stale = False
-        task.write_initial_states(self._state[:1], episodes, None)
-        if self.config.base_box:
-            task.write_base_states(self._state[1:], episodes)
+        self.core.initial(self.np_random, self._batch)
         self._needs_reset = False
         self._hand_unseen, self._throw_unseen, self._outcome = self.render_mode == "rgb_array_list", False, None
         if self.render_mode == "human":
             self.render()
-        row = episodes.data[0].tolist()
-        info = {
-            "target_x": row[task.EP_TARGET_X],
-            "target_faces": episodes.data[0, task.EP_TARGET_FACES].astype(np.int8),
-            "release_x": row[task.EP_RELEASE_X],
-            "release_y": row[task.EP_RELEASE_Y],
-            "release_angle": row[task.EP_RELEASE_ANGLE],
-            "mass": row[task.EP_MASS],
-            "friction": row[task.EP_FRICTION],
-            "restitution": row[task.EP_RESTITUTION],
-        }
-        if self.config.base_box:
-            info["base_length"], info["base_height"] = row[task.EP_BASE_LENGTH], row[task.EP_BASE_HEIGHT]
-        return self._observe()[0], info
+        return self._observe()[0], first_of(self.core.reset_info(self._batch))
 
     def _observe(self) -> np.ndarray:
-        return task.observe(self._state[:1], self._episodes, self.config, self._state[1:])
+        return self.core.observation(self._batch)
 
     def step(self, action):
         """Throw the box with ``action`` and simulate until it rests (or ``max_sim_time``)."""
         if self._needs_reset:
             raise ResetNeeded("each BoxToss episode is a single throw: call reset() before step()")
-        actions = task.check_actions(action, self.action_space.shape)
-        task.write_initial_states(self._state[:1], self._episodes, task.actions_to_throws(actions, self.config))
-        if self.config.base_box:
-            task.write_base_states(self._state[1:], self._episodes)
+        core, batch = self.core, self._batch
+        core.launch(batch, core.check_actions(action, self.action_space.shape))
         self._needs_reset = True
-        simulator = self._simulator or self._build_simulator()
-        simulator.run(self._state, self._params, self._settings, self._stats, self._trajectory, self._events)
-        stats = self._stats[0].tolist()
-        if stats[layout.STATUS] != layout.STATUS_OK:
-            check_finite_stats(self._stats, self.solver)  # raises NonFiniteStateError
-        rest_time, end_time = stats[layout.REST_TIME], stats[layout.END_TIME]
-        at_rest = not math.isnan(rest_time)
-        reward, terms, success, distance, orientation_error = self._landing(self._state[:1], at_rest, self._state[1:])
-        x, y, angle, _, _, _ = self._state[0].tolist()
-        episode = self._episodes.data[0].tolist()
-        flight_time = stats[layout.FIRST_CONTACT_TIME]
-        info = {
-            "final_x": x,
-            "final_y": y,
-            "final_angle": (angle + math.pi) % (2.0 * math.pi) - math.pi,
-            "face_down": face_down(angle),
-            "at_rest": at_rest,
-            "success": bool(success[0]),
-            "distance": float(distance[0]),
-            "orientation_error": float(orientation_error[0]),
-            "flight_time": end_time if math.isnan(flight_time) else flight_time,
-            "n_impacts": int(stats[layout.N_IMPACTS]),
-            "n_steps": int(stats[layout.N_STEPS]),
-            "max_penetration": stats[layout.MAX_PENETRATION],
-            "sim_time": end_time,
-            **{name: float(value[0]) for name, value in terms.items()},
-            "target_x": episode[task.EP_TARGET_X],
-            "mass": episode[task.EP_MASS],
-            "friction": episode[task.EP_FRICTION],
-            "restitution": episode[task.EP_RESTITUTION],
-        }
-        if self.config.base_box:
-            info.update({key: value[0].item() for key, value in
-                         base_landing_info(self._state[1:], self._state[:1], self._episodes, self.config).items()})
+        core.simulate(batch, self._simulator or self._build_simulator(), self._trajectory, self._events)
+        core.check_finite(batch)  # raises NonFiniteStateError
+        reward, info = core.score(batch)
+        reward, info = float(reward[0]), first_of(info)
         if self.render_mode is not None:
             from box_toss_env.envs.render import ThrowOutcome
 
-            self._outcome = ThrowOutcome.from_step(float(reward[0]), info, self._episodes.target_faces[0])
+            self._outcome = ThrowOutcome.from_step(reward, info, self._episodes.target_faces[0])
             self._throw_unseen = self.render_mode == "rgb_array_list"
             if self.render_mode == "human":
                 self.render()
         observation = self._observe()
-        if task.outside_bounds(observation, self.observation_space.low, self.observation_space.high)[0]:
-            raise EnergyGainError(self._bounds_message(observation[0]))
-        return observation[0], float(reward[0]), True, False, info
+        core.check_bounds(observation)  # raises EnergyGainError
+        return observation[0], reward, True, False, info
 
     def _bounds_message(self, observation: np.ndarray) -> str:
         """What the throw that ended in ``observation`` (outside the bounds) did, for the solver that ran."""
-        space = self.observation_space
-        column = int(np.argmax(np.maximum(space.low - observation, observation - space.high)))
-        where = (f"the throw ended with {task.observation_names(self.config)[column]} = {observation[column]:g}, "
-                 f"outside the "
-                 f"observation bounds [{space.low[column]:g}, {space.high[column]:g}]")
-        stiffness = self.config.penalty_stiffness
-        if column == task.OBS_Y and observation[column] < space.low[column]:
-            what = (f"{where}: the box sank through the floor (its centre more than a corner radius below it) "
-                    f"with solver={self.solver!r}. ")
-            if self.solver == "robust":
-                return what + "The robust solver should never let a box through: please report these arguments"
-            if stiffness == 0.0:
-                return what + ("With penalty_stiffness=0 the seed scheme has nothing that pushes a corner back out "
-                               "of the floor: give penalty_stiffness > 0, or use solver='robust'")
-            return what + (f"The seed scheme's penalty spring (penalty_stiffness={stiffness:g} N/m) was too soft to "
-                           "hold it: use a stiffer one (with a dt small enough for it), or solver='robust'")
-        what = f"{where} that energy conservation guarantees: solver={self.solver!r} created energy. "
-        if self.solver == "robust":
-            return what + "The robust solver should never create energy: please report these arguments"
-        return what + (f"The seed scheme's explicit penalty spring gains energy when dt is too large for its "
-                       f"stiffness (dt={self.dt:g} s with penalty_stiffness={stiffness:g} N/m): use a smaller dt "
-                       "(e.g. 1/1024 s for 1e5 N/m), a softer penalty_stiffness, or solver='robust'")
+        return self.core.bounds_message(observation)
 
     def landing_reward(self, final_state: np.ndarray, at_rest: bool, base_state: np.ndarray | None = None
                        ) -> tuple[float, dict[str, float]]:
         """The reward of the current episode's throw ending in ``final_state`` (x, y, angle, vx, vy,
         spin) and its named terms (see Rewards); ``step`` returns exactly this. With a base box,
         ``base_state`` is where the base ended (default: where it stands at reset)."""
-        state = np.asarray(final_state, dtype=np.float64).reshape(1, layout.STATE_SIZE)
-        base = None
-        if self.config.base_box:
-            if base_state is None:
-                base = task.write_base_states(np.zeros((1, layout.STATE_SIZE)), self._episodes)
-            else:
-                base = np.asarray(base_state, dtype=np.float64).reshape(1, layout.STATE_SIZE)
-        reward, terms, *_ = self._landing(state, at_rest, base)
+        batch = dataclasses.replace(self._batch, state=np.zeros_like(self._state))
+        batch.thrown_state[:] = np.asarray(final_state, dtype=np.float64).reshape(1, layout.STATE_SIZE)
+        base = batch.base_state
+        if base is not None and base_state is None:
+            task.write_base_states(base, self._episodes)  # where the base stands at reset
+        elif base is not None:
+            base[:] = np.asarray(base_state, dtype=np.float64).reshape(1, layout.STATE_SIZE)
+        reward, terms, *_ = self.core.landing(batch, np.array([at_rest]))
         return float(reward[0]), {name: float(value[0]) for name, value in terms.items()}
-
-    def _landing(self, states: np.ndarray, at_rest: bool, base_states: np.ndarray | None = None):
-        return task.reward_terms(states, np.array([at_rest]), self._episodes, self.config, base_states)
 
     # -- rendering --------------------------------------------------------------------------------
     def render(self):
@@ -578,19 +404,21 @@ class BoxTossEnv(gym.Env):
         self.__dict__.update(state)
 
 
-def base_landing_info(base_states: np.ndarray, states: np.ndarray, episodes: task.Episodes,
-                      config: task.TaskConfig) -> dict[str, np.ndarray]:
-    """The step info of a task with a base box, (n,) arrays: where the base ended (``base_x``, ``base_y``
-    [m], ``base_angle`` [rad, wrapped to [-pi, pi)]), the thrown box's lowest point above the base's top
-    (``height_above_base`` [m]) and whether it rests on it (``on_base``: within ``task.SUPPORT_TOLERANCE``
-    of the top, its centre over the top face)."""
-    _, dy = task.landing_offsets(states, episodes, config, base_states)
-    top_x, _, half_top = task.base_top(base_states, episodes)
-    on_base = (np.abs(dy) <= task.SUPPORT_TOLERANCE) & (np.abs(states[:, layout.X] - top_x) <= half_top)
-    return {"base_x": base_states[:, layout.X].copy(), "base_y": base_states[:, layout.Y].copy(),
-            "base_angle": task.wrap_angles(base_states[:, layout.ANGLE]), "height_above_base": dy,
-            "on_base": on_base}
-
-
 def _check_pixels(name: str, value) -> int:
     return check_integer(name, value, 16, 8192)
+
+
+def _document_arguments(env_class: type) -> None:
+    """Write the arguments' declaration into the class docstring (its "Arguments" table) and the
+    signature of ``__init__`` (what ``help()`` and ``inspect.signature`` show)."""
+    if env_class.__doc__:  # None under python -OO
+        env_class.__doc__ = env_class.__doc__.replace(
+            "    ARGUMENTS_TABLE", textwrap.indent(arguments_table(), "    "))
+    parameters = [inspect.Parameter("self", inspect.Parameter.POSITIONAL_OR_KEYWORD),
+                  inspect.Parameter("render_mode", inspect.Parameter.POSITIONAL_OR_KEYWORD, default=None)]
+    parameters += [inspect.Parameter(a.name, inspect.Parameter.KEYWORD_ONLY, default=a.default)
+                   for a in ENV_ARGUMENTS]
+    env_class.__init__.__signature__ = inspect.Signature(parameters)
+
+
+_document_arguments(BoxTossEnv)

@@ -5,11 +5,12 @@
 
 Env i behaves exactly like a single ``BoxToss-v0`` seeded the same way: it owns its own random
 stream (``reset(seed=s)`` seeds env i with s + i, as Gymnasium's vector envs do; ``random_streams``
-keeps all of them in one array) and draws its episodes with the same batch-first task functions
-(``task``), and all throws go through the single env's compiled engine kernel, run over shares of
-the batch on ``threads`` threads at once (default: ``numba.config.NUMBA_NUM_THREADS``, the cores
-available); results do not depend on the thread count. The task logic, the reward, the drawing and
-the compiled code are the single env's, not a copy: whichever of the two throws first compiles
+keeps all of them in one array), and its throws are the single env's throw over a batch of
+``num_envs`` (``functional.BoxTossFunctional``, ``self.core``, the same object as ``self.env.core``): all
+throws go through the single env's compiled engine kernel, run over shares of the batch on ``threads``
+threads at once (default: ``numba.config.NUMBA_NUM_THREADS``, the cores available); results do not depend on
+the thread count. The task logic, the reward, the drawing and the compiled code are the single env's, not a
+copy: whichever of the two throws first compiles
 the kernel (or loads it from numba's cache) for both. With a base box (``BoxToss-OnBox-v0``) each env is a
 scene of two colliding boxes, rows 2i and 2i + 1 of the engine's arrays, and the batch runs the single env's
 colliding kernel on each env's pair in one compiled call (``physics.grouped``, whole envs per thread).
@@ -18,7 +19,7 @@ Episodes are one step long, so envs reset in the step they end (``AutoresetMode.
 observation returned by ``step`` is the next episode's first one, and the final observation and info
 are in ``info["final_obs"]`` and ``info["final_info"]`` (with their ``_final_obs``/``_final_info``
 masks). With Gymnasium's default ``NEXT_STEP`` every other step would be an empty reset step.
-For Stable-Baselines3 wrap it in ``box_toss_env.vector.sb3_adapter.SB3VecEnvAdapter``.
+For Stable-Baselines3 wrap it in ``box_toss_env.wrappers.sb3_adapter.SB3VecEnvAdapter``.
 
 The engine's threads are Python threads running the compiled kernel without the GIL; numba's own
 threading layer (OpenMP or TBB) is not used.
@@ -26,8 +27,6 @@ threading layer (OpenMP or TBB) is not used.
 
 from __future__ import annotations
 
-import dataclasses
-import math
 from typing import Any
 
 import numpy as np
@@ -36,10 +35,10 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from box_toss_env.envs import task
-from box_toss_env.envs.box_toss import BoxTossEnv, EnergyGainError, base_landing_info, check_render_mode_type
+from box_toss_env.envs.box_toss import BoxTossEnv, check_render_mode_type
 from box_toss_env.envs.random_streams import RandomStreams, check_seeds
-from box_toss_env.physics import Simulator, check_finite_stats, layout
-from box_toss_env.physics.grouped import GroupedSimulator, make_simulator
+from box_toss_env.physics import Simulator
+from box_toss_env.physics.grouped import GroupedSimulator
 from box_toss_env.physics.simulate import check_threads
 from box_toss_env.physics.validation import check_integer
 
@@ -79,14 +78,13 @@ class BoxTossVectorEnv(VectorEnv):
         self.metadata = {**self.metadata, "render_fps": self.env.render_fps}
 
         n = self.num_envs
-        bodies = n * self.config.bodies_per_env  # env i's bodies: consecutive rows, its thrown box first
-        self._episodes = task.Episodes.empty(n, self.config.episode_size)
-        self._params = np.zeros((bodies, layout.PARAM_SIZE))
-        self._state = np.zeros((bodies, layout.STATE_SIZE))
-        self._stats = np.zeros((bodies, layout.STATS_SIZE))
+        self.core = self.env.core  # the throw, batch-first: the single env's, over a batch of num_envs
+        # env i's bodies: consecutive rows of the batch's engine arrays, its thrown box first
+        self._batch = self.core.empty(n)
+        self._episodes, self._params, self._state, self._stats = (self._batch.episodes, self._batch.params,
+                                                                  self._batch.state, self._batch.stats)
         self._streams = RandomStreams(n)  # env i's random stream: np_random of a single env
         self._settings = self.env.engine_settings
-        self._params_stale = True
         self._needs_reset = True
         self._simulator: Simulator | GroupedSimulator | None = None
 
@@ -96,8 +94,7 @@ class BoxTossVectorEnv(VectorEnv):
         box the single env's colliding kernel run on each env's pair of boxes, ``physics.grouped``),
         compiled or loaded at its first run."""
         if self._simulator is None:
-            self._simulator = make_simulator(dataclasses.replace(self.env.flags, parallel=True),
-                                             self.config.bodies_per_env, threads=self.threads, start_interpreted=True)
+            self._simulator = self.core.make_simulator(parallel=True, threads=self.threads, start_interpreted=True)
         return self._simulator
 
     @property
@@ -123,32 +120,11 @@ class BoxTossVectorEnv(VectorEnv):
     def _new_episodes(self) -> dict[str, np.ndarray]:
         """Draw every env's next episode (each from its own stream); the boxes are in the hand."""
         # the uniform variates each episode is drawn from, drawn in place (no second batch-sized array)
-        episodes = task.episodes_from_uniforms(self._streams.fill_uniform(self._episodes.data), self.config,
-                                               self._episodes)
-        if self._params_stale or self.config.draws_body_params:
-            task.write_body_params(self._params, episodes, self.config)
-            self._params_stale = False
-        task.write_initial_states(self._thrown_state, episodes, None)
-        if self.config.base_box:
-            task.write_base_states(self._base_state, episodes)
-        data = episodes.data
-        info = {
-            "target_x": data[:, task.EP_TARGET_X].copy(),
-            "target_faces": data[:, task.EP_TARGET_FACES].astype(np.int8),
-            "release_x": data[:, task.EP_RELEASE_X].copy(),
-            "release_y": data[:, task.EP_RELEASE_Y].copy(),
-            "release_angle": data[:, task.EP_RELEASE_ANGLE].copy(),
-            "mass": data[:, task.EP_MASS].copy(),
-            "friction": data[:, task.EP_FRICTION].copy(),
-            "restitution": data[:, task.EP_RESTITUTION].copy(),
-        }
-        if self.config.base_box:
-            info["base_length"] = data[:, task.EP_BASE_LENGTH].copy()
-            info["base_height"] = data[:, task.EP_BASE_HEIGHT].copy()
-        return info
+        self.core.initial_from_uniforms(self._streams.fill_uniform(self._episodes.data), self._batch)
+        return self.core.reset_info(self._batch)
 
     def _observe(self) -> np.ndarray:
-        return task.observe(self._thrown_state, self._episodes, self.config, self._base_state)
+        return self.core.observation(self._batch)
 
     # -- the Gymnasium API ------------------------------------------------------------------------
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None):
@@ -163,22 +139,13 @@ class BoxTossVectorEnv(VectorEnv):
         then start every env's next episode (all episodes end in this step)."""
         if self._needs_reset:
             raise ResetNeeded("call reset() before the first step()")
-        actions = task.check_actions(actions, self.action_space.shape)
-        episodes = self._episodes
-        task.write_initial_states(self._thrown_state, episodes, task.actions_to_throws(actions, self.config))
-        if self.config.base_box:
-            task.write_base_states(self._base_state, episodes)
-        self.simulator.run(self._state, self._params, self._settings, self._stats)
-        if np.any(self._stats[:, layout.STATUS] != layout.STATUS_OK):
-            check_finite_stats(self._stats, self.env.solver)
-        stats = task.thrown_rows(self._stats, self.config)
+        core, batch = self.core, self._batch
+        core.launch(batch, core.check_actions(actions, self.action_space.shape))
+        core.simulate(batch, self.simulator)
+        core.check_finite(batch)  # raises NonFiniteStateError
         final_obs = self._observe()
-        outside = task.outside_bounds(final_obs, self.single_observation_space.low, self.single_observation_space.high)
-        if outside.any():
-            i = int(np.argmax(outside))
-            raise EnergyGainError(f"env {i}: {self.env._bounds_message(final_obs[i])}")
-        final_info = self._landing_info(stats)
-        reward = final_info.pop("reward")
+        core.check_bounds(final_obs, name_envs=True)  # raises EnergyGainError
+        reward, final_info = core.score(batch)
         # every episode ended: start the next ones
         info = self._new_episodes()
         observations = self._observe()
@@ -189,43 +156,6 @@ class BoxTossVectorEnv(VectorEnv):
         info["final_info"] = with_masks(final_info, n)
         info["_final_info"] = np.ones(n, dtype=bool)
         return observations, reward, np.ones(n, dtype=bool), np.zeros(n, dtype=bool), info
-
-    def _landing_info(self, stats: np.ndarray) -> dict[str, np.ndarray]:
-        """The single env's step ``info``, one array per key, plus the reward."""
-        state = self._thrown_state
-        base = self._base_state
-        rest_time = stats[:, layout.REST_TIME]
-        at_rest = ~np.isnan(rest_time)
-        reward, terms, success, distance, orientation_error = task.reward_terms(state, at_rest, self._episodes,
-                                                                                self.config, base)
-        angle = state[:, layout.ANGLE]
-        flight_time = stats[:, layout.FIRST_CONTACT_TIME]
-        end_time = stats[:, layout.END_TIME].copy()
-        data = self._episodes.data
-        info = {
-            "reward": reward,
-            "final_x": state[:, layout.X].copy(),
-            "final_y": state[:, layout.Y].copy(),
-            "final_angle": (angle + math.pi) % (2.0 * math.pi) - math.pi,
-            "face_down": task.faces_down(angle),
-            "at_rest": at_rest,
-            "success": success,
-            "distance": distance,
-            "orientation_error": orientation_error,
-            "flight_time": np.where(np.isnan(flight_time), end_time, flight_time),
-            "n_impacts": stats[:, layout.N_IMPACTS].astype(np.int64),
-            "n_steps": stats[:, layout.N_STEPS].astype(np.int64),
-            "max_penetration": stats[:, layout.MAX_PENETRATION].copy(),
-            "sim_time": end_time,
-            **terms,
-            "target_x": data[:, task.EP_TARGET_X].copy(),
-            "mass": data[:, task.EP_MASS].copy(),
-            "friction": data[:, task.EP_FRICTION].copy(),
-            "restitution": data[:, task.EP_RESTITUTION].copy(),
-        }
-        if self.config.base_box:
-            info.update(base_landing_info(base, state, self._episodes, self.config))
-        return info
 
     def render(self) -> tuple[np.ndarray, ...] | None:
         """One frame per env of its current state (the box in the hand after a step, since envs

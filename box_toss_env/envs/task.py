@@ -33,8 +33,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from box_toss_env.envs.arguments import BASE_DEFAULTS, ENV_ARGUMENTS
 from box_toss_env.physics import layout
-from box_toss_env.physics.ranges import ENGINE_RANGES, Range
+from box_toss_env.physics.ranges import Range
 from box_toss_env.physics.validation import check_bool, check_choice
 
 # -- target kinds: which faces may end down ------------------------------------------------------
@@ -215,34 +216,13 @@ class Episodes:
 
 
 # -- configuration ------------------------------------------------------------------------------
-ENV_RANGES = {
-    "box_length": ENGINE_RANGES["length"],
-    "box_width": ENGINE_RANGES["width"],
-    "mass": ENGINE_RANGES["mass"],  # and each end of mass_range
-    "friction": ENGINE_RANGES["friction"],  # and friction_range
-    "restitution": ENGINE_RANGES["restitution"],  # and restitution_range
-    "penalty_stiffness": ENGINE_RANGES["penalty_stiffness"],
-    "gravity": Range(1e-3, 1e4, "m/s^2"),
-    "release_x_range": Range(-1e3, 1e3, "m"),
-    "release_height_range": Range(0.0, 1e4, "m", low_open=True),  # and above the box's corner radius
-    "release_angle_range": Range(-math.pi, math.pi, "rad"),
-    "target_x_range": Range(-1e3, 1e3, "m"),
-    "max_speed": Range(0.0, 1e3, "m/s", low_open=True),
-    "launch_angle_range": Range(-math.pi, math.pi, "rad"),
-    "max_spin": Range(0.0, 1e4, "rad/s"),
-    "position_tolerance": Range(0.0, 1e3, "m", low_open=True),
-    "distance_weight": Range(0.0, 1e6, "1/m"),
-    "orientation_weight": Range(0.0, 1e6, "1/rad"),
-    "success_bonus": Range(0.0, 1e6),
-    "dt": ENGINE_RANGES["dt"],
-    "max_sim_time": Range(0.0, 1e4, "s", low_open=True),  # and max_sim_time / dt <= ranges.MAX_STEPS
-    "render_fps": Range(0.0, 1e3, "1/s", low_open=True),
-    "base_length_range": ENGINE_RANGES["length"],  # and base_height_range[1] <= base_length_range[0]
-    "base_height_range": ENGINE_RANGES["width"],
-    "base_mass": ENGINE_RANGES["mass"],
-}
-"""The env's arguments and their allowed ranges (docs/ranges.md): every observation stays finite in
-float32 and every throw is simulated, at every combination of them."""
+DYNAMICS_RANGES = ("mass_range", "friction_range", "restitution_range")
+ENV_RANGES = {argument.name: argument.allowed for argument in ENV_ARGUMENTS
+              if argument.allowed is not None and argument.name not in DYNAMICS_RANGES}
+"""The env's arguments and their allowed ranges (docs/ranges.md), read from their declaration
+(``arguments.ENV_ARGUMENTS``): every observation stays finite in float32 and every throw is simulated, at
+every combination of them. ``mass_range``, ``friction_range`` and ``restitution_range`` take the ranges of
+``mass``, ``friction`` and ``restitution`` at each end."""
 
 
 def check_interval(name: str, value, allowed: Range) -> tuple[float, float]:
@@ -310,10 +290,6 @@ def make_task_config(*, box_length, box_width, gravity, mass, friction, restitut
         **pairs,
         **base,
     )
-
-
-BASE_DEFAULTS = {"base_length_range": (0.6, 1.0), "base_height_range": (0.2, 0.5), "base_mass": 10.0}
-"""The base box's size ranges [m] and mass [kg] when ``base_box=True`` leaves them None."""
 
 
 def check_base_box(base_box, base_length_range, base_height_range, base_mass, target_x_range, release_x_range,

@@ -11,7 +11,7 @@ import ray  # noqa: E402
 
 from agents.rllib_envs import make_env, register_rllib_envs  # noqa: E402
 from agents.rllib_ppo import SUCCESS, make_config, summary  # noqa: E402
-from box_toss_env.vector.next_step import NextStepAutoreset  # noqa: E402
+from box_toss_env.wrappers.next_step import NextStepAutoreset  # noqa: E402
 
 
 @pytest.fixture(scope="module")

@@ -18,7 +18,7 @@ from box_toss_env.envs.ballistic import (
     face_angles,
 )
 from box_toss_env.physics import Box, Scene, simulate
-from box_toss_env.vector.ballistic import BallisticThrowsVector
+from box_toss_env.wrappers.ballistic import BallisticThrowsVector
 
 ENV_ID = "BoxToss-ShortEnd-v0"
 

@@ -241,8 +241,8 @@ def test_batched_results_do_not_depend_on_the_thread_count():
 
 
 def test_ballistic_commands_on_the_batch_and_the_sb3_adapter():
-    from box_toss_env.vector.ballistic import BallisticThrowsVector
-    from box_toss_env.vector.sb3_adapter import SB3VecEnvAdapter
+    from box_toss_env.wrappers.ballistic import BallisticThrowsVector
+    from box_toss_env.wrappers.sb3_adapter import SB3VecEnvAdapter
 
     venv = SB3VecEnvAdapter(BallisticThrowsVector(gym.make_vec(ENV_ID, num_envs=4,
                                                                vectorization_mode="vector_entry_point")))

@@ -15,7 +15,7 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.wrappers import vector as V
 
 import box_toss_env  # noqa: F401  (registers BoxToss-v0)
-from box_toss_env.vector.normalize import NormalizeObservation
+from box_toss_env.wrappers.normalize import NormalizeObservation
 
 ROOT = Path(__file__).resolve().parents[2]
 N = 8

@@ -151,7 +151,7 @@ def test_sb3_trains_on_the_batched_env_through_the_adapter():
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
 
-    from box_toss_env.vector.sb3_adapter import SB3VecEnvAdapter
+    from box_toss_env.wrappers.sb3_adapter import SB3VecEnvAdapter
 
     adapter = SB3VecEnvAdapter(gym.make_vec("BoxToss-v0", num_envs=4))
     adapter.seed(3)
@@ -167,7 +167,7 @@ def test_sb3_trains_on_the_batched_env_through_the_adapter():
 
 
 def test_the_adapter_refuses_next_step_autoreset():
-    from box_toss_env.vector.sb3_adapter import SB3VecEnvAdapter
+    from box_toss_env.wrappers.sb3_adapter import SB3VecEnvAdapter
 
     envs = gym.make_vec("BoxToss-v0", num_envs=2, vectorization_mode="sync")
     with pytest.raises(ValueError, match="SAME_STEP"):

@@ -8,8 +8,8 @@ import pytest
 from gymnasium.vector import AutoresetMode
 
 import box_toss_env  # noqa: F401  (registers BoxToss-v0)
-from box_toss_env.vector.disabled_autoreset import DisabledAutoreset
-from box_toss_env.vector.next_step import NextStepAutoreset
+from box_toss_env.wrappers.disabled_autoreset import DisabledAutoreset
+from box_toss_env.wrappers.next_step import NextStepAutoreset
 
 N = 4
 KWARGS = {"target_face": "mixed"}
