@@ -1,0 +1,153 @@
+"""The ceiling of ``BoxToss-Stack-v0``: a planner that searches each throw with the simulator.
+
+For every throw of an episode, a cross-entropy search over a throw command simulates candidate throws onto
+copies of the current scene (``BoxTossStackEnv.try_throws``: all candidates of a round in one call of the
+engine's colliding kernel), then throws the best one for real. The search is per throw and greedy: it
+scores a candidate by the env's reward of that throw minus ``centring_weight`` times how far the thrown
+box's centre ended from the target x (a centred box is a better base for the next one). Since a copy's
+simulation is bit for bit the env's, the throw made is exactly the one scored.
+
+The command c in [-1, 1]^3 (as ``envs.ballistic``'s, aimed at the stack's top): the flight time
+T = T_lo + (T_hi - T_lo) (c0 + 1) / 2, the touchdown x* = target_x + offset_range c1, and the touchdown
+angle phi = phi_flat + turn_range c2, phi_flat the angle nearest the release angle at which a long side
+is down; the centre touches down at the stack's height H plus h(phi) = (L/2)|sin phi| + (W/2)|cos phi|:
+
+    vx = (x* - x0) / T,   vy = (H + h(phi) - y0) / T + g T / 2,   spin = (phi - theta0) / T.
+
+    python -m agents.stack_planner --episodes 50               # success, height, throws simulated, seconds
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from dataclasses import asdict, dataclass
+
+import gymnasium as gym
+import numpy as np
+
+from box_toss_env.envs import stack_task
+
+TEST_FIRST_SEED = 10_000  # episodes are seeds 10000, 10001, ... (as the one-throw test targets)
+
+
+@dataclass(frozen=True)
+class StackPlannerSettings:
+    """The search budget per throw: ``initial`` uniform commands, then up to ``iterations`` rounds of
+    ``population`` commands drawn around the ``elite`` best so far (a Gaussian, its spread shrinking to
+    theirs); it stops early once a throw lands the box flat and centred on the stack."""
+
+    initial: int = 64
+    population: int = 32
+    elite: int = 6
+    iterations: int = 3
+    flight_time_range: tuple[float, float] = (0.3, 1.6)  # [s]
+    offset_range: float = 0.3  # [m]
+    turn_range: float = 0.25 * math.pi  # [rad]
+    centring_weight: float = 1.0  # [1/m]
+    threads: int | None = 1
+
+
+def command_actions(observation: np.ndarray, commands: np.ndarray, config: stack_task.StackConfig,
+                    settings: StackPlannerSettings) -> np.ndarray:
+    """The env actions (m, 3) of ``commands`` (m, 3) in [-1, 1] from ``observation`` (module docstring)."""
+    tail = observation[stack_task.BODY_SIZE * config.n_boxes:].astype(np.float64)
+    x0, y0 = tail[stack_task.H_X], tail[stack_task.H_Y]
+    theta0 = math.atan2(tail[stack_task.H_SIN], tail[stack_task.H_COS])
+    half_length, half_width = 0.5 * tail[stack_task.H_LENGTH], 0.5 * tail[stack_task.H_WIDTH]
+    t_low, t_high = settings.flight_time_range
+    flight_time = t_low + (t_high - t_low) * 0.5 * (commands[:, 0] + 1.0)
+    landing_x = tail[stack_task.G_TARGET_X] + settings.offset_range * commands[:, 1]
+    phi = round(theta0 / math.pi) * math.pi + settings.turn_range * commands[:, 2]
+    height = tail[stack_task.G_HEIGHT] + half_length * np.abs(np.sin(phi)) + half_width * np.abs(np.cos(phi))
+    vx = (landing_x - x0) / flight_time
+    vy = (height - y0) / flight_time + 0.5 * config.gravity * flight_time
+    spin = (phi - theta0) / flight_time
+    return stack_task.actions_of_throws(np.hypot(vx, vy), np.arctan2(vy, vx), spin, config)
+
+
+class StackPlanner:
+    """Plans each throw of a ``BoxToss-Stack-v0`` episode by a cross-entropy search with the simulator."""
+
+    def __init__(self, settings: StackPlannerSettings = StackPlannerSettings(), seed: int = 0):
+        self.settings = settings
+        self.rng = np.random.default_rng(seed)
+        self.simulated = 0  # candidate throws simulated so far
+
+    def plan(self, env: gym.Env, observation: np.ndarray) -> np.ndarray:
+        """The best action (3,) found for the box in the hand of ``env`` (which it leaves as it was)."""
+        unwrapped = env.unwrapped
+        config = unwrapped.config
+        settings = self.settings
+        k = unwrapped._thrown
+        width = float(observation[stack_task.BODY_SIZE * k + stack_task.B_WIDTH])  # of the box in the hand
+        commands = self.rng.uniform(-1.0, 1.0, (settings.initial, 3))
+        best_score, best_action = -np.inf, None
+        all_commands, all_scores = np.zeros((0, 3)), np.zeros(0)
+        for round_ in range(settings.iterations + 1):
+            actions = command_actions(observation, commands, config, settings)
+            outcomes = unwrapped.try_throws(actions, threads=settings.threads)
+            self.simulated += len(actions)
+            centre = np.abs(unwrapped.last_tried[:, k, 0] - unwrapped._target_x)
+            scores = outcomes.reward - settings.centring_weight * centre
+            i = int(np.argmax(scores))
+            if scores[i] > best_score:
+                best_score, best_action = scores[i], actions[i]
+            all_commands, all_scores = np.vstack((all_commands, commands)), np.concatenate((all_scores, scores))
+            flat_on_top = outcomes.terms["reward_height"][i] >= 0.95 * config.height_weight * width
+            if outcomes.success[i] or (flat_on_top and centre[i] < 0.03 and not outcomes.fell[i]):
+                break
+            if round_ == settings.iterations:
+                break
+            elite = all_commands[np.argsort(all_scores)[-settings.elite:]]
+            mean, std = elite.mean(axis=0), np.maximum(elite.std(axis=0), 0.02)
+            commands = np.clip(self.rng.normal(mean, std, (settings.population, 3)), -1.0, 1.0)
+        return best_action
+
+
+def run_episodes(n_episodes: int, settings: StackPlannerSettings = StackPlannerSettings(),
+                 first_seed: int = TEST_FIRST_SEED, env_kwargs: dict | None = None) -> dict:
+    """The planner on episodes seeded ``first_seed``, ``first_seed + 1``, ...: its success rate, mean final
+    stack height [m], falls, candidate throws simulated per throw made, and seconds."""
+    env = gym.make("BoxToss-Stack-v0", **(env_kwargs or {}))
+    planner = StackPlanner(settings)
+    successes, heights, falls, throws = [], [], [], 0
+    start = time.perf_counter()
+    for episode in range(n_episodes):
+        observation, _ = env.reset(seed=first_seed + episode)
+        terminated = False
+        while not terminated:
+            action = planner.plan(env, observation)
+            observation, _, terminated, _, info = env.step(action)
+            throws += 1
+        successes.append(info["success"])
+        heights.append(info["stack_height"])
+        falls.append(info["fell"])
+    seconds = time.perf_counter() - start
+    env.close()
+    return {"episodes": n_episodes, "success_rate": float(np.mean(successes)), "mean_height": float(np.mean(heights)),
+            "fall_rate": float(np.mean(falls)), "simulated_per_throw": planner.simulated / max(throws, 1),
+            "seconds": seconds, "budget": asdict(settings)}
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(prog="python -m agents.stack_planner", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--episodes", type=int, default=50)
+    parser.add_argument("--first-seed", type=int, default=TEST_FIRST_SEED)
+    parser.add_argument("--initial", type=int, default=StackPlannerSettings.initial)
+    parser.add_argument("--population", type=int, default=StackPlannerSettings.population)
+    parser.add_argument("--iterations", type=int, default=StackPlannerSettings.iterations)
+    parser.add_argument("--threads", type=int, default=1)
+    args = parser.parse_args(argv)
+    settings = StackPlannerSettings(initial=args.initial, population=args.population, iterations=args.iterations,
+                                    threads=args.threads)
+    result = run_episodes(args.episodes, settings, args.first_seed)
+    print(f"BoxToss-Stack-v0 planner on {result['episodes']} episodes (seeds {args.first_seed}...): success "
+          f"{100 * result['success_rate']:.1f}%, mean final height {result['mean_height']:.3f} m, falls "
+          f"{100 * result['fall_rate']:.1f}%, {result['simulated_per_throw']:.0f} candidate throws simulated per "
+          f"throw, {result['seconds']:.1f} s; budget {result['budget']}")
+
+
+if __name__ == "__main__":
+    main()
