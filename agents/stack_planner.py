@@ -14,7 +14,7 @@ is down; the centre touches down at the stack's height H plus h(phi) = (L/2)|sin
 
     vx = (x* - x0) / T,   vy = (H + h(phi) - y0) / T + g T / 2,   spin = (phi - theta0) / T.
 
-    python -m agents.stack_planner --episodes 50               # success, height, throws simulated, seconds
+    python -m agents.stack_planner --episodes 50 --readme      # success, height, throws simulated, seconds per budget
 """
 
 from __future__ import annotations
@@ -27,6 +27,7 @@ from dataclasses import asdict, dataclass
 import gymnasium as gym
 import numpy as np
 
+from agents.doc_sections import replace_section
 from box_toss_env.envs import stack_task
 
 TEST_FIRST_SEED = 10_000  # episodes are seeds 10000, 10001, ... (as the one-throw test targets)
@@ -131,22 +132,48 @@ def run_episodes(n_episodes: int, settings: StackPlannerSettings = StackPlannerS
             "seconds": seconds, "budget": asdict(settings)}
 
 
+BUDGETS = {
+    "small": StackPlannerSettings(initial=16, population=8, elite=4, iterations=1),
+    "default": StackPlannerSettings(),
+    "large": StackPlannerSettings(initial=128, population=64, elite=8, iterations=5),
+}
+"""Growing searches per throw: the ceiling is the success where a larger one stops raising it."""
+
+
+def budget_table(rows: list[tuple[str, dict]], first_seed: int) -> str:
+    """The sweep as the markdown section of docs/stack.md."""
+    lines = ["| budget (initial, population, elite, rounds) | success | mean final height | stack fell | "
+             "throws simulated per throw | seconds |", "|---|---|---|---|---|---|"]
+    for name, result in rows:
+        b = result["budget"]
+        lines.append(f"| {name} ({b['initial']}, {b['population']}, {b['elite']}, {b['iterations']}) | "
+                     f"{100 * result['success_rate']:.1f}% | {result['mean_height']:.3f} m | "
+                     f"{100 * result['fall_rate']:.1f}% | {result['simulated_per_throw']:.0f} | "
+                     f"{result['seconds']:.0f} |")
+    n = rows[0][1]["episodes"]
+    command = f"python -m agents.stack_planner --episodes {n} --budgets {' '.join(name for name, _ in rows)} --readme"
+    return (f"Measured on {n} episodes (seeds {first_seed}...) of the default `BoxToss-Stack-v0` (a hand of 4), "
+            f"one engine thread, by `{command}`:\n\n" + "\n".join(lines))
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m agents.stack_planner", description=__doc__.split("\n\n")[0])
     parser.add_argument("--episodes", type=int, default=50)
     parser.add_argument("--first-seed", type=int, default=TEST_FIRST_SEED)
-    parser.add_argument("--initial", type=int, default=StackPlannerSettings.initial)
-    parser.add_argument("--population", type=int, default=StackPlannerSettings.population)
-    parser.add_argument("--iterations", type=int, default=StackPlannerSettings.iterations)
-    parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--budgets", nargs="+", choices=sorted(BUDGETS), default=list(BUDGETS))
+    parser.add_argument("--readme", action="store_true", help="write the table into docs/stack.md")
     args = parser.parse_args(argv)
-    settings = StackPlannerSettings(initial=args.initial, population=args.population, iterations=args.iterations,
-                                    threads=args.threads)
-    result = run_episodes(args.episodes, settings, args.first_seed)
-    print(f"BoxToss-Stack-v0 planner on {result['episodes']} episodes (seeds {args.first_seed}...): success "
-          f"{100 * result['success_rate']:.1f}%, mean final height {result['mean_height']:.3f} m, falls "
-          f"{100 * result['fall_rate']:.1f}%, {result['simulated_per_throw']:.0f} candidate throws simulated per "
-          f"throw, {result['seconds']:.1f} s; budget {result['budget']}")
+    rows = []
+    for name in args.budgets:
+        result = run_episodes(args.episodes, BUDGETS[name], args.first_seed)
+        rows.append((name, result))
+        print(f"{name}: success {100 * result['success_rate']:.1f}%, mean final height {result['mean_height']:.3f} m, "
+              f"falls {100 * result['fall_rate']:.1f}%, {result['simulated_per_throw']:.0f} candidate throws "
+              f"simulated per throw, {result['seconds']:.1f} s", flush=True)
+    table = budget_table(rows, args.first_seed)
+    print(table)
+    if args.readme:
+        replace_section("stack-ceiling", table)
 
 
 if __name__ == "__main__":
