@@ -7,12 +7,8 @@ scores a candidate by the env's reward of that throw minus ``centring_weight`` t
 box's centre ended from the target x (a centred box is a better base for the next one). Since a copy's
 simulation is bit for bit the env's, the throw made is exactly the one scored.
 
-The command c in [-1, 1]^3 (as ``envs.ballistic``'s, aimed at the stack's top): the flight time
-T = T_lo + (T_hi - T_lo) (c0 + 1) / 2, the touchdown x* = target_x + offset_range c1, and the touchdown
-angle phi = phi_flat + turn_range c2, phi_flat the angle nearest the release angle at which a long side
-is down; the centre touches down at the stack's height H plus h(phi) = (L/2)|sin phi| + (W/2)|cos phi|:
-
-    vx = (x* - x0) / T,   vy = (H + h(phi) - y0) / T + g T / 2,   spin = (phi - theta0) / T.
+The command c in [-1, 1]^3 is ``envs.stack_commands``' (flight time, touchdown offset from the target x, lean
+from lying flat, aimed at the stack's top), the action space PPO is trained in too.
 
     python -m agents.stack_planner --episodes 50 --readme      # success, height, throws simulated, seconds per budget
 """
@@ -20,15 +16,15 @@ is down; the centre touches down at the stack's height H plus h(phi) = (L/2)|sin
 from __future__ import annotations
 
 import argparse
-import math
 import time
 from dataclasses import asdict, dataclass
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 
 from agents.doc_sections import replace_section
-from box_toss_env.envs import stack_task
+from box_toss_env.envs import stack_commands, stack_task
 
 TEST_FIRST_SEED = 10_000  # episodes are seeds 10000, 10001, ... (as the one-throw test targets)
 
@@ -43,29 +39,18 @@ class StackPlannerSettings:
     population: int = 32
     elite: int = 6
     iterations: int = 3
-    flight_time_range: tuple[float, float] = (0.3, 1.6)  # [s]
-    offset_range: float = 0.3  # [m]
-    turn_range: float = 0.25 * math.pi  # [rad]
+    flight_time_range: tuple[float, float] = stack_commands.FLIGHT_TIME_RANGE  # [s]
+    offset_range: float = stack_commands.OFFSET_RANGE  # [m]
+    turn_range: float = stack_commands.TURN_RANGE  # [rad]
     centring_weight: float = 1.0  # [1/m]
     threads: int | None = 1
 
 
 def command_actions(observation: np.ndarray, commands: np.ndarray, config: stack_task.StackConfig,
                     settings: StackPlannerSettings) -> np.ndarray:
-    """The env actions (m, 3) of ``commands`` (m, 3) in [-1, 1] from ``observation`` (module docstring)."""
-    tail = observation[stack_task.BODY_SIZE * config.n_boxes:].astype(np.float64)
-    x0, y0 = tail[stack_task.H_X], tail[stack_task.H_Y]
-    theta0 = math.atan2(tail[stack_task.H_SIN], tail[stack_task.H_COS])
-    half_length, half_width = 0.5 * tail[stack_task.H_LENGTH], 0.5 * tail[stack_task.H_WIDTH]
-    t_low, t_high = settings.flight_time_range
-    flight_time = t_low + (t_high - t_low) * 0.5 * (commands[:, 0] + 1.0)
-    landing_x = tail[stack_task.G_TARGET_X] + settings.offset_range * commands[:, 1]
-    phi = round(theta0 / math.pi) * math.pi + settings.turn_range * commands[:, 2]
-    height = tail[stack_task.G_HEIGHT] + half_length * np.abs(np.sin(phi)) + half_width * np.abs(np.cos(phi))
-    vx = (landing_x - x0) / flight_time
-    vy = (height - y0) / flight_time + 0.5 * config.gravity * flight_time
-    spin = (phi - theta0) / flight_time
-    return stack_task.actions_of_throws(np.hypot(vx, vy), np.arctan2(vy, vx), spin, config)
+    """The env actions (m, 3) of ``commands`` (m, 3) in [-1, 1] from ``observation`` (``envs.stack_commands``)."""
+    return stack_commands.command_actions(observation, commands, config, settings.flight_time_range,
+                                          settings.offset_range, settings.turn_range)
 
 
 class StackPlanner:
@@ -107,20 +92,17 @@ class StackPlanner:
         return best_action
 
 
-def run_episodes(n_episodes: int, settings: StackPlannerSettings = StackPlannerSettings(),
-                 first_seed: int = TEST_FIRST_SEED, env_kwargs: dict | None = None) -> dict:
-    """The planner on episodes seeded ``first_seed``, ``first_seed + 1``, ...: its success rate, mean final
-    stack height [m], falls, candidate throws simulated per throw made, and seconds."""
+def play_episodes(n_episodes: int, act, first_seed: int = TEST_FIRST_SEED, env_kwargs: dict | None = None) -> dict:
+    """``act(env, observation) -> action`` on episodes seeded ``first_seed``, ``first_seed + 1``, ...: its success
+    rate, mean final stack height [m], falls, throws made and seconds."""
     env = gym.make("BoxToss-Stack-v0", **(env_kwargs or {}))
-    planner = StackPlanner(settings)
     successes, heights, falls, throws = [], [], [], 0
     start = time.perf_counter()
     for episode in range(n_episodes):
         observation, _ = env.reset(seed=first_seed + episode)
         terminated = False
         while not terminated:
-            action = planner.plan(env, observation)
-            observation, _, terminated, _, info = env.step(action)
+            observation, _, terminated, _, info = env.step(act(env, observation))
             throws += 1
         successes.append(info["success"])
         heights.append(info["stack_height"])
@@ -128,8 +110,37 @@ def run_episodes(n_episodes: int, settings: StackPlannerSettings = StackPlannerS
     seconds = time.perf_counter() - start
     env.close()
     return {"episodes": n_episodes, "success_rate": float(np.mean(successes)), "mean_height": float(np.mean(heights)),
-            "fall_rate": float(np.mean(falls)), "simulated_per_throw": planner.simulated / max(throws, 1),
-            "seconds": seconds, "budget": asdict(settings)}
+            "fall_rate": float(np.mean(falls)), "throws": throws, "seconds": seconds}
+
+
+def run_episodes(n_episodes: int, settings: StackPlannerSettings = StackPlannerSettings(),
+                 first_seed: int = TEST_FIRST_SEED, env_kwargs: dict | None = None) -> dict:
+    """The planner on ``play_episodes``' episodes, with the candidate throws it simulated per throw made."""
+    planner = StackPlanner(settings)
+    result = play_episodes(n_episodes, planner.plan, first_seed, env_kwargs)
+    return {**result, "simulated_per_throw": planner.simulated / max(result["throws"], 1), "budget": asdict(settings)}
+
+
+def zoo_policy(run_dir: Path):
+    """``act(env, observation)`` of a PPO model that RL Zoo trained on ``BoxToss-Stack-v0`` in throw commands
+    (``run_dir`` holds ``BoxToss-Stack-v0.zip`` and, with normalisation, ``BoxToss-Stack-v0/vecnormalize.pkl``);
+    it acts deterministically (the mean command)."""
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
+
+    model = PPO.load(run_dir / "BoxToss-Stack-v0.zip", device="cpu")
+    statistics = run_dir / "BoxToss-Stack-v0" / "vecnormalize.pkl"
+    normalize = None
+    if statistics.exists():
+        normalize = VecNormalize.load(str(statistics), DummyVecEnv([lambda: gym.make("BoxToss-Stack-v0")]))
+        normalize.training = False
+
+    def act(env: gym.Env, observation: np.ndarray) -> np.ndarray:
+        seen = normalize.normalize_obs(observation[None]) if normalize is not None else observation[None]
+        command, _ = model.predict(seen, deterministic=True)
+        return stack_commands.command_actions(observation, command, env.unwrapped.config)[0].astype(np.float32)
+
+    return act
 
 
 BUDGETS = {
@@ -162,7 +173,14 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--first-seed", type=int, default=TEST_FIRST_SEED)
     parser.add_argument("--budgets", nargs="+", choices=sorted(BUDGETS), default=list(BUDGETS))
     parser.add_argument("--readme", action="store_true", help="write the table into docs/stack.md")
+    parser.add_argument("--model", type=Path, help="evaluate this RL Zoo run folder's PPO instead of the planner")
     args = parser.parse_args(argv)
+    if args.model is not None:
+        result = play_episodes(args.episodes, zoo_policy(args.model), args.first_seed)
+        print(f"{args.model}: success {100 * result['success_rate']:.1f}%, mean final height "
+              f"{result['mean_height']:.3f} m, falls {100 * result['fall_rate']:.1f}% on {result['episodes']} "
+              f"episodes (seeds {args.first_seed}...), {result['throws'] / result['seconds']:.0f} throws/s")
+        return
     rows = []
     for name in args.budgets:
         result = run_episodes(args.episodes, BUDGETS[name], args.first_seed)

@@ -57,3 +57,20 @@ def test_the_command_touches_down_on_the_stack_top():
     assert abs(x - observation[tail + stack_task.G_TARGET_X]) < 1e-5
     assert abs(y - (0.4 + 0.5 * observation[tail + stack_task.H_WIDTH])) < 1e-5
     assert set(BUDGETS) == {"small", "default", "large"}
+
+
+def test_a_zoo_run_folder_is_evaluated_with_its_normalisation(tmp_path):
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
+
+    from agents.stack_planner import play_episodes, zoo_policy
+    from box_toss_env.envs.stack_commands import StackCommands
+
+    venv = VecNormalize(DummyVecEnv([lambda: StackCommands(gym.make("BoxToss-Stack-v0"))]), norm_reward=False)
+    model = PPO("MlpPolicy", venv, n_steps=8, batch_size=8, n_epochs=1, seed=0)
+    model.learn(8)
+    model.save(tmp_path / "BoxToss-Stack-v0.zip")
+    (tmp_path / "BoxToss-Stack-v0").mkdir()
+    venv.save(str(tmp_path / "BoxToss-Stack-v0" / "vecnormalize.pkl"))
+    result = play_episodes(2, zoo_policy(tmp_path))
+    assert result["episodes"] == 2 and 2 <= result["throws"] <= 8 and 0.0 <= result["success_rate"] <= 1.0

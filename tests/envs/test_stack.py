@@ -13,18 +13,18 @@ import pytest
 from gymnasium.error import ResetNeeded
 
 import box_toss_env  # noqa: F401  (registers the ids)
-from agents.stack_planner import StackPlannerSettings, command_actions
 from box_toss_env.envs import stack_task
 from box_toss_env.envs.stack import BoxTossStackEnv
+from box_toss_env.envs.stack_commands import StackCommands, command_actions
 
 ENV_ID = "BoxToss-Stack-v0"
 LOB = np.array([[0.6, 0.0, 0.0]])
-"""A command by hand (``agents.stack_planner``): a lob of 1.08 s touching down flat on the stack's top, at the
+"""A command by hand (``envs.stack_commands``): a lob of 1.08 s touching down flat on the stack's top, at the
 target x."""
 
 
 def lob(env, observation) -> np.ndarray:
-    return command_actions(observation, LOB, env.unwrapped.config, StackPlannerSettings())[0].astype(np.float32)
+    return command_actions(observation, LOB, env.unwrapped.config)[0].astype(np.float32)
 
 
 def test_registered_with_its_spaces():
@@ -214,3 +214,16 @@ def test_make_vec_runs_single_envs_with_their_results():
     _, rewards, _, _, _ = envs.step(actions[0])
     for i in range(2):
         assert rewards[i] == single[i][1][0]
+
+
+def test_stack_commands_act_through_the_command_map():
+    """The wrapper throws what ``command_actions`` maps its command to; its observations and rewards are the env's."""
+    wrapped = StackCommands(gym.make(ENV_ID))
+    env = gym.make(ENV_ID)
+    observation, _ = wrapped.reset(seed=4)
+    assert observation.tobytes() == env.reset(seed=4)[0].tobytes()
+    for _ in range(2):
+        expected = env.step(lob(env, observation))
+        observation, reward, terminated, _, info = wrapped.step(LOB[0])
+        assert observation.tobytes() == expected[0].tobytes() and reward == expected[1]
+    assert info["stack_size"] == 2 and not info["fell"]
