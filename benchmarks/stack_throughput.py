@@ -1,0 +1,56 @@
+"""Throws per second of one ``BoxToss-Stack-v0`` env made with ``gymnasium.make``: whole episodes (``reset`` and
+one ``step`` per box of the hand, until the episode ends), with random actions and with a lob onto the stack's top
+(the throw command c = (0.6, 0, 0) of ``envs.stack_commands``, whose episodes build the whole stack). Prints
+measured figures; asserts nothing.
+
+    python -m benchmarks.stack_throughput [--episodes 100]
+
+A throw's cost grows with the scene: every body of it is simulated until all of them rest (the engine's colliding
+kernel, with sleeping islands). The first episode (loading the compiled kernel) is not timed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import gymnasium as gym
+import numpy as np
+
+import box_toss_env  # noqa: F401  (registers BoxToss-Stack-v0)
+from box_toss_env.envs.stack_commands import command_actions
+
+LOB = np.array([[0.6, 0.0, 0.0]])
+
+
+def episodes_per_policy(env: gym.Env, n_episodes: int, act) -> tuple[float, float]:
+    """(throws per second, throws per episode) of ``act(observation)`` over ``n_episodes`` seeded 0, 1, ..."""
+    throws = 0
+    start = time.perf_counter()
+    for seed in range(n_episodes):
+        observation, _ = env.reset(seed=seed)
+        terminated = False
+        while not terminated:
+            observation, _, terminated, _, _ = env.step(act(observation))
+            throws += 1
+    return throws / (time.perf_counter() - start), throws / n_episodes
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.stack_throughput", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--episodes", type=int, default=100)
+    args = parser.parse_args(argv)
+    env = gym.make("BoxToss-Stack-v0")
+    config = env.unwrapped.config
+    rng = np.random.default_rng(0)
+    policies = {"random actions": lambda observation: rng.uniform(-1, 1, 3).astype(np.float32),
+                "lob onto the stack": lambda observation: command_actions(observation, LOB, config)[0]}
+    episodes_per_policy(env, 1, policies["lob onto the stack"])  # load the compiled kernel
+    for name, act in policies.items():
+        rate, length = episodes_per_policy(env, args.episodes, act)
+        print(f"BoxToss-Stack-v0, {name}: {rate:.0f} throws/s ({length:.2f} throws per episode, {args.episodes} "
+              f"episodes, gymnasium.make)")
+
+
+if __name__ == "__main__":
+    main()
