@@ -188,17 +188,17 @@ def actions_of_throws(speed: np.ndarray, direction: np.ndarray, spin: np.ndarray
 
 # -- the stack -------------------------------------------------------------------------------------------
 def tops(states: np.ndarray, half: np.ndarray) -> np.ndarray:
-    """(..., k) height of each box's highest corner [m]: y + hx |sin a| + hy |cos a|."""
+    """(..., k) height of each box's highest corner [m]: y + hx |sin a| + hy |cos a| (``half`` (..., k, 2))."""
     angle = states[..., layout.ANGLE]
-    return states[..., layout.Y] + half[:, 0] * np.abs(np.sin(angle)) + half[:, 1] * np.abs(np.cos(angle))
+    return states[..., layout.Y] + half[..., 0] * np.abs(np.sin(angle)) + half[..., 1] * np.abs(np.cos(angle))
 
 
-def on_target(states: np.ndarray, target_x: float, config: StackConfig) -> np.ndarray:
-    """(..., k) whether each box's centre lies within ``target_radius`` of the target x."""
-    return np.abs(states[..., layout.X] - target_x) <= config.target_radius
+def on_target(states: np.ndarray, target_x, config: StackConfig) -> np.ndarray:
+    """(..., k) whether each box's centre lies within ``target_radius`` of the target x (a scalar or (...,))."""
+    return np.abs(states[..., layout.X] - np.asarray(target_x)[..., None]) <= config.target_radius
 
 
-def stack_heights(states: np.ndarray, half: np.ndarray, target_x: float, config: StackConfig) -> np.ndarray:
+def stack_heights(states: np.ndarray, half: np.ndarray, target_x, config: StackConfig) -> np.ndarray:
     """(...) the stack's height: the highest top of the boxes on the target, 0 without any [m]."""
     if states.shape[-2] == 0:
         return np.zeros(states.shape[:-2])
@@ -207,7 +207,7 @@ def stack_heights(states: np.ndarray, half: np.ndarray, target_x: float, config:
 
 @dataclass
 class ThrowOutcomes:
-    """What m throws of the same box onto the same scene did, (m,) arrays (``score_throws``)."""
+    """What m throws did, (m,) arrays (``score_throws``)."""
 
     reward: np.ndarray
     terms: dict[str, np.ndarray]
@@ -219,27 +219,28 @@ class ThrowOutcomes:
     distance: np.ndarray  # [m] of the thrown box's centre from the target x
 
 
-def score_throws(before: np.ndarray, after: np.ndarray, half: np.ndarray, at_rest: np.ndarray, target_x: float,
+def score_throws(before: np.ndarray, after: np.ndarray, half: np.ndarray, at_rest: np.ndarray, target_x,
                  config: StackConfig) -> ThrowOutcomes:
-    """Score throws of box k onto a scene of k boxes: ``before`` (k, 6) the scene before it, ``after``
-    (m, k + 1, 6) the scene once the throw came to rest (the thrown box last), ``half`` (k + 1, 2), ``at_rest``
-    (m,) whether every body rests. Rewards (the env's docstring):
+    """Score m throws of box k onto scenes of k boxes: ``before`` ((m,) k, 6) the scene before it, ``after``
+    (m, k + 1, 6) the scene once the throw came to rest (the thrown box last), ``half`` ((m,) k + 1, 2),
+    ``at_rest`` (m,) whether every body rests, ``target_x`` a scalar or (m,). Rewards (the env's docstring):
 
         reward_height   = height_weight * (H_after - H_before)
         reward_distance = -distance_weight * max(|x_thrown - target_x| - target_radius, 0)
         reward_fall     = -fall_penalty * fell
         reward_success  = success_bonus * success   (only the last box of the hand can succeed)
     """
-    k = before.shape[0]
-    height_before = stack_heights(before, half[:k], target_x, config)
+    k = before.shape[-2]
+    half_before = half[..., :k, :]
+    height_before = stack_heights(before, half_before, target_x, config)
     height = stack_heights(after, half, target_x, config)
     members = on_target(after, target_x, config)
     was_member = on_target(before, target_x, config)
-    dropped = tops(before, half[:k]) - tops(after[:, :k], half[:k]) > config.fall_tolerance
+    dropped = tops(before, half_before) - tops(after[:, :k], half_before) > config.fall_tolerance
     fell = np.any(was_member & (~members[:, :k] | dropped), axis=1)
     distance = np.abs(after[:, k, layout.X] - target_x)
     last = k + 1 == config.n_boxes
-    needed = config.success_fraction * np.sum(2.0 * half[:, 1])
+    needed = config.success_fraction * np.sum(2.0 * half[..., 1], axis=-1)
     success = last & at_rest & ~fell & members.all(axis=1) & (height >= needed)
     terms = {
         "reward_height": config.height_weight * (height - height_before),
@@ -253,29 +254,35 @@ def score_throws(before: np.ndarray, after: np.ndarray, half: np.ndarray, at_res
 
 
 # -- observation -----------------------------------------------------------------------------------------
-def observe(states: np.ndarray, hand: np.ndarray, thrown: int, target_x: float, height: float,
-            config: StackConfig) -> np.ndarray:
-    """The float32 observation (obs_size,) of a scene whose first ``thrown`` boxes are thrown (``states``
-    (n_boxes, 6): their rows are the engine's), with the hand (n_boxes, EPISODE_COLUMNS) and the stack's
-    ``height``; the layout is ``BODY_COLUMNS`` per box, then ``TAIL_COLUMNS``."""
-    n = config.n_boxes
-    bodies = np.zeros((n, BODY_SIZE))
-    angle = states[:thrown, layout.ANGLE]
-    bodies[:thrown, B_X:B_Y + 1] = states[:thrown, layout.X:layout.Y + 1]
-    bodies[:thrown, B_COS], bodies[:thrown, B_SIN] = np.cos(angle), np.sin(angle)
-    bodies[:thrown, B_VX:B_SPIN + 1] = states[:thrown, layout.VX:]
-    bodies[:, B_LENGTH:B_MASS + 1] = hand[:, E_LENGTH:E_MASS + 1]
-    bodies[:thrown, B_THROWN] = 1.0
-    tail = np.zeros(TAIL_SIZE)
-    if thrown < n:
-        box = hand[thrown]
-        tail[H_X], tail[H_Y] = box[E_RELEASE_X], box[E_RELEASE_Y]
-        tail[H_COS], tail[H_SIN] = math.cos(box[E_RELEASE_ANGLE]), math.sin(box[E_RELEASE_ANGLE])
-        tail[H_LENGTH:H_MASS + 1] = box[E_LENGTH:E_MASS + 1]
-        tail[H_IN_HAND] = 1.0
-    tail[G_TARGET_X], tail[G_TARGET_RADIUS], tail[G_HEIGHT], tail[G_LEFT] = target_x, config.target_radius, height, (
-        n - thrown)
-    return np.concatenate((bodies.ravel(), tail)).astype(np.float32)
+def observe(states: np.ndarray, hand: np.ndarray, thrown, target_x, height, config: StackConfig) -> np.ndarray:
+    """The float32 observations ((m,) obs_size) of scenes whose first ``thrown`` ((m,)) boxes are thrown: ``states``
+    ((m,) n_boxes, 6), their rows the engine's, the hands ((m,) n_boxes, EPISODE_COLUMNS), the target x and the
+    stack's ``height`` (scalars or (m,)); the layout is ``BODY_COLUMNS`` per box, then ``TAIL_COLUMNS``."""
+    single = states.ndim == 2
+    states, hand = (states[None], hand[None]) if single else (states, hand)
+    m, n = states.shape[0], config.n_boxes
+    thrown = np.broadcast_to(np.asarray(thrown), (m,))
+    is_thrown = np.arange(n) < thrown[:, None]  # (m, n)
+    angle = states[..., layout.ANGLE]
+    bodies = np.zeros((m, n, BODY_SIZE))
+    bodies[..., B_X:B_Y + 1] = states[..., layout.X:layout.Y + 1]
+    bodies[..., B_COS], bodies[..., B_SIN] = np.cos(angle), np.sin(angle)
+    bodies[..., B_VX:B_SPIN + 1] = states[..., layout.VX:]
+    bodies[..., :B_LENGTH] *= is_thrown[..., None]
+    bodies[..., B_LENGTH:B_MASS + 1] = hand[..., E_LENGTH:E_MASS + 1]
+    bodies[..., B_THROWN] = is_thrown
+    in_hand = thrown < n
+    box = hand[np.arange(m), np.minimum(thrown, n - 1)] * in_hand[:, None]  # (m, EPISODE_COLUMNS), 0 when empty
+    tail = np.zeros((m, TAIL_SIZE))
+    tail[:, H_X], tail[:, H_Y] = box[:, E_RELEASE_X], box[:, E_RELEASE_Y]
+    tail[:, H_COS] = np.cos(box[:, E_RELEASE_ANGLE]) * in_hand
+    tail[:, H_SIN] = np.sin(box[:, E_RELEASE_ANGLE])
+    tail[:, H_LENGTH:H_MASS + 1] = box[:, E_LENGTH:E_MASS + 1]
+    tail[:, H_IN_HAND] = in_hand
+    tail[:, G_TARGET_X], tail[:, G_TARGET_RADIUS], tail[:, G_HEIGHT] = target_x, config.target_radius, height
+    tail[:, G_LEFT] = n - thrown
+    observations = np.concatenate((bodies.reshape(m, -1), tail), axis=1).astype(np.float32)
+    return observations[0] if single else observations
 
 
 def observation_bounds(config: StackConfig, horizon: float) -> tuple[np.ndarray, np.ndarray]:
