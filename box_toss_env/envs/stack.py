@@ -165,11 +165,11 @@ class BoxTossStackEnv(gym.Env):
     height over it, and the throw count, height and score (the return so far) written top-left; after the
     last throw or a fall, the result top-right. ``"human"`` shows the same in a window after each step.
 
-    Batching: each env's scene grows by one body per throw, so envs of one batch hold scenes of different
-    sizes; ``gymnasium.make_vec("BoxToss-Stack-v0", num_envs=n)`` gives Gymnasium's ``SyncVectorEnv`` of
-    single envs (SB3: ``DummyVecEnv``), whose results are the single envs' by construction. ``try_throws``
-    simulates many candidate throws onto copies of the current scene in one compiled call (the planner's
-    search, ``agents.stack_planner``).
+    Batching: ``gymnasium.make_vec("BoxToss-Stack-v0", num_envs=n)`` gives the native batched env
+    (``stack_vector.BoxTossStackVectorEnv``): one compiled call per scene size present in the batch, every env bit
+    for bit this env seeded alike, same-step autoreset. ``vectorization_mode="sync"`` gives Gymnasium's
+    ``SyncVectorEnv`` of single envs (SB3: ``DummyVecEnv``). ``try_throws`` simulates many candidate throws onto
+    copies of the current scene in one compiled call (the planner's search, ``agents.stack_planner``).
 
     ## Version History
 

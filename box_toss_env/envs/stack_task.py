@@ -132,39 +132,46 @@ def make_stack_config(**kwargs) -> StackConfig:
 
 
 # -- drawing an episode ----------------------------------------------------------------------------------
-def episode_from_uniforms(u: np.ndarray, config: StackConfig) -> tuple[np.ndarray, float]:
-    """The hand (n_boxes, EPISODE_COLUMNS): length, width [m], mass [kg], release x, y [m], angle [rad] of
-    each box, and the target x [m], from uniform variates u (n_boxes * EPISODE_COLUMNS + 1,) in [0, 1)."""
+def episode_from_uniforms(u: np.ndarray, config: StackConfig) -> tuple[np.ndarray, np.ndarray]:
+    """The hands ((m,) n_boxes, EPISODE_COLUMNS): length, width [m], mass [kg], release x, y [m], angle [rad] of
+    each box, and the target x [m] ((m,) or a 0-d array), from uniform variates u ((m,) n_boxes * EPISODE_COLUMNS
+    + 1) in [0, 1)."""
     n = config.n_boxes
-    boxes = u[:n * EPISODE_COLUMNS].reshape(n, EPISODE_COLUMNS)
+    boxes = u[..., :n * EPISODE_COLUMNS].reshape(u.shape[:-1] + (n, EPISODE_COLUMNS))
     ranges = np.array([config.box_length_range, config.box_width_range, config.mass_range, config.release_x_range,
                        config.release_height_range, config.release_angle_range])
     hand = ranges[:, 0] + (ranges[:, 1] - ranges[:, 0]) * boxes
     low, high = config.target_x_range
-    return hand, float(low + (high - low) * u[-1])
+    return hand, low + (high - low) * u[..., -1]
+
+
+def uniforms_per_episode(config: StackConfig) -> int:
+    """How many uniform variates one episode draws (one call of ``Generator.random`` per reset)."""
+    return config.n_boxes * EPISODE_COLUMNS + 1
 
 
 def draw_episode(rng: np.random.Generator, config: StackConfig) -> tuple[np.ndarray, float]:
     """``episode_from_uniforms`` of one draw from ``rng`` (one call per reset, so a seed fixes the episode)."""
-    return episode_from_uniforms(rng.random(config.n_boxes * EPISODE_COLUMNS + 1), config)
+    hand, target_x = episode_from_uniforms(rng.random(uniforms_per_episode(config)), config)
+    return hand, float(target_x)
 
 
 def body_params(hand: np.ndarray, config: StackConfig) -> np.ndarray:
-    """The engine's body parameters (n_boxes, 7) of a hand: uniform boxes, the scene's material."""
-    params = np.empty((len(hand), layout.PARAM_SIZE))
-    length, width, mass = hand[:, E_LENGTH], hand[:, E_WIDTH], hand[:, E_MASS]
-    params[:, layout.HALF_LENGTH] = 0.5 * length
-    params[:, layout.HALF_WIDTH] = 0.5 * width
-    params[:, layout.MASS] = mass
-    params[:, layout.INERTIA] = mass * (length**2 + width**2) / 12.0
-    params[:, layout.RESTITUTION] = config.restitution
-    params[:, layout.FRICTION] = config.friction
-    params[:, layout.STIFFNESS] = config.penalty_stiffness
+    """The engine's body parameters ((m,) n_boxes, 7) of hands: uniform boxes, the scene's material."""
+    params = np.empty(hand.shape[:-1] + (layout.PARAM_SIZE,))
+    length, width, mass = hand[..., E_LENGTH], hand[..., E_WIDTH], hand[..., E_MASS]
+    params[..., layout.HALF_LENGTH] = 0.5 * length
+    params[..., layout.HALF_WIDTH] = 0.5 * width
+    params[..., layout.MASS] = mass
+    params[..., layout.INERTIA] = mass * (length**2 + width**2) / 12.0
+    params[..., layout.RESTITUTION] = config.restitution
+    params[..., layout.FRICTION] = config.friction
+    params[..., layout.STIFFNESS] = config.penalty_stiffness
     return params
 
 
 def thrown_states(release: np.ndarray, actions: np.ndarray, config: StackConfig) -> np.ndarray:
-    """(m, 6) engine states of a box released at ``release`` (x, y, angle) and thrown with ``actions``
+    """(m, 6) engine states of boxes released at ``release`` ((m,) 3: x, y, angle) and thrown with ``actions``
     (m, 3) in [-1, 1]: speed = max_speed (a0 + 1) / 2, direction = lo + (hi - lo) (a1 + 1) / 2 above the
     horizontal, spin = max_spin a2 (as ``BoxToss-v0``)."""
     speed = 0.5 * config.max_speed * (actions[:, 0] + 1.0)

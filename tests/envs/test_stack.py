@@ -201,10 +201,8 @@ def test_ppo_smoke():
     assert action.shape == (1, 3) and np.all(np.abs(action) <= 1.0)
 
 
-def test_make_vec_runs_single_envs_with_their_results():
-    """Scenes of different sizes per env: ``make_vec`` gives Gymnasium's SyncVectorEnv of single envs, each
-    bit for bit the single env seeded alike (env i seeded s + i)."""
-    envs = gym.make_vec(ENV_ID, num_envs=2)
+def test_make_vec_sync_runs_single_envs_with_their_results():
+    envs = gym.make_vec(ENV_ID, num_envs=2, vectorization_mode="sync")
     assert isinstance(envs, gym.vector.SyncVectorEnv)
     actions = np.random.default_rng(1).uniform(-1, 1, (3, 2, 3)).astype(np.float32)
     observations, _ = envs.reset(seed=20)
@@ -214,6 +212,60 @@ def test_make_vec_runs_single_envs_with_their_results():
     _, rewards, _, _, _ = envs.step(actions[0])
     for i in range(2):
         assert rewards[i] == single[i][1][0]
+
+
+def single_episodes(seed: int, policy, n_steps: int, **kwargs):
+    """(observation, reward, terminated, info) after each of ``n_steps`` steps of one env seeded ``seed``, with the
+    vector env's same-step autoreset: after an episode ends, the next one starts at once (the reset's observation
+    returned, the ended one's kept as ``final``)."""
+    env = gym.make(ENV_ID, **kwargs)
+    observation, _ = env.reset(seed=seed)
+    rows = []
+    for step in range(n_steps):
+        observation, reward, terminated, _, info = env.step(policy(env, observation, step))
+        final = observation
+        if terminated:
+            observation, _ = env.reset()
+        rows.append((observation, reward, terminated, info, final))
+    return rows
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_the_native_batch_is_the_single_envs_bit_for_bit(threads):
+    """Envs at different throws of their episodes (scenes of different sizes), episodes ending at different steps
+    (lobs build stacks, random throws knock them over): every env's observation, reward, termination and info are
+    the single env's seeded alike, bit for bit, whatever the thread count."""
+    from box_toss_env.envs.stack_vector import BoxTossStackVectorEnv
+
+    n, n_steps = 4, 7
+    rng = np.random.default_rng(8)
+    random_actions = rng.uniform(-1, 1, (n_steps, n, 3)).astype(np.float32)
+    lobbing = rng.random((n_steps, n)) < 0.7
+
+    def policy(i):
+        return lambda env, observation, step: lob(env, observation) if lobbing[step, i] else random_actions[step, i]
+
+    envs = gym.make_vec(ENV_ID, num_envs=n, threads=threads)
+    assert isinstance(envs, BoxTossStackVectorEnv)
+    observations, _ = envs.reset(seed=30)
+    singles = [single_episodes(30 + i, policy(i), n_steps) for i in range(n)]
+    ended = 0
+    for step in range(n_steps):
+        actions = np.stack([lob(envs.env, observations[i]) if lobbing[step, i] else random_actions[step, i]
+                            for i in range(n)])
+        observations, rewards, terminated, truncated, info = envs.step(actions)
+        assert not truncated.any()
+        for i in range(n):
+            observation, reward, done, single_info, final = singles[i][step]
+            assert observations[i].tobytes() == observation.tobytes()
+            assert rewards[i] == reward and terminated[i] == done
+            source = info["final_info"] if done else info
+            for key, value in single_info.items():
+                assert source[key][i] == value, key
+            if done:
+                assert info["final_obs"][i].tobytes() == final.tobytes()
+                ended += 1
+    assert ended >= 2
 
 
 def test_stack_commands_act_through_the_command_map():
