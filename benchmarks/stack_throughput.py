@@ -3,7 +3,10 @@ one ``step`` per box of the hand, until the episode ends), with random actions a
 (the throw command c = (0.6, 0, 0) of ``envs.stack_commands``, whose episodes build the whole stack). Prints
 measured figures; asserts nothing.
 
-    python -m benchmarks.stack_throughput [--episodes 100]
+    python -m benchmarks.stack_throughput [--episodes 100] [--batch 64]
+
+``--batch N`` also times the native batched env (``gymnasium.make_vec``, N envs, one engine thread) for as many
+throws.
 
 A throw's cost grows with the scene: every body of it is simulated until all of them rest (the engine's colliding
 kernel, with sleeping islands). The first episode (loading the compiled kernel) is not timed.
@@ -36,9 +39,31 @@ def episodes_per_policy(env: gym.Env, n_episodes: int, act) -> tuple[float, floa
     return throws / (time.perf_counter() - start), throws / n_episodes
 
 
+def batched_throws_per_second(n_envs: int, n_throws: int, lob: bool) -> float:
+    """Throws per second of the native batched env (one engine thread), random actions or lobs."""
+    envs = gym.make_vec("BoxToss-Stack-v0", num_envs=n_envs, threads=1)
+    config = envs.unwrapped.config
+    rng = np.random.default_rng(0)
+    observations, _ = envs.reset(seed=0)
+
+    def act(observations):
+        if lob:
+            return np.concatenate([command_actions(o, LOB, config) for o in observations]).astype(np.float32)
+        return rng.uniform(-1, 1, (n_envs, 3)).astype(np.float32)
+
+    for _ in range(config.n_boxes):  # load the compiled kernels (one per scene size)
+        observations = envs.step(act(observations))[0]
+    steps = max(1, n_throws // n_envs)
+    start = time.perf_counter()
+    for _ in range(steps):
+        observations = envs.step(act(observations))[0]
+    return steps * n_envs / (time.perf_counter() - start)
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.stack_throughput", description=__doc__.split("\n\n")[0])
     parser.add_argument("--episodes", type=int, default=100)
+    parser.add_argument("--batch", type=int, default=0, help="also time a batched env of this many envs")
     args = parser.parse_args(argv)
     env = gym.make("BoxToss-Stack-v0")
     config = env.unwrapped.config
@@ -50,6 +75,9 @@ def main(argv: list[str] | None = None) -> None:
         rate, length = episodes_per_policy(env, args.episodes, act)
         print(f"BoxToss-Stack-v0, {name}: {rate:.0f} throws/s ({length:.2f} throws per episode, {args.episodes} "
               f"episodes, gymnasium.make)")
+        if args.batch:
+            batched = batched_throws_per_second(args.batch, round(length * args.episodes), name != "random actions")
+            print(f"BoxToss-Stack-v0, {name}: {batched:.0f} throws/s batched ({args.batch} envs, one engine thread)")
 
 
 if __name__ == "__main__":
