@@ -66,7 +66,7 @@ class StackPlanner:
         unwrapped = env.unwrapped
         config = unwrapped.config
         settings = self.settings
-        k = unwrapped._thrown
+        k = unwrapped.thrown
         width = float(observation[stack_task.BODY_SIZE * k + stack_task.B_WIDTH])  # of the box in the hand
         commands = self.rng.uniform(-1.0, 1.0, (settings.initial, 3))
         best_score, best_action = -np.inf, None
@@ -75,7 +75,7 @@ class StackPlanner:
             actions = command_actions(observation, commands, config, settings)
             outcomes = unwrapped.try_throws(actions, threads=settings.threads)
             self.simulated += len(actions)
-            centre = np.abs(unwrapped.last_tried[:, k, 0] - unwrapped._target_x)
+            centre = np.abs(unwrapped.last_tried[:, k, 0] - unwrapped.target_x)
             scores = outcomes.reward - settings.centring_weight * centre
             i = int(np.argmax(scores))
             if scores[i] > best_score:

@@ -260,6 +260,16 @@ class BoxTossStackEnv(gym.Env):
         return self._settings.copy()
 
     @property
+    def thrown(self) -> int:
+        """How many boxes of the hand have been thrown in this episode."""
+        return self._thrown
+
+    @property
+    def target_x(self) -> float:
+        """This episode's target x [m]."""
+        return self._target_x
+
+    @property
     def scene(self) -> tuple[np.ndarray, np.ndarray]:
         """Copies of the engine's state (k, 6) and body parameters (k, 7) of the k boxes thrown so far."""
         k = self._thrown
