@@ -71,9 +71,9 @@ class BoxTossStackEnv(gym.Env):
     | 11 j + 7, 8 | its length, width (always)             | ``box_*_range[0]``      | ``box_*_range[1]``     | m     |
     | 11 j + 9    | its mass (always)                      | ``mass_range[0]``       | ``mass_range[1]``      | kg    |
     | 11 j + 10   | 1 once thrown, 0 before (the mask)     | 0                       | 1                      |       |
-    | 11 n + 0, 1 | the box in the hand: release x, y      | ``release_*_range[0]``  | ``release_*_range[1]`` | m     |
+    | 11 n + 0, 1 | the box in the hand: release x, y      | min(x lo, 0), 0         | ``release_*_range[1]`` | m     |
     | 11 n + 2, 3 | its release cos, sin                   | -1                      | 1                      |       |
-    | 11 n + 4-6  | its length, width [m], mass [kg]       | the ranges' lows        | the ranges' highs      |       |
+    | 11 n + 4-6  | its length, width [m], mass [kg]       | 0                       | the ranges' highs      |       |
     | 11 n + 7    | 1 while a box is in the hand           | 0                       | 1                      |       |
     | 11 n + 8    | target x                               | ``target_x_range[0]``   | ``target_x_range[1]``  | m     |
     | 11 n + 9    | target radius                          | ``target_radius``       | ``target_radius``      | m     |
