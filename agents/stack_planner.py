@@ -16,6 +16,7 @@ from lying flat, aimed at the stack's top), the action space PPO is trained in t
 from __future__ import annotations
 
 import argparse
+import json
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -23,7 +24,7 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 
-from agents.doc_sections import replace_section
+from agents.doc_sections import REPO, replace_section
 from box_toss_env.envs import stack_commands, stack_task
 
 TEST_FIRST_SEED = 10_000  # episodes are seeds 10000, 10001, ... (as the one-throw test targets)
@@ -151,20 +152,38 @@ BUDGETS = {
 """Growing searches per throw: the ceiling is the success where a larger one stops raising it."""
 
 
-def budget_table(rows: list[tuple[str, dict]], first_seed: int) -> str:
-    """The sweep as the markdown section of docs/stack.md."""
-    lines = ["| budget (initial, population, elite, rounds) | success | mean final height | stack fell | "
-             "throws simulated per throw | seconds |", "|---|---|---|---|---|---|"]
-    for name, result in rows:
+RESULTS = REPO / "docs" / "agents" / "stack_ceiling.json"
+"""Each budget's measured row, kept so that runs of different budgets (at once, or one after another) make one
+table."""
+
+
+def budget_table(rows: list[dict]) -> str:
+    """The measured rows (``run_episodes``' results with their budget's ``name``) as docs/stack.md's section."""
+    lines = ["| budget (initial, population, elite, rounds) | episodes (seeds) | success | mean final height | "
+             "stack fell | throws simulated per throw | seconds |", "|---|---|---|---|---|---|---|"]
+    for result in rows:
         b = result["budget"]
-        lines.append(f"| {name} ({b['initial']}, {b['population']}, {b['elite']}, {b['iterations']}) | "
-                     f"{100 * result['success_rate']:.1f}% | {result['mean_height']:.3f} m | "
-                     f"{100 * result['fall_rate']:.1f}% | {result['simulated_per_throw']:.0f} | "
-                     f"{result['seconds']:.0f} |")
-    n = rows[0][1]["episodes"]
-    command = f"python -m agents.stack_planner --episodes {n} --budgets {' '.join(name for name, _ in rows)} --readme"
-    return (f"Measured on {n} episodes (seeds {first_seed}...) of the default `BoxToss-Stack-v0` (a hand of 4), "
-            f"one engine thread, by `{command}`:\n\n" + "\n".join(lines))
+        lines.append(f"| {result['name']} ({b['initial']}, {b['population']}, {b['elite']}, {b['iterations']}) | "
+                     f"{result['episodes']} ({result['first_seed']}...) | {100 * result['success_rate']:.1f}% | "
+                     f"{result['mean_height']:.3f} m | {100 * result['fall_rate']:.1f}% | "
+                     f"{result['simulated_per_throw']:.0f} | {result['seconds']:.0f} |")
+    return ("Measured on the default `BoxToss-Stack-v0` (a hand of 4), one engine thread, the 2 cores shared with "
+            "other jobs (seconds are wall time), by `python -m agents.stack_planner --episodes N --budgets NAME "
+            "--readme` (each run adds its rows to `docs/agents/stack_ceiling.json` and writes the table of all):"
+            "\n\n" + "\n".join(lines))
+
+
+def saved_rows(path: Path = RESULTS) -> list[dict]:
+    return json.loads(path.read_text()) if path.exists() else []
+
+
+def save_row(row: dict, path: Path = RESULTS) -> list[dict]:
+    """Add ``row`` to the saved rows (replacing one of the same budget name), ordered by budget size."""
+    order = list(BUDGETS)
+    rows = [r for r in saved_rows(path) if r["name"] != row["name"]] + [row]
+    rows.sort(key=lambda r: order.index(r["name"]) if r["name"] in order else len(order))
+    path.write_text(json.dumps(rows, indent=1) + "\n")
+    return rows
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -172,7 +191,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--episodes", type=int, default=50)
     parser.add_argument("--first-seed", type=int, default=TEST_FIRST_SEED)
     parser.add_argument("--budgets", nargs="+", choices=sorted(BUDGETS), default=list(BUDGETS))
-    parser.add_argument("--readme", action="store_true", help="write the table into docs/stack.md")
+    parser.add_argument("--readme", action="store_true",
+                        help="save the rows in docs/agents/stack_ceiling.json and write the table into docs/stack.md")
     parser.add_argument("--model", type=Path, help="evaluate this RL Zoo run folder's PPO instead of the planner")
     args = parser.parse_args(argv)
     if args.model is not None:
@@ -181,17 +201,14 @@ def main(argv: list[str] | None = None) -> None:
               f"{result['mean_height']:.3f} m, falls {100 * result['fall_rate']:.1f}% on {result['episodes']} "
               f"episodes (seeds {args.first_seed}...), {result['throws'] / result['seconds']:.0f} throws/s")
         return
-    rows = []
     for name in args.budgets:
-        result = run_episodes(args.episodes, BUDGETS[name], args.first_seed)
-        rows.append((name, result))
+        result = {"name": name, "first_seed": args.first_seed,
+                  **run_episodes(args.episodes, BUDGETS[name], args.first_seed)}
         print(f"{name}: success {100 * result['success_rate']:.1f}%, mean final height {result['mean_height']:.3f} m, "
               f"falls {100 * result['fall_rate']:.1f}%, {result['simulated_per_throw']:.0f} candidate throws "
               f"simulated per throw, {result['seconds']:.1f} s", flush=True)
-    table = budget_table(rows, args.first_seed)
-    print(table)
-    if args.readme:
-        replace_section("stack-ceiling", table)
+        if args.readme:
+            replace_section("stack-ceiling", budget_table(save_row(result)))
 
 
 if __name__ == "__main__":

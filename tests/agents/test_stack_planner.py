@@ -21,8 +21,8 @@ def test_the_planner_stacks_a_hand_of_three():
     assert result["success_rate"] == 1.0 and result["fall_rate"] == 0.0
     assert result["mean_height"] >= 0.9 * 3 * 0.15
     assert 0 < result["simulated_per_throw"] <= 64 + 3 * 32
-    table = budget_table([("default", result)], 10_000)
-    assert "| default (64, 32, 6, 3) | 100.0% |" in table
+    table = budget_table([{"name": "default", "first_seed": 10_000, **result}])
+    assert "| default (64, 32, 6, 3) | 2 (10000...) | 100.0% |" in table
 
 
 def test_planning_leaves_the_scene_and_the_throw_made_is_the_one_scored():
@@ -74,3 +74,18 @@ def test_a_zoo_run_folder_is_evaluated_with_its_normalisation(tmp_path):
     venv.save(str(tmp_path / "BoxToss-Stack-v0" / "vecnormalize.pkl"))
     result = play_episodes(2, zoo_policy(tmp_path))
     assert result["episodes"] == 2 and 2 <= result["throws"] <= 8 and 0.0 <= result["success_rate"] <= 1.0
+
+
+def test_saved_rows_make_one_table_ordered_by_budget(tmp_path):
+    from agents.stack_planner import save_row, saved_rows
+
+    path = tmp_path / "rows.json"
+    row = {"episodes": 3, "first_seed": 5, "success_rate": 0.5, "mean_height": 0.4, "fall_rate": 0.0,
+           "simulated_per_throw": 10.0, "seconds": 1.0}
+    save_row({**row, "name": "large", "budget": {"initial": 1, "population": 2, "elite": 3, "iterations": 4}}, path)
+    save_row({**row, "name": "small", "budget": {"initial": 5, "population": 6, "elite": 7, "iterations": 8}}, path)
+    rows = save_row({**row, "name": "small", "success_rate": 1.0,
+                     "budget": {"initial": 5, "population": 6, "elite": 7, "iterations": 8}}, path)
+    assert [r["name"] for r in rows] == ["small", "large"] and saved_rows(path) == rows
+    table = budget_table(rows).splitlines()
+    assert table[-2].startswith("| small (5, 6, 7, 8) | 3 (5...) | 100.0% |") and table[-1].startswith("| large")
