@@ -23,6 +23,7 @@ SECTION_PAGES = {
     "rllib-sampling": DOCS / "rllib.md",  # python -m benchmarks.rllib_sampling --readme
     "reports": DOCS / "reports.md",  # python -m reports.precision / stability / collisions
     "stack-ceiling": DOCS / "stack.md",  # python -m agents.stack_planner --readme
+    "stack-ppo": DOCS / "stack.md",  # python -m agents.stack_planner --model RUN --readme
 }
 
 

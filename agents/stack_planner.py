@@ -3,9 +3,11 @@
 For every throw of an episode, a cross-entropy search over a throw command simulates candidate throws onto
 copies of the current scene (``BoxTossStackEnv.try_throws``: all candidates of a round in one call of the
 engine's colliding kernel), then throws the best one for real. The search is per throw and greedy: it
-scores a candidate by the env's reward of that throw minus ``centring_weight`` times how far the thrown
-box's centre ended from the target x (a centred box is a better base for the next one). Since a copy's
-simulation is bit for bit the env's, the throw made is exactly the one scored.
+scores a candidate by the env's reward of that throw, with the height it adds credited up to the thrown box's
+width only, minus ``centring_weight`` times how far the thrown box's centre ended from the target x (a box lying
+flat and centred is the best base for the next one, and a greedy search that credits a box stood on its end
+would prefer it). Its first candidates are lobs flat onto the stack's centre
+(``PRIOR_COMMANDS``). Since a copy's simulation is bit for bit the env's, the throw made is exactly the one scored.
 
 The command c in [-1, 1]^3 is ``envs.stack_commands``' (flight time, touchdown offset from the target x, lean
 from lying flat, aimed at the stack's top), the action space PPO is trained in too.
@@ -54,6 +56,10 @@ def command_actions(observation: np.ndarray, commands: np.ndarray, config: stack
                                           settings.offset_range, settings.turn_range)
 
 
+PRIOR_COMMANDS = np.array([[c0, 0.0, 0.0] for c0 in (-0.6, -0.2, 0.2, 0.6, 1.0)])
+"""Lobs flat onto the stack's centre, of five flight times: the first candidates of every search."""
+
+
 class StackPlanner:
     """Plans each throw of a ``BoxToss-Stack-v0`` episode by a cross-entropy search with the simulator."""
 
@@ -70,6 +76,8 @@ class StackPlanner:
         k = unwrapped.thrown
         width = float(observation[stack_task.BODY_SIZE * k + stack_task.B_WIDTH])  # of the box in the hand
         commands = self.rng.uniform(-1.0, 1.0, (settings.initial, 3))
+        prior = PRIOR_COMMANDS[:settings.initial]
+        commands[:len(prior)] = prior
         best_score, best_action = -np.inf, None
         all_commands, all_scores = np.zeros((0, 3)), np.zeros(0)
         for round_ in range(settings.iterations + 1):
@@ -77,7 +85,10 @@ class StackPlanner:
             outcomes = unwrapped.try_throws(actions, threads=settings.threads)
             self.simulated += len(actions)
             centre = np.abs(unwrapped.last_tried[:, k, 0] - unwrapped.target_x)
-            scores = outcomes.reward - settings.centring_weight * centre
+            # a box lying flat is the best base for the next: height beyond its width is not credited
+            height = outcomes.terms["reward_height"]
+            scores = (outcomes.reward - height + np.minimum(height, config.height_weight * width)
+                      - settings.centring_weight * centre)
             i = int(np.argmax(scores))
             if scores[i] > best_score:
                 best_score, best_action = scores[i], actions[i]
@@ -192,14 +203,19 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--first-seed", type=int, default=TEST_FIRST_SEED)
     parser.add_argument("--budgets", nargs="+", choices=sorted(BUDGETS), default=list(BUDGETS))
     parser.add_argument("--readme", action="store_true",
-                        help="save the rows in docs/agents/stack_ceiling.json and write the table into docs/stack.md")
+                        help="save the rows in docs/agents/stack_ceiling.json and write the table into docs/stack.md "
+                             "(with --model: the PPO section)")
     parser.add_argument("--model", type=Path, help="evaluate this RL Zoo run folder's PPO instead of the planner")
     args = parser.parse_args(argv)
     if args.model is not None:
         result = play_episodes(args.episodes, zoo_policy(args.model), args.first_seed)
-        print(f"{args.model}: success {100 * result['success_rate']:.1f}%, mean final height "
-              f"{result['mean_height']:.3f} m, falls {100 * result['fall_rate']:.1f}% on {result['episodes']} "
-              f"episodes (seeds {args.first_seed}...), {result['throws'] / result['seconds']:.0f} throws/s")
+        line = (f"success {100 * result['success_rate']:.1f}%, mean final height {result['mean_height']:.3f} m, "
+                f"stack fell {100 * result['fall_rate']:.1f}% on {result['episodes']} episodes (seeds "
+                f"{args.first_seed}...)")
+        print(f"{args.model}: {line}")
+        if args.readme:
+            command = f"python -m agents.stack_planner --model {args.model} --episodes {args.episodes} --readme"
+            replace_section("stack-ppo", f"PPO, acting deterministically: {line}; by `{command}`.")
         return
     for name in args.budgets:
         result = {"name": name, "first_seed": args.first_seed,
