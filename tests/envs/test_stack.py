@@ -279,3 +279,24 @@ def test_stack_commands_act_through_the_command_map():
         observation, reward, terminated, _, info = wrapped.step(LOB[0])
         assert observation.tobytes() == expected[0].tobytes() and reward == expected[1]
     assert info["stack_size"] == 2 and not info["fell"]
+
+
+def test_sb3_trains_on_the_native_batch():
+    """SB3 through the batched env's adapter: a hand of two ends every episode at the second step, with its
+    terminal observation, and PPO learns on it."""
+    from stable_baselines3 import PPO
+
+    from box_toss_env.vector.sb3_adapter import SB3VecEnvAdapter
+
+    adapter = SB3VecEnvAdapter(gym.make_vec(ENV_ID, num_envs=4, n_boxes=2))
+    adapter.reset()
+    actions = np.random.default_rng(0).uniform(-1, 1, (2, 4, 3)).astype(np.float32)
+    _, _, dones, _ = adapter.step(actions[0])
+    assert not dones.any()  # nothing stood on the target before the first throw, so nothing could fall
+    observations, _, dones, infos = adapter.step(actions[1])
+    assert dones.all() and all(info["terminal_observation"].shape == observations[0].shape for info in infos)
+    tail = stack_task.BODY_SIZE * 2
+    assert np.all(observations[:, tail + stack_task.G_LEFT] == 2)  # the next episodes' hands, full
+    model = PPO("MlpPolicy", adapter, n_steps=16, batch_size=32, n_epochs=1, seed=0)
+    model.learn(64)
+    assert model.num_timesteps == 64
