@@ -24,6 +24,7 @@ SECTION_PAGES = {
     "reports": DOCS / "reports.md",  # python -m reports.precision / stability / collisions
     "stack-ceiling": DOCS / "stack.md",  # python -m agents.stack_planner --readme
     "stack-ppo": DOCS / "stack.md",  # python -m agents.stack_planner --model RUN --readme
+    "stack-throughput": DOCS / "stack.md",  # python -m benchmarks.stack_throughput --readme
 }
 
 

@@ -15,12 +15,14 @@ kernel, with sleeping islands). The first episode (loading the compiled kernel) 
 from __future__ import annotations
 
 import argparse
+import os
 import time
 
 import gymnasium as gym
 import numpy as np
 
 import box_toss_env  # noqa: F401  (registers BoxToss-Stack-v0)
+from agents.doc_sections import replace_section
 from box_toss_env.envs.stack_commands import command_actions
 
 LOB = np.array([[0.6, 0.0, 0.0]])
@@ -64,6 +66,7 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m benchmarks.stack_throughput", description=__doc__.split("\n\n")[0])
     parser.add_argument("--episodes", type=int, default=100)
     parser.add_argument("--batch", type=int, default=0, help="also time a batched env of this many envs")
+    parser.add_argument("--readme", action="store_true", help="write the figures into docs/stack.md")
     args = parser.parse_args(argv)
     env = gym.make("BoxToss-Stack-v0")
     config = env.unwrapped.config
@@ -71,13 +74,21 @@ def main(argv: list[str] | None = None) -> None:
     policies = {"random actions": lambda observation: rng.uniform(-1, 1, 3).astype(np.float32),
                 "lob onto the stack": lambda observation: command_actions(observation, LOB, config)[0]}
     episodes_per_policy(env, 1, policies["lob onto the stack"])  # load the compiled kernel
+    lines = []
     for name, act in policies.items():
         rate, length = episodes_per_policy(env, args.episodes, act)
-        print(f"BoxToss-Stack-v0, {name}: {rate:.0f} throws/s ({length:.2f} throws per episode, {args.episodes} "
-              f"episodes, gymnasium.make)")
+        line = f"{name}: {rate:.0f} throws/s through `gymnasium.make` ({length:.2f} throws per episode)"
         if args.batch:
             batched = batched_throws_per_second(args.batch, round(length * args.episodes), name != "random actions")
-            print(f"BoxToss-Stack-v0, {name}: {batched:.0f} throws/s batched ({args.batch} envs, one engine thread)")
+            line += f", {batched:.0f} throws/s batched ({args.batch} envs, one engine thread)"
+        print(f"BoxToss-Stack-v0, {line}", flush=True)
+        lines.append(f"- {line}")
+    if args.readme:
+        load = os.getloadavg()[0]
+        command = f"python -m benchmarks.stack_throughput --episodes {args.episodes}" + (
+            f" --batch {args.batch}" if args.batch else "") + " --readme"
+        replace_section("stack-throughput", f"Measured by `{command}` ({args.episodes} episodes each; load average "
+                        f"{load:.1f} on the 2 shared cores):\n\n" + "\n".join(lines))
 
 
 if __name__ == "__main__":
