@@ -8,7 +8,7 @@ __version__ = "0.1.0"
 
 
 def _register_envs() -> None:
-    """Register ``BoxToss-v0`` and its variants with string entry points (nothing is imported
+    """Register ``BoxToss-v0``, its variants and ``BoxToss-Stack-v0`` with string entry points (nothing is imported
     until an env is made, so ``import box_toss_env`` does not import pygame or the envs)."""
     import gymnasium
 
@@ -29,6 +29,9 @@ def _register_envs() -> None:
             vector_entry_point="box_toss_env.envs.box_toss_vector:BoxTossVectorEnv",
             kwargs=kwargs,
         )
+    if "BoxToss-Stack-v0" not in gymnasium.registry:  # a sequence of throws building a stack (its own env class)
+        gymnasium.register(id="BoxToss-Stack-v0", entry_point="box_toss_env.envs.stack:BoxTossStackEnv",
+                           vector_entry_point="box_toss_env.envs.stack_vector:BoxTossStackVectorEnv")
 
 
 _register_envs()

@@ -6,7 +6,7 @@ from pathlib import Path
 AGENTS = Path(__file__).resolve().parents[2] / "agents"
 LAYERS = {
     "algorithms": 0, "config": 1, "doc_sections": 0, "run_folder": 0, "envs": 0, "rllib_envs": 0,
-    "policies": 2, "oracle": 2, "search_space": 2,
+    "policies": 2, "oracle": 2, "stack_planner": 2, "search_space": 2,
     "evaluation": 3,
     "training": 4, "ceiling": 4,
     "report": 5, "tuning": 5, "sweep_report": 5,
