@@ -22,6 +22,7 @@ SECTION_PAGES = {
     "cold-start": DOCS / "cold-start.md",  # python -m benchmarks.cold_start --readme
     "rllib-sampling": DOCS / "rllib.md",  # python -m benchmarks.rllib_sampling --readme
     "reports": DOCS / "reports.md",  # python -m reports.precision / stability / collisions
+    "reality-impacts": DOCS / "reality.md",  # python -m reports.reality.impacts --data DIR --ellipse FILE
 }
 
 

@@ -92,3 +92,48 @@ def grid_fit(loss, coarse=COARSE, friction_max: float = 2.0) -> tuple[float, flo
     values2 = loss(e2, mu2)
     best2 = int(np.argmin(values2))
     return float(e2[best2]), float(mu2[best2]), float(values2[best2])
+
+
+def tangential(velocity, rx, ry, restitution, friction, tangential_restitution, mass: float,
+               inertia: float) -> np.ndarray:
+    """The proposal measured, not in the engine: the point-contact Newton + Coulomb map with a tangential
+    restitution e_t, the impulse (lam, q) that gives u_n+ = -e u_n- and u_t+ = -e_t u_t- (the contact point
+    springs back along the surface) if it lies in the friction cone |q| <= mu lam, else sliding with
+    q = -sign(u_t) mu lam. e_t = 0 is ``apply("newton", ...)``. Vectorised: every argument may be an (n,) array."""
+    velocity = np.asarray(velocity, dtype=float).reshape(-1, 3)
+    vx, vy, spin = velocity.T
+    rx, ry = np.asarray(rx, dtype=float), np.asarray(ry, dtype=float)
+    e, mu, et = (np.asarray(v, dtype=float) for v in (restitution, friction, tangential_restitution))
+    inv_m, inv_i = 1.0 / mass, 1.0 / inertia
+    u_n, u_t = vy + spin * rx, vx - spin * ry
+    k_nn, k_tt, k_nt = inv_m + rx * rx * inv_i, inv_m + ry * ry * inv_i, -rx * ry * inv_i
+    dn, dt = -(1.0 + e) * u_n, -(1.0 + et) * u_t
+    det = k_nn * k_tt - k_nt * k_nt
+    lam = (dn * k_tt - dt * k_nt) / det
+    q = (dt * k_nn - dn * k_nt) / det
+    slide = np.abs(q) > mu * lam
+    # sliding on in the slip's direction, or (a slip the normal impulse reverses) the other way, as
+    # ``contact_solver.solve_one_corner`` decides it
+    sign = np.where(u_t > 0.0, 1.0, -1.0)
+    lam_slide = dn / np.maximum(k_nn - sign * mu * k_nt, 1e-300)
+    reverses = sign * (u_t + k_nt * lam_slide - k_tt * sign * mu * lam_slide) < 0.0
+    sign = np.where(reverses, -sign, sign)
+    lam_slide = dn / np.maximum(k_nn - sign * mu * k_nt, 1e-300)
+    lam = np.where(slide, lam_slide, lam)
+    q = np.where(slide, -sign * mu * lam_slide, q)
+    approaching = u_n < 0.0
+    lam, q = np.where(approaching, lam, 0.0), np.where(approaching, q, 0.0)
+    return np.stack([vx + q * inv_m, vy + lam * inv_m, spin + (rx * lam - ry * q) * inv_i], axis=-1)
+
+
+def grid_fit3(loss, coarse=COARSE, friction_max: float = 2.0) -> tuple[float, float, float, float]:
+    """(e, mu, e_t, loss) minimising ``loss(e, mu, e_t)`` on ``coarse``^3 (e_t on [0, 1]), then on a grid of a
+    fifth of its spacing around the best point."""
+    points = [a.ravel() for a in np.meshgrid(coarse, coarse, coarse, indexing="ij")]
+    best = int(np.argmin(loss(*points)))
+    fine = np.arange(-4, 5) * (coarse[1] - coarse[0]) / 5
+    e, mu, et = (np.clip(p[best] + fine, 0, top) for p, top in zip(points, (1, friction_max, 1), strict=True))
+    points = [a.ravel() for a in np.meshgrid(e, mu, et, indexing="ij")]
+    values = loss(*points)
+    best = int(np.argmin(values))
+    return float(points[0][best]), float(points[1][best]), float(points[2][best]), float(values[best])
