@@ -171,6 +171,7 @@ class Result:
     errors: np.ndarray  # (n,) held-out normalised errors
     seconds: float = 0.0
     et: float = math.nan  # the tangential restitution, for the proposal's law
+    predicted: np.ndarray | None = None  # (n, 3) the predicted post-impact velocities
 
     @property
     def mean(self) -> float:
@@ -210,7 +211,7 @@ def run_square(folder: Path, engines: bool = True, quick: bool = False) -> dict:
             e, mu = fit_square(fit_on, model)
             predicted, seconds = predict(test_on, model, e, mu)
             errors = impact_law.normalised_error(predicted, test_on.after, SQUARE_GYRATION)
-            results.append(Result(model, kind, e, mu, errors, seconds))
+            results.append(Result(model, kind, e, mu, errors, seconds, predicted=predicted))
             print(f"square, {kind}, {model}: e = {e:.2f}, mu = {mu:.2f}, mean {results[-1].mean:.3f}, "
                   f"median {results[-1].median:.3f}", flush=True)
     # the flat landings of the held-out set under each model fitted on all impacts
@@ -410,10 +411,20 @@ def flat_landings(square: dict) -> list[str]:
         cells = [f"{math.degrees(low):.0f}-{min(45, math.degrees(high)):.0f}", str(int(mask.sum()))]
         cells += [f"{np.nanmean(by_model[m].errors[mask]):.2f}" if m in by_model else "-"
                   for m in ("ours", "map: ours", "map: newton")]
+        cells += [f"{np.median(np.abs(held.after[mask, 2])):.1f}"]
+        cells += [f"{np.median(np.abs(by_model[m].predicted[mask, 2])):.1f}" if m in by_model else "-"
+                  for m in ("ours", "map: ours")]
+        cells += [f"{np.median(held.after[mask, 1]):.2f}"]
+        cells += [f"{np.median(by_model[m].predicted[mask, 1]):.2f}" if m in by_model else "-"
+                  for m in ("ours", "map: ours")]
         rows.append(cells)
-    return ["By tilt at the impact (held out, each model fitted on all impacts; mean error):", "",
-            table(["tilt [deg]", "impacts", "ours, robust solver", "our law, lowest corner only",
-                   "Newton + Coulomb, lowest corner"], rows), ""]
+    return ["By tilt at the impact (held out, each model fitted on all impacts): mean error, the median spin"
+            " after the impact (absolute) and the median vertical velocity of the centre after it, measured and"
+            " predicted:", "",
+            table(["tilt [deg]", "impacts", "error: ours, robust solver", "error: our law, lowest corner only",
+                   "error: Newton + Coulomb, lowest corner", "spin after, measured [rad/s]", "spin: ours",
+                   "spin: lowest corner only", "vz after, measured [m/s]", "vz: ours", "vz: lowest corner only"],
+                  rows), ""]
 
 
 def teaching(square: dict | None, ellipse: dict | None) -> str:
@@ -425,6 +436,7 @@ def teaching(square: dict | None, ellipse: dict | None) -> str:
         newton_c, newton_a = by[("map: newton", "corner")], by[("map: newton", "all")]
         one_a = by[("map: ours", "all")]
         flat = held.tilt < FLAT_TILT
+        spins = [np.median(np.abs(v[flat, 2])) for v in (held.after, ours_a.predicted, one_a.predicted)]
         items.append(
             f"- **Corner impacts.** Our robust solver predicts the post-impact velocity of the held-out corner"
             f" impacts to {ours_c.mean:.2f} mean / {ours_c.median:.2f} median (e = {ours_c.e:.2f}, mu ="
@@ -440,8 +452,9 @@ def teaching(square: dict | None, ellipse: dict | None) -> str:
             f" {np.mean(newton_a.errors[flat]):.2f} the point map): one corner hits, the square turns about it"
             " and the other corner of the face hits within a millisecond; our solver takes that second impact"
             " (and a simultaneous pair together, Poisson on both corners), so the square comes off the floor"
-            " moving up and spinning little, as measured, where a point map sends it off spinning about the"
-            " first corner.")
+            f" moving up and spinning little ({spins[1]:.1f} rad/s, median absolute spin after; measured"
+            f" {spins[0]:.1f}), where a map at one corner sends it off spinning about that corner"
+            f" ({spins[2]:.1f} rad/s).")
         proposal = square["proposal"]
         gain = np.mean(proposal["errors"])
         items.append(
