@@ -15,8 +15,9 @@ Corner impacts land more than 15 deg from flat. Restitution and friction are fit
 drops (odd numbers) of the class reported, by grid search of the mean normalised error; figures are on the
 held-out drops (even numbers).
 
-**Ellipse** (``--ellipse``: ``data_ellipse.mat`` of mcubelab/planar-impact-dataset, read where the user put it;
-it has no licence and is not in this repository). 1,718 measured impacts of an ellipse (36.4 g, semi-axes 35 x
+**Ellipse** (``--ellipse``: ``data_ellipse.mat`` of mcubelab/planar-impact-dataset, read where the user put it,
+e.g. with ``python -m reports.reality.download --ellipse --out DIR``; it has no licence and is not in this
+repository). 1,718 measured impacts of an ellipse (36.4 g, semi-axes 35 x
 25 mm, radius of gyration 19.2 mm) with pre- and post-impact states and the contact Jacobian's normal and tangent
 rows; the impact laws are applied with that Jacobian; training rows are the even ones (0-based), held-out the odd
 ones. If ``v_models.mat`` (the six published models' predictions) lies beside it, their errors on the same
@@ -536,9 +537,10 @@ def main(argv=None) -> int:
             raise SystemExit(f"{parser.prog}: error: {problem}") from None
         raise
     note = ("" if ellipse is not None else
-            "Skipped: no `--ellipse FILE` given (download `processed_data/data_ellipse.mat`, and `v_models.mat`"
-            " beside it for the published models, from the GitHub repository mcubelab/planar-impact-dataset;"
-            " it has no licence and is not in this repository).")
+            "Skipped: no `--ellipse FILE` given (`python -m reports.reality.download --ellipse --out DIR` downloads"
+            " `data_ellipse.mat`, and `v_models.mat` for the published models, from the GitHub repository"
+            " mcubelab/planar-impact-dataset at a pinned commit, checked by SHA-256; it has no licence and is"
+            " not in this repository).")
     text = section(square, ellipse, note)
     from agents.doc_sections import replace_section
 

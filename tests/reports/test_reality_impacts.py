@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from reports.reality import data, impact_law, impacts, report, synthetic
+from reports.reality import data, download, impact_law, impacts, report, synthetic
 
 MASS, GYRATION = impacts.ELLIPSE_MASS, impacts.ELLIPSE_GYRATION
 INERTIA = MASS * GYRATION**2
@@ -146,3 +146,11 @@ def test_the_committed_page_has_the_impacts_section():
     page = report.REPO / "docs" / "reality.md"
     section = report.impacts_section_of(page)
     assert section.startswith("## The impact alone") and "### The square's first impacts" in section
+
+
+def test_the_ellipse_download_is_pinned_and_checked(tmp_path):
+    assert set(download.ELLIPSE_FILES) == {"data_ellipse.mat", "v_models.mat"} and len(download.ELLIPSE_COMMIT) == 40
+    (tmp_path / "data_ellipse.mat").write_bytes(b"not the file")
+    assert download.verify(tmp_path, download.ELLIPSE_FILES) == {"data_ellipse.mat": "checksum",
+                                                                 "v_models.mat": "missing"}
+    assert download.main(["--ellipse", "--check", "--out", str(tmp_path)]) == 1
