@@ -50,7 +50,7 @@ ELLIPSE_MASS = 36.4e-3  # [kg]
 ELLIPSE_GYRATION = 0.0192  # [m]
 PUBLISHED = ("Drumwright-Shell", "AP Poisson", "AP Newton", "Mirtich", "Wang-Mason", "Whittaker")
 PUBLISHED_RANGE = "0.59-0.64 mean / 0.51-0.55 median (Fazeli et al. 2017)"
-TARGET_CORNER = (0.38, 0.27)  # the point-contact map of the issue that asked for this: corner impacts
+TARGET_CORNER = (0.38, 0.27)  # the target: a point-contact Newton + Coulomb map's error on the corner impacts
 ENGINES = ("pymunk", "box2d", "box2d-v3", "mujoco")
 
 
@@ -204,7 +204,7 @@ ELLIPSE_LABELS = {"ours": "our engine's impact law (Poisson + Coulomb, robust so
                   "newton": "point contact, Newton + Coulomb"}
 MODEL_LABELS = {"ours": "ours, robust solver, dt = 4 ms (both corners of a flat landing)",
                 "map: ours": "our impact law at the lowest corner only (one impact)",
-                "map: newton": "point contact, Newton + Coulomb (the issue's crude map)"}
+                "map: newton": "point contact, Newton + Coulomb (the kind of map that set the target)"}
 
 
 def run_square(folder: Path, engines: bool = True, quick: bool = False) -> dict:
@@ -459,8 +459,8 @@ def teaching(square: dict | None, ellipse: dict | None) -> str:
             f"- **Corner impacts.** Our robust solver predicts the post-impact velocity of the held-out corner"
             f" impacts to {ours_c.mean:.2f} mean / {ours_c.median:.2f} median (e = {ours_c.e:.2f}, mu ="
             f" {ours_c.mu:.2f}), against {newton_c.mean:.2f} / {newton_c.median:.2f} for the point-contact"
-            f" Newton + Coulomb map on the same impacts and the same measurement, and the issue's"
-            f" {TARGET_CORNER[0]} / {TARGET_CORNER[1]} (its own measurement of the velocities)"
+            f" Newton + Coulomb map on the same impacts and the same measurement, and the target"
+            f" {TARGET_CORNER[0]} / {TARGET_CORNER[1]} (such a map on its own reading of the velocities)"
             + (": the other engines, each simulating the same frames fitted the same way, "
                + ", ".join(f"{r.model} {r.mean:.2f} / {r.median:.2f}" for r in others) if others else "")
             + (f" (MuJoCo's soft contact, its stiffness set by the step as in `benchmarks/other_engines.py`, lasts"
