@@ -28,6 +28,7 @@ SECTION_PAGES = {
     "stack-ceiling": DOCS / "stack.md",  # python -m agents.stack_planner --readme
     "stack-ppo": DOCS / "stack.md",  # python -m agents.stack_planner --model RUN --readme
     "stack-throughput": DOCS / "stack.md",  # python -m benchmarks.stack_throughput --readme
+    "reality-impacts": DOCS / "reality.md",  # python -m reports.reality.impacts --data DIR --ellipse FILE
 }
 
 

@@ -148,7 +148,21 @@ def cleaning_section(report: Report) -> str:
     return table(["", ""], rows)
 
 
-def markdown(report: Report, figures: dict[str, str], quick: bool) -> str:
+IMPACTS_START, IMPACTS_END = "<!-- reality-impacts:start -->", "<!-- reality-impacts:end -->"
+IMPACTS_PLACEHOLDER = ("The impact-alone section is written here by `python -m reports.reality.impacts --data DIR"
+                       " --ellipse FILE`.")
+
+
+def impacts_section_of(page: Path) -> str:
+    """What stands between the impacts markers of ``page`` (written by ``reports.reality.impacts``), kept when this
+    report rewrites the page; a placeholder if there is none."""
+    text = page.read_text() if page.is_file() else ""
+    if IMPACTS_START in text and IMPACTS_END in text:
+        return text.split(IMPACTS_START, 1)[1].split(IMPACTS_END, 1)[0].strip()
+    return IMPACTS_PLACEHOLDER
+
+
+def markdown(report: Report, figures: dict[str, str], quick: bool, impacts_section: str = IMPACTS_PLACEHOLDER) -> str:
     default = report.evaluations[0]
     noise = report.noise
     held = report.n_held
@@ -235,6 +249,7 @@ def markdown(report: Report, figures: dict[str, str], quick: bool) -> str:
     ]
     if report.skipped:
         lines += ["Skipped: " + "; ".join(report.skipped), ""]
+    lines += [IMPACTS_START, impacts_section, IMPACTS_END, ""]
     return "\n".join(lines)
 
 
@@ -411,7 +426,7 @@ def write_report(report: Report, out: Path, quick: bool = False) -> Path:
     plot_time(report, out / "figures" / figures["time"])
     plot_work(report, out / "figures" / figures["work"])
     path = out / "reality.md"
-    write_atomic(path, markdown(report, figures, quick))
+    write_atomic(path, markdown(report, figures, quick, impacts_section_of(path)))
     return path
 
 
