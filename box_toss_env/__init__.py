@@ -30,5 +30,8 @@ def _register_envs() -> None:
             kwargs=kwargs,
         )
 
+    if "BoxToss-Goal-v0" not in gymnasium.registry:
+        gymnasium.register(id="BoxToss-Goal-v0", entry_point="box_toss_env.envs.goal:BoxTossGoalEnv")
+
 
 _register_envs()
