@@ -80,3 +80,15 @@ def test_her_trains_a_few_hundred_steps(algo):
                                              learning_starts=50, batch_size=32, policy_kwargs={"net_arch": [32]},
                                              seed=0, device="cpu")
     model.learn(200)
+
+
+def test_sac_recipe_passes_her_through():
+    from stable_baselines3 import HerReplayBuffer
+
+    from agents import config
+
+    entry = config.load_hyperparams("sac", "BoxToss-Goal-v0")
+    kwargs = config.algorithm_kwargs(entry, "sac")
+    assert kwargs["replay_buffer_class"] is HerReplayBuffer
+    assert kwargs["replay_buffer_kwargs"]["goal_selection_strategy"] == "future"
+    assert kwargs["policy"] == "MultiInputPolicy"
