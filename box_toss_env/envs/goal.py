@@ -24,9 +24,29 @@ class BoxTossGoalEnv(BoxTossEnv):
     orientation term uses the face down rather than the exact rest angle, so it equals BoxTossEnv's term
     for a box resting flat and differs by the small tilt otherwise (pi when not at rest).
 
+    ## Action Space
+    As ``BoxTossEnv`` (the throw, ``Box(-1, 1, (3,))``).
+
+    ## Observation Space
+    | key             | shape | meaning                                                      |
+    |-----------------|-------|--------------------------------------------------------------|
+    | observation     | as BoxTossEnv | BoxTossEnv's observation                             |
+    | achieved_goal   | (6,)  | (box x, at rest 0/1, one-hot of the face down)               |
+    | desired_goal    | (6,)  | (target x, 1, target-face mask)                              |
+
     ## Rewards
-    ``compute_reward(achieved, desired, info)``: task.py's distance and success terms computed from the
-    goals alone; ``step`` returns exactly ``compute_reward`` of its own goals.
+    ``compute_reward(achieved, desired, info)``: task.py's distance, orientation (``task.orientation_errors``
+    of the face down; pi when not at rest) and success terms computed from the goals alone, over any leading
+    batch dimensions; ``step`` returns exactly ``compute_reward`` of its own goals.
+
+    ## Starting State
+    As ``BoxTossEnv``; the achieved goal is the box in the hand (at rest 0, no face).
+
+    ## Episode End
+    One throw: terminated after the step, as ``BoxTossEnv``.
+
+    ## Arguments
+    ``BoxTossEnv``'s keyword arguments, except ``base_box`` (not supported yet).
 
     ## Version history
     - v0: first version (no base box).
