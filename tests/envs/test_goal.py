@@ -119,6 +119,14 @@ def test_renders_the_throw():
     assert frame.ndim == 3 and frame.shape[2] == 3 and frame.std() > 0
 
 
+def test_record_throws_records_the_goal_env(tmp_path):
+    from box_toss_env.envs import record_throws
+
+    env = make(render_mode="rgb_array_list", render_width=120, render_height=80)
+    path = record_throws(env, tmp_path / "goal.gif", n_throws=1, seed=0)
+    assert path.stat().st_size > 0
+
+
 @pytest.mark.parametrize("algo", ["SAC", "TD3"])
 def test_her_trains_a_few_hundred_steps(algo):
     import stable_baselines3
