@@ -16,9 +16,10 @@ minibatch and epochs, the learning rate decaying linearly to 0 over the recipe's
 entropy coefficients, gradient clipping, gamma and lambda, separate policy and value networks of the recipe's
 sizes, a state-independent action std started at ``exp(log_std_init)``, no KL penalty (SB3's PPO has none), and
 ballistic commands where the recipe names ``BallisticThrows``. RLlib's defaults differ on each of those (a shared
-encoder, a state-dependent std starting near 1, a KL penalty, a constant rate, ...), which is what kept it far
-below SB3 (docs/rllib.md). Each iteration prints the mean return and the success rate of the sampled (exploring)
-throws; at the end the policy's mean action is evaluated on ``--eval-episodes`` fresh throws.
+encoder, a state-dependent std starting near 1, a KL penalty, a constant rate, ...); setting them as SB3's has not
+yet brought RLlib to SB3's success (docs/rllib.md has the figures). Each iteration prints the mean return and the
+success rate of the sampled (exploring) throws; at the end the policy's mean action is evaluated on
+``--eval-episodes`` fresh throws.
 """
 
 from __future__ import annotations
