@@ -403,6 +403,10 @@ def algorithm_kwargs(config: dict[str, Any], algo: str, action_size: int = 3) ->
             kwargs[key] = schedule(key, kwargs[key])
     if isinstance(kwargs.get("train_freq"), list):
         kwargs["train_freq"] = tuple(kwargs["train_freq"])
+    if isinstance(kwargs.get("replay_buffer_class"), str):  # Zoo names the class: HerReplayBuffer
+        import stable_baselines3
+
+        kwargs["replay_buffer_class"] = getattr(stable_baselines3, kwargs["replay_buffer_class"])
     if config.get("noise_type") == "normal":
         sigma = float(config["noise_std"]) * np.ones(action_size)
         kwargs["action_noise"] = NormalActionNoise(np.zeros(action_size), sigma)

@@ -18,6 +18,7 @@ DOCS = REPO / "docs"
 SECTION_PAGES = {
     "benchmark": README,  # the headline table of the front page (python -m agents.benchmark --report-only --readme)
     "agents": DOCS / "agents.md",  # python -m agents.main --full --readme
+    "variant-gifs": DOCS / "environment.md",  # python -m agents.variant_gifs
     "tune": DOCS / "hyperparameter-search.md",  # python -m agents.tune ... --readme
     "engine-benchmark": DOCS / "engine.md",  # python -m benchmarks.engine --readme
     "throughput": DOCS / "batched.md",  # python -m benchmarks.throughput --readme

@@ -9,25 +9,37 @@ The env comes from ``agents.rllib_envs`` (``env_config``: the env's kwargs). ``-
 (default) gives each env runner the native batched env with one engine thread, ``sync`` RLlib's default;
 with 256 envs per runner the native env sampled a little faster (``python -m benchmarks.rllib_sampling``;
 RLlib's per-episode work, not the env, sets the pace). Observations are normalised by RLlib's
-``MeanStdFilter`` (their bounds span hundreds of metres), and the PPO settings mirror
-``agents/hyperparams/ppo.yml``: one-throw episodes, so gamma = 0. Each iteration prints the mean
-return and the success rate of the sampled (exploring) throws.
+``MeanStdFilter`` (their bounds span hundreds of metres).
+
+The PPO settings are SB3's recipe for the env, read from ``agents/hyperparams/ppo.yml`` (``recipe``): the batch,
+minibatch and epochs, the learning rate decaying linearly to 0 over the recipe's throws, the clip range, value and
+entropy coefficients, gradient clipping, gamma and lambda, separate policy and value networks of the recipe's
+sizes, a state-independent action std started at ``exp(log_std_init)``, no KL penalty (SB3's PPO has none), and
+ballistic commands where the recipe names ``BallisticThrows``. RLlib's defaults differ on each of those (a shared
+encoder, a state-dependent std starting near 1, a KL penalty, a constant rate, ...); setting them as SB3's has not
+yet brought RLlib to SB3's success (docs/rllib.md has the figures). Each iteration prints the mean return and the
+success rate of the sampled (exploring) throws; at the end the policy's mean action is evaluated on
+``--eval-episodes`` fresh throws.
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from typing import Any
 
+import numpy as np
 import ray
+import torch
 from ray.rllib.algorithms.ppo import PPO, PPOConfig
+from ray.rllib.algorithms.ppo.torch.default_ppo_torch_rl_module import DefaultPPOTorchRLModule
 from ray.rllib.connectors.env_to_module import MeanStdFilter
-from ray.rllib.core.rl_module.default_model_config import DefaultModelConfig
+from ray.rllib.core.rl_module.rl_module import RLModuleSpec
 
-from agents.config import read_value
-from agents.rllib_envs import ENV_IDS, VECTORIZE_MODES, register_rllib_envs
+from agents.config import load_hyperparams, read_value
+from agents.rllib_envs import BALLISTIC, ENV_IDS, VECTORIZE_MODES, register_rllib_envs
 
 SUCCESS = "box_toss_success"  # the metric each finished episode logs
 
@@ -37,27 +49,94 @@ def log_success(*, episode, metrics_logger, **_) -> None:
     metrics_logger.log_value(SUCCESS, float(episode.get_infos(-1)["success"]), reduce="mean")
 
 
+class PPOModule(DefaultPPOTorchRLModule):
+    """RLlib's default PPO module whose free log std starts at ``model_config["log_std_init"]`` (SB3's
+    ``log_std_init``; RLlib starts it at 0, an action std of 1)."""
+
+    def setup(self):
+        super().setup()
+        if self.model_config.get("free_log_std") and self.model_config.get("log_std_init") is not None:
+            with torch.no_grad():
+                self.pi.log_std.fill_(float(self.model_config["log_std_init"]))
+
+
+ACTIVATIONS = {"nn.Tanh": "tanh", "nn.ReLU": "relu"}
+
+
+def recipe(env_id: str) -> dict[str, Any]:
+    """SB3's PPO recipe for ``env_id`` (``agents/hyperparams/ppo.yml``) in RLlib's terms."""
+    entry = load_hyperparams("ppo", env_id)
+    policy = entry.get("policy_kwargs") or {}
+    rate = entry["learning_rate"]
+    decays = isinstance(rate, str)  # lin_<x>: x decaying linearly to 0
+    clip = entry.get("clip_range", 0.2)
+    if isinstance(clip, str):
+        raise ValueError(f"ppo.yml's {env_id} has a clip_range schedule {clip!r}, which recipe() does not map")
+    wrapper = entry.get("env_wrapper")
+    if wrapper not in (None, BALLISTIC):
+        raise ValueError(f"ppo.yml's {env_id} names env_wrapper {wrapper!r}; recipe() maps only {BALLISTIC}")
+    return {
+        "n_throws": entry["n_timesteps"], "train_batch_size": entry["n_envs"] * entry["n_steps"],
+        "minibatch_size": entry["batch_size"], "num_epochs": entry["n_epochs"],
+        "lr": float(rate.partition("_")[2]) if decays else float(rate), "lr_decays": decays,
+        "gamma": entry.get("gamma", 0.99), "lambda_": entry.get("gae_lambda", 0.95), "clip_param": clip,
+        "entropy_coeff": entry.get("ent_coef", 0.0), "vf_loss_coeff": entry.get("vf_coef", 0.5),
+        "grad_clip": entry.get("max_grad_norm", 0.5), "hiddens": list(policy.get("net_arch", [64, 64])),
+        "activation": ACTIVATIONS[policy.get("activation_fn", "nn.Tanh")],
+        "log_std_init": policy.get("log_std_init", 0.0), "ballistic": wrapper == BALLISTIC,
+    }
+
+
 def make_config(env_id: str, env_config: dict[str, Any] | None = None, *, num_envs: int = 256,
-                vectorize: str = "native", num_env_runners: int = 0, train_batch_size: int = 2048,
-                minibatch_size: int = 128, num_epochs: int = 10, lr: float = 5e-4, seed: int = 0) -> PPOConfig:
-    """RLlib PPO on ``env_id`` (the BoxToss envs must be registered: ``register_rllib_envs``)."""
+                vectorize: str = "native", num_env_runners: int = 0, seed: int = 0,
+                **overrides: Any) -> PPOConfig:
+    """RLlib PPO on ``env_id`` with SB3's recipe (``recipe``; ``overrides`` replace its keys, e.g.
+    ``train_batch_size=256``). The BoxToss envs must be registered: ``register_rllib_envs``."""
     if vectorize not in VECTORIZE_MODES:
         raise ValueError(f"vectorize must be one of {sorted(VECTORIZE_MODES)}, got {vectorize!r}")
+    settings = recipe(env_id)
+    unknown = set(overrides) - set(settings)
+    if unknown:
+        raise ValueError(f"unknown settings {sorted(unknown)}; known: {sorted(settings)}")
+    settings.update(overrides)
     env_config = dict(env_config or {})
     if vectorize == "native":
         env_config.setdefault("threads", 1)  # an env runner has one CPU
+    if settings["ballistic"]:
+        env_config.setdefault("ballistic", True)
+    lr = [[0, settings["lr"]], [settings["n_throws"], 0.0]] if settings["lr_decays"] else settings["lr"]
+    model_config = {"fcnet_hiddens": settings["hiddens"], "fcnet_activation": settings["activation"],
+                    "vf_share_layers": False, "free_log_std": True, "log_std_init": settings["log_std_init"]}
     return (
         PPOConfig()
         .environment(env_id, env_config=env_config)
         .env_runners(num_env_runners=num_env_runners, num_envs_per_env_runner=num_envs,
                      gym_env_vectorize_mode=VECTORIZE_MODES[vectorize],
                      env_to_module_connector=lambda env, spaces, device: MeanStdFilter())
-        .training(train_batch_size_per_learner=train_batch_size, minibatch_size=minibatch_size,
-                  num_epochs=num_epochs, lr=lr, gamma=0.0, lambda_=1.0, clip_param=0.2)
-        .rl_module(model_config=DefaultModelConfig(fcnet_hiddens=[128, 128], fcnet_activation="tanh"))
+        .training(train_batch_size_per_learner=settings["train_batch_size"], minibatch_size=settings["minibatch_size"],
+                  num_epochs=settings["num_epochs"], lr=lr, gamma=settings["gamma"], lambda_=settings["lambda_"],
+                  clip_param=settings["clip_param"], entropy_coeff=settings["entropy_coeff"],
+                  vf_loss_coeff=settings["vf_loss_coeff"], grad_clip=settings["grad_clip"],
+                  grad_clip_by="global_norm", use_kl_loss=False, vf_clip_param=math.inf)
+        .rl_module(rl_module_spec=RLModuleSpec(module_class=PPOModule, model_config=model_config))
         .callbacks(on_episode_end=log_success)
         .debugging(seed=seed)
     )
+
+
+def iterations_of(config: PPOConfig, env_id: str) -> int:
+    """Iterations that sample the recipe's throws (``n_throws`` / the train batch, rounded up)."""
+    return math.ceil(recipe(env_id)["n_throws"] / config.train_batch_size_per_learner)
+
+
+def evaluate(algo: PPO, episodes: int) -> dict[str, float]:
+    """Success and mean return of the policy's mean action (``explore=False``) on at least ``episodes`` fresh
+    throws of the local env runner (its env's own draws, not the SB3 test seeds)."""
+    done = [episode for episode in algo.env_runner.sample(num_episodes=episodes, explore=False, force_reset=True)
+            if episode.is_done]
+    success = [float(episode.get_infos(-1)["success"]) for episode in done]
+    return {"episodes": len(done), "success": float(np.mean(success)),
+            "return": float(np.mean([episode.get_return() for episode in done]))}
 
 
 def summary(result: dict[str, Any]) -> dict[str, float]:
@@ -84,11 +163,13 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--env", default="BoxToss-v0", choices=ENV_IDS)
     parser.add_argument("--env-config", nargs="*", default=[], metavar="KEY=VALUE", help="env kwargs")
-    parser.add_argument("--iterations", type=int, default=40)
+    parser.add_argument("--iterations", type=int, default=None,
+                        help="training iterations (default: the recipe's throws / the train batch)")
     parser.add_argument("--num-envs", type=int, default=256, help="envs per env runner")
     parser.add_argument("--vectorize", default="native", choices=sorted(VECTORIZE_MODES))
     parser.add_argument("--num-env-runners", type=int, default=0, help="0: sample in the training process")
-    parser.add_argument("--train-batch-size", type=int, default=2048)
+    parser.add_argument("--train-batch-size", type=int, default=None, help="default: the recipe's n_envs x n_steps")
+    parser.add_argument("--eval-episodes", type=int, default=1024, help="deterministic throws at the end (0: none)")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--address", help="a running Ray cluster; default: a local Ray")
     parser.add_argument("--num-cpus", type=int, help="CPUs of the local Ray (default: all)")
@@ -113,10 +194,16 @@ def main(argv: list[str] | None = None) -> list[dict[str, float]]:
     else:
         ray.init(address="local", num_cpus=args.num_cpus, include_dashboard=False)
     register_rllib_envs()
+    overrides = {} if args.train_batch_size is None else {"train_batch_size": args.train_batch_size}
     config = make_config(args.env, env_config, num_envs=args.num_envs, vectorize=args.vectorize,
-                         num_env_runners=args.num_env_runners, train_batch_size=args.train_batch_size,
-                         seed=args.seed)
-    algo, history = train(config, args.iterations)
+                         num_env_runners=args.num_env_runners, seed=args.seed, **overrides)
+    iterations = args.iterations if args.iterations is not None else iterations_of(config, args.env)
+    algo, history = train(config, iterations)
+    if args.eval_episodes > 0:
+        result = evaluate(algo, args.eval_episodes)
+        print(f"deterministic (mean action): success {result['success']:.1%} of {result['episodes']} throws, "
+              f"return {result['return']:.3f}", flush=True)
+        history.append({"evaluation": result})
     algo.stop()
     return history
 

@@ -33,5 +33,8 @@ def _register_envs() -> None:
         gymnasium.register(id="BoxToss-Stack-v0", entry_point="box_toss_env.envs.stack:BoxTossStackEnv",
                            vector_entry_point="box_toss_env.envs.stack_vector:BoxTossStackVectorEnv")
 
+    if "BoxToss-Goal-v0" not in gymnasium.registry:
+        gymnasium.register(id="BoxToss-Goal-v0", entry_point="box_toss_env.envs.goal:BoxTossGoalEnv")
+
 
 _register_envs()

@@ -167,7 +167,8 @@ class BoxTossEnv(gym.Env):
 
     Registered variants: ``BoxToss-LongSide-v0`` (``target_face="long_side"``),
     ``BoxToss-ShortEnd-v0`` (``"short_end"``), ``BoxToss-ThisSideUp-v0`` (``"exact"``),
-    ``BoxToss-Mixed-v0`` (``"mixed"``) and ``BoxToss-OnBox-v0`` (``base_box=True``).
+    ``BoxToss-Mixed-v0`` (``"mixed"``) and ``BoxToss-OnBox-v0`` (``base_box=True``); ``BoxToss-Goal-v0`` is
+    this task in gymnasium-robotics' goal form (``box_toss_env.envs.goal.BoxTossGoalEnv``, for HER).
 
     ## A base box to land on (``base_box=True``, ``BoxToss-OnBox-v0``)
 

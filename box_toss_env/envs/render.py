@@ -292,7 +292,7 @@ def record_throws(env, path: str | Path, n_throws: int = 1,
     if policy is None:
         env.action_space.seed(seed)
         policy = lambda observation: env.action_space.sample()  # noqa: E731
-    renderer = env.unwrapped._renderer_for_env()
+    renderer = getattr(env.unwrapped, "throw_env", env.unwrapped)._renderer_for_env()  # a goal env's throws
     frames: list[np.ndarray] = []
     trace_before, renderer.trace = renderer.trace, trace
     try:

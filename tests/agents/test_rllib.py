@@ -10,7 +10,9 @@ pytest.importorskip("ray.rllib")
 import ray  # noqa: E402
 
 from agents.rllib_envs import make_env, register_rllib_envs  # noqa: E402
-from agents.rllib_ppo import SUCCESS, make_config, summary  # noqa: E402
+from agents.rllib_ppo import SUCCESS, evaluate, iterations_of, make_config, recipe, summary  # noqa: E402
+from box_toss_env.envs.ballistic import BallisticThrows  # noqa: E402
+from box_toss_env.wrappers.ballistic import BallisticThrowsVector  # noqa: E402
 from box_toss_env.wrappers.next_step import NextStepAutoreset  # noqa: E402
 
 
@@ -30,6 +32,24 @@ def test_the_env_creator_honours_env_config():
     assert batched.unwrapped.config.target_face == "short_end" and batched.unwrapped.threads == 1
     with pytest.raises(ValueError, match="max_spin"):
         make_env("BoxToss-v0", {"max_spin": -1.0})
+    assert isinstance(make_env("BoxToss-ShortEnd-v0", {"ballistic": True}), BallisticThrows)
+    commands = make_env("BoxToss-ShortEnd-v0", {"num_envs": 4, "ballistic": True})
+    assert isinstance(commands, NextStepAutoreset) and isinstance(commands.env, BallisticThrowsVector)
+
+
+def test_the_settings_are_sb3s_recipe():
+    position, pose = recipe("BoxToss-v0"), recipe("BoxToss-ShortEnd-v0")
+    assert position == {"n_throws": 300_000, "train_batch_size": 2048, "minibatch_size": 128, "num_epochs": 10,
+                        "lr": 5e-4, "lr_decays": True, "gamma": 0.0, "lambda_": 1.0, "clip_param": 0.2,
+                        "entropy_coeff": 0.0, "vf_loss_coeff": 0.5, "grad_clip": 0.5, "hiddens": [128, 128],
+                        "activation": "tanh", "log_std_init": -2.5, "ballistic": False}
+    assert pose["ballistic"] and pose["log_std_init"] == -1.0 and pose["n_throws"] == 600_000
+    config = make_config("BoxToss-v0")
+    assert config.lr == [[0, 5e-4], [300_000, 0.0]] and not config.use_kl_loss and config.grad_clip == 0.5
+    assert iterations_of(config, "BoxToss-v0") == 147
+    assert make_config("BoxToss-ShortEnd-v0").env_config["ballistic"] is True
+    with pytest.raises(ValueError, match="unknown settings"):
+        make_config("BoxToss-v0", learning_rate=1e-3)
 
 
 @pytest.mark.parametrize("vectorize", ["native", "sync"])
@@ -50,5 +70,18 @@ def test_rllib_ppo_trains_an_iteration(local_ray, vectorize):
         assert figures["env_steps"] >= 256 and figures["episode_length"] == 1.0  # one throw per episode
         assert 0.0 <= figures["success"] <= 1.0 and SUCCESS in result["env_runners"]
         assert result["learners"]["default_policy"]["num_module_steps_trained"] > 0
+    finally:
+        algo.stop()
+
+
+def test_the_module_starts_from_the_recipes_std_with_separate_networks(local_ray):
+    config = make_config("BoxToss-v0", num_envs=16, train_batch_size=256, minibatch_size=64, num_epochs=1)
+    algo = config.build_algo()
+    try:
+        module = algo.get_module()
+        assert module.pi.log_std.detach().tolist() == [-2.5] * 3  # RLlib's default would start at 0 (std 1)
+        assert not module.model_config["vf_share_layers"]
+        result = evaluate(algo, 32)
+        assert result["episodes"] >= 32 and 0.0 <= result["success"] <= 1.0
     finally:
         algo.stop()
