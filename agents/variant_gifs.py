@@ -36,9 +36,12 @@ OUT = DOCS / "figures"
 MAX_BYTES = 300_000
 
 
+SEQUENTIAL = ("BoxToss-Stack-v0",)  # episodes of several throws, planned by agents.stack_planner (docs/stack.md)
+
+
 def variant_ids() -> list[str]:
-    """Every registered BoxToss id, in registration order."""
-    return [env_id for env_id in gym.registry if env_id.startswith("BoxToss-")]
+    """Every registered one-throw BoxToss id, in registration order."""
+    return [env_id for env_id in gym.registry if env_id.startswith("BoxToss-") and env_id not in SEQUENTIAL]
 
 
 def throw_env(env: gym.Env) -> gym.Env:
