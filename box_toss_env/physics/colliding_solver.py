@@ -675,6 +675,7 @@ def advance_alone(k, n, state_pose, vel, params, awake, supported, alone, memory
             return end, slept, b
         if not math.isnan(memory[b, REST_TIME]):
             awake[b] = False
+            alone[b] = False  # woken later, it starts a new memory row
             island[b] = b
             rest_time[b] = memory[b, REST_TIME]
             slept += 1
