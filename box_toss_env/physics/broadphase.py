@@ -55,15 +55,15 @@ def insertion_sort(order, keys):
         order[q + 1] = item
 
 
-@jit_stage
-def overlaps(i, j, pose, bound, reach):
-    """The exact test of the module docstring for boxes i and j."""
-    margin = reach[i] + reach[j]
-    return (abs(pose[j, 0] - pose[i, 0]) <= bound[i, 0] + bound[j, 0] + margin
-            and abs(pose[j, 1] - pose[i, 1]) <= bound[i, 1] + bound[j, 1] + margin)
+@jit_stage(inline="always")
+def overlaps(dx, dy, bound_x, bound_y, margin):
+    """The exact test of the module docstring for two boxes whose centres are (dx, dy) apart, with summed
+    half extents (bound_x, bound_y) and summed reaches ``margin``: |dx| <= bound_x + margin and
+    |dy| <= bound_y + margin. Scalars only, so that the sweep's inner loop handles no array."""
+    return abs(dx) <= bound_x + margin and abs(dy) <= bound_y + margin
 
 
-@jit_stage
+@jit_stage(nrt=True)  # the sort of the keys allocates its stack
 def candidate_pairs(pose, bound, reach, include, moving, axis, order, low, keys):
     """The candidate pairs (module docstring) among the boxes with ``include`` set, of which at least one
     has ``moving`` set, as keys i n + j (i < j) in increasing order in ``keys``. ``order`` is the sweep order
@@ -87,7 +87,8 @@ def candidate_pairs(pose, bound, reach, include, moving, axis, order, low, keys)
             if not include[j] or not (moving[i] or moving[j]):
                 continue
             a, b = min(i, j), max(i, j)
-            if overlaps(a, b, pose, bound, reach):
+            if overlaps(pose[b, 0] - pose[a, 0], pose[b, 1] - pose[a, 1], bound[a, 0] + bound[b, 0],
+                        bound[a, 1] + bound[b, 1], reach[a] + reach[b]):
                 if count >= keys.shape[0]:
                     return -1
                 keys[count] = a * n + b
