@@ -22,7 +22,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .colliding_seed import make_colliding_seed_kernel
-from .colliding_solver import make_colliding_robust_kernel
+from .colliding_step import make_colliding_robust_kernel
 from .robust_solver import make_robust_kernel
 from .seed_solver import make_seed_kernel
 

@@ -1,0 +1,471 @@
+"""The step script of the robust solver for scenes whose boxes collide (``Scene(boxes_collide=True)``):
+``make_colliding_robust_kernel`` builds the kernel, whose loop reads as the method below, one stage a
+line; the contact formulas, the impulse solves and the penalty are in ``colliding_solver``, the
+geometry of contacts in ``box_collision``, pairs in ``broadphase``, sleeping in ``islands``.
+
+The stage script of one substep of length h:
+  1. find contacts: every box-box point whose gap the two bodies could close within h, every box-floor
+     corner within the box's reach plus the scene's largest (a struck box moves further than its own
+     speed says) (speculative contacts, ``box_collision.find_contacts``); each starts from its impulse of
+     the last substep when the same feature touched (warm starting), so a stack's load is carried from
+     step to step rather than rebuilt by the iterations;
+  2. penalty: penetration deeper than the slop is removed by the critically damped penalty spring with
+     backward Euler, as a pseudo-velocity (``robust_solver``'s split impulse, now between two bodies:
+     ERP = h omega / (h omega + 2), omega = sqrt(k K_n)); positions move, velocities do not, and the
+     potential energy it returns is taken from the kinetic energy of the bodies it moved, as far as
+     they have it (the one place a substep can gain energy: a box pushed up out of an overlap while at
+     rest; the scene's energy still never exceeds what it started with in our tests);
+  3. integrate velocities: v += h g;
+  4. solve contact velocities: the normal impulses stay >= 0 and let each gap close but not pass
+     (u_rel . n >= -max(gap, 0) / h); each contact's accumulated friction impulse is clamped to mu times
+     its normal impulse (it can bring the slip at a contact to zero, never drive it the other way). Up to
+     DIRECT_LIMIT contacts the normal impulses are solved exactly together (an active set on the dense
+     Delassus matrix, ``normal_lcp``: a stack's load passes through every box at once, whatever the mass
+     ratio), alternating with friction sweeps until the impulses change by less than CONVERGED of their
+     sum (at most VELOCITY_ITERATIONS rounds); beyond that, projected Gauss-Seidel over the contacts
+     (Box2D's sequential impulses, friction then normal at each, at most GAUSS_SEIDEL_ITERATIONS sweeps);
+  5. restitution, only for impacts: a contact that approached faster than the restitution threshold
+     before this substep (u0 = u_rel . n < -threshold) and took an impulse gets the target
+     u_rel . n >= -e u0 (Newton's law with the approach speed before the solve, as Box2D v3), so a
+     single frictionless contact takes p = -(1 + e) u0 / K_n in all, the closed form, in the substep
+     its gap closes (also for e = 0: the impact is not spread over the speculative steps); resting
+     contacts (slower than the threshold) get none. The impacts are solved again with stage 4's solve,
+     together with every other contact and with friction (the simultaneous impulse LCP: a box struck
+     while lying on the floor is held by the floor and tips as friction says), then polished contact by
+     contact (``apply_restitution``). Restitution solved alone, without the floor or friction, drove a
+     box struck from above 1.3 cm into the floor at 200 m/s and made a box dropped on a box nearly
+     frictionless at its impact;
+  6. no energy gained: the bodies that took an impulse are scaled by the one factor s in [0, 1] that
+     keeps their kinetic + potential energy from rising in the substep (``energy_limit_scale``; with
+     several contacts, friction or warm starting the impulses alone could add energy). Scaling every
+     velocity by s keeps every contact satisfied and reverses no slip;
+  7. integrate positions: a body that took no impulse moves on its exact parabola
+     (x += h v - h^2 g / 2 with v already at the end of the substep), one in contact with symplectic
+     Euler (x += h v).
+A grid step dt is split into substeps so that no point of any box moves further than
+TUNNEL_FRACTION / 2 of the scene's smallest half extent in one (the point speed bound
+|v| + |g| h + |omega| R), so two boxes move by at most TUNNEL_FRACTION of it relative to one another,
+and no box turns further than MAX_ROTATION_PER_STEP, up to MAX_SUBSTEPS. No tunnelling: within that
+bound two boxes cannot pass through one another in a substep (they move by less than half the
+thinnest box, and the speculative contacts stop the gap from closing past zero); the floor's
+speculative contacts hold at any speed. The bound holds up to a relative speed of
+MAX_SUBSTEPS * TUNNEL_FRACTION * min(hx, hy) / dt (3,300 m/s for 10 cm thick boxes at dt = 1/256 s);
+beyond it the substeps are capped and only the speculative contacts remain (not guaranteed).
+
+What a grid step does before and after the substeps, so that a scene pays only for what moves:
+  0. wake: with ``until_rest``, every sleeping island that an awake body can reach within the step wakes
+     (``islands.wake_touched``; bodies placed at rest sleep from the start, ``islands.sleep_placed``);
+     sleeping bodies are left out of everything below;
+  alone: while at most ALONE_LIMIT bodies are awake, the whole steps for which no two boxes can meet
+     (``steps_alone``: on the exact parabolas while every awake body flies, or by a bound on every point's
+     speed from the body's energy, ``energy_speed``, while they bounce or slide on the floor apart) are
+     taken by each awake body alone against the floor with the floor-only solver (``robust_solver.advance_box``:
+     flight in closed form, impacts located in time, its own sleep), in one jump: a box thrown over a
+     sleeping one, or settling on the floor beside it, costs what a floor throw costs until they get close;
+  1.-7. the substeps above, over the awake bodies only; contacts come from the sort-and-sweep broadphase
+     (``broadphase.candidate_pairs``), which visits the pairs in the order testing every pair did, so the
+     results are those of the all-pairs search;
+  8. sleep: with ``until_rest``, an island (bodies joined by box-box contacts) whose bodies have all been
+     supported and slower than ``sleep_speed`` at every point for ``sleep_time`` falls asleep
+     (``islands.fall_asleep``: velocities zero, no cost until touched); the run stops once every body sleeps.
+Impacts between boxes are resolved in the substep where the gap closes (not located in time as the
+floor-only solver locates a box's impacts with the floor).
+"""
+
+import math
+
+import numpy as np
+
+from . import layout
+from .box_collision import (
+    APPROACH,
+    BODY1,
+    BODY2,
+    CONTACT_COLUMNS,
+    FRICTION_IMPULSE,
+    GAP,
+    ID_COLUMNS,
+    IMPULSE,
+    KEY,
+    NX,
+    NY,
+    RESTITUTION,
+    TARGET,
+    find_contacts,
+    update_geometry,
+)
+from .broadphase import candidate_pairs, sweep_axis
+from .colliding_solver import (
+    ALONE_LIMIT,
+    CONTACT_TOLERANCE,
+    DIRECT_LIMIT,
+    MIN_CAPACITY,
+    advance_alone,
+    apply_restitution,
+    body_kinetic_energy,
+    body_reach,
+    correct_penetrations,
+    count_awake,
+    prepare_contacts,
+    relative_velocity,
+    solve_velocities,
+    steps_alone,
+    substeps,
+    warm_start,
+)
+from .compilation import jit_kernel, jit_stage
+from .contact_solver import CORNER_ROWS, MAX_CORNERS
+from .islands import fall_asleep, sleep_placed, wake_touched
+from .kernel_support import read_settings, record_event, store_state, write_stats
+from .robust_solver import MEMORY_SIZE, energy_limit_scale
+
+
+# -- 1. broadphase and narrowphase -------------------------------------------------------------------
+@jit_stage
+def contact_reach(pose, half, vel, radius, awake, h, gravity, tolerance, trig, bound, reach, floor_reach):
+    """Each awake body's bounding box and how far it can travel in the substep (``body_reach``); against
+    the floor a body reaches its own distance plus the fastest body's (a struck box moves further than its
+    own speed says)."""
+    update_geometry(pose, half, awake, trig, bound)
+    fastest = body_reach(vel, radius, awake, h, gravity, tolerance, reach)
+    for b in range(pose.shape[0]):
+        floor_reach[b] = reach[b] + fastest
+
+
+@jit_stage
+def note_penetration(contacts, ids, count, max_penetration):
+    """The deepest penetration each body has had (-gap of its contacts), for the stats."""
+    for c in range(count):
+        depth = -contacts[c, GAP]
+        b1 = ids[c, BODY1]
+        b2 = ids[c, BODY2]
+        max_penetration[b1] = max(max_penetration[b1], depth)
+        if b2 >= 0:
+            max_penetration[b2] = max(max_penetration[b2], depth)
+
+
+# -- 2.-3. before the solve: energies, approach speeds, gravity ------------------------------------
+@jit_stage
+def approach_speeds(contacts, ids, count, vel, params, kinetic_before):
+    """Each body's kinetic energy and each contact's approach speed u_rel . n before the substep's impulses."""
+    for b in range(vel.shape[0]):
+        kinetic_before[b] = body_kinetic_energy(vel, b, params)
+    for c in range(count):
+        ux, uy = relative_velocity(c, contacts, ids, vel)
+        contacts[c, APPROACH] = ux * contacts[c, NX] + uy * contacts[c, NY]
+
+
+@jit_stage
+def integrate_velocities(vel, awake, h, gravity):
+    """v += h g for the awake bodies (a sleeping body does not fall)."""
+    for b in range(vel.shape[0]):
+        if awake[b]:
+            vel[b, 1] += h * gravity
+
+
+# -- 4. warm start and solve -------------------------------------------------------------------------
+@jit_stage
+def speculative_targets(contacts, count, h):
+    """u_rel . n >= -max(gap, 0) / h: each gap may close within the substep but not pass."""
+    for c in range(count):
+        contacts[c, TARGET] = -max(contacts[c, GAP], 0.0) / h
+
+
+@jit_stage
+def store_impulses(contacts, ids, count, previous_keys, previous_impulses):
+    """Keep the solved impulses by contact key for the next substep's warm start; returns how many."""
+    for c in range(count):
+        previous_keys[c] = ids[c, KEY]
+        previous_impulses[c, 0] = contacts[c, IMPULSE]
+        previous_impulses[c, 1] = contacts[c, FRICTION_IMPULSE]
+    return count
+
+
+# -- 5. restitution ----------------------------------------------------------------------------------
+@jit_stage
+def restitution_targets(contacts, count, threshold):
+    """u_rel . n >= -e u0 for the contacts that approached faster than the threshold and took an impulse;
+    returns how many (the impacts)."""
+    impacts = 0
+    for c in range(count):
+        if contacts[c, APPROACH] < -threshold and contacts[c, IMPULSE] > 0.0:
+            contacts[c, TARGET] = -contacts[c, RESTITUTION] * contacts[c, APPROACH]
+            impacts += 1
+    return impacts
+
+
+# -- 6. no energy gained -----------------------------------------------------------------------------
+@jit_stage
+def mark_touched(contacts, ids, count, impacts, threshold, touched, impacted):
+    """Which bodies took an impulse in the substep, and at how many impacts each."""
+    for b in range(touched.shape[0]):
+        touched[b] = False
+        impacted[b] = 0
+    for c in range(count):
+        if contacts[c, IMPULSE] > 0.0:
+            b1 = ids[c, BODY1]
+            b2 = ids[c, BODY2]
+            touched[b1] = True
+            if b2 >= 0:
+                touched[b2] = True
+            if impacts > 0 and contacts[c, APPROACH] < -threshold:
+                impacted[b1] += 1
+                if b2 >= 0:
+                    impacted[b2] += 1
+
+
+@jit_stage
+def limit_energy(contacts, ids, count, vel, params, kinetic_before, touched, impacted, supported, first_contact,
+                 n_impacts, h, t, gravity, record, events):
+    """Scale the touched bodies' velocities by the one s in [0, 1] that keeps their kinetic + potential energy
+    from rising in the substep (``energy_limit_scale``); count (and with ``record`` log) each body's impacts."""
+    before = 0.0
+    after = 0.0
+    rise = 0.0
+    for b in range(vel.shape[0]):
+        if touched[b]:
+            supported[b] = True
+            if math.isnan(first_contact[b]):
+                first_contact[b] = t
+            before += kinetic_before[b]
+            after += body_kinetic_energy(vel, b, params)
+            rise += -gravity * h * vel[b, 1] * params[b, layout.MASS]
+        if impacted[b] > 0:
+            if record:
+                approach = 0.0
+                for c in range(count):
+                    if ids[c, BODY1] == b or ids[c, BODY2] == b:
+                        approach = max(approach, -contacts[c, APPROACH])
+                record_event(events, b, n_impacts[b], t, approach, impacted[b])
+            n_impacts[b] += 1
+    if after > 0.0:
+        scale = energy_limit_scale(before, after, rise)
+        if scale < 1.0:
+            for b in range(vel.shape[0]):
+                if touched[b]:
+                    vel[b, 0] *= scale
+                    vel[b, 1] *= scale
+                    vel[b, 2] *= scale
+
+
+# -- 7. integrate positions --------------------------------------------------------------------------
+@jit_stage
+def integrate_positions(pose, vel, awake, touched, h, gravity):
+    """The exact parabola out of contact (x += h v - h^2 g / 2, v at the end of the substep), symplectic
+    Euler in contact (x += h v)."""
+    for b in range(pose.shape[0]):
+        if awake[b]:
+            pose[b, 0] += h * vel[b, 0]
+            pose[b, 1] += h * vel[b, 1]
+            if not touched[b]:
+                pose[b, 1] -= 0.5 * h * h * gravity
+            pose[b, 2] += h * vel[b, 2]
+
+
+# -- after the step: record, check, sleep ------------------------------------------------------------
+@jit_stage
+def record_states(trajectory, row, pose, vel):
+    for b in range(pose.shape[0]):
+        store_state(trajectory, row, b, pose[b, 0], pose[b, 1], pose[b, 2], vel[b, 0], vel[b, 1], vel[b, 2])
+
+
+@jit_stage
+def end_step(pose, vel, awake, n_stepped, n, record, trajectory):
+    """Count the step for the awake bodies, record it, and say whether every body is still finite."""
+    if record:
+        record_states(trajectory, n, pose, vel)
+    finite = True
+    for b in range(pose.shape[0]):
+        n_stepped[b] += awake[b]
+        if not (math.isfinite(pose[b, 0]) and math.isfinite(pose[b, 1]) and math.isfinite(pose[b, 2])
+                and math.isfinite(vel[b, 0]) and math.isfinite(vel[b, 1]) and math.isfinite(vel[b, 2])):
+            finite = False
+    return finite
+
+
+@jit_stage
+def sleep_islands(ids, count, pose, vel, radius, awake, supported, still_for, sleep_speed, sleep_time, parent, ready,
+                  island, rest_time, n, dt, record, trajectory):
+    """8. The islands whose bodies have all been supported and slower than ``sleep_speed`` at every point
+    for ``sleep_time`` fall asleep (``islands.fall_asleep``); returns how many bodies did."""
+    for b in range(pose.shape[0]):
+        if awake[b]:
+            speed = math.sqrt(vel[b, 0] ** 2 + vel[b, 1] ** 2) + abs(vel[b, 2]) * radius[b]
+            still_for[b] = still_for[b] + dt if supported[b] and speed <= sleep_speed else 0.0
+    slept = fall_asleep(ids, count, awake, still_for, sleep_time, parent, ready, island, vel)
+    if slept > 0:
+        for b in range(pose.shape[0]):
+            if not awake[b] and math.isnan(rest_time[b]):
+                rest_time[b] = n * dt
+                if record:
+                    store_state(trajectory, n, b, pose[b, 0], pose[b, 1], pose[b, 2], 0.0, 0.0, 0.0)
+    return slept
+
+
+@jit_stage
+def write_back(state, stats, pose, vel, first_contact, n_impacts, n_stepped, max_penetration, rest_time, n, dt,
+               status, fail_step):
+    """The bodies' final states and stats; a failure is reported on the bodies that are not finite."""
+    for b in range(state.shape[0]):
+        state[b, 0], state[b, 1], state[b, 2] = pose[b, 0], pose[b, 1], pose[b, 2]
+        state[b, 3], state[b, 4], state[b, 5] = vel[b, 0], vel[b, 1], vel[b, 2]
+        body_status = layout.STATUS_OK
+        if status != layout.STATUS_OK and not (math.isfinite(pose[b, 0]) and math.isfinite(pose[b, 1])
+                                               and math.isfinite(pose[b, 2]) and math.isfinite(vel[b, 0])
+                                               and math.isfinite(vel[b, 1]) and math.isfinite(vel[b, 2])):
+            body_status = status
+        write_stats(stats, b, first_contact[b], n_impacts[b], n_stepped[b], max_penetration[b], rest_time[b],
+                    n * dt, body_status, fail_step if body_status != layout.STATUS_OK else -1, n + 1)
+
+
+def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, source_digest: int):
+    """Build the robust kernel for scenes whose boxes collide (flags are compile-time, as
+    ``robust_solver.make_robust_kernel``'s): ``run(state, params, settings, stats, trajectory, events)``
+    advances every body of the scene together, in place."""
+    PENALTY, FRICTION_ON, RECORD, DIGEST = use_penalty, use_friction, record, source_digest
+
+    @jit_kernel
+    def run(state, params, settings, stats, trajectory, events):
+        _ = DIGEST  # the on-disk cache key includes every engine source (see robust_solver)
+        dt, gravity, max_steps, until_rest, threshold, sleep_speed, sleep_time, slop = read_settings(settings)
+        nb = state.shape[0]
+        pose = state[:, 0:3].copy()
+        vel = state[:, 3:6].copy()
+        half = params[:, 0:2].copy()
+        inv_mass = 1.0 / params[:, layout.MASS]
+        inv_inertia = 1.0 / params[:, layout.INERTIA]
+        radius = np.sqrt(half[:, 0] ** 2 + half[:, 1] ** 2)
+        smallest_half = half.min()
+        tolerance = CONTACT_TOLERANCE * (1.0 + radius.max())
+        trig, bound, pseudo, work = np.zeros((nb, 2)), np.zeros((nb, 2)), np.zeros((nb, 3)), np.zeros((nb, 6))
+        reach, floor_reach, kinetic_before, max_penetration = np.zeros(nb), np.zeros(nb), np.zeros(nb), np.zeros(nb)
+        touched, supported, ready = np.zeros(nb, np.bool_), np.zeros(nb, np.bool_), np.zeros(nb, np.bool_)
+        impacted, n_impacts, n_stepped = np.zeros(nb, np.int64), np.zeros(nb, np.int64), np.zeros(nb, np.int64)
+        first_contact = np.full(nb, math.nan)
+        capacity = max(8 * nb, MIN_CAPACITY)
+        contacts, ids = np.zeros((capacity, CONTACT_COLUMNS)), np.zeros((capacity, ID_COLUMNS), np.int64)
+        previous_keys, previous_impulses = np.zeros(capacity, np.int64), np.zeros((capacity, 2))
+        # the exact normal solve's work arrays
+        w, factor = np.zeros((DIRECT_LIMIT, DIRECT_LIMIT)), np.zeros((DIRECT_LIMIT, DIRECT_LIMIT))
+        free, x, lcp_y = np.zeros(DIRECT_LIMIT), np.zeros(DIRECT_LIMIT), np.zeros(DIRECT_LIMIT)
+        active, index = np.zeros(DIRECT_LIMIT, np.bool_), np.zeros(DIRECT_LIMIT, np.int64)
+        # broadphase (sort and sweep) and islands (sleeping)
+        everyone, awake = np.ones(nb, np.bool_), np.ones(nb, np.bool_)
+        island = np.full(nb, -1, np.int64)  # a sleeping body's island (its root body); -1 while awake
+        still_for = np.zeros(nb)  # [s] how long each awake body has been supported and still
+        rest_time = np.full(nb, math.nan)  # when each body last fell asleep
+        parent = np.zeros(nb, np.int64)
+        update_geometry(pose, half, everyone, trig, bound)
+        axis = sweep_axis(pose, everyone)
+        order = np.argsort(pose[:, axis])
+        low = np.zeros(nb)
+        pair_keys = np.zeros(max(4 * nb, MIN_CAPACITY), np.int64)
+        # bodies advanced alone: advance_box's memory rows and work arrays (contact_solver)
+        memory = np.zeros((nb, MEMORY_SIZE))
+        alone = np.zeros(nb, np.bool_)  # whether a body's memory row holds on (advanced alone since the substeps)
+        corners = np.zeros((CORNER_ROWS, MAX_CORNERS))
+        corner_delassus = np.zeros((MAX_CORNERS, MAX_CORNERS))
+        corner_ids = np.zeros(MAX_CORNERS, np.int64)
+        n_previous, h_previous, count, n, n_awake = 0, dt, 0, 0, nb
+        status, fail_step = layout.STATUS_OK, -1
+        if RECORD:
+            record_states(trajectory, 0, pose, vel)
+        if until_rest:  # bodies placed at rest sleep from the start
+            slept = sleep_placed(pose, vel, half, bound, reach, everyone, awake, island, rest_time, ready, sleep_speed,
+                                 tolerance, axis, order, low, pair_keys)
+            while slept < 0:
+                pair_keys = np.zeros(2 * pair_keys.shape[0], np.int64)
+                slept = sleep_placed(pose, vel, half, bound, reach, everyone, awake, island, rest_time, ready,
+                                     sleep_speed, tolerance, axis, order, low, pair_keys)
+            n_awake -= slept
+        while n < max_steps and n_awake > 0:
+            if n_awake < nb:  # 0. wake the sleeping islands an awake body can reach in this step
+                update_geometry(pose, half, awake, trig, bound)
+                body_reach(vel, radius, awake, dt, gravity, tolerance, reach)
+                while wake_touched(pose, bound, reach, everyone, awake, island, still_for, rest_time, axis, order,
+                                   low, pair_keys) < 0:
+                    pair_keys = np.zeros(2 * pair_keys.shape[0], np.int64)
+                n_awake = count_awake(awake)
+            if n_awake <= ALONE_LIMIT:
+                # alone: whole steps of each awake body against the floor alone while no two boxes can meet
+                k = steps_alone(pose, vel, half, radius, awake, params, gravity, tolerance, dt, max_steps - n)
+                if k > 0:
+                    n, slept, failed = advance_alone(
+                        k, n, pose, vel, params, awake, supported, alone, memory, n_stepped, n_impacts, first_contact,
+                        max_penetration, still_for, island, rest_time, work, dt, gravity, until_rest, threshold,
+                        sleep_speed, sleep_time, slop, PENALTY, FRICTION_ON, RECORD, corners, corner_delassus,
+                        corner_ids, trajectory, events)
+                    n_previous = 0  # the contacts of the substeps before are gone
+                    if failed >= 0:
+                        status, fail_step = layout.STATUS_NONFINITE, n
+                        break
+                    n_awake -= slept
+                    if n_awake == 0:
+                        break
+                    continue
+            n_sub = substeps(vel, radius, smallest_half, dt, gravity)
+            h = dt / n_sub
+            supported[:] = False
+            alone[:] = False
+            for sub in range(n_sub):
+                t = n * dt + sub * h
+                # 1. broadphase and narrowphase: contacts within what the bodies can travel in the substep
+                contact_reach(pose, half, vel, radius, awake, h, gravity, tolerance, trig, bound, reach, floor_reach)
+                n_pairs = candidate_pairs(pose, bound, reach, awake, awake, axis, order, low, pair_keys)
+                while n_pairs < 0:
+                    pair_keys = np.zeros(2 * pair_keys.shape[0], np.int64)
+                    n_pairs = candidate_pairs(pose, bound, reach, awake, awake, axis, order, low, pair_keys)
+                count = find_contacts(pose, trig, half, reach, floor_reach, pair_keys, n_pairs, awake, contacts, ids)
+                while count < 0:  # more contacts than room: grow, keeping the warm start
+                    capacity *= 2
+                    contacts = np.zeros((capacity, CONTACT_COLUMNS))
+                    ids = np.zeros((capacity, ID_COLUMNS), np.int64)
+                    keys = np.zeros(capacity, np.int64)
+                    keys[:n_previous] = previous_keys[:n_previous]
+                    impulses = np.zeros((capacity, 2))
+                    impulses[:n_previous] = previous_impulses[:n_previous]
+                    previous_keys, previous_impulses = keys, impulses
+                    count = find_contacts(pose, trig, half, reach, floor_reach, pair_keys, n_pairs, awake, contacts,
+                                          ids)
+                prepare_contacts(contacts, ids, count, params, inv_mass, inv_inertia)
+                note_penetration(contacts, ids, count, max_penetration)
+                # 2. relax: split-impulse correction of penetrations deeper than the slop
+                if PENALTY and count > 0:
+                    correct_penetrations(contacts, ids, count, pose, vel, pseudo, inv_mass, inv_inertia, h, slop,
+                                         tolerance, gravity, params, w, factor, free, x, active, index, lcp_y)
+                approach_speeds(contacts, ids, count, vel, params, kinetic_before)
+                # 3. integrate velocities
+                integrate_velocities(vel, awake, h, gravity)
+                # 4. warm start, solve (speculative targets), store impulses for the next substep
+                speculative_targets(contacts, count, h)
+                warm_start(contacts, ids, count, previous_keys, previous_impulses, n_previous, h / h_previous, vel,
+                           inv_mass, inv_inertia)
+                solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, FRICTION_ON, w, factor, free, x,
+                                 active, index, lcp_y)
+                n_previous = store_impulses(contacts, ids, count, previous_keys, previous_impulses)
+                h_previous = h
+                # 5. restitution for impacts only: solved with every contact and friction, then polished
+                impacts = restitution_targets(contacts, count, threshold)
+                if impacts > 0:
+                    solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, FRICTION_ON, w, factor, free, x,
+                                     active, index, lcp_y)
+                    apply_restitution(contacts, ids, count, vel, inv_mass, inv_inertia, threshold)
+                # 6. no energy gained by the bodies that took an impulse
+                mark_touched(contacts, ids, count, impacts, threshold, touched, impacted)
+                limit_energy(contacts, ids, count, vel, params, kinetic_before, touched, impacted, supported,
+                             first_contact, n_impacts, h, t, gravity, RECORD, events)
+                # 7. integrate positions
+                integrate_positions(pose, vel, awake, touched, h, gravity)
+            n += 1
+            if not end_step(pose, vel, awake, n_stepped, n, RECORD, trajectory):
+                status, fail_step = layout.STATUS_NONFINITE, n
+                break
+            if until_rest:  # 8. sleep
+                n_awake -= sleep_islands(ids, count, pose, vel, radius, awake, supported, still_for, sleep_speed,
+                                         sleep_time, parent, ready, island, rest_time, n, dt, RECORD, trajectory)
+                if n_awake == 0:
+                    break
+        write_back(state, stats, pose, vel, first_contact, n_impacts, n_stepped, max_penetration, rest_time, n, dt,
+                   status, fail_step)
+
+    return run
