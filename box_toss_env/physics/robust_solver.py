@@ -278,6 +278,123 @@ def start_memory(memory, i, time):
     memory[i, FAIL_STEP] = -1.0
 
 
+@jit_stage(inline="always")
+def read_memory(memory, i):
+    """Box i's row of ``memory`` as (in flight, located corner, loaded corners, lift, still for, first contact,
+    rest time, max penetration, impacts, steps, time)."""
+    return (memory[i, IN_FLIGHT] != 0.0, np.int64(memory[i, LOCATED]), np.int64(memory[i, LOADED]), memory[i, LIFT],
+            memory[i, STILL_FOR], memory[i, FIRST_CONTACT], memory[i, REST_TIME], memory[i, MAX_PENETRATION],
+            np.int64(memory[i, N_IMPACTS]), np.int64(memory[i, N_STEPS]), memory[i, TIME])
+
+
+@jit_stage(inline="always")
+def write_memory(memory, i, in_flight, located, loaded, lift, still_for, first_contact, rest_time, max_penetration,
+                 n_impacts, n_steps, t, status, fail_step):
+    """``read_memory``'s inverse, with the status and the failed step."""
+    memory[i, IN_FLIGHT] = 1.0 if in_flight else 0.0
+    memory[i, LOCATED] = located
+    memory[i, LOADED] = loaded
+    memory[i, LIFT] = lift
+    memory[i, STILL_FOR] = still_for
+    memory[i, FIRST_CONTACT] = first_contact
+    memory[i, REST_TIME] = rest_time
+    memory[i, MAX_PENETRATION] = max_penetration
+    memory[i, N_IMPACTS] = n_impacts
+    memory[i, N_STEPS] = n_steps
+    memory[i, TIME] = t
+    memory[i, STATUS] = status
+    memory[i, FAIL_STEP] = fail_step
+
+
+@jit_stage(inline="always")
+def fly(i, x, y, angle, vx, vy, spin, hx, hy, gravity, t, n, n_end, dt, tolerance, record, trajectory):
+    """Flight in closed form from time t (grid step n) to the first contact with the floor or to grid step
+    ``n_end``, whichever comes first, the grid rows passed recorded. Returns the state there, the time flown,
+    whether a corner touched, and the last grid row the flight passed."""
+    end_time = n_end * dt
+    tau, touched = time_to_contact(y, angle, vy, spin, hx, hy, gravity, end_time - t, tolerance)
+    # grid rows passed in this flight: up to the end, or to the last one before the contact
+    last = n_end if not touched else min(np.int64(math.floor((t + tau) / dt)), n_end)
+    if record:
+        for row in range(n + 1, last + 1):
+            xr, yr, ar, vxr, vyr, wr = flight_state(x, y, angle, vx, vy, spin, gravity, row * dt - t)
+            store_state(trajectory, row, i, xr, yr, ar, vxr, vyr, wr)
+    x, y, angle, vx, vy, spin = flight_state(x, y, angle, vx, vy, spin, gravity, tau)
+    return x, y, angle, vx, vy, spin, tau, touched, last
+
+
+@jit_stage(inline="always")
+def solve_piece(y, cos_a, sin_a, vx, vy, spin, left, hx, hy, gravity, tolerance, radius, threshold, friction, inv_mass,
+                inv_inertia, located_impacts, corners, k, ids):
+    """Stages 1.-3. of a piece of a contact step of at most ``left``: velocities with gravity, the contact
+    velocities solved, and, where a corner off the floor was stopped while approaching faster than the
+    threshold, the piece shortened to its arrival (that impact is then resolved at the piece's end, stage 0).
+    Returns (vx, vy, spin, piece, located corner or -1, located impacts so far, corners in contact, kinetic
+    energy at the start)."""
+    piece = left
+    located = -1
+    vx0, vy0, spin0 = vx, vy, spin
+    for attempt in range(2):
+        vx, vy, spin = vx0, vy0, spin0
+        kinetic_before = kinetic_energy(vx, vy, spin, inv_mass, inv_inertia)
+        # no point moves faster than sqrt(2 KE (1/m + R^2 / I)) once gravity has acted
+        # (Cauchy-Schwarz; contact impulses never add kinetic energy)
+        reach = tolerance + piece * math.sqrt(
+            2.0 * kinetic_energy(vx, vy + gravity * piece, spin, inv_mass, inv_inertia)
+            * (inv_mass + radius * radius * inv_inertia))
+        n_corners = contact_corners(y, cos_a, sin_a, vy, spin, hx, hy, gravity, piece, reach,
+                                    corners, ids)
+        normal_velocities(vy, spin, corners, n_corners, APPROACH)
+        # 1. integrate velocities
+        vy = vy + gravity * piece
+        # 2. contact velocities: each corner may close its gap but not pass it
+        for c in range(n_corners):
+            corners[TARGET, c] = -max(y + corners[RY, c], 0.0) / piece
+        vx, vy, spin = solve_contact_velocities(vx, vy, spin, corners, n_corners, friction, inv_mass, inv_inertia,
+                                                FRICTION_ITERATIONS, k)
+        if attempt == 1:
+            break
+        # 3. an impact inside the piece: a corner off the floor stopped while approaching
+        # faster than the threshold arrives after gap / approach; the piece is redone up to
+        # that instant, where the impact is resolved (0.), not on the grid
+        arrival = piece
+        hit = -1
+        for c in range(n_corners):
+            gap = y + corners[RY, c]
+            if (corners[IMPULSE, c] > 0.0 and corners[APPROACH, c] < -threshold
+                    and gap > tolerance and gap < -arrival * corners[APPROACH, c]):
+                arrival = -gap / corners[APPROACH, c]
+                hit = ids[c]
+        if hit < 0 or located_impacts >= MAX_LOCATED_IMPACTS:
+            break
+        located_impacts += 1
+        located = hit
+        piece = arrival
+    return vx, vy, spin, piece, located, located_impacts, n_corners, kinetic_before
+
+
+@jit_stage
+def penalty_step(y, angle, vx, vy, spin, first, cos_a, sin_a, hx, hy, slop, stiffness, piece, gravity, inv_mass,
+                 inv_inertia, corners, k):
+    """Stage 6: the implicit penalty correction of what penetrates beyond the slop, at the lowest corner and its
+    neighbours; the potential energy it returns is taken from the kinetic energy. Returns (y, angle, vx, vy,
+    spin)."""
+    below = 0
+    for corner in (first, (first + 1) % 4, (first + 3) % 4):
+        place_corner(corners, below, corner, cos_a, sin_a, hx, hy)
+        corners[DEPTH, below] = -(y + corners[RY, below]) - slop
+        if corners[DEPTH, below] > 0.0:
+            below += 1
+    lifted = y
+    y, angle = correct_penetration(y, angle, corners, below, stiffness, piece, inv_mass, inv_inertia, k)
+    kinetic = kinetic_energy(vx, vy, spin, inv_mass, inv_inertia)
+    rise = -gravity * (y - lifted) / inv_mass
+    if rise > 0.0 and kinetic > 0.0:
+        scale = math.sqrt(max(1.0 - rise / kinetic, 0.0))
+        vx, vy, spin = scale * vx, scale * vy, scale * spin
+    return y, angle, vx, vy, spin
+
+
 @jit_stage
 def advance_box(i, state, params, memory, n, n_end, dt, gravity, until_rest, threshold, sleep_speed, sleep_time,
                 slop, use_penalty, use_friction, record, corners, k, ids, trajectory, events):
@@ -294,23 +411,14 @@ def advance_box(i, state, params, memory, n, n_end, dt, gravity, until_rest, thr
     inv_mass = 1.0 / params[i, layout.MASS]
     inv_inertia = 1.0 / params[i, layout.INERTIA]
     restitution = params[i, layout.RESTITUTION]
-    friction = params[i, layout.FRICTION]
+    friction = params[i, layout.FRICTION] if use_friction else 0.0
     stiffness = params[i, layout.STIFFNESS]
     radius = math.sqrt(hx * hx + hy * hy)
     tolerance = CONTACT_TOLERANCE * (1.0 + radius)
     simultaneous = SIMULTANEOUS_TOLERANCE * (1.0 + radius)
     end_time = n_end * dt
-    in_flight = memory[i, IN_FLIGHT] != 0.0
-    located = np.int64(memory[i, LOCATED])
-    loaded = np.int64(memory[i, LOADED])
-    lift = memory[i, LIFT]
-    still_for = memory[i, STILL_FOR]
-    first_contact = memory[i, FIRST_CONTACT]
-    rest_time = memory[i, REST_TIME]
-    max_penetration = memory[i, MAX_PENETRATION]
-    n_impacts = np.int64(memory[i, N_IMPACTS])
-    n_steps = np.int64(memory[i, N_STEPS])
-    t = memory[i, TIME]
+    (in_flight, located, loaded, lift, still_for, first_contact, rest_time, max_penetration, n_impacts, n_steps,
+     t) = read_memory(memory, i)
     status = layout.STATUS_OK
     fail_step = -1
     cos_a = math.cos(angle)
@@ -318,14 +426,8 @@ def advance_box(i, state, params, memory, n, n_end, dt, gravity, until_rest, thr
     while n < n_end:
         if in_flight:
             # ---- flight: closed form up to the first contact ----
-            tau, touched = time_to_contact(y, angle, vy, spin, hx, hy, gravity, end_time - t, tolerance)
-            # grid rows passed in this flight: up to the end, or to the last one before the contact
-            last = n_end if not touched else min(np.int64(math.floor((t + tau) / dt)), n_end)
-            if record:
-                for row in range(n + 1, last + 1):
-                    xr, yr, ar, vxr, vyr, wr = flight_state(x, y, angle, vx, vy, spin, gravity, row * dt - t)
-                    store_state(trajectory, row, i, xr, yr, ar, vxr, vyr, wr)
-            x, y, angle, vx, vy, spin = flight_state(x, y, angle, vx, vy, spin, gravity, tau)
+            x, y, angle, vx, vy, spin, tau, touched, last = fly(i, x, y, angle, vx, vy, spin, hx, hy, gravity, t, n,
+                                                                n_end, dt, tolerance, record, trajectory)
             cos_a = math.cos(angle)
             sin_a = math.sin(angle)
             if not touched:
@@ -341,7 +443,7 @@ def advance_box(i, state, params, memory, n, n_end, dt, gravity, until_rest, thr
             # ---- impact at the contact instant ----
             vx, vy, spin, touching, approach, leaves = resolve_impact(
                 y, cos_a, sin_a, vx, vy, spin, hx, hy, inv_mass, inv_inertia, restitution,
-                friction if use_friction else 0.0, threshold, simultaneous, corners, k)
+                friction, threshold, simultaneous, corners, k)
             if touching > 0 and approach > threshold:
                 if record:
                     record_event(events, i, n_impacts, t, approach, touching)
@@ -376,51 +478,14 @@ def advance_box(i, state, params, memory, n, n_end, dt, gravity, until_rest, thr
                 # 0. impact at this instant: a touching corner approaching faster than the threshold
                 vx, vy, spin, touching, approach = contact_impact(
                     y, cos_a, sin_a, vx, vy, spin, hx, hy, inv_mass, inv_inertia, restitution,
-                    friction if use_friction else 0.0, threshold, tolerance + lift, located, loaded, corners, k)
+                    friction, threshold, tolerance + lift, located, loaded, corners, k)
                 if approach > 0.0:
                     if record:
                         record_event(events, i, n_impacts, t + elapsed, approach, touching)
                     n_impacts += 1
-                piece = left
-                located = -1
-                vx0, vy0, spin0 = vx, vy, spin
-                for attempt in range(2):
-                    vx, vy, spin = vx0, vy0, spin0
-                    kinetic_before = kinetic_energy(vx, vy, spin, inv_mass, inv_inertia)
-                    # no point moves faster than sqrt(2 KE (1/m + R^2 / I)) once gravity has acted
-                    # (Cauchy-Schwarz; contact impulses never add kinetic energy)
-                    reach = tolerance + piece * math.sqrt(
-                        2.0 * kinetic_energy(vx, vy + gravity * piece, spin, inv_mass, inv_inertia)
-                        * (inv_mass + radius * radius * inv_inertia))
-                    n_corners = contact_corners(y, cos_a, sin_a, vy, spin, hx, hy, gravity, piece, reach,
-                                                corners, ids)
-                    normal_velocities(vy, spin, corners, n_corners, APPROACH)
-                    # 1. integrate velocities
-                    vy = vy + gravity * piece
-                    # 2. contact velocities: each corner may close its gap but not pass it
-                    for c in range(n_corners):
-                        corners[TARGET, c] = -max(y + corners[RY, c], 0.0) / piece
-                    vx, vy, spin = solve_contact_velocities(vx, vy, spin, corners, n_corners,
-                                                            friction if use_friction else 0.0, inv_mass,
-                                                            inv_inertia, FRICTION_ITERATIONS, k)
-                    if attempt == 1:
-                        break
-                    # 3. an impact inside the piece: a corner off the floor stopped while approaching
-                    # faster than the threshold arrives after gap / approach; the piece is redone up to
-                    # that instant, where the impact is resolved (0.), not on the grid
-                    arrival = piece
-                    hit = -1
-                    for c in range(n_corners):
-                        gap = y + corners[RY, c]
-                        if (corners[IMPULSE, c] > 0.0 and corners[APPROACH, c] < -threshold
-                                and gap > tolerance and gap < -arrival * corners[APPROACH, c]):
-                            arrival = -gap / corners[APPROACH, c]
-                            hit = ids[c]
-                    if hit < 0 or located_impacts >= MAX_LOCATED_IMPACTS:
-                        break
-                    located_impacts += 1
-                    located = hit
-                    piece = arrival
+                vx, vy, spin, piece, located, located_impacts, n_corners, kinetic_before = solve_piece(
+                    y, cos_a, sin_a, vx, vy, spin, left, hx, hy, gravity, tolerance, radius, threshold,
+                    friction, inv_mass, inv_inertia, located_impacts, corners, k, ids)
                 loaded = 0
                 for c in range(n_corners):
                     if corners[IMPULSE, c] > 0.0:
@@ -444,22 +509,10 @@ def advance_box(i, state, params, memory, n, n_end, dt, gravity, until_rest, thr
                 # 6. penalty: implicit correction of what penetrates beyond the slop, at the lowest corner
                 # and its neighbours; the potential energy it returns is taken from the kinetic energy
                 if use_penalty and penetration > slop + tolerance:
-                    below = 0
-                    for corner in (first, (first + 1) % 4, (first + 3) % 4):
-                        place_corner(corners, below, corner, cos_a, sin_a, hx, hy)
-                        corners[DEPTH, below] = -(y + corners[RY, below]) - slop
-                        if corners[DEPTH, below] > 0.0:
-                            below += 1
-                    lifted = y
-                    y, angle = correct_penetration(y, angle, corners, below, stiffness, piece, inv_mass,
-                                                   inv_inertia, k)
+                    y, angle, vx, vy, spin = penalty_step(y, angle, vx, vy, spin, first, cos_a, sin_a, hx, hy, slop,
+                                                          stiffness, piece, gravity, inv_mass, inv_inertia, corners, k)
                     cos_a = math.cos(angle)
                     sin_a = math.sin(angle)
-                    kinetic = kinetic_energy(vx, vy, spin, inv_mass, inv_inertia)
-                    rise = -gravity * (y - lifted) / inv_mass
-                    if rise > 0.0 and kinetic > 0.0:
-                        scale = math.sqrt(max(1.0 - rise / kinetic, 0.0))
-                        vx, vy, spin = scale * vx, scale * vy, scale * spin
                 held = held or penetration > 0.0
                 lift = h_sub * h_sub * spin * spin * radius  # how far a rotating substep lifts a held corner
                 elapsed += piece
@@ -493,19 +546,8 @@ def advance_box(i, state, params, memory, n, n_end, dt, gravity, until_rest, thr
             loaded = 0
     state[i, 0], state[i, 1], state[i, 2] = x, y, angle
     state[i, 3], state[i, 4], state[i, 5] = vx, vy, spin
-    memory[i, IN_FLIGHT] = 1.0 if in_flight else 0.0
-    memory[i, LOCATED] = located
-    memory[i, LOADED] = loaded
-    memory[i, LIFT] = lift
-    memory[i, STILL_FOR] = still_for
-    memory[i, FIRST_CONTACT] = first_contact
-    memory[i, REST_TIME] = rest_time
-    memory[i, MAX_PENETRATION] = max_penetration
-    memory[i, N_IMPACTS] = n_impacts
-    memory[i, N_STEPS] = n_steps
-    memory[i, TIME] = t
-    memory[i, STATUS] = status
-    memory[i, FAIL_STEP] = fail_step
+    write_memory(memory, i, in_flight, located, loaded, lift, still_for, first_contact, rest_time, max_penetration,
+                 n_impacts, n_steps, t, status, fail_step)
     return n
 
 
