@@ -27,9 +27,9 @@ Figures: ns per body-step = wall / (steps n); us per body per simulated second =
 simulated time covered, which puts engines with different steps on one scale. Each engine runs at its
 own default step (``DEFAULT_DT``: 60 Hz for the others, Box2D v3 with 4 substeps), ours at ``OUR_DT``.
 Per-case budget: an engine whose window would take longer than ``--budget`` s is timed over fewer steps
-(at least ``MIN_STEPS``; the table's ``steps`` column says how many): our engine's all-pairs broadphase
-makes it slow on 1,000+ boxes. Quality, at the end of the awake run: max penetration (deepest box corner
-below the floor or inside another box, m) and, for the pyramid, how far its top box moved (m).
+(at least ``MIN_STEPS``; the table's ``steps`` column says how many, and the text which runs were cut).
+Quality, at the end of the awake run: max penetration (deepest box corner below the floor or inside another
+box, m) and, for the pyramid, how far its top box moved (m).
 """
 
 from __future__ import annotations
@@ -387,8 +387,8 @@ def report(args: argparse.Namespace, log: Callable[[str], None]) -> str:
     lines = [f"`python -m benchmarks.engine_scale{' --quick' if quick else ''}`: numba {numba.__version__}, "
              f"one thread for every engine; {load_text()}.", "",
              f"Window {window:g} s of simulated time per case, per-case budget {budget:g} s of wall time: "
-             f"where the window would take longer, fewer steps are timed (`steps`, at least {MIN_STEPS}): so is "
-             "ours on 1,000+ boxes (its solver sweeps every contact of the pile 16 times a substep). "
+             f"where the window would take longer, fewer steps are timed (`steps`, at least {MIN_STEPS}): "
+             f"{shortened_text(rows, window)}. "
              "Settled: sleeping allowed (ours until rest, so fewer steps when everyone sleeps). Piles settled "
              f"{SETTLE:g} s first by " + ", ".join(f"{case}: {who}" for case, who in settlers.items()) + ".", ""]
     lines += table(rows)
@@ -402,6 +402,13 @@ def report(args: argparse.Namespace, log: Callable[[str], None]) -> str:
         lines += ["", "(quick run: shorter window, smaller budget, no 5,000-box pile)"]
     plot(rows)
     return "\n".join(lines)
+
+
+def shortened_text(rows: list[Row], window: float) -> str:
+    """Which awake runs the budget cut short, for the generated text."""
+    cut = [f"{row.engine} on {row.case}" for row in rows
+           if row.mode == "awake" and row.steps and row.steps < round(window / row.dt)]
+    return "so were " + ", ".join(cut) if cut else "no run was cut short"
 
 
 def main(argv=None) -> None:
