@@ -149,7 +149,7 @@ def run_play(parser: argparse.ArgumentParser, args) -> int:
 
     import box_toss_env  # noqa: F401  (registers the envs)
     from box_toss_env.viewer.play import PlayController
-    from box_toss_env.viewer.window import PlayWindow
+    from box_toss_env.viewer.play_window import PlayWindow
 
     kwargs = {"render_mode": "rgb_array_list", "render_width": args.width or 720, "render_height": args.height or 480}
     if args.solver is not None:
