@@ -17,8 +17,8 @@ ALLOWED = {
     "box_toss_env/physics/colliding_solver.py:make_colliding_robust_kernel": 273,
     "box_toss_env/physics/colliding_solver.py:make_colliding_robust_kernel.run": 264,
     "box_toss_env/physics/robust_solver.py:advance_box": 228,
-    "box_toss_env/physics/colliding_seed.py:make_colliding_seed_kernel": 132,
-    "box_toss_env/physics/colliding_seed.py:make_colliding_seed_kernel.run": 123,
+    "box_toss_env/physics/colliding_reference.py:make_colliding_reference_kernel": 132,
+    "box_toss_env/physics/colliding_reference.py:make_colliding_reference_kernel.run": 123,
 }
 """``file:function`` (``Class.method``, ``outer.inner``) -> its length in lines."""
 

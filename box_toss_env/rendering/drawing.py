@@ -9,8 +9,8 @@ from typing import Any
 
 import numpy as np
 
+from box_toss_env.rendering.box_corners import box_vertices
 from box_toss_env.rendering.camera import Camera
-from box_toss_env.rendering.geometry import box_vertices
 from box_toss_env.rendering.palette import (
     FACE_STRIPE_WIDTH_PX,
     FLOOR_LABEL_GAP_PX,

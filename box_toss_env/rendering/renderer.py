@@ -13,10 +13,10 @@ from typing import Any
 
 import numpy as np
 
+from box_toss_env.rendering.box_corners import box_vertices
 from box_toss_env.rendering.camera import Camera
 from box_toss_env.rendering.dependency import import_pygame
 from box_toss_env.rendering.drawing import FLOOR_TICK_STEPS_M, SceneDrawing, floor_label, floor_tick_step, floor_ticks
-from box_toss_env.rendering.geometry import box_vertices
 from box_toss_env.rendering.palette import (
     FACE_COLOUR_NAMES,
     FACE_STRIPE_WIDTH_PX,
@@ -64,7 +64,7 @@ class SceneRenderer(SceneDrawing):
     ``"result"``, ``"floor"``, ``"target"``), so callers and tests can read what a frame says.
 
     Faces are numbered by outward normal in the body frame (0: -y, 1: +x, 2: +y, 3: -x, see
-    ``geometry``). Each face has a coloured stripe inside the box (``Palette.face_colours``: red, blue,
+    ``box_corners``). Each face has a coloured stripe inside the box (``Palette.face_colours``: red, blue,
     yellow, purple); face 0's stripe is twice as thick, so at angle 0 the red stripe is at the bottom and at
     angle pi it is on top.
 

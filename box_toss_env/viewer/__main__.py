@@ -13,7 +13,7 @@ from box_toss_env.files import atomic_path
 from box_toss_env.physics.scene import SOLVERS
 from box_toss_env.physics.scenes import SCENES
 from box_toss_env.viewer.controller import STEPS_PER_FRAME, ViewerController
-from box_toss_env.viewer.kernels import KernelLoader
+from box_toss_env.viewer.kernel_loader import KernelLoader
 
 PARAMETER_FLAGS = (("dt", "dt", "time step size [s]"), ("gravity", "gravity", "gravity along y [m/s^2]"),
                    ("stiffness", "penalty_stiffness", "penalty stiffness [N/m]"),

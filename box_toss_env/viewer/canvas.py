@@ -12,7 +12,7 @@ import numpy as np
 
 from box_toss_env.files import atomic_path
 from box_toss_env.rendering import import_pygame
-from box_toss_env.viewer.kernels import KernelJob
+from box_toss_env.viewer.kernel_loader import KernelJob
 
 PANEL_WIDTH_PX = 340
 FRAME_RATE = 60

@@ -32,7 +32,7 @@ from box_toss_env.physics import (
     layout,
 )
 from box_toss_env.rendering import Camera
-from box_toss_env.viewer.kernels import KernelLoader
+from box_toss_env.viewer.kernel_loader import KernelLoader
 from box_toss_env.viewer.lane import (
     DRAG_FOLLOW_FRAMES,
     DRAG_SPIN_DAMPING,

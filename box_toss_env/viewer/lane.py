@@ -19,7 +19,7 @@ from box_toss_env.physics import (
     layout,
     make_settings,
 )
-from box_toss_env.viewer.kernels import KernelJob, KernelLoader, zero_step_args
+from box_toss_env.viewer.kernel_loader import KernelJob, KernelLoader, zero_step_args
 
 STEPS_PER_FRAME = 8
 """Simulation steps per drawn frame, as in the seed demo."""

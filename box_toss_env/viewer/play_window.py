@@ -28,7 +28,7 @@ from box_toss_env.viewer.canvas import (
     notice_lines,
     output_paths,
 )
-from box_toss_env.viewer.kernels import KernelLoader, zero_step_args
+from box_toss_env.viewer.kernel_loader import KernelLoader, zero_step_args
 from box_toss_env.viewer.play import THROW_GAIN, PlayController
 
 PLAY_KEYS = (
