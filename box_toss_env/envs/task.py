@@ -279,6 +279,7 @@ def observe(states: np.ndarray, episodes: Episodes, config: TaskConfig, base_sta
     parts = [states[:, layout.X:layout.Y + 1], np.cos(angles), np.sin(angles), states[:, layout.VX:],
              episodes.data[:, EP_TARGET_X:EP_TARGET_X + size - OBS_TARGET_X]]
     if config.base_box:
+        assert base_states is not None  # given with a base box
         base_angles = base_states[:, layout.ANGLE:layout.ANGLE + 1]
         parts += [base_states[:, layout.X:layout.Y + 1], np.cos(base_angles), np.sin(base_angles),
                   episodes.base_size]
@@ -320,13 +321,13 @@ def observation_bounds(config: TaskConfig, horizon: float) -> tuple[np.ndarray, 
         high += [config.target_x_range[1] + base_speed * horizon,
                  base_radius + ENERGY_MARGIN * energy * share / config.gravity, 1.0, 1.0,
                  config.base_length_range[1], config.base_height_range[1]]
-    low, high = np.array(low, dtype=np.float32), np.array(high, dtype=np.float32)
+    lows, highs = np.array(low, dtype=np.float32), np.array(high, dtype=np.float32)
     # a fixed quantity (target x, mass, friction or restitution not drawn) would have equal bounds, which
     # Gymnasium's checker flags as a degenerate space: its bounds are one float32 step either side instead
-    fixed = low == high
-    low[fixed] = np.nextafter(low[fixed], np.float32(-np.inf))
-    high[fixed] = np.nextafter(high[fixed], np.float32(np.inf))
-    return low, high
+    fixed = lows == highs
+    lows[fixed] = np.nextafter(lows[fixed], np.float32(-np.inf))
+    highs[fixed] = np.nextafter(highs[fixed], np.float32(np.inf))
+    return lows, highs
 
 
 OBSERVATION_NAMES = ("x", "y", "cos(angle)", "sin(angle)", "vx", "vy", "spin", "target x", "target face 0",
@@ -342,7 +343,7 @@ def observation_names(config: TaskConfig) -> tuple[str, ...]:
 
 def outside_bounds(obs: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
     """(n,) bool: which observations (n, size) leave [low, high] somewhere."""
-    return ((obs < low) | (obs > high)).any(axis=1)
+    return ((obs < low) | (obs > high)).any(axis=1)  # type: ignore[return-value]  # numpy's stubs: a bool
 
 
 # -- 4. reward -----------------------------------------------------------------------------------
@@ -395,6 +396,7 @@ def landing_offsets(states: np.ndarray, episodes: Episodes, config: TaskConfig,
     x; dy = 0 without a base box."""
     if not config.base_box:
         return states[:, layout.X] - episodes.data[:, EP_TARGET_X], np.zeros(len(states))
+    assert base_states is not None  # given with a base box
     top_x, top_y, _ = base_top(base_states, episodes)
     _, half_y = half_extents_along_axes(states[:, layout.ANGLE], config.half_length, config.half_width)
     return states[:, layout.X] - top_x, states[:, layout.Y] - half_y - top_y

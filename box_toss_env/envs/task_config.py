@@ -7,6 +7,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
+from typing import Any, cast
 
 import numpy as np
 
@@ -194,7 +195,7 @@ def check_scalar_or_interval(name: str, value, interval, allowed: Range) -> tupl
     """``(value, value)``, or the (low, high) ``interval`` (named ``name_range``) when it is given."""
     scalar = None if value is None and interval is not None else allowed.check(name, value)  # checked in any case
     if interval is None:
-        return (scalar,) * 2
+        return (cast(float, scalar),) * 2  # not None: checked above
     return check_interval(f"{name}_range", interval, allowed)
 
 
@@ -208,13 +209,13 @@ def make_task_config(*, box_length, box_width, gravity, mass, friction, restitut
     wrong type, a ValueError one outside its range (``ENV_RANGES``). ``*_range=None`` fixes that
     quantity at its scalar argument. ``base_*=None`` takes ``BASE_DEFAULTS`` with ``base_box=True``
     (they must stay None without it)."""
-    scalar = {name: ENV_RANGES[name].check(name, value) for name, value in (
+    scalar: dict[str, Any] = {name: ENV_RANGES[name].check(name, value) for name, value in (
         ("box_length", box_length), ("box_width", box_width), ("gravity", gravity),
         ("penalty_stiffness", penalty_stiffness), ("max_speed", max_speed), ("max_spin", max_spin),
         ("position_tolerance", position_tolerance), ("distance_weight", distance_weight),
         ("orientation_weight", orientation_weight), ("success_bonus", success_bonus),
         ("max_sim_time", max_sim_time))}
-    pairs = {name: check_interval(name, value, ENV_RANGES[name]) for name, value in (
+    pairs: dict[str, Any] = {name: check_interval(name, value, ENV_RANGES[name]) for name, value in (
         ("release_x_range", release_x_range), ("release_height_range", release_height_range),
         ("release_angle_range", release_angle_range), ("target_x_range", target_x_range),
         ("launch_angle_range", launch_angle_range))}
