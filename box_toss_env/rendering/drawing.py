@@ -35,9 +35,19 @@ class SceneDrawing:
     width_px: int
     height_px: int
     _headline_font: Any
+    drawn_text: dict[str, list[str]]
 
     def _get_font(self, pygame: ModuleType) -> Any:  # ``SceneRenderer._get_font``
         raise NotImplementedError
+
+    def _is_out_of_view(self, corners_px: np.ndarray) -> bool:
+        columns, rows = corners_px[:, 0], corners_px[:, 1]
+        return bool(
+            columns.max() < 0
+            or columns.min() > self.width_px
+            or rows.max() < 0
+            or rows.min() > self.height_px
+        )
 
     def _draw_sky_and_ground(self, pygame: ModuleType, surface: Any, camera: Camera) -> None:
         """Background, the ground region below y = 0, the floor line, and ticks labelled in metres."""

@@ -284,15 +284,6 @@ class SceneRenderer(SceneDrawing):
                 self._font = self._headline_font = None
         return self._font
 
-    def _is_out_of_view(self, corners_px: np.ndarray) -> bool:
-        columns, rows = corners_px[:, 0], corners_px[:, 1]
-        return bool(
-            columns.max() < 0
-            or columns.min() > self.width_px
-            or rows.max() < 0
-            or rows.min() > self.height_px
-        )
-
     def _check_camera_size(self, camera: Camera) -> None:
         if (camera.width_px, camera.height_px) != (self.width_px, self.height_px):
             raise ValueError(
