@@ -31,6 +31,7 @@ import math
 
 import numpy as np
 
+from box_toss_env.envs.arguments import BASE_DEFAULTS, ENV_ARGUMENTS
 from box_toss_env.envs.task_columns import (
     _FACE_SET_TABLE,
     ACT_LAUNCH_ANGLE,
@@ -98,6 +99,7 @@ from box_toss_env.envs.task_config import (
 from box_toss_env.physics import layout
 
 __all__ = [
+    "BASE_DEFAULTS", "ENV_ARGUMENTS",  # declared in arguments, importable from here too
     "ACTION_SIZE", "ACT_LAUNCH_ANGLE", "ACT_SPEED", "ACT_SPIN", "BASE_OBSERVATION_NAMES", "BASE_OBS_SIZE",
     "DYNAMICS_RANGES", "ENERGY_MARGIN", "ENV_RANGES", "EPISODE_SIZE", "EPISODE_SIZE_WITH_BASE", "EP_BASE_HEIGHT",
     "EP_BASE_LENGTH", "EP_DYNAMICS", "EP_FACE_0", "EP_FACE_1", "EP_FACE_2", "EP_FACE_3", "EP_FRICTION", "EP_MASS",
