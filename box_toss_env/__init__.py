@@ -12,7 +12,7 @@ def _register_envs() -> None:
     until an env is made, so ``import box_toss_env`` does not import pygame or the envs)."""
     import gymnasium
 
-    variants = {
+    variants: dict[str, dict[str, object]] = {
         "BoxToss-v0": {},
         "BoxToss-LongSide-v0": {"target_face": "long_side"},
         "BoxToss-ShortEnd-v0": {"target_face": "short_end"},

@@ -129,7 +129,7 @@ class BallisticThrows(gym.Wrapper):
     def __init__(self, env: gym.Env, flight_time_range: tuple[float, float] | None = None,
                  offset_range: float = DEFAULT_OFFSET_RANGE, turn_range: float = DEFAULT_TURN_RANGE):
         super().__init__(env)
-        self.config: task.TaskConfig = env.unwrapped.config
+        self.config: task.TaskConfig = env.unwrapped.config  # type: ignore[attr-defined]  # a BoxToss env
         self.settings = check_command_settings(self.config, flight_time_range, offset_range, turn_range)
         self._observation: np.ndarray | None = None
 

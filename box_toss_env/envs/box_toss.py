@@ -23,6 +23,7 @@ from box_toss_env.envs.functional import (  # noqa: F401  (EnergyGainError, base
 )
 from box_toss_env.envs.random_streams import check_seed
 from box_toss_env.physics import Simulator, layout
+from box_toss_env.physics.grouped import GroupedSimulator
 from box_toss_env.physics.validation import check_integer
 
 RENDER_MODES = ("human", "rgb_array", "rgb_array_list")
@@ -258,7 +259,7 @@ class BoxTossEnv(gym.Env):
         # "rgb_array_list" draws when render() asks: the hand and the throw not returned yet, and the result
         self._hand_unseen = self._throw_unseen = False
         self._outcome = None
-        self._simulator = None  # built at the first throw: making an env compiles nothing
+        self._simulator: Simulator | GroupedSimulator | None = None  # built at the first throw: nothing compiled before
 
     @property
     def engine_settings(self) -> np.ndarray:
@@ -266,7 +267,7 @@ class BoxTossEnv(gym.Env):
         ``physics.layout``), for running the same throws on the engine directly (a copy)."""
         return self._settings.copy()
 
-    def _build_simulator(self) -> Simulator:
+    def _build_simulator(self) -> Simulator | GroupedSimulator:
         self._simulator = self.core.make_simulator(record=self._records, start_interpreted=True)
         return self._simulator
 
@@ -386,6 +387,7 @@ class BoxTossEnv(gym.Env):
         writes rows up to the step where the box fell asleep; later rows are left unwritten); with a base
         box (T, 2, 6), the thrown box first."""
         recorded = int(self._stats[0, layout.N_RECORDED])
+        assert self._trajectory is not None  # recorded: the env draws
         return self._trajectory[:recorded] if self.config.base_box else self._trajectory[:recorded, 0]
 
     def close(self):
@@ -419,7 +421,7 @@ def _document_arguments(env_class: type) -> None:
                   inspect.Parameter("render_mode", inspect.Parameter.POSITIONAL_OR_KEYWORD, default=None)]
     parameters += [inspect.Parameter(a.name, inspect.Parameter.KEYWORD_ONLY, default=a.default)
                    for a in ENV_ARGUMENTS]
-    env_class.__init__.__signature__ = inspect.Signature(parameters)
+    env_class.__init__.__signature__ = inspect.Signature(parameters)  # type: ignore[misc]
 
 
 _document_arguments(BoxTossEnv)

@@ -105,8 +105,8 @@ class BoxTossVectorEnv(VectorEnv):
     def _base_state(self) -> np.ndarray:
         return task.base_rows(self._state, self.config)
 
-    @property
-    def np_random(self) -> list[np.random.Generator]:
+    @property  # type: ignore[misc]  # a generator per env, where Gymnasium's vector envs have one
+    def np_random(self) -> list[np.random.Generator]:  # type: ignore[override]
         """Each env's random generator, at its current position (copies: drawing from them does not
         advance the envs' streams)."""
         return [self._streams.generator(i) for i in range(self.num_envs)]

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
@@ -127,7 +127,7 @@ class BoxTossGoalEnv(gym.Env):
         self.render_mode = self.throw_env.render_mode
         self.config = self.throw_env.config
         self.action_space = self.throw_env.action_space
-        inner = self.throw_env.observation_space
+        inner = cast(spaces.Box, self.throw_env.observation_space)
         x_low = min(inner.low[task.OBS_X], inner.low[task.OBS_TARGET_X])
         x_high = max(inner.high[task.OBS_X], inner.high[task.OBS_TARGET_X])
         low = np.array([x_low, 0.0, -MAX_TILT, 0.0, 0.0, 0.0, 0.0], dtype=np.float32)

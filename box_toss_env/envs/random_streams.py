@@ -113,13 +113,13 @@ def check_seeds(seed, n: int) -> list[int | None] | np.ndarray | None:
         if len(negative):
             raise ValueError(f"{expected}: seed[{negative[0]}] is {array[negative[0]]}")
         return array.astype(np.uint64)
-    seeds = []
+    checked: list[int | None] = []
     for i, value in enumerate(seed):
         try:
-            seeds.append(check_seed(value, f"seed[{i}]"))
+            checked.append(check_seed(value, f"seed[{i}]"))
         except (TypeError, ValueError) as error:
             raise type(error)(f"{expected}: {error}") from None
-    return seeds
+    return checked
 
 
 INIT_A, MULT_A, INIT_B, MULT_B = 0x43B0D7E5, 0x931E8875, 0x8B51F9DD, 0x58F38DED  # numpy's SeedSequence
@@ -153,12 +153,12 @@ def seed_sequence_words(entropy: np.ndarray) -> np.ndarray:
     for source in range(POOL_SIZE, k):
         for destination in range(POOL_SIZE):
             pool[destination] = mix(pool[destination], hashmix(entropy[:, source]))
-    constant = INIT_B
+    output_constant = INIT_B
     words = []
     for i in range(2 * 4):
-        value = pool[i % POOL_SIZE] ^ np.uint32(constant)
-        constant = (constant * MULT_B) & MASK_32
-        value = value * np.uint32(constant)
+        value = pool[i % POOL_SIZE] ^ np.uint32(output_constant)
+        output_constant = (output_constant * MULT_B) & MASK_32
+        value = value * np.uint32(output_constant)
         words.append((value ^ (value >> np.uint32(XSHIFT))).astype(np.uint64))
     return np.stack([words[2 * i] | (words[2 * i + 1] << np.uint64(32)) for i in range(4)], axis=1)
 

@@ -195,7 +195,10 @@ class ThrowRenderer:
                outcome: ThrowOutcome | None = None, trace: np.ndarray | None = None) -> dict:
         faces = np.flatnonzero(target_faces > 0.0)
         states = np.asarray(state, dtype=np.float64).reshape(-1, layout.STATE_SIZE)  # the thrown box first
-        half_extents = self.half_extents if len(states) == 1 else np.vstack((self.half_extents, self.other_boxes))
+        half_extents = self.half_extents
+        if len(states) != 1:
+            assert self.other_boxes is not None  # set with the other boxes' states
+            half_extents = np.vstack((self.half_extents, self.other_boxes))
         return dict(
             position=states[:, layout.X:layout.Y + 1],
             angle=states[:, layout.ANGLE],
@@ -215,7 +218,7 @@ class ThrowRenderer:
     def _planned_scene(self, trajectory: np.ndarray, planned: PlannedFrame, target_x: float,
                        target_faces: np.ndarray, outcome: ThrowOutcome | None) -> dict:
         shows_result = planned.shows_result and outcome is not None
-        caption = planned.caption + (", at rest" if shows_result and outcome.at_rest else "")
+        caption = planned.caption + (", at rest" if shows_result and outcome is not None and outcome.at_rest else "")
         trace = thrown_trajectory(trajectory)[:planned.row + 1, layout.X:layout.Y + 1] if self.trace else None
         return self._scene(trajectory[planned.row], target_x, target_faces, caption, planned.camera,
                            outcome if shows_result else None, trace)

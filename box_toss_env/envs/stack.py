@@ -404,7 +404,7 @@ class BoxTossStackEnv(gym.Env):
             half = np.vstack((half, self._params[k, layout.HALF_LENGTH:layout.HALF_WIDTH + 1]))
         radius, target_x = self.config.target_radius, self._target_x
         height_line = np.array([[target_x - radius, self._height], [target_x + radius, self._height]])
-        result = ()
+        result: tuple[str, ...] = ()
         success = None
         if self._needs_reset and self._last is not None:
             success = bool(self._last.success[0])

@@ -16,7 +16,7 @@ them. The command c = 0 is the prior's throw: flat onto the stack's top, centred
 from __future__ import annotations
 
 import math
-from typing import Any, SupportsFloat
+from typing import Any, SupportsFloat, cast
 
 import gymnasium as gym
 import numpy as np
@@ -55,8 +55,8 @@ class StackCommands(gym.Wrapper):
     def __init__(self, env: gym.Env, flight_time_range: tuple[float, float] = FLIGHT_TIME_RANGE,
                  offset_range: float = OFFSET_RANGE, turn_range: float = TURN_RANGE):
         super().__init__(env)
-        self.config: stack_task.StackConfig = env.unwrapped.config
-        self.settings = (tuple(flight_time_range), float(offset_range), float(turn_range))
+        self.config: stack_task.StackConfig = env.unwrapped.config  # type: ignore[attr-defined]  # BoxToss-Stack
+        self.settings = (cast(tuple[float, float], tuple(flight_time_range)), float(offset_range), float(turn_range))
         self._observation: np.ndarray | None = None
 
     def reset(self, **kwargs) -> tuple[Any, dict[str, Any]]:

@@ -166,14 +166,14 @@ class BoxTossStackVectorEnv(VectorEnv):
         before = self._state[envs, :size - 1].copy()
         scenes = np.ascontiguousarray(self._state[envs, :size]).reshape(m * size, layout.STATE_SIZE)
         params = np.ascontiguousarray(self._params[envs, :size]).reshape(m * size, layout.PARAM_SIZE)
-        stats = np.zeros((m * size, layout.STATS_SIZE))
+        stats: np.ndarray = np.zeros((m * size, layout.STATS_SIZE))
         self._simulator(size).run(scenes, params, self._settings, stats)
         if np.any(stats[:, layout.STATUS] != layout.STATUS_OK):
             check_finite_stats(stats, "robust")
         after = scenes.reshape(m, size, layout.STATE_SIZE)
         self._state[envs, :size] = after
         stats = stats.reshape(m, size, layout.STATS_SIZE)
-        at_rest = ~np.isnan(stats[..., layout.REST_TIME]).any(axis=1)
+        at_rest: np.ndarray = ~np.isnan(stats[..., layout.REST_TIME]).any(axis=1)
         half = self._params[envs, :size, layout.HALF_LENGTH:layout.HALF_WIDTH + 1]
         outcome = stack_task.score_throws(before, after, half, at_rest, self._targets[envs], self.config)
         reward[envs] = outcome.reward

@@ -27,295 +27,94 @@ and 2 are its long sides and faces 1 and 3 its short ends. Face f is down when t
 
 from __future__ import annotations
 
-import functools
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from box_toss_env.envs.arguments import BASE_DEFAULTS, ENV_ARGUMENTS
+from box_toss_env.envs.task_columns import (
+    _FACE_SET_TABLE,
+    ACT_LAUNCH_ANGLE,
+    ACT_SPEED,
+    ACT_SPIN,
+    ACTION_SIZE,
+    BASE_OBS_SIZE,
+    ENERGY_MARGIN,
+    EP_BASE_HEIGHT,
+    EP_BASE_LENGTH,
+    EP_DYNAMICS,
+    EP_FACE_0,
+    EP_FACE_1,
+    EP_FACE_2,
+    EP_FACE_3,
+    EP_FRICTION,
+    EP_MASS,
+    EP_RELEASE,
+    EP_RELEASE_ANGLE,
+    EP_RELEASE_X,
+    EP_RELEASE_Y,
+    EP_RESTITUTION,
+    EP_TARGET_FACES,
+    EP_TARGET_X,
+    EPISODE_SIZE,
+    EPISODE_SIZE_WITH_BASE,
+    FACE_SET_NAMES,
+    FACE_SETS,
+    MIXED_KINDS,
+    OBS_BASE_COS,
+    OBS_BASE_HEIGHT,
+    OBS_BASE_LENGTH,
+    OBS_BASE_SIN,
+    OBS_BASE_X,
+    OBS_BASE_Y,
+    OBS_COS,
+    OBS_FRICTION,
+    OBS_MASS,
+    OBS_RESTITUTION,
+    OBS_SIN,
+    OBS_SIZE,
+    OBS_SIZE_WITH_DYNAMICS,
+    OBS_SPIN,
+    OBS_TARGET_FACES,
+    OBS_TARGET_X,
+    OBS_VX,
+    OBS_VY,
+    OBS_X,
+    OBS_Y,
+    QUARTER_TURN,
+    TARGET_FACE_KINDS,
+    U_TARGET_FACE,
+    U_TARGET_KIND,
+)
+from box_toss_env.envs.task_config import (
+    DYNAMICS_RANGES,
+    ENV_RANGES,
+    Episodes,
+    TaskConfig,
+    check_base_box,
+    check_interval,
+    check_scalar_or_interval,
+    make_task_config,
+)
 from box_toss_env.physics import layout
-from box_toss_env.physics.ranges import Range
-from box_toss_env.physics.validation import check_bool, check_choice
 
-# -- target kinds: which faces may end down ------------------------------------------------------
-TARGET_FACE_KINDS = ("any", "long_side", "short_end", "exact", "mixed")
-"""Values of ``target_face``. "exact" draws one face per episode ("this side up"); "mixed" draws one
-of "any", "long_side", "short_end", "exact" per episode, uniformly."""
-FACE_SETS = {
-    "any": (1.0, 1.0, 1.0, 1.0),
-    "long_side": (1.0, 0.0, 1.0, 0.0),
-    "short_end": (0.0, 1.0, 0.0, 1.0),
-}
-FACE_SET_NAMES = ("any", "long_side", "short_end")
-_FACE_SET_TABLE = np.array([FACE_SETS[name] for name in FACE_SET_NAMES])
-MIXED_KINDS = ("any", "long_side", "short_end", "exact")  # drawn uniformly by target_face="mixed"
-QUARTER_TURN = 0.5 * math.pi
-
-# -- what one episode draws: one row of ``Episodes.data`` per episode ----------------------------
-(EP_RELEASE_X, EP_RELEASE_Y, EP_RELEASE_ANGLE, EP_TARGET_X, EP_FACE_0, EP_FACE_1, EP_FACE_2, EP_FACE_3,
- EP_MASS, EP_FRICTION, EP_RESTITUTION) = range(11)
-EPISODE_SIZE = 11
-# with base_box: the base box's length and height [m] (its centre x is the target x); a task without a
-# base draws EPISODE_SIZE variates per episode, as it always did
-EP_BASE_LENGTH, EP_BASE_HEIGHT = 11, 12
-EPISODE_SIZE_WITH_BASE = 13
-EP_RELEASE = slice(EP_RELEASE_X, EP_RELEASE_ANGLE + 1)  # x [m], y [m], angle [rad] in the hand
-EP_TARGET_FACES = slice(EP_FACE_0, EP_FACE_3 + 1)  # 1.0 for each face that may end down
-EP_DYNAMICS = slice(EP_MASS, EP_RESTITUTION + 1)  # mass [kg], friction [-], restitution [-]
-# the uniform variates: one per column; the face columns' variates pick the target kind and face
-U_TARGET_KIND, U_TARGET_FACE = EP_FACE_0, EP_FACE_1
-
-# -- observation columns --------------------------------------------------------------------------
-OBS_X, OBS_Y, OBS_COS, OBS_SIN, OBS_VX, OBS_VY, OBS_SPIN, OBS_TARGET_X = range(8)
-OBS_TARGET_FACES = slice(8, 12)  # 1.0 where that face may end down
-OBS_MASS, OBS_FRICTION, OBS_RESTITUTION = 12, 13, 14  # only with observe_dynamics
-OBS_SIZE = 12
-OBS_SIZE_WITH_DYNAMICS = 15
-# with base_box, six columns after all the others: the base box's pose and size
-BASE_OBS_SIZE = 6  # base x [m], base y [m], cos and sin of its angle, its length and height [m]
-OBS_BASE_X, OBS_BASE_Y, OBS_BASE_COS, OBS_BASE_SIN, OBS_BASE_LENGTH, OBS_BASE_HEIGHT = range(-6, 0)
-# the observation's target and dynamics columns are the episode's columns from EP_TARGET_X on
-assert OBS_SIZE - OBS_TARGET_X == EP_MASS - EP_TARGET_X
-
-# -- action columns -------------------------------------------------------------------------------
-ACT_SPEED, ACT_LAUNCH_ANGLE, ACT_SPIN = 0, 1, 2
-ACTION_SIZE = 3
-
-ENERGY_MARGIN = 2.0
-"""Observation bounds on speeds and distances are this factor above what the energy of the fastest
-throw allows (an exact solver never adds energy; the margin covers the seed scheme's small gains)."""
-
-
-@dataclass(frozen=True)
-class TaskConfig:
-    """Everything the task functions need, validated once (``make_task_config``). SI units.
-
-    Ranges are ``(low, high)`` tuples with low <= high; low == high fixes the value.
-    """
-
-    half_length: float  # [m] along the body's local x
-    half_width: float  # [m] along local y
-    gravity: float  # [m/s^2] magnitude, pointing down
-    mass_range: tuple[float, float]  # [kg]
-    friction_range: tuple[float, float]  # [-]
-    restitution_range: tuple[float, float]  # [-]
-    penalty_stiffness: float  # [N/m]
-    release_x_range: tuple[float, float]  # [m]
-    release_height_range: tuple[float, float]  # [m] of the box's centre
-    release_angle_range: tuple[float, float]  # [rad]
-    target_x_range: tuple[float, float]  # [m]
-    target_face: str
-    max_speed: float  # [m/s]
-    launch_angle_range: tuple[float, float]  # [rad] above the horizontal
-    max_spin: float  # [rad/s]
-    position_tolerance: float  # [m]
-    distance_weight: float  # [1/m]
-    orientation_weight: float  # [1/rad]
-    success_bonus: float  # [-]
-    observe_dynamics: bool
-    max_sim_time: float  # [s]
-    base_box: bool = False  # a base box to land on (BoxToss-OnBox-v0)
-    base_length_range: tuple[float, float] = (0.0, 0.0)  # [m] of the base box, with base_box
-    base_height_range: tuple[float, float] = (0.0, 0.0)  # [m] of the base box, with base_box
-    base_mass: float = 0.0  # [kg] of the base box, with base_box
-
-    @functools.cached_property
-    def randomises_dynamics(self) -> bool:
-        """Whether mass, friction or restitution are drawn per episode."""
-        return any(low != high for low, high in (self.mass_range, self.friction_range, self.restitution_range))
-
-    @functools.cached_property
-    def draws_body_params(self) -> bool:
-        """Whether the engine's body parameters change from episode to episode: drawn dynamics, or the
-        base box's drawn size."""
-        base_drawn = self.base_length_range[0] != self.base_length_range[1] or (
-            self.base_height_range[0] != self.base_height_range[1])
-        return self.randomises_dynamics or (self.base_box and base_drawn)
-
-    @property
-    def obs_size(self) -> int:
-        size = OBS_SIZE_WITH_DYNAMICS if self.observe_dynamics else OBS_SIZE
-        return size + BASE_OBS_SIZE if self.base_box else size
-
-    @property
-    def episode_size(self) -> int:
-        """Columns of ``Episodes.data`` (and variates drawn per episode)."""
-        return EPISODE_SIZE_WITH_BASE if self.base_box else EPISODE_SIZE
-
-    @property
-    def bodies_per_env(self) -> int:
-        """Engine bodies per episode: the thrown box, and the base box with ``base_box``."""
-        return 2 if self.base_box else 1
-
-    @property
-    def corner_radius(self) -> float:
-        """Distance from the centre to a corner [m]."""
-        return math.hypot(self.half_length, self.half_width)
-
-    @property
-    def gyration_radius_squared(self) -> float:
-        """I / m = (L^2 + W^2) / 12 [m^2] for a uniform box, whatever its mass."""
-        return (self.half_length**2 + self.half_width**2) / 3.0
-
-    # constant arrays, computed once (the functions below run per step and stay cheap on small batches)
-    @functools.cached_property
-    def episode_low_span(self) -> tuple[np.ndarray, np.ndarray]:
-        """(episode_size,) low and high - low of each drawn column (0 for the face columns)."""
-        low, span = np.zeros(self.episode_size), np.zeros(self.episode_size)
-        columns = [(EP_RELEASE_X, self.release_x_range), (EP_RELEASE_Y, self.release_height_range),
-                   (EP_RELEASE_ANGLE, self.release_angle_range), (EP_TARGET_X, self.target_x_range),
-                   (EP_MASS, self.mass_range), (EP_FRICTION, self.friction_range),
-                   (EP_RESTITUTION, self.restitution_range)]
-        if self.base_box:
-            columns += [(EP_BASE_LENGTH, self.base_length_range), (EP_BASE_HEIGHT, self.base_height_range)]
-        for column, (a, b) in columns:
-            low[column], span[column] = a, b - a
-        return low, span
-
-    @functools.cached_property
-    def action_scale_offset(self) -> tuple[np.ndarray, np.ndarray]:
-        """(3,) scale and offset mapping actions in [-1, 1] to speed, launch angle and spin."""
-        low, high = self.launch_angle_range
-        scale = np.array([0.5 * self.max_speed, 0.5 * (high - low), self.max_spin])
-        offset = np.array([0.5 * self.max_speed, 0.5 * (high + low), 0.0])
-        return scale, offset
-
-
-@dataclass
-class Episodes:
-    """What is drawn at reset for a batch of n episodes: one row of ``data`` (n, EPISODE_SIZE) per
-    episode, columns ``EP_*``. The properties are views of ``data``."""
-
-    data: np.ndarray
-
-    @classmethod
-    def empty(cls, n: int, size: int = EPISODE_SIZE) -> Episodes:
-        """``n`` episodes of ``size`` columns (``TaskConfig.episode_size``)."""
-        return cls(np.zeros((n, size)))
-
-    @property
-    def release(self) -> np.ndarray:  # (n, 3): x [m], y [m], angle [rad] of the box in the hand
-        return self.data[:, EP_RELEASE]
-
-    @property
-    def target_x(self) -> np.ndarray:  # (n,) [m], where the box's centre should come to rest
-        return self.data[:, EP_TARGET_X]
-
-    @property
-    def target_faces(self) -> np.ndarray:  # (n, 4), 1.0 for each face that may end down
-        return self.data[:, EP_TARGET_FACES]
-
-    @property
-    def dynamics(self) -> np.ndarray:  # (n, 3): mass [kg], friction [-], restitution [-]
-        return self.data[:, EP_DYNAMICS]
-
-    @property
-    def base_size(self) -> np.ndarray:  # (n, 2): the base box's length and height [m] (with base_box)
-        return self.data[:, EP_BASE_LENGTH:EP_BASE_HEIGHT + 1]
-
-
-# -- configuration ------------------------------------------------------------------------------
-DYNAMICS_RANGES = ("mass_range", "friction_range", "restitution_range")
-ENV_RANGES = {argument.name: argument.allowed for argument in ENV_ARGUMENTS
-              if argument.allowed is not None and argument.name not in DYNAMICS_RANGES}
-"""The env's arguments and their allowed ranges (docs/ranges.md), read from their declaration
-(``arguments.ENV_ARGUMENTS``): every observation stays finite in float32 and every throw is simulated, at
-every combination of them. ``mass_range``, ``friction_range`` and ``restitution_range`` take the ranges of
-``mass``, ``friction`` and ``restitution`` at each end."""
-
-
-def check_interval(name: str, value, allowed: Range) -> tuple[float, float]:
-    """``value`` as a (low, high) tuple of floats inside ``allowed``, with low <= high; a TypeError
-    if it is not a pair of real numbers, a ValueError naming the parameter and the range otherwise."""
-    if not isinstance(value, (tuple, list, np.ndarray)):  # not a dict, set, range or str: no order or not numbers
-        raise TypeError(f"{name} must be a (low, high) pair of real numbers (a tuple or list), "
-                        f"got {type(value).__name__} {value!r}")
-    try:
-        first, second = value
-    except (TypeError, ValueError):
-        raise TypeError(f"{name} must be a (low, high) pair of real numbers, got {value!r}") from None
-    first = allowed.check(f"{name}[0]", first)
-    second = allowed.check(f"{name}[1]", second)
-    if first > second:
-        raise ValueError(f"{name} must have low <= high, got {value!r}")
-    return first, second
-
-
-def check_scalar_or_interval(name: str, value, interval, allowed: Range) -> tuple[float, float]:
-    """``(value, value)``, or the (low, high) ``interval`` (named ``name_range``) when it is given."""
-    scalar = None if value is None and interval is not None else allowed.check(name, value)  # checked in any case
-    if interval is None:
-        return (scalar,) * 2
-    return check_interval(f"{name}_range", interval, allowed)
-
-
-def make_task_config(*, box_length, box_width, gravity, mass, friction, restitution, penalty_stiffness,
-                     mass_range, friction_range, restitution_range, release_x_range, release_height_range,
-                     release_angle_range, target_x_range, target_face, max_speed, launch_angle_range,
-                     max_spin, position_tolerance, distance_weight, orientation_weight, success_bonus,
-                     observe_dynamics, max_sim_time, base_box=False, base_length_range=None, base_height_range=None,
-                     base_mass=None) -> TaskConfig:
-    """Validate the task's keyword arguments into a TaskConfig: a TypeError names an argument of the
-    wrong type, a ValueError one outside its range (``ENV_RANGES``). ``*_range=None`` fixes that
-    quantity at its scalar argument. ``base_*=None`` takes ``BASE_DEFAULTS`` with ``base_box=True``
-    (they must stay None without it)."""
-    scalar = {name: ENV_RANGES[name].check(name, value) for name, value in (
-        ("box_length", box_length), ("box_width", box_width), ("gravity", gravity),
-        ("penalty_stiffness", penalty_stiffness), ("max_speed", max_speed), ("max_spin", max_spin),
-        ("position_tolerance", position_tolerance), ("distance_weight", distance_weight),
-        ("orientation_weight", orientation_weight), ("success_bonus", success_bonus),
-        ("max_sim_time", max_sim_time))}
-    pairs = {name: check_interval(name, value, ENV_RANGES[name]) for name, value in (
-        ("release_x_range", release_x_range), ("release_height_range", release_height_range),
-        ("release_angle_range", release_angle_range), ("target_x_range", target_x_range),
-        ("launch_angle_range", launch_angle_range))}
-    corner_radius = math.hypot(scalar["box_length"], scalar["box_width"]) / 2
-    if pairs["release_height_range"][0] <= corner_radius:
-        raise ValueError(
-            f"release_height_range must lie above the box's corner radius {corner_radius:g} m (so the box "
-            f"starts clear of the floor at any angle), got {release_height_range!r}")
-    base = check_base_box(base_box, base_length_range, base_height_range, base_mass, pairs["target_x_range"],
-                          pairs["release_x_range"], corner_radius)
-    return TaskConfig(
-        half_length=0.5 * scalar.pop("box_length"),
-        half_width=0.5 * scalar.pop("box_width"),
-        mass_range=check_scalar_or_interval("mass", mass, mass_range, ENV_RANGES["mass"]),
-        friction_range=check_scalar_or_interval("friction", friction, friction_range, ENV_RANGES["friction"]),
-        restitution_range=check_scalar_or_interval("restitution", restitution, restitution_range,
-                                                   ENV_RANGES["restitution"]),
-        target_face=check_choice("target_face", target_face, TARGET_FACE_KINDS),
-        observe_dynamics=check_bool("observe_dynamics", observe_dynamics),
-        **scalar,
-        **pairs,
-        **base,
-    )
-
-
-def check_base_box(base_box, base_length_range, base_height_range, base_mass, target_x_range, release_x_range,
-                   corner_radius) -> dict:
-    """The TaskConfig fields of the base box, validated (``make_task_config``)."""
-    given = {"base_length_range": base_length_range, "base_height_range": base_height_range,
-             "base_mass": base_mass}
-    if not check_bool("base_box", base_box):
-        for name, value in given.items():
-            if value is not None:
-                raise ValueError(f"{name} applies only with base_box=True (a base box to land on), got {name}="
-                                 f"{value!r} with base_box=False")
-        return {}
-    values = {name: BASE_DEFAULTS[name] if value is None else value for name, value in given.items()}
-    lengths = check_interval("base_length_range", values["base_length_range"], ENV_RANGES["base_length_range"])
-    heights = check_interval("base_height_range", values["base_height_range"], ENV_RANGES["base_height_range"])
-    mass = ENV_RANGES["base_mass"].check("base_mass", values["base_mass"])
-    if heights[1] > lengths[0]:
-        raise ValueError(f"base_height_range must not exceed base_length_range[0] = {lengths[0]:g} m (the base box "
-                         f"lies on its long side, its lowest pose), got {values['base_height_range']!r}")
-    clearance = release_x_range[1] + corner_radius + 0.5 * lengths[1]
-    if target_x_range[0] < clearance:
-        raise ValueError(f"target_x_range must start at {clearance:g} m or beyond with base_box=True (the base box, "
-                         f"centred at the target x, must stand clear of the box in the hand: release x max + its "
-                         f"corner radius + half the longest base), got {target_x_range!r}")
-    return {"base_box": True, "base_length_range": lengths, "base_height_range": heights, "base_mass": mass}
+__all__ = [
+    "BASE_DEFAULTS", "ENV_ARGUMENTS",  # declared in arguments, importable from here too
+    "ACTION_SIZE", "ACT_LAUNCH_ANGLE", "ACT_SPEED", "ACT_SPIN", "BASE_OBSERVATION_NAMES", "BASE_OBS_SIZE",
+    "DYNAMICS_RANGES", "ENERGY_MARGIN", "ENV_RANGES", "EPISODE_SIZE", "EPISODE_SIZE_WITH_BASE", "EP_BASE_HEIGHT",
+    "EP_BASE_LENGTH", "EP_DYNAMICS", "EP_FACE_0", "EP_FACE_1", "EP_FACE_2", "EP_FACE_3", "EP_FRICTION", "EP_MASS",
+    "EP_RELEASE", "EP_RELEASE_ANGLE", "EP_RELEASE_X", "EP_RELEASE_Y", "EP_RESTITUTION", "EP_TARGET_FACES",
+    "EP_TARGET_X", "Episodes", "FACE_SETS", "FACE_SET_NAMES", "MIXED_KINDS", "OBSERVATION_NAMES", "OBS_BASE_COS",
+    "OBS_BASE_HEIGHT", "OBS_BASE_LENGTH", "OBS_BASE_SIN", "OBS_BASE_X", "OBS_BASE_Y", "OBS_COS", "OBS_FRICTION",
+    "OBS_MASS", "OBS_RESTITUTION", "OBS_SIN", "OBS_SIZE", "OBS_SIZE_WITH_DYNAMICS", "OBS_SPIN", "OBS_TARGET_FACES",
+    "OBS_TARGET_X", "OBS_VX", "OBS_VY", "OBS_X", "OBS_Y", "QUARTER_TURN", "REWARD_TERMS", "SUPPORT_TOLERANCE",
+    "TARGET_FACE_KINDS", "TaskConfig", "U_TARGET_FACE", "U_TARGET_KIND", "actions_to_throws", "base_rows", "base_top",
+    "check_actions", "check_base_box", "check_interval", "check_scalar_or_interval", "describe_target_faces",
+    "episodes_from_uniforms", "faces_down", "half_extents_along_axes", "landing_offsets", "make_task_config",
+    "observation_bounds", "observation_names", "observe", "orientation_errors", "outside_bounds", "reward_terms",
+    "sample_episodes", "target_face_sets", "thrown_rows", "throws_to_actions", "wrap_angles", "write_base_states",
+    "write_body_params", "write_initial_states",
+]
 
 
 # -- 1. sampling ---------------------------------------------------------------------------------
@@ -482,6 +281,7 @@ def observe(states: np.ndarray, episodes: Episodes, config: TaskConfig, base_sta
     parts = [states[:, layout.X:layout.Y + 1], np.cos(angles), np.sin(angles), states[:, layout.VX:],
              episodes.data[:, EP_TARGET_X:EP_TARGET_X + size - OBS_TARGET_X]]
     if config.base_box:
+        assert base_states is not None  # given with a base box
         base_angles = base_states[:, layout.ANGLE:layout.ANGLE + 1]
         parts += [base_states[:, layout.X:layout.Y + 1], np.cos(base_angles), np.sin(base_angles),
                   episodes.base_size]
@@ -523,13 +323,13 @@ def observation_bounds(config: TaskConfig, horizon: float) -> tuple[np.ndarray, 
         high += [config.target_x_range[1] + base_speed * horizon,
                  base_radius + ENERGY_MARGIN * energy * share / config.gravity, 1.0, 1.0,
                  config.base_length_range[1], config.base_height_range[1]]
-    low, high = np.array(low, dtype=np.float32), np.array(high, dtype=np.float32)
+    lows, highs = np.array(low, dtype=np.float32), np.array(high, dtype=np.float32)
     # a fixed quantity (target x, mass, friction or restitution not drawn) would have equal bounds, which
     # Gymnasium's checker flags as a degenerate space: its bounds are one float32 step either side instead
-    fixed = low == high
-    low[fixed] = np.nextafter(low[fixed], np.float32(-np.inf))
-    high[fixed] = np.nextafter(high[fixed], np.float32(np.inf))
-    return low, high
+    fixed = lows == highs
+    lows[fixed] = np.nextafter(lows[fixed], np.float32(-np.inf))
+    highs[fixed] = np.nextafter(highs[fixed], np.float32(np.inf))
+    return lows, highs
 
 
 OBSERVATION_NAMES = ("x", "y", "cos(angle)", "sin(angle)", "vx", "vy", "spin", "target x", "target face 0",
@@ -545,7 +345,7 @@ def observation_names(config: TaskConfig) -> tuple[str, ...]:
 
 def outside_bounds(obs: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
     """(n,) bool: which observations (n, size) leave [low, high] somewhere."""
-    return ((obs < low) | (obs > high)).any(axis=1)
+    return ((obs < low) | (obs > high)).any(axis=1)  # type: ignore[return-value]  # numpy's stubs: a bool
 
 
 # -- 4. reward -----------------------------------------------------------------------------------
@@ -598,6 +398,7 @@ def landing_offsets(states: np.ndarray, episodes: Episodes, config: TaskConfig,
     x; dy = 0 without a base box."""
     if not config.base_box:
         return states[:, layout.X] - episodes.data[:, EP_TARGET_X], np.zeros(len(states))
+    assert base_states is not None  # given with a base box
     top_x, top_y, _ = base_top(base_states, episodes)
     _, half_y = half_extents_along_axes(states[:, layout.ANGLE], config.half_length, config.half_width)
     return states[:, layout.X] - top_x, states[:, layout.Y] - half_y - top_y

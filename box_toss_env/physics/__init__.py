@@ -3,14 +3,14 @@
 Two solvers share one scene description:
 
 - ``solver="seed"``: the scheme of ``shared/reference/rigid_body_collisions.txt``, exactly
-  (``seed_solver``);
+  (``reference_solver``);
 - ``solver="robust"`` (default): the same ingredients arranged to stay right at any step,
   stiffness, speed, spin, mass and aspect ratio (``robust_solver``).
 
 ``simulate(scene, ...)`` runs a scene; ``Simulator`` runs compiled kernels on raw arrays.
 
 ``Scene(boxes_collide=True)`` makes the boxes of a scene collide with one another too (``box_collision``,
-``colliding_solver``, ``colliding_seed``; docs/box_collisions.md); by default they meet only the floor
+``colliding_solver``, ``colliding_reference``; docs/box_collisions.md); by default they meet only the floor
 and none of that is compiled.
 """
 

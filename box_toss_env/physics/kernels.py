@@ -10,8 +10,8 @@ stage recompiles its callers.
 
 ``boxes_collide`` picks a different kernel, not a branch in one: with it False (every scene that does
 not ask for box-box contact) ``make_kernel`` returns the very kernel it returned before box-box contact
-existed, and nothing of ``box_collision``, ``colliding_solver`` or ``colliding_seed`` is compiled; with
-it True the bodies of the scene are stepped together (``colliding_solver``, ``colliding_seed``).
+existed, and nothing of ``box_collision``, ``colliding_solver`` or ``colliding_reference`` is compiled; with
+it True the bodies of the scene are stepped together (``colliding_solver``, ``colliding_reference``).
 """
 
 from __future__ import annotations
@@ -21,10 +21,10 @@ import hashlib
 from dataclasses import dataclass
 from pathlib import Path
 
-from .colliding_seed import make_colliding_seed_kernel
+from .colliding_reference import make_colliding_reference_kernel
 from .colliding_step import make_colliding_robust_kernel
+from .reference_solver import make_reference_kernel
 from .robust_solver import make_robust_kernel
-from .seed_solver import make_seed_kernel
 
 
 @dataclass(frozen=True)
@@ -68,7 +68,7 @@ def make_kernel_of(**fields):
 @functools.cache
 def _make_kernel(solver: str, use_impulses: bool, use_penalty: bool, use_friction: bool, record: bool):
     if solver == "seed":
-        return make_seed_kernel(use_impulses, use_penalty, use_friction, record, source_digest())
+        return make_reference_kernel(use_impulses, use_penalty, use_friction, record, source_digest())
     if solver == "robust":
         if not use_impulses:
             raise ValueError("use_impulses must be True with solver='robust'")
@@ -79,7 +79,7 @@ def _make_kernel(solver: str, use_impulses: bool, use_penalty: bool, use_frictio
 @functools.cache
 def _make_colliding_kernel(solver: str, use_impulses: bool, use_penalty: bool, use_friction: bool, record: bool):
     if solver == "seed":
-        return make_colliding_seed_kernel(use_impulses, use_penalty, use_friction, record, source_digest())
+        return make_colliding_reference_kernel(use_impulses, use_penalty, use_friction, record, source_digest())
     if solver == "robust":
         if not use_impulses:
             raise ValueError("use_impulses must be True with solver='robust'")

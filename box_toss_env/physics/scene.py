@@ -66,7 +66,7 @@ class Scene:
 
     ``boxes_collide``: False (default), every box meets only the floor and the boxes are independent
     (a batch of them runs on threads); True, the boxes of the scene also collide with one another and
-    are stepped together (``colliding_solver``, ``colliding_seed``). A colliding scene must start with no
+    are stepped together (``colliding_solver``, ``colliding_reference``). A colliding scene must start with no
     two boxes overlapping by more than 1% of the thinner one's smaller half extent (a ValueError names
     them); smaller overlaps, and those that arise during a run, are resolved by the penalty.
     """

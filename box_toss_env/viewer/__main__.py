@@ -13,7 +13,7 @@ from box_toss_env.files import atomic_path
 from box_toss_env.physics.scene import SOLVERS
 from box_toss_env.physics.scenes import SCENES
 from box_toss_env.viewer.controller import STEPS_PER_FRAME, ViewerController
-from box_toss_env.viewer.kernels import KernelLoader
+from box_toss_env.viewer.kernel_loader import KernelLoader
 
 PARAMETER_FLAGS = (("dt", "dt", "time step size [s]"), ("gravity", "gravity", "gravity along y [m/s^2]"),
                    ("stiffness", "penalty_stiffness", "penalty stiffness [N/m]"),
@@ -149,7 +149,7 @@ def run_play(parser: argparse.ArgumentParser, args) -> int:
 
     import box_toss_env  # noqa: F401  (registers the envs)
     from box_toss_env.viewer.play import PlayController
-    from box_toss_env.viewer.window import PlayWindow
+    from box_toss_env.viewer.play_window import PlayWindow
 
     kwargs = {"render_mode": "rgb_array_list", "render_width": args.width or 720, "render_height": args.height or 480}
     if args.solver is not None:

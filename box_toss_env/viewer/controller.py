@@ -13,300 +13,53 @@ wall time per step is averaged over the last ``TIMING_WINDOW_STEPS`` (50) steps.
 With a ``KernelLoader`` (the window's), a lane's kernel is loaded or compiled on a background thread:
 until every lane's kernel is ready the scene holds still and ``notices`` says which one is compiling.
 Without one, the first step compiles it where it runs.
+
+Its parts: ``parameters`` (the panel's rows), ``lane`` (one running simulation), ``view`` (the camera);
+their names stay importable from here.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from collections import deque
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from box_toss_env.physics import (
     SOLVERS,
-    NonFiniteStateError,
     Scene,
-    Simulator,
-    check_finite_stats,
     layout,
-    make_settings,
 )
-from box_toss_env.rendering import Camera, box_vertices
-from box_toss_env.viewer.kernels import KernelJob, KernelLoader, zero_step_args
-
-STEPS_PER_FRAME = 8
-"""Simulation steps per drawn frame, as in the seed demo."""
-TIMING_WINDOW_STEPS = 50
-"""The ms-per-step read-out is the mean over this many of the latest steps, as in the seed demo."""
-DRAG_FOLLOW_FRAMES = 1.0
-"""A dragged box's grab point is given the velocity that closes the gap to the cursor in this many frames."""
-DRAG_SPIN_DAMPING = 0.5
-"""A dragged box's spin is multiplied by this before each frame (it would swing wildly otherwise)."""
-MAX_DRAG_SPEED = 50.0
-"""Cap on the speed a drag gives a box [m/s]."""
-ZOOM_STEP = 1.15
-"""Zoom factor of one wheel click or key press."""
-MIN_PIXELS_PER_METRE, MAX_PIXELS_PER_METRE = 0.5, 20000.0
-
-
-# -- the panel's parameters ----------------------------------------------------------------------
-@dataclass(frozen=True)
-class Parameter:
-    """A numeric field of ``Scene`` shown in the panel. The arrow keys move it along ``ladder``
-    (to the nearest ladder value above or below the current one); any value can also be typed."""
-
-    name: str  # the Scene field
-    label: str
-    unit: str
-    ladder: tuple[float, ...]
-
-    def next_value(self, current: float, direction: int) -> float:
-        """The nearest ladder value above (``direction > 0``) or below ``current``; ``current``
-        itself when the ladder ends there."""
-        tolerance = 1e-9 * max(1.0, abs(current))
-        if direction > 0:
-            above = [v for v in self.ladder if v > current + tolerance]
-            return min(above) if above else current
-        below = [v for v in self.ladder if v < current - tolerance]
-        return max(below) if below else current
-
-    def format(self, value: float) -> str:
-        return f"{value:.6g} {self.unit}".rstrip()
-
-
-def _one_two_five(low_exponent: int, high_exponent: int) -> tuple[float, ...]:
-    return tuple(m * 10.0**e for e in range(low_exponent, high_exponent + 1) for m in (1.0, 2.0, 5.0))
-
-
-PARAMETERS = (
-    Parameter("dt", "time step size", "s",
-              (0.0002, 0.0005, 0.001, 0.002, 0.0025, 0.004, 0.005, 0.0075, 0.01, 0.015, 0.02, 0.03, 0.05)),
-    Parameter("gravity", "gravity", "m/s^2", tuple(sorted({*range(-30, 1), -9.81}))),
-    Parameter("penalty_stiffness", "penalty stiffness", "N/m", (0.0, *_one_two_five(0, 6))),
-    Parameter("restitution", "restitution coefficient", "", tuple(round(0.05 * k, 2) for k in range(21))),
-    Parameter("friction", "friction coefficient", "",
-              (0.0, 0.01, 0.02, 0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.8, 1.0, 1.5, 2.0)),
+from box_toss_env.rendering import Camera
+from box_toss_env.viewer.kernel_loader import KernelLoader
+from box_toss_env.viewer.lane import (
+    DRAG_FOLLOW_FRAMES,
+    DRAG_SPIN_DAMPING,
+    MAX_DRAG_SPEED,
+    STEPS_PER_FRAME,
+    TIMING_WINDOW_STEPS,
+    Grab,
+    Lane,
+    StepTimer,
 )
-TOGGLES = (("use_impulses", "use impulses"), ("use_penalty", "use penalty force"), ("boxes_collide", "boxes collide"))
-PARAMETER_BY_NAME = {parameter.name: parameter for parameter in PARAMETERS}
-ROWS = (*(parameter.name for parameter in PARAMETERS), *(name for name, _ in TOGGLES), "solver")
-"""The panel's selectable rows, top to bottom: the five parameters, the three toggles, the solver."""
-ROW_LABELS = {**{p.name: p.label for p in PARAMETERS}, **dict(TOGGLES), "solver": "solver"}
-COMPARE_SOLVERS = ("seed", "robust")
-"""The lanes of compare mode, left to right."""
+from box_toss_env.viewer.parameters import (
+    COMPARE_SOLVERS,
+    PARAMETER_BY_NAME,
+    PARAMETERS,
+    ROW_LABELS,
+    ROWS,
+    TOGGLES,
+    Parameter,
+)
+from box_toss_env.viewer.view import MAX_PIXELS_PER_METRE, MIN_PIXELS_PER_METRE, ZOOM_STEP, View, fit_view, view_points
 
-
-# -- timing ----------------------------------------------------------------------------------------
-class StepTimer:
-    """Mean wall time per simulation step over the latest ``window`` steps.
-
-    A run of k steps that took s seconds counts as k steps of s / k each."""
-
-    def __init__(self, window: int = TIMING_WINDOW_STEPS):
-        self.step_seconds: deque[float] = deque(maxlen=window)
-
-    def record(self, seconds: float, steps: int) -> None:
-        self.step_seconds.extend([seconds / steps] * min(steps, self.step_seconds.maxlen))
-
-    @property
-    def mean_ms(self) -> float:
-        """Mean [ms] per step; nan before the first step."""
-        if not self.step_seconds:
-            return math.nan
-        return 1e3 * sum(self.step_seconds) / len(self.step_seconds)
-
-    def reset(self) -> None:
-        self.step_seconds.clear()
-
-
-# -- one running simulation --------------------------------------------------------------------------
-@dataclass
-class Grab:
-    """A box held by the mouse: ``local`` is the held point in the box's frame [m], ``target`` the
-    cursor in the world [m]."""
-
-    body: int
-    local: np.ndarray
-    target: np.ndarray
-
-
-@dataclass(eq=False)
-class Lane:
-    """One simulation as the demo runs it: the scene, its compiled ``Simulator`` and the arrays it
-    steps. ``state`` is edited in place between runs (dragging); ``sim_time`` and ``steps`` count
-    from the last restart."""
-
-    scene: Scene
-    steps_per_frame: int = STEPS_PER_FRAME
-    clock: Callable[[], float] = time.perf_counter
-    loader: KernelLoader | None = None
-    simulator: Simulator = field(init=False)
-    job: KernelJob | None = field(init=False, default=None)  # the kernel's load, while it is queued or running
-    state: np.ndarray = field(init=False)
-    params: np.ndarray = field(init=False)
-    settings: np.ndarray = field(init=False)
-    stats: np.ndarray = field(init=False)
-    timer: StepTimer = field(init=False, default_factory=StepTimer)
-    sim_time: float = field(init=False, default=0.0)
-    steps: int = field(init=False, default=0)
-    diverged: NonFiniteStateError | None = field(init=False, default=None)
-    grab: Grab | None = field(init=False, default=None)
-
-    def __post_init__(self):
-        self._use_simulator(self._make_simulator(self.scene), self.scene)
-        self.set_scene(self.scene)
-        self.restart()
-
-    @staticmethod
-    def _make_simulator(scene: Scene) -> Simulator:
-        # a handful of boxes: numba's threads would cost more than they save
-        return Simulator.for_scene(scene, parallel=False)
-
-    def _use_simulator(self, simulator: Simulator, scene: Scene) -> None:
-        """Take ``simulator``; with a loader, queue its kernel's first call (nothing if compiled already)."""
-        self.simulator = simulator
-        if self.loader is not None:
-            args = zero_step_args(scene.initial_state(), scene.body_params(),
-                                  make_settings(scene, 0, until_rest=False),
-                                  np.zeros((scene.n_bodies, layout.STATS_SIZE)))
-            self.job = self.loader.prepare(simulator.kernel, args, scene.solver)
-
-    @property
-    def ready(self) -> bool:
-        """The kernel can run now (always, without a loader: the first run compiles it)."""
-        return self.job is None or self.job.ready
-
-    @property
-    def notice(self) -> str | None:
-        """What the lane waits for ("compiling the seed kernel... (first use only)"), or None."""
-        return None if self.ready else self.job.notice
-
-    @property
-    def solver(self) -> str:
-        return self.scene.solver
-
-    def set_scene(self, scene: Scene) -> None:
-        """Take new parameters; the state goes on from where it is. The simulator is rebuilt only
-        when the compile-time flags change (solver, impulses, penalty, friction, boxes colliding on or off)."""
-        simulator = self._make_simulator(scene)
-        if simulator.flags != self.simulator.flags:
-            self._use_simulator(simulator, scene)
-        self.scene = scene
-        self.params = scene.body_params()
-        self.settings = make_settings(scene, self.steps_per_frame, until_rest=False)
-
-    def restart(self) -> None:
-        """Back to the scene's initial state (with the current parameters)."""
-        self.state = self.scene.initial_state()
-        self.stats = np.zeros((self.scene.n_bodies, layout.STATS_SIZE))
-        self.timer.reset()
-        self.sim_time = 0.0
-        self.steps = 0
-        self.diverged = None
-        self.grab = None
-
-    def step_frame(self) -> None:
-        """Run one frame's steps (applying the drag first); a divergence stops the lane."""
-        if self.diverged is not None or not self.ready:
-            return
-        if self.grab is not None:
-            self._pull_grabbed_box()
-        start = self.clock()
-        self.simulator.run(self.state, self.params, self.settings, self.stats)
-        elapsed = self.clock() - start
-        try:
-            check_finite_stats(self.stats, self.solver)
-        except NonFiniteStateError as error:  # the kernel counts steps from the start of this run
-            self.sim_time += error.step * self.scene.dt
-            self.steps += error.step
-            self.diverged = NonFiniteStateError(error.body, self.steps, self.solver)
-            self.grab = None
-            return
-        self.timer.record(elapsed, self.steps_per_frame)
-        self.steps += self.steps_per_frame
-        self.sim_time += self.steps_per_frame * self.scene.dt
-
-    # -- dragging -----------------------------------------------------------------------------------
-    def body_at(self, point: np.ndarray) -> int | None:
-        """The topmost box (the last drawn) containing the world point [m], or None."""
-        x, y, angle = self.state[:, layout.X], self.state[:, layout.Y], self.state[:, layout.ANGLE]
-        dx, dy = point[0] - x, point[1] - y
-        local_x = np.cos(angle) * dx + np.sin(angle) * dy
-        local_y = -np.sin(angle) * dx + np.cos(angle) * dy
-        inside = ((np.abs(local_x) <= self.params[:, layout.HALF_LENGTH])
-                  & (np.abs(local_y) <= self.params[:, layout.HALF_WIDTH]))
-        hits = np.flatnonzero(inside)
-        return int(hits[-1]) if hits.size else None
-
-    def grab_at(self, point: np.ndarray) -> bool:
-        """Hold the box under the world point, if any; returns whether one was grabbed."""
-        point = np.asarray(point, dtype=np.float64)
-        body = self.body_at(point) if self.diverged is None else None
-        if body is None:
-            return False
-        x, y, angle = self.state[body, :3]
-        cos, sin = math.cos(angle), math.sin(angle)
-        dx, dy = point[0] - x, point[1] - y
-        self.grab = Grab(body, np.array([cos * dx + sin * dy, -sin * dx + cos * dy]), point.copy())
-        return True
-
-    def grab_point(self) -> np.ndarray | None:
-        """World position of the held point [m]."""
-        if self.grab is None:
-            return None
-        x, y, angle = self.state[self.grab.body, :3]
-        cos, sin = math.cos(angle), math.sin(angle)
-        lx, ly = self.grab.local
-        return np.array([x + cos * lx - sin * ly, y + sin * lx + cos * ly])
-
-    def _pull_grabbed_box(self) -> None:
-        """v = (cursor - held point) / (frames * steps * dt): the held point reaches the cursor in
-        ``DRAG_FOLLOW_FRAMES`` frames if nothing else acts; the spin is damped."""
-        grab = self.grab
-        gap = grab.target - self.grab_point()
-        velocity = gap / (DRAG_FOLLOW_FRAMES * self.steps_per_frame * self.scene.dt)
-        speed = float(np.hypot(*velocity))
-        if speed > MAX_DRAG_SPEED:
-            velocity *= MAX_DRAG_SPEED / speed
-        self.state[grab.body, layout.VX:layout.VY + 1] = velocity
-        self.state[grab.body, layout.SPIN] *= DRAG_SPIN_DAMPING
-
-
-# -- the view ----------------------------------------------------------------------------------------
-@dataclass
-class View:
-    """What the camera looks at: the world point at the centre of each lane [m] and the scale [px/m]."""
-
-    center_x: float
-    center_y: float
-    pixels_per_metre: float
-
-
-def view_points(scene: Scene) -> np.ndarray:
-    """Points a first view of ``scene`` should show [m]: every box corner, and for a moving box
-    the top of its ballistic arc and where that arc meets the floor."""
-    state = scene.initial_state()
-    params = scene.body_params()
-    corners = box_vertices(state[:, :2], state[:, layout.ANGLE], params[:, :2]).reshape(-1, 2)
-    points = [corners]
-    g = -scene.gravity
-    for x, y, _, vx, vy, _ in state:
-        if g > 0 and (vx or vy):
-            apex_time = max(vy / g, 0.0)
-            landing_time = (vy + math.sqrt(vy * vy + 2.0 * g * max(y, 0.0))) / g
-            points.append([[x + vx * apex_time, y + vy * apex_time - 0.5 * g * apex_time**2],
-                           [x + vx * landing_time, 0.0]])
-    return np.concatenate([np.asarray(p, dtype=np.float64).reshape(-1, 2) for p in points])
-
-
-def fit_view(scene: Scene, width_px: int, height_px: int) -> View:
-    points = view_points(scene)
-    span = float(np.ptp(points, axis=0).max())
-    camera = Camera.fit_points(points, width_px, height_px, margin_m=0.2 + 0.12 * span, min_span_m=2.0)
-    return View(camera.center_x, camera.center_y, camera.pixels_per_metre)
+__all__ = [
+    "COMPARE_SOLVERS", "DRAG_FOLLOW_FRAMES", "DRAG_SPIN_DAMPING", "Grab", "Lane", "MAX_DRAG_SPEED",
+    "MAX_PIXELS_PER_METRE", "MIN_PIXELS_PER_METRE", "PARAMETERS", "PARAMETER_BY_NAME", "Parameter", "ROWS",
+    "ROW_LABELS", "STEPS_PER_FRAME", "StepTimer", "TIMING_WINDOW_STEPS", "TOGGLES", "View", "ViewerController",
+    "ZOOM_STEP", "fit_view", "view_points",
+]
 
 
 # -- the controller ------------------------------------------------------------------------------------

@@ -37,7 +37,7 @@ class DisabledAutoreset(VectorWrapper):
         if mask is None:
             self._ended[:] = False
             self._pending = None
-            return self.env.reset(seed=seed, options=options or None)
+            return self.env.reset(seed=seed, options=options or None)  # type: ignore[arg-type]  # a list of seeds too
         mask = check_reset_mask(mask, self.num_envs)
         if seed is not None:
             raise ValueError("seed must be None when options['reset_mask'] is given: the next episodes were drawn "
@@ -48,6 +48,7 @@ class DisabledAutoreset(VectorWrapper):
             raise ValueError("reset_mask selects envs whose episode has not ended: "
                              f"{np.flatnonzero(mask & ~self._ended).tolist()}")
         self._ended &= ~mask
+        assert self._pending is not None  # drawn when the episodes ended
         observations, info = self._pending
         return observations.copy(), dict(info)
 

@@ -35,7 +35,7 @@ class NextStepAutoreset(VectorWrapper):
 
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None):
         self._next = None
-        return self.env.reset(seed=seed, options=options)
+        return self.env.reset(seed=seed, options=options)  # type: ignore[arg-type]  # a list of seeds too
 
     def step(self, actions):
         n = self.num_envs

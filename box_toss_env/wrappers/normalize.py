@@ -61,7 +61,7 @@ class NormalizeObservation(VectorWrapper):
         self.update_running_mean = True
 
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None):
-        obs, info = self.env.reset(seed=seed, options=options)
+        obs, info = self.env.reset(seed=seed, options=options)  # type: ignore[arg-type]  # a list of seeds too
         return self._observe(obs), info
 
     def step(self, actions):

@@ -20,7 +20,7 @@ It works under ``VecMonitor`` and ``VecNormalize`` like any SB3 VecEnv. Needs th
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
@@ -108,7 +108,7 @@ class SB3VecEnvAdapter(VecEnv):
             return range(self.num_envs)
         if isinstance(indices, int):
             return [indices]
-        return indices
+        return cast(Sequence[int], indices)  # SB3 passes a list or a range
 
     def get_attr(self, attr_name: str, indices: VecEnvIndices = None) -> list[Any]:
         if hasattr(self.vector_env, "get_attr") and attr_name not in ("render_mode",):
@@ -138,4 +138,4 @@ class SB3VecEnvAdapter(VecEnv):
 
     def get_images(self) -> Sequence[np.ndarray | None]:
         frames = self.vector_env.render()
-        return [None] * self.num_envs if frames is None else list(frames)
+        return [None] * self.num_envs if frames is None else list(frames)  # type: ignore[arg-type]  # a frame each

@@ -324,11 +324,11 @@ def test_boxes_collide_false_is_todays_kernel():
 NOT_COMPILED_PROBE = textwrap.dedent("""
     import json
     from numba.core.registry import CPUDispatcher
-    from box_toss_env.physics import (box_collision, broadphase, colliding_seed, colliding_solver, colliding_step,
+    from box_toss_env.physics import (box_collision, broadphase, colliding_reference, colliding_solver, colliding_step,
                                       islands, scenes, simulate)
     for solver in ("robust", "seed"):
         simulate(scenes.toss(solver=solver), duration=2.0, until_rest=True)
-    colliding_only = (box_collision, broadphase, colliding_seed, colliding_solver, colliding_step, islands)
+    colliding_only = (box_collision, broadphase, colliding_reference, colliding_solver, colliding_step, islands)
     compiled = [f"{module.__name__}.{name}" for module in colliding_only
                 for name, function in vars(module).items()
                 if isinstance(function, CPUDispatcher) and function.py_func.__module__ == module.__name__

@@ -27,13 +27,13 @@ from box_toss_env.physics import (
     geometry,
     kernel_support,
     make_kernel,
+    reference_solver,
     robust_solver,
-    seed_solver,
 )
 from box_toss_env.physics.compilation import EngineDispatcher
 
 PACKAGE = Path(box_toss_env.__file__).parent
-STAGE_MODULES = (contact_solver, flight, geometry, kernel_support, robust_solver, seed_solver)
+STAGE_MODULES = (contact_solver, flight, geometry, kernel_support, robust_solver, reference_solver)
 
 
 def compile_events(function) -> list[str]:
@@ -100,7 +100,7 @@ def test_every_stage_is_compiled_once_for_plain_argument_types(tmp_path):
     assert set(variants.values()) == {1}  # each variant compiled once, under a name of its own
     assert collections.Counter(name.rsplit("_v", 1)[0] for name in variants) == {
         "box_toss_env.physics.robust_solver.make_robust_kernel.<locals>.run": 4,
-        "box_toss_env.physics.seed_solver.make_seed_kernel.<locals>.run": 4}
+        "box_toss_env.physics.reference_solver.make_reference_kernel.<locals>.run": 4}
 
 
 def test_stages_have_no_python_wrapper_and_kernels_release_the_gil():

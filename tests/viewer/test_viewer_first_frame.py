@@ -15,10 +15,11 @@ import pytest
 import box_toss_env  # noqa: F401  (registers the envs)
 from box_toss_env.physics import Simulator, scenes
 from box_toss_env.rendering import import_pygame
-from box_toss_env.viewer import PlayController, ViewerController, kernels
+from box_toss_env.viewer import PlayController, ViewerController
+from box_toss_env.viewer import kernel_loader as kernels
 from box_toss_env.viewer import window as window_module
 from box_toss_env.viewer.__main__ import main
-from box_toss_env.viewer.kernels import KernelLoader
+from box_toss_env.viewer.kernel_loader import KernelLoader
 from box_toss_env.viewer.window import NOTICE_BACKGROUND, PlayWindow, ViewerWindow
 
 os.environ["SDL_VIDEODRIVER"] = "dummy"

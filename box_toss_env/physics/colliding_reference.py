@@ -1,10 +1,10 @@
 """The seed scheme for scenes whose boxes collide (``Scene(boxes_collide=True, solver="seed")``): our
 extension of the demo, which knows only the floor. It uses the reference text's own two-body formulas
 and its vertex contacts, generalised from "a corner below y = 0" to "a corner inside another box";
-a scene whose boxes cannot meet runs ``seed_solver``'s kernel, exactly the demo.
+a scene whose boxes cannot meet runs ``reference_solver``'s kernel, exactly the demo.
 
 Per time step:
-  1. every box in turn, its corners against the floor exactly as ``seed_solver.seed_step`` (impulse
+  1. every box in turn, its corners against the floor exactly as ``reference_solver.reference_step`` (impulse
      at once, then the penalty force and its friction summed into the box's force and torque);
   2. every pair i < j in turn, first the corners of box i inside box j, then those of box j inside
      box i, each corner in the demo's order. A corner c of box 1 inside box 2 (|local x| < hx and
@@ -30,7 +30,7 @@ import numpy as np
 from . import layout
 from .compilation import jit_kernel, jit_stage
 from .kernel_support import is_lying_still, read_settings, record_event, store_state, write_stats
-from .seed_solver import TANGENT_NORMALISE_MIN
+from .reference_solver import TANGENT_NORMALISE_MIN
 
 
 @jit_stage
@@ -135,15 +135,15 @@ def corners_inside(b1, b2, vel, force, params, restitution, friction, stiffness,
     return inside
 
 
-def make_colliding_seed_kernel(use_impulses: bool, use_penalty: bool, use_friction: bool, record: bool,
+def make_colliding_reference_kernel(use_impulses: bool, use_penalty: bool, use_friction: bool, record: bool,
                                source_digest: int):
     """Build the seed kernel for scenes whose boxes collide (flags compile-time, as
-    ``seed_solver.make_seed_kernel``'s)."""
+    ``reference_solver.make_reference_kernel``'s)."""
     IMPULSES, PENALTY, FRICTION, RECORD, DIGEST = use_impulses, use_penalty, use_friction, record, source_digest
 
     @jit_kernel
     def run(state, params, settings, stats, trajectory, events):
-        _ = DIGEST  # the on-disk cache key includes every engine source (see seed_solver)
+        _ = DIGEST  # the on-disk cache key includes every engine source (see reference_solver)
         dt, gravity, max_steps, until_rest, _, sleep_speed, sleep_time, _ = read_settings(settings)
         nb = state.shape[0]
         # body work array: vx, vy, omega, x, y, angle (velocities first, as the contact code indexes them)

@@ -28,7 +28,7 @@ TANGENT_NORMALISE_MIN = 1e-4  # the demo normalises u_t only above this length
 
 
 @jit_stage(inline="always")
-def seed_step(x, y, angle, vx, vy, spin, half_length, half_width, mass, inertia, restitution,
+def reference_step(x, y, angle, vx, vy, spin, half_length, half_width, mass, inertia, restitution,
               friction, stiffness, dt, gravity, use_impulses, use_penalty, use_friction):
     """One step of the seed scheme for one box. Returns the new state, the lowest corner height
     before the step and a bit mask of the corners that were below the floor."""
@@ -106,7 +106,7 @@ def seed_step(x, y, angle, vx, vy, spin, half_length, half_width, mass, inertia,
     return x, y, angle, vx, vy, spin, lowest_y, below
 
 
-def make_seed_kernel(use_impulses: bool, use_penalty: bool, use_friction: bool, record: bool,
+def make_reference_kernel(use_impulses: bool, use_penalty: bool, use_friction: bool, record: bool,
                      source_digest: int):
     """Build the seed kernel for exactly the stages a scene uses (flags are compile-time).
 
@@ -140,7 +140,7 @@ def make_seed_kernel(use_impulses: bool, use_penalty: bool, use_friction: bool, 
                 store_state(trajectory, 0, i, x, y, angle, vx, vy, spin)
             n = 0
             while n < max_steps:
-                x, y, angle, vx, vy, spin, lowest_y, below = seed_step(
+                x, y, angle, vx, vy, spin, lowest_y, below = reference_step(
                     x, y, angle, vx, vy, spin, hx, hy, mass, inertia,
                     params[i, layout.RESTITUTION], params[i, layout.FRICTION], params[i, layout.STIFFNESS],
                     dt, gravity, IMPULSES, PENALTY, FRICTION)
