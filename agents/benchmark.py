@@ -35,8 +35,10 @@ from agents import algorithms, ceiling, report, train
 from agents.algorithms import ALGORITHMS
 from agents.config import algorithm_kwargs, load_hyperparams
 from agents.doc_sections import read_section, replace_section
+from agents.envs import read_env_wrapper
 from agents.evaluation import TEST_TARGETS, evaluate_run, make_baseline_run
 from agents.training import RUNS, latest_checkpoint, read_timing
+from box_toss_env.envs.ballistic import BallisticThrows
 from box_toss_env.files import atomic_path, save_figure, write_atomic
 
 VARIANTS = ("BoxToss-v0", "BoxToss-LongSide-v0", "BoxToss-ShortEnd-v0", "BoxToss-ThisSideUp-v0", "BoxToss-Mixed-v0",
@@ -93,7 +95,9 @@ def ensure_goal_trained(root: Path, agent: str, seed: int) -> Path:
                                                       "seed": seed, "hyperparams": config}, sort_keys=False))
     write_atomic(path / "command.txt", f"python -m agents.benchmark --envs {GOAL_ENV} --seeds {seed}\n")
     torch.set_num_threads(int(config.get("torch_threads", 1)))
-    venv = make_vec_env(GOAL_ENV, n_envs=int(config["n_envs"]), seed=seed)
+    wrapper = read_env_wrapper(config.get("env_wrapper"))  # ballistic commands, as the flat recipes
+    venv = make_vec_env(GOAL_ENV, n_envs=int(config["n_envs"]), seed=seed, wrapper_class=BallisticThrows if wrapper
+                        else None, wrapper_kwargs=wrapper[1] if wrapper else None)
     model = algorithms.algorithm_class(algo)(env=venv, seed=seed, device="cpu", verbose=0,
                                              **algorithm_kwargs(config, algo))
     print(f"{GOAL_ENV}: {GOAL_AGENTS[agent][2]}, seed {seed}, {int(config['n_timesteps']):,} throws ...", flush=True)
@@ -188,8 +192,9 @@ def goal_document(root: Path, algos: list[str], seeds: list[int]) -> str:
              f"the same {TEST_TARGETS:,} test targets (the ceiling is `BoxToss-v0`'s). Each agent is trained with "
              f"SB3 on `{GOAL_ENV}`'s recipe in `agents/hyperparams/sac.yml` or `td3.yml` "
              f"({' / '.join(f'{b:,}' for b in budgets)} throws), with the recipe's `HerReplayBuffer` or, for SAC "
-             "without HER, the same settings with SB3's plain replay buffer; in env actions (no ballistic "
-             f"commands). `python -m agents.benchmark --envs {GOAL_ENV} --seeds 0 --readme` trains what is missing "
+             "without HER, the same settings with SB3's plain replay buffer"
+             f"{'; in ballistic commands' if goal_hyperparams('sac-her')[1].get('env_wrapper') else '; in env actions'}"
+             f". `python -m agents.benchmark --envs {GOAL_ENV} --seeds 0 --readme` trains what is missing "
              "and rewrites this section.", ""]
     return "\n".join(lines + variant_table(GOAL_ENV, rows, None))
 

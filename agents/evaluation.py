@@ -245,7 +245,7 @@ def load_policy(run_dir: Path, model: str = "final") -> tuple[Policy, dict[str, 
     if config.get("goal"):  # Dict observations (BoxToss-Goal-v0): HER's replay buffer is not needed to act
         model = load_model(algo, run_dir / "model.zip",
                            custom_objects={"replay_buffer_class": None, "replay_buffer_kwargs": {}, "buffer_size": 1})
-        return GoalPolicy(model), config
+        return GoalPolicy(model, config.get("hyperparams", {}).get("env_wrapper")), config
     hyperparams = config.get("hyperparams", {})
     return TrainedPolicy.load(run_dir, algo, model, hyperparams.get("env_wrapper"),
                               normalized=bool(hyperparams.get("normalize", True))), config

@@ -65,13 +65,17 @@ class ConstantPolicy:
 class GoalPolicy:
     """A model trained on ``BoxToss-Goal-v0`` (Dict observations) throwing at ``BoxToss-v0``'s targets: each
     first observation is made the goal env's Dict of the same seed (``goal_observations``), the model answers
-    with its deterministic action (env actions, no normalisation)."""
+    with its deterministic action (no normalisation), mapped to env actions as ``env_wrapper`` does (ballistic
+    commands) if it was trained through one."""
 
-    def __init__(self, model: BaseAlgorithm):
+    def __init__(self, model: BaseAlgorithm, env_wrapper: Any = None):
         self.model = model
+        self.commands_to_actions = command_map(env_wrapper)
 
     def act(self, observations: np.ndarray, reset_infos, env: gym.Env) -> np.ndarray:
         actions, _ = self.model.predict(goal_observations(observations), deterministic=True)
+        if self.commands_to_actions is not None:
+            actions = self.commands_to_actions(observations, actions, env)
         return actions
 
 

@@ -15,11 +15,14 @@ The PPO settings are SB3's recipe for the env, read from ``agents/hyperparams/pp
 minibatch and epochs, the learning rate decaying linearly to 0 over the recipe's throws, the clip range, value and
 entropy coefficients, gradient clipping, gamma and lambda, separate policy and value networks of the recipe's
 sizes, a state-independent action std started at ``exp(log_std_init)``, no KL penalty (SB3's PPO has none), and
-ballistic commands where the recipe names ``BallisticThrows``. RLlib's defaults differ on each of those (a shared
-encoder, a state-dependent std starting near 1, a KL penalty, a constant rate, ...); setting them as SB3's has not
-yet brought RLlib to SB3's success (docs/rllib.md has the figures). Each iteration prints the mean return and the
-success rate of the sampled (exploring) throws; at the end the policy's mean action is evaluated on
-``--eval-episodes`` fresh throws.
+ballistic commands where the recipe names ``BallisticThrows``. Two settings are RLlib's mechanics rather than
+options, and both are set as SB3's here: RLlib adds an artificial (loss-masked) bootstrap timestep to every
+episode, so with one-throw episodes half its rows are artificial; it standardised the advantages over them too
+(``MaskedAdvantagePPOLearner`` standardises over the real throws of each minibatch) and cuts minibatches by rows
+(``ROWS_PER_THROW``). The first was why RLlib's PPO did not learn where SB3's did (docs/rllib.md has the
+figures). Each iteration prints the mean return and the success rate of the sampled (exploring) throws
+(``--diagnostics``: and the learner's figures, ``--eval-every``: and the mean action's success); at the end the
+policy's mean action is evaluated on ``--eval-episodes`` fresh throws.
 """
 
 from __future__ import annotations

@@ -118,6 +118,20 @@ def test_goal_observations_of_box_toss_observations_are_the_goal_envs(target_fac
         np.testing.assert_allclose(built[key], np.stack([d[key] for d in dicts]), rtol=0, atol=1e-6)
 
 
+def test_ballistic_commands_around_the_goal_env_are_box_toss_ones():
+    from box_toss_env.envs.ballistic import BallisticThrows
+
+    env, flat = BallisticThrows(make()), gymnasium.make("BoxToss-v0")
+    command = np.array([0.2, -0.1, 0.3], dtype=np.float32)
+    for seed in (5, 6):
+        env.reset(seed=seed)
+        flat_obs, _ = flat.reset(seed=seed)
+        _, reward, *_ = env.step(command)
+        actions, _ = ballistic_actions(flat_obs[None], command, flat.unwrapped.config)
+        _, flat_reward, *_ = flat.step(actions[0])
+        assert reward == pytest.approx(flat_reward, abs=1e-4)
+
+
 def test_base_box_is_refused():
     with pytest.raises(ValueError, match="base_box"):
         make(base_box=True)
