@@ -44,9 +44,12 @@ from box_toss_env.files import atomic_path, save_figure, write_atomic
 VARIANTS = ("BoxToss-v0", "BoxToss-LongSide-v0", "BoxToss-ShortEnd-v0", "BoxToss-ThisSideUp-v0", "BoxToss-Mixed-v0",
             "BoxToss-OnBox-v0")
 GOAL_ENV = "BoxToss-Goal-v0"
-GOAL_AGENTS = {"sac-her": ("sac", True, "SAC + HER"), "td3-her": ("td3", True, "TD3 + HER"),
-               "sac-no-her": ("sac", False, "SAC without HER")}
-"""The goal env's agents: run name -> (algorithm, with the recipe's HerReplayBuffer, the table's label)."""
+GOAL_AGENTS = {"sac-her": ("sac", True, True, "SAC + HER"), "td3-her": ("td3", True, True, "TD3 + HER"),
+               "sac-no-her": ("sac", False, True, "SAC without HER"),
+               "sac-her-env-actions": ("sac", True, False, "SAC + HER, env actions"),
+               "sac-no-her-env-actions": ("sac", False, False, "SAC without HER, env actions")}
+"""The goal env's agents: run name -> (algorithm, with the recipe's HerReplayBuffer, in the recipe's ballistic
+commands (else in env actions), the table's label)."""
 GOAL_SECTION = "benchmark-goal"
 ROOT = RUNS / "benchmark"
 DOCS = report.DOCS
@@ -71,12 +74,15 @@ def ensure_trained(root: Path, env_id: str, algo: str, seed: int) -> Path:
 
 def goal_hyperparams(agent: str) -> tuple[str, dict[str, Any]]:
     """The algorithm and settings of the goal agent ``agent``: its recipe for ``BoxToss-Goal-v0`` in
-    ``<algo>.yml``, without the replay buffer class (SB3's plain ``DictReplayBuffer``) for the agent without HER."""
-    algo, her, _ = GOAL_AGENTS[agent]
+    ``<algo>.yml``, without the replay buffer class (SB3's plain ``DictReplayBuffer``) for an agent without HER,
+    without the ``env_wrapper`` (env actions) for an agent in env actions."""
+    algo, her, commands, _ = GOAL_AGENTS[agent]
     config = load_hyperparams(algo, GOAL_ENV)
     if not her:
         config.pop("replay_buffer_class", None)
         config.pop("replay_buffer_kwargs", None)
+    if not commands:
+        config.pop("env_wrapper", None)
     return algo, config
 
 
@@ -100,7 +106,7 @@ def ensure_goal_trained(root: Path, agent: str, seed: int) -> Path:
                         else None, wrapper_kwargs=wrapper[1] if wrapper else None)
     model = algorithms.algorithm_class(algo)(env=venv, seed=seed, device="cpu", verbose=0,
                                              **algorithm_kwargs(config, algo))
-    print(f"{GOAL_ENV}: {GOAL_AGENTS[agent][2]}, seed {seed}, {int(config['n_timesteps']):,} throws ...", flush=True)
+    print(f"{GOAL_ENV}: {GOAL_AGENTS[agent][-1]}, seed {seed}, {int(config['n_timesteps']):,} throws ...", flush=True)
     start = time.perf_counter()
     model.learn(int(config["n_timesteps"]))
     wall = time.perf_counter() - start
@@ -172,7 +178,7 @@ def goal_rows(root: Path, algos: list[str], seeds: list[int]) -> list[dict[str, 
     random = report.read_results(root / GOAL_ENV / "random")
     if random:
         rows.append({"agent": "random actions", "results": [random], "timing": [None]})
-    for agent, (algo, _, label) in GOAL_AGENTS.items():
+    for agent, (algo, _, _, label) in GOAL_AGENTS.items():
         found = [(report.read_results(p), read_timing(p)) for seed in seeds if algo in algos
                  and report.read_results(p := run_dir(root, GOAL_ENV, agent, seed)) is not None]
         if found:
@@ -187,15 +193,15 @@ def goal_document(root: Path, algos: list[str], seeds: list[int]) -> str:
     if not rows:
         return ""
     budgets = sorted({int(goal_hyperparams(agent)[1]["n_timesteps"]) for agent in GOAL_AGENTS})
-    lines = [f"### {GOAL_ENV}: what HER buys", "",
+    lines = [f"### {GOAL_ENV}: what HER buys, and ballistic commands", "",
              f"The goal-conditioned form of `BoxToss-v0` (Dict observations): its throws are `BoxToss-v0`'s, scored on "
              f"the same {TEST_TARGETS:,} test targets (the ceiling is `BoxToss-v0`'s). Each agent is trained with "
              f"SB3 on `{GOAL_ENV}`'s recipe in `agents/hyperparams/sac.yml` or `td3.yml` "
-             f"({' / '.join(f'{b:,}' for b in budgets)} throws), with the recipe's `HerReplayBuffer` or, for SAC "
-             "without HER, the same settings with SB3's plain replay buffer"
-             f"{'; in ballistic commands' if goal_hyperparams('sac-her')[1].get('env_wrapper') else '; in env actions'}"
-             f". `python -m agents.benchmark --envs {GOAL_ENV} --seeds 0 --readme` trains what is missing "
-             "and rewrites this section.", ""]
+             f"({' / '.join(f'{b:,}' for b in budgets)} throws), with the recipe's `HerReplayBuffer` or, without HER, "
+             "the same settings with SB3's plain replay buffer; in the recipe's ballistic commands, or in the env's "
+             "own actions where the row says so (the recipe without `env_wrapper`). "
+             f"`python -m agents.benchmark --envs {GOAL_ENV} --seeds 0 --readme` trains what is missing and rewrites "
+             "this section.", ""]
     return "\n".join(lines + variant_table(GOAL_ENV, rows, None))
 
 
@@ -365,7 +371,7 @@ def main(argv: list[str] | None = None) -> None:
         if goal:
             ensure_random(args.root, GOAL_ENV)
             for seed in args.seeds:
-                for agent, (algo, _, _) in GOAL_AGENTS.items():
+                for agent, (algo, *_) in GOAL_AGENTS.items():
                     if algo in args.algos:
                         ensure_goal_trained(args.root, agent, seed)
     goal_text = goal_document(args.root, args.algos, args.seeds) if goal else None

@@ -15,6 +15,8 @@ def test_the_goal_agents_differ_only_in_her():
     assert algo == "sac" and her["replay_buffer_class"] == "HerReplayBuffer"
     assert "replay_buffer_class" not in plain and "replay_buffer_kwargs" not in plain
     assert {k: v for k, v in her.items() if not k.startswith("replay_buffer")} == plain
+    _, env_actions = benchmark.goal_hyperparams("sac-her-env-actions")
+    assert her["env_wrapper"] and {k: v for k, v in her.items() if k != "env_wrapper"} == env_actions
     td3_algo, td3 = benchmark.goal_hyperparams("td3-her")
     assert td3_algo == "td3" and td3["n_timesteps"] == her["n_timesteps"]  # the same budget
 
@@ -47,5 +49,6 @@ def test_goal_runs_are_trained_scored_and_written_in_their_section(tiny, tmp_pat
     assert not isinstance(policy.model.replay_buffer, HerReplayBuffer)  # loaded to act, without HER's env
     text = page.read_text()
     assert text.startswith("# page\n\nkept\n") and "old" not in text
-    for label in ("random actions", "SAC + HER (1 seed)", "TD3 + HER (1 seed)", "SAC without HER (1 seed)"):
+    for label in ("random actions", "SAC + HER (1 seed)", "TD3 + HER (1 seed)", "SAC without HER (1 seed)",
+                  "SAC + HER, env actions (1 seed)", "SAC without HER, env actions (1 seed)"):
         assert f"| {label} |" in text
