@@ -202,7 +202,7 @@ def goal_document(root: Path, algos: list[str], seeds: list[int]) -> str:
              "own actions where the row says so (the recipe without `env_wrapper`). "
              f"`python -m agents.benchmark --envs {GOAL_ENV} --seeds 0 --readme` trains what is missing and rewrites "
              "this section.", ""]
-    return "\n".join(lines + variant_table(GOAL_ENV, rows, None))
+    return "\n".join(lines + variant_table(GOAL_ENV, rows, None)[2:])  # under this heading, not the variant's
 
 
 def variant_table(env_id: str, rows: list[dict[str, Any]], sweep: list[dict[str, Any]] | None) -> list[str]:
