@@ -3,6 +3,7 @@
     python -m agents.benchmark                      # everything (hours on 2 cores): runs/benchmark/, docs/agents/
     python -m agents.benchmark --envs BoxToss-ShortEnd-v0 --algos ppo --seeds 0 1 2
     python -m agents.benchmark --report-only --readme   # rebuild the table and figures from finished runs
+    python -m agents.benchmark --envs BoxToss-Goal-v0 --seeds 0 --readme   # the goal env's rows only (HER or not)
 
 Each training is ``python -m agents.train`` with the hyperparameters of ``agents/hyperparams/<algo>.yml``
 for that env id, in ``runs/benchmark/<env id>/<algo>-seed<k>``; a run that has finished is kept, so
@@ -10,6 +11,12 @@ the command continues where a killed one stopped. The ceiling is ``agents.ceilin
 at growing search budgets), saved in ``runs/benchmark/<env id>/ceiling.json``. Everything is scored on
 the same test targets (``agents.evaluation``); the results go to ``docs/agents/benchmark.md``, one
 learning-curve figure per variant and, with ``--readme``, the README's benchmark section.
+
+``BoxToss-Goal-v0`` (Dict observations, for HER) is trained here with SB3 directly (``ensure_goal_trained``:
+``agents.train`` runs the native batched envs), as the ``GOAL_AGENTS``: SAC and TD3 with their recipe's
+``HerReplayBuffer`` and SAC without it, at the recipe's budget, so the table shows what HER buys. Its throws
+are ``BoxToss-v0``'s, scored on the same test targets (``GoalPolicy``). Its rows are the page's
+``benchmark-goal`` section, which ``--envs BoxToss-Goal-v0 --readme`` rewrites alone.
 """
 
 from __future__ import annotations
@@ -17,19 +24,33 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import time
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+import yaml
 
-from agents import ceiling, report, train
+from agents import algorithms, ceiling, report, train
 from agents.algorithms import ALGORITHMS
+from agents.config import algorithm_kwargs, load_hyperparams
+from agents.doc_sections import read_section, replace_section
+from agents.envs import read_env_wrapper
 from agents.evaluation import TEST_TARGETS, evaluate_run, make_baseline_run
 from agents.training import RUNS, latest_checkpoint, read_timing
-from box_toss_env.files import save_figure, write_atomic
+from box_toss_env.envs.ballistic import BallisticThrows
+from box_toss_env.files import atomic_path, save_figure, write_atomic
 
 VARIANTS = ("BoxToss-v0", "BoxToss-LongSide-v0", "BoxToss-ShortEnd-v0", "BoxToss-ThisSideUp-v0", "BoxToss-Mixed-v0",
             "BoxToss-OnBox-v0")
+GOAL_ENV = "BoxToss-Goal-v0"
+GOAL_AGENTS = {"sac-her": ("sac", True, True, "SAC + HER"), "td3-her": ("td3", True, True, "TD3 + HER"),
+               "sac-no-her": ("sac", False, True, "SAC without HER"),
+               "sac-her-env-actions": ("sac", True, False, "SAC + HER, env actions"),
+               "sac-no-her-env-actions": ("sac", False, False, "SAC without HER, env actions")}
+"""The goal env's agents: run name -> (algorithm, with the recipe's HerReplayBuffer, in the recipe's ballistic
+commands (else in env actions), the table's label)."""
+GOAL_SECTION = "benchmark-goal"
 ROOT = RUNS / "benchmark"
 DOCS = report.DOCS
 FACE_KINDS = ("any face", "a long side", "a short end", "face 0", "face 1", "face 2", "face 3")
@@ -48,6 +69,54 @@ def ensure_trained(root: Path, env_id: str, algo: str, seed: int) -> Path:
         train.main(["--resume", str(path), "--no-progress"])
     else:
         train.main([*args, "--runs-dir", str(path.parent), "--name", path.name])
+    return path
+
+
+def goal_hyperparams(agent: str) -> tuple[str, dict[str, Any]]:
+    """The algorithm and settings of the goal agent ``agent``: its recipe for ``BoxToss-Goal-v0`` in
+    ``<algo>.yml``, without the replay buffer class (SB3's plain ``DictReplayBuffer``) for an agent without HER,
+    without the ``env_wrapper`` (env actions) for an agent in env actions."""
+    algo, her, commands, _ = GOAL_AGENTS[agent]
+    config = load_hyperparams(algo, GOAL_ENV)
+    if not her:
+        config.pop("replay_buffer_class", None)
+        config.pop("replay_buffer_kwargs", None)
+    if not commands:
+        config.pop("env_wrapper", None)
+    return algo, config
+
+
+def ensure_goal_trained(root: Path, agent: str, seed: int) -> Path:
+    """The goal agent ``agent`` trained with SB3 on ``BoxToss-Goal-v0`` (``n_envs`` single goal envs in a
+    ``DummyVecEnv``, one torch thread) and evaluated, unless its results exist. A killed run starts again."""
+    import torch
+    from stable_baselines3.common.env_util import make_vec_env
+
+    path = run_dir(root, GOAL_ENV, agent, seed)
+    if report.read_results(path) is not None:
+        return path
+    algo, config = goal_hyperparams(agent)
+    path.mkdir(parents=True, exist_ok=True)
+    write_atomic(path / "config.yml", yaml.safe_dump({"algo": algo, "env_id": GOAL_ENV, "env_kwargs": {}, "goal": True,
+                                                      "seed": seed, "hyperparams": config}, sort_keys=False))
+    write_atomic(path / "command.txt", f"python -m agents.benchmark --envs {GOAL_ENV} --seeds {seed}\n")
+    torch.set_num_threads(int(config.get("torch_threads", 1)))
+    wrapper = read_env_wrapper(config.get("env_wrapper"))  # ballistic commands, as the flat recipes
+    venv = make_vec_env(GOAL_ENV, n_envs=int(config["n_envs"]), seed=seed, wrapper_class=BallisticThrows if wrapper
+                        else None, wrapper_kwargs=wrapper[1] if wrapper else None)
+    model = algorithms.algorithm_class(algo)(env=venv, seed=seed, device="cpu", verbose=0,
+                                             **algorithm_kwargs(config, algo))
+    print(f"{GOAL_ENV}: {GOAL_AGENTS[agent][-1]}, seed {seed}, {int(config['n_timesteps']):,} throws ...", flush=True)
+    start = time.perf_counter()
+    model.learn(int(config["n_timesteps"]))
+    wall = time.perf_counter() - start
+    venv.close()
+    with atomic_path(path / "model.zip") as temp:
+        model.save(temp)
+    write_atomic(path / "timing.json", json.dumps({"algo": algo, "timesteps": int(model.num_timesteps),
+                                                   "wall_seconds": wall, "torch_threads": torch.get_num_threads()},
+                                                  indent=2))
+    evaluate_run(path, quiet=True)
     return path
 
 
@@ -101,6 +170,39 @@ def agent_rows(root: Path, env_id: str, algos: list[str], seeds: list[int]) -> l
             rows.append({"agent": f"{algo.upper()} ({len(found)} seed{'s' * (len(found) > 1)})",
                          "results": [r for r, _ in found], "timing": [t for _, t in found]})
     return rows
+
+
+def goal_rows(root: Path, algos: list[str], seeds: list[int]) -> list[dict[str, Any]]:
+    """The goal env's rows: random actions, then each of ``GOAL_AGENTS`` whose algorithm is in ``algos``."""
+    rows = []
+    random = report.read_results(root / GOAL_ENV / "random")
+    if random:
+        rows.append({"agent": "random actions", "results": [random], "timing": [None]})
+    for agent, (algo, _, _, label) in GOAL_AGENTS.items():
+        found = [(report.read_results(p), read_timing(p)) for seed in seeds if algo in algos
+                 and report.read_results(p := run_dir(root, GOAL_ENV, agent, seed)) is not None]
+        if found:
+            rows.append({"agent": f"{label} ({len(found)} seed{'s' * (len(found) > 1)})",
+                         "results": [r for r, _ in found], "timing": [t for _, t in found]})
+    return rows
+
+
+def goal_document(root: Path, algos: list[str], seeds: list[int]) -> str:
+    """The goal env's section of the page: what HER buys at the same budget."""
+    rows = goal_rows(root, algos, seeds)
+    if not rows:
+        return ""
+    budgets = sorted({int(goal_hyperparams(agent)[1]["n_timesteps"]) for agent in GOAL_AGENTS})
+    lines = [f"### {GOAL_ENV}: what HER buys, and ballistic commands", "",
+             f"The goal-conditioned form of `BoxToss-v0` (Dict observations): its throws are `BoxToss-v0`'s, scored on "
+             f"the same {TEST_TARGETS:,} test targets (the ceiling is `BoxToss-v0`'s). Each agent is trained with "
+             f"SB3 on `{GOAL_ENV}`'s recipe in `agents/hyperparams/sac.yml` or `td3.yml` "
+             f"({' / '.join(f'{b:,}' for b in budgets)} throws), with the recipe's `HerReplayBuffer` or, without HER, "
+             "the same settings with SB3's plain replay buffer; in the recipe's ballistic commands, or in the env's "
+             "own actions where the row says so (the recipe without `env_wrapper`). "
+             f"`python -m agents.benchmark --envs {GOAL_ENV} --seeds 0 --readme` trains what is missing and rewrites "
+             "this section.", ""]
+    return "\n".join(lines + variant_table(GOAL_ENV, rows, None)[2:])  # under this heading, not the variant's
 
 
 def variant_table(env_id: str, rows: list[dict[str, Any]], sweep: list[dict[str, Any]] | None) -> list[str]:
@@ -248,7 +350,7 @@ def ratios(root: Path, envs: list[str], algos: list[str], seeds: list[int]) -> s
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--envs", nargs="+", default=list(VARIANTS))
+    parser.add_argument("--envs", nargs="+", default=[*VARIANTS, GOAL_ENV])
     parser.add_argument("--algos", nargs="+", default=sorted(ALGORITHMS), choices=sorted(ALGORITHMS))
     parser.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
     parser.add_argument("--root", type=Path, default=ROOT)
@@ -256,21 +358,39 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--report-only", action="store_true", help="train nothing: tables from finished runs")
     parser.add_argument("--readme", action="store_true", help="write docs/agents/benchmark.md and the README section")
     args = parser.parse_args(argv)
+    variants = [env_id for env_id in args.envs if env_id != GOAL_ENV]
+    goal = GOAL_ENV in args.envs
     if not args.report_only:
-        for env_id in args.envs:
+        for env_id in variants:
             ensure_random(args.root, env_id)
             if not args.no_ceiling:
                 ensure_ceiling(args.root, env_id)
             for seed in args.seeds:
                 for algo in args.algos:
                     ensure_trained(args.root, env_id, algo, seed)
-    text = document(args.root, args.envs, args.algos, args.seeds)
-    summary = headline(args.root, args.envs, args.algos, args.seeds)
+        if goal:
+            ensure_random(args.root, GOAL_ENV)
+            for seed in args.seeds:
+                for agent, (algo, *_) in GOAL_AGENTS.items():
+                    if algo in args.algos:
+                        ensure_goal_trained(args.root, agent, seed)
+    goal_text = goal_document(args.root, args.algos, args.seeds) if goal else None
+    if goal_text:
+        print(goal_text)
+    if not variants:
+        if args.readme and goal_text:
+            replace_section(GOAL_SECTION, goal_text)
+        return
+    text = document(args.root, variants, args.algos, args.seeds)
+    summary = headline(args.root, variants, args.algos, args.seeds)
     print(summary)
     if args.readme:
         DOCS.mkdir(parents=True, exist_ok=True)
-        write_atomic(DOCS / "benchmark.md", "# BoxToss benchmark\n\nGenerated by `python -m agents.benchmark "
-                                           "--report-only --readme` from the runs in `runs/benchmark/`.\n\n" + text)
+        page = DOCS / "benchmark.md"
+        kept = goal_text if goal_text else (read_section(GOAL_SECTION, page) or "")
+        write_atomic(page, "# BoxToss benchmark\n\nGenerated by `python -m agents.benchmark --report-only --readme` "
+                           "from the runs in `runs/benchmark/`.\n\n" + text
+                     + f"\n<!-- {GOAL_SECTION}:start -->\n{kept}\n<!-- {GOAL_SECTION}:end -->\n")
         report.write_readme("### Benchmark: every variant, every algorithm, against the ceiling\n\n"
                             "`python -m agents.benchmark` (then `--report-only --readme`). Success on the test "
                             "targets; the ceiling is the oracle whose search grew until its success stopped rising "

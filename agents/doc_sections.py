@@ -17,6 +17,7 @@ README = REPO / "README.md"
 DOCS = REPO / "docs"
 SECTION_PAGES = {
     "benchmark": README,  # the headline table of the front page (python -m agents.benchmark --report-only --readme)
+    "benchmark-goal": DOCS / "agents" / "benchmark.md",  # python -m agents.benchmark --envs BoxToss-Goal-v0 --readme
     "agents": DOCS / "agents.md",  # python -m agents.main --full --readme
     "variant-gifs": DOCS / "environment.md",  # python -m agents.variant_gifs
     "tune": DOCS / "hyperparameter-search.md",  # python -m agents.tune ... --readme
@@ -44,6 +45,17 @@ def relink(text: str, page: Path) -> str:
         return text
     prefix = os.path.relpath(DOCS, page.resolve().parent).replace(os.sep, "/")
     return text.replace("](docs/", "](" if prefix == "." else f"]({prefix}/")
+
+
+def read_section(name: str, page: Path | None = None) -> str | None:
+    """What stands between the ``name`` markers of ``page`` (default: the page that holds the section); None
+    if the page or its markers are missing."""
+    page = page if page is not None else page_for(name)
+    start, end = f"<!-- {name}:start -->", f"<!-- {name}:end -->"
+    content = page.read_text() if page.exists() else ""
+    if start not in content or end not in content:
+        return None
+    return content.split(start, 1)[1].split(end, 1)[0].strip()
 
 
 def replace_section(name: str, text: str, readme: Path | None = None) -> None:

@@ -20,6 +20,7 @@ from stable_baselines3.common.vec_env import VecNormalize
 from agents import algorithms
 from agents.envs import command_map, observation_normalizer
 from box_toss_env.envs import task
+from box_toss_env.envs.goal import goal_observations
 
 
 class UnreadableModelError(ValueError):
@@ -59,6 +60,23 @@ class ConstantPolicy:
 
     def act(self, observations: np.ndarray, reset_infos, env: gym.Env) -> np.ndarray:
         return np.tile(self.action, (len(observations), 1))
+
+
+class GoalPolicy:
+    """A model trained on ``BoxToss-Goal-v0`` (Dict observations) throwing at ``BoxToss-v0``'s targets: each
+    first observation is made the goal env's Dict of the same seed (``goal_observations``), the model answers
+    with its deterministic action (no normalisation), mapped to env actions as ``env_wrapper`` does (ballistic
+    commands) if it was trained through one."""
+
+    def __init__(self, model: BaseAlgorithm, env_wrapper: Any = None):
+        self.model = model
+        self.commands_to_actions = command_map(env_wrapper)
+
+    def act(self, observations: np.ndarray, reset_infos, env: gym.Env) -> np.ndarray:
+        actions, _ = self.model.predict(goal_observations(observations), deterministic=True)
+        if self.commands_to_actions is not None:
+            actions = self.commands_to_actions(observations, actions, env)
+        return actions
 
 
 class TrainedPolicy:

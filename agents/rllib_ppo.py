@@ -15,11 +15,14 @@ The PPO settings are SB3's recipe for the env, read from ``agents/hyperparams/pp
 minibatch and epochs, the learning rate decaying linearly to 0 over the recipe's throws, the clip range, value and
 entropy coefficients, gradient clipping, gamma and lambda, separate policy and value networks of the recipe's
 sizes, a state-independent action std started at ``exp(log_std_init)``, no KL penalty (SB3's PPO has none), and
-ballistic commands where the recipe names ``BallisticThrows``. RLlib's defaults differ on each of those (a shared
-encoder, a state-dependent std starting near 1, a KL penalty, a constant rate, ...); setting them as SB3's has not
-yet brought RLlib to SB3's success (docs/rllib.md has the figures). Each iteration prints the mean return and the
-success rate of the sampled (exploring) throws; at the end the policy's mean action is evaluated on
-``--eval-episodes`` fresh throws.
+ballistic commands where the recipe names ``BallisticThrows``. Two settings are RLlib's mechanics rather than
+options, and both are set as SB3's here: RLlib adds an artificial (loss-masked) bootstrap timestep to every
+episode, so with one-throw episodes half its rows are artificial; it standardised the advantages over them too
+(``MaskedAdvantagePPOLearner`` standardises over the real throws of each minibatch) and cuts minibatches by rows
+(``ROWS_PER_THROW``). The first was why RLlib's PPO did not learn where SB3's did (docs/rllib.md has the
+figures). Each iteration prints the mean return and the success rate of the sampled (exploring) throws
+(``--diagnostics``: and the learner's figures, ``--eval-every``: and the mean action's success); at the end the
+policy's mean action is evaluated on ``--eval-episodes`` fresh throws.
 """
 
 from __future__ import annotations
@@ -35,8 +38,11 @@ import ray
 import torch
 from ray.rllib.algorithms.ppo import PPO, PPOConfig
 from ray.rllib.algorithms.ppo.torch.default_ppo_torch_rl_module import DefaultPPOTorchRLModule
+from ray.rllib.algorithms.ppo.torch.ppo_torch_learner import PPOTorchLearner
 from ray.rllib.connectors.env_to_module import MeanStdFilter
+from ray.rllib.core.columns import Columns
 from ray.rllib.core.rl_module.rl_module import RLModuleSpec
+from ray.rllib.evaluation.postprocessing import Postprocessing
 
 from agents.config import load_hyperparams, read_value
 from agents.rllib_envs import BALLISTIC, ENV_IDS, VECTORIZE_MODES, register_rllib_envs
@@ -59,6 +65,32 @@ class PPOModule(DefaultPPOTorchRLModule):
             with torch.no_grad():
                 self.pi.log_std.fill_(float(self.model_config["log_std_init"]))
 
+
+class MaskedAdvantagePPOLearner(PPOTorchLearner):
+    """RLlib's PPO learner with SB3's advantage standardisation: over each minibatch's real timesteps.
+
+    RLlib adds an artificial timestep to every episode (``AddOneTsToEpisodesAndTruncate``, for the value
+    bootstrap; ``loss_mask`` False) and standardises the advantages over the whole batch *including* those
+    rows. With one-throw episodes half the rows are artificial, and with gamma 0 their advantage is
+    ``-V(landing)``, about +1 once the value has learned the mean return of about -1: the real advantages come
+    out with a negative mean (the policy loss of the sampled throws, ``-mean(A)``, about +0.6), so every update
+    lowers the probability of every sampled throw and widens the action std instead of aiming. This learner
+    standardises the advantages again over the rows of ``loss_mask`` (an affine map of RLlib's values, so
+    the same as standardising the raw advantages of the real throws), per minibatch as SB3 does."""
+
+    def compute_loss_for_module(self, *, module_id, config, batch, fwd_out):
+        advantages = batch[Postprocessing.ADVANTAGES]
+        real = advantages[batch[Columns.LOSS_MASK]] if Columns.LOSS_MASK in batch else advantages
+        if real.numel() > 1:
+            batch = {**batch, Postprocessing.ADVANTAGES: (advantages - real.mean()) / (real.std() + 1e-8)}
+        return super().compute_loss_for_module(module_id=module_id, config=config, batch=batch, fwd_out=fwd_out)
+
+
+ROWS_PER_THROW = 2
+"""Rows of RLlib's train batch per one-throw episode: the throw and the artificial bootstrap timestep that RLlib
+adds to every episode (loss-masked). RLlib cuts minibatches by rows, so a minibatch of SB3's ``batch_size``
+throws is ``ROWS_PER_THROW`` times as many rows (measured: ``num_module_steps_trained`` is 40,960 for 2,048 throws
+and 10 epochs)."""
 
 ACTIVATIONS = {"nn.Tanh": "tanh", "nn.ReLU": "relu"}
 
@@ -88,10 +120,12 @@ def recipe(env_id: str) -> dict[str, Any]:
 
 
 def make_config(env_id: str, env_config: dict[str, Any] | None = None, *, num_envs: int = 256,
-                vectorize: str = "native", num_env_runners: int = 0, seed: int = 0,
+                vectorize: str = "native", num_env_runners: int = 0, seed: int = 0, masked_advantages: bool = True,
                 **overrides: Any) -> PPOConfig:
     """RLlib PPO on ``env_id`` with SB3's recipe (``recipe``; ``overrides`` replace its keys, e.g.
-    ``train_batch_size=256``). The BoxToss envs must be registered: ``register_rllib_envs``."""
+    ``train_batch_size=256``), the advantages standardised over the real timesteps of each minibatch
+    (``MaskedAdvantagePPOLearner``; ``masked_advantages=False``: RLlib's, over the batch with its artificial
+    timesteps). The BoxToss envs must be registered: ``register_rllib_envs``."""
     if vectorize not in VECTORIZE_MODES:
         raise ValueError(f"vectorize must be one of {sorted(VECTORIZE_MODES)}, got {vectorize!r}")
     settings = recipe(env_id)
@@ -113,11 +147,13 @@ def make_config(env_id: str, env_config: dict[str, Any] | None = None, *, num_en
         .env_runners(num_env_runners=num_env_runners, num_envs_per_env_runner=num_envs,
                      gym_env_vectorize_mode=VECTORIZE_MODES[vectorize],
                      env_to_module_connector=lambda env, spaces, device: MeanStdFilter())
-        .training(train_batch_size_per_learner=settings["train_batch_size"], minibatch_size=settings["minibatch_size"],
+        .training(train_batch_size_per_learner=settings["train_batch_size"],
+                  minibatch_size=settings["minibatch_size"] * ROWS_PER_THROW,
                   num_epochs=settings["num_epochs"], lr=lr, gamma=settings["gamma"], lambda_=settings["lambda_"],
                   clip_param=settings["clip_param"], entropy_coeff=settings["entropy_coeff"],
                   vf_loss_coeff=settings["vf_loss_coeff"], grad_clip=settings["grad_clip"],
-                  grad_clip_by="global_norm", use_kl_loss=False, vf_clip_param=math.inf)
+                  grad_clip_by="global_norm", use_kl_loss=False, vf_clip_param=math.inf,
+                  learner_class=MaskedAdvantagePPOLearner if masked_advantages else PPOTorchLearner)
         .rl_module(rl_module_spec=RLModuleSpec(module_class=PPOModule, model_config=model_config))
         .callbacks(on_episode_end=log_success)
         .debugging(seed=seed)
@@ -139,23 +175,46 @@ def evaluate(algo: PPO, episodes: int) -> dict[str, float]:
             "return": float(np.mean([episode.get_return() for episode in done]))}
 
 
+LEARNER_FIGURES = {"lr": "default_optimizer_learning_rate", "entropy": "entropy", "policy_loss": "policy_loss",
+                   "vf_loss": "vf_loss", "vf_explained_var": "vf_explained_var",
+                   "grad_norm": "gradients_default_optimizer_global_norm",
+                   "rows_trained": "num_module_steps_trained"}
+"""The learner's figures ``--diagnostics`` prints (ours -> the key in RLlib's learner results)."""
+
+
 def summary(result: dict[str, Any]) -> dict[str, float]:
-    """The figures of one ``algo.train()`` result that matter here."""
+    """The figures of one ``algo.train()`` result that matter here, and the learner's (``LEARNER_FIGURES``,
+    those RLlib reports)."""
     runners = result["env_runners"]
+    learner = result.get("learners", {}).get("default_policy", {})
     return {"env_steps": runners["num_env_steps_sampled_lifetime"], "return": runners["episode_return_mean"],
-            "success": runners[SUCCESS], "episode_length": runners["episode_len_mean"]}
+            "success": runners[SUCCESS], "episode_length": runners["episode_len_mean"],
+            **{name: float(learner[key]) for name, key in LEARNER_FIGURES.items() if key in learner}}
 
 
-def train(config: PPOConfig, iterations: int) -> tuple[PPO, list[dict[str, float]]]:
+def train(config: PPOConfig, iterations: int, diagnostics: bool = False, eval_every: int = 0,
+          eval_episodes: int = 256) -> tuple[PPO, list[dict[str, float]]]:
+    """``iterations`` of ``algo.train()``; with ``diagnostics`` each line adds the learner's figures and the
+    action std (``exp`` of the free log std) after the update; every ``eval_every`` iterations (0: never) the
+    mean action's success on ``eval_episodes`` fresh throws (``evaluate``), as SB3's runs validate."""
     algo = config.build_algo()
     history = []
     for iteration in range(iterations):
         start = time.perf_counter()
         figures = summary(algo.train())
         figures["seconds"] = time.perf_counter() - start
+        figures["action_std"] = [float(v) for v in algo.get_module().pi.log_std.detach().exp()]
         history.append(figures)
-        print(f"iteration {iteration + 1}: {figures['env_steps']:,.0f} throws, return {figures['return']:.3f}, "
-              f"success {figures['success']:.1%} ({figures['seconds']:.1f} s)", flush=True)
+        line = (f"iteration {iteration + 1}: {figures['env_steps']:,.0f} throws, return {figures['return']:.3f}, "
+                f"success {figures['success']:.1%} ({figures['seconds']:.1f} s)")
+        if diagnostics:
+            line += "".join(f", {name} {figures[name]:.4g}" for name in LEARNER_FIGURES if name in figures)
+            line += ", action std " + " ".join(f"{v:.3f}" for v in figures["action_std"])
+        if eval_every and (iteration + 1) % eval_every == 0:
+            figures["mean_action"] = evaluate(algo, eval_episodes)
+            line += (f"; mean action: success {figures['mean_action']['success']:.1%} of "
+                     f"{figures['mean_action']['episodes']} throws")
+        print(line, flush=True)
     return algo, history
 
 
@@ -170,9 +229,17 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     parser.add_argument("--num-env-runners", type=int, default=0, help="0: sample in the training process")
     parser.add_argument("--train-batch-size", type=int, default=None, help="default: the recipe's n_envs x n_steps")
     parser.add_argument("--eval-episodes", type=int, default=1024, help="deterministic throws at the end (0: none)")
+    parser.add_argument("--eval-every", type=int, default=0,
+                        help="iterations between evaluations of the mean action on 256 fresh throws (0: none)")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--address", help="a running Ray cluster; default: a local Ray")
     parser.add_argument("--num-cpus", type=int, help="CPUs of the local Ray (default: all)")
+    parser.add_argument("--diagnostics", action="store_true",
+                        help="print the learner's figures (rate, entropy, losses, gradient norm) and the action std")
+    parser.add_argument("--rllib-advantages", action="store_true",
+                        help="RLlib's advantage standardisation (over the batch with its artificial timesteps)")
+    parser.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE",
+                        help="replace settings of the recipe (recipe()'s keys, e.g. num_epochs=5)")
     return parser.parse_args(argv)
 
 
@@ -194,11 +261,14 @@ def main(argv: list[str] | None = None) -> list[dict[str, float]]:
     else:
         ray.init(address="local", num_cpus=args.num_cpus, include_dashboard=False)
     register_rllib_envs()
-    overrides = {} if args.train_batch_size is None else {"train_batch_size": args.train_batch_size}
+    overrides = env_config_of(args.set)
+    if args.train_batch_size is not None:
+        overrides["train_batch_size"] = args.train_batch_size
     config = make_config(args.env, env_config, num_envs=args.num_envs, vectorize=args.vectorize,
-                         num_env_runners=args.num_env_runners, seed=args.seed, **overrides)
+                         num_env_runners=args.num_env_runners, seed=args.seed,
+                         masked_advantages=not args.rllib_advantages, **overrides)
     iterations = args.iterations if args.iterations is not None else iterations_of(config, args.env)
-    algo, history = train(config, iterations)
+    algo, history = train(config, iterations, args.diagnostics, args.eval_every)
     if args.eval_episodes > 0:
         result = evaluate(algo, args.eval_episodes)
         print(f"deterministic (mean action): success {result['success']:.1%} of {result['episodes']} throws, "

@@ -119,9 +119,15 @@ def ballistic_actions(observations: np.ndarray, commands: np.ndarray, config: ta
     return np.clip(actions, -1.0, 1.0), clipped
 
 
+def _throw_observation(observation: Any) -> np.ndarray:
+    """The throw env's observation: ``observation`` itself, or a goal env's ``observation["observation"]``."""
+    return np.asarray(observation["observation"] if isinstance(observation, dict) else observation)
+
+
 class BallisticThrows(gym.Wrapper):
     """BoxToss acting in ballistic commands (module docstring): the action is (flight time,
-    landing offset, touchdown angle), each in [-1, 1]; observations and rewards are the env's.
+    landing offset, touchdown angle), each in [-1, 1]; observations and rewards are the env's. Around
+    ``BoxToss-Goal-v0`` the commands are computed from the Dict's ``"observation"`` (the throw env's).
 
     Also loads in RL Baselines3 Zoo as ``env_wrapper: box_toss_env.envs.ballistic.BallisticThrows``.
     """
@@ -135,7 +141,7 @@ class BallisticThrows(gym.Wrapper):
 
     def reset(self, **kwargs) -> tuple[Any, dict[str, Any]]:
         observation, info = self.env.reset(**kwargs)
-        self._observation = np.asarray(observation)
+        self._observation = _throw_observation(observation)
         return observation, info
 
     def step(self, action) -> tuple[Any, SupportsFloat, bool, bool, dict[str, Any]]:
@@ -144,6 +150,6 @@ class BallisticThrows(gym.Wrapper):
         command = task.check_actions(action, (task.ACTION_SIZE,))
         actions, clipped = ballistic_actions(self._observation[None], command, self.config, *self.settings)
         observation, reward, terminated, truncated, info = self.env.step(actions[0])
-        self._observation = np.asarray(observation)
+        self._observation = _throw_observation(observation)
         info["command_clipped"] = bool(clipped[0])
         return observation, reward, terminated, truncated, info

@@ -43,6 +43,21 @@ def desired_goals(episodes: task.Episodes) -> np.ndarray:
     return goals
 
 
+def goal_observations(observations: np.ndarray) -> dict[str, np.ndarray]:
+    """The Dict observations (``observation``, ``achieved_goal``, ``desired_goal``) that ``BoxTossGoalEnv.reset``
+    returns, from ``BoxTossEnv``'s first observations (n, 12) of the same seeds: the achieved goal is the box in
+    the hand (its x and angle, at rest 0), the desired goal the observation's target x and target-face mask. So a
+    policy trained on the goal env throws at ``BoxToss-v0``'s targets (the evaluation's)."""
+    observations = np.asarray(observations, dtype=np.float32).reshape(-1, np.shape(observations)[-1])
+    angles = np.arctan2(observations[:, task.OBS_SIN], observations[:, task.OBS_COS])
+    achieved = achieved_goals(observations[:, task.OBS_X], angles, np.zeros(len(observations)))
+    desired = np.zeros((len(observations), GOAL_SIZE), dtype=np.float32)
+    desired[:, GOAL_X] = observations[:, task.OBS_TARGET_X]
+    desired[:, GOAL_AT_REST] = 1.0
+    desired[:, GOAL_FACES] = observations[:, task.OBS_TARGET_FACES]
+    return {"observation": observations, "achieved_goal": achieved, "desired_goal": desired}
+
+
 class BoxTossGoalEnv(gym.Env):
     r"""BoxToss with gymnasium-robotics' goal-conditioned interface, so that HER can relabel each throw as
     a success for where it came to rest.

@@ -10,7 +10,7 @@ pytest.importorskip("ray.rllib")
 import ray  # noqa: E402
 
 from agents.rllib_envs import make_env, register_rllib_envs  # noqa: E402
-from agents.rllib_ppo import SUCCESS, evaluate, iterations_of, make_config, recipe, summary  # noqa: E402
+from agents.rllib_ppo import SUCCESS, MaskedAdvantagePPOLearner, evaluate, iterations_of, make_config, recipe, summary  # noqa: E402
 from box_toss_env.envs.ballistic import BallisticThrows  # noqa: E402
 from box_toss_env.wrappers.ballistic import BallisticThrowsVector  # noqa: E402
 from box_toss_env.wrappers.next_step import NextStepAutoreset  # noqa: E402
@@ -46,6 +46,8 @@ def test_the_settings_are_sb3s_recipe():
     assert pose["ballistic"] and pose["log_std_init"] == -1.0 and pose["n_throws"] == 600_000
     config = make_config("BoxToss-v0")
     assert config.lr == [[0, 5e-4], [300_000, 0.0]] and not config.use_kl_loss and config.grad_clip == 0.5
+    assert config.minibatch_size == 256  # rows: SB3's 128 throws and RLlib's artificial timestep of each
+    assert config.learner_class is MaskedAdvantagePPOLearner
     assert iterations_of(config, "BoxToss-v0") == 147
     assert make_config("BoxToss-ShortEnd-v0").env_config["ballistic"] is True
     with pytest.raises(ValueError, match="unknown settings"):
@@ -85,3 +87,19 @@ def test_the_module_starts_from_the_recipes_std_with_separate_networks(local_ray
         assert result["episodes"] >= 32 and 0.0 <= result["success"] <= 1.0
     finally:
         algo.stop()
+
+
+def test_the_learner_standardises_the_advantages_over_the_real_timesteps(monkeypatch):
+    """RLlib's standardisation includes the artificial (loss-masked) timestep of every episode; ours does not."""
+    import torch
+    from ray.rllib.algorithms.ppo.torch.ppo_torch_learner import PPOTorchLearner
+    from ray.rllib.core.columns import Columns
+    from ray.rllib.evaluation.postprocessing import Postprocessing
+
+    seen = {}
+    monkeypatch.setattr(PPOTorchLearner, "compute_loss_for_module", lambda self, **kwargs: seen.update(kwargs))
+    batch = {Postprocessing.ADVANTAGES: torch.tensor([1.0, 3.0, 100.0, -50.0]),
+             Columns.LOSS_MASK: torch.tensor([True, True, False, False])}
+    learner = object.__new__(MaskedAdvantagePPOLearner)  # no setup: only the loss is called
+    learner.compute_loss_for_module(module_id="p", config=None, batch=batch, fwd_out={})
+    torch.testing.assert_close(seen["batch"][Postprocessing.ADVANTAGES][:2], torch.tensor([-0.5, 0.5]) * 2 ** 0.5)

@@ -106,6 +106,32 @@ def test_deterministic_under_seeding():
     assert not np.array_equal(env.reset(seed=4)[0]["desired_goal"], first)
 
 
+@pytest.mark.parametrize("target_face", ["any", "mixed"])
+def test_goal_observations_of_box_toss_observations_are_the_goal_envs(target_face):
+    """A goal policy evaluated on BoxToss-v0's targets sees what the goal env's reset gives for the same seed."""
+    throw_env, goal_env = gymnasium.make("BoxToss-v0", target_face=target_face), make(target_face=target_face)
+    seeds = range(10_000, 10_020)
+    flat = np.stack([throw_env.reset(seed=seed)[0] for seed in seeds])
+    dicts = [goal_env.reset(seed=seed)[0] for seed in seeds]
+    built = goal.goal_observations(flat)
+    for key in ("observation", "achieved_goal", "desired_goal"):
+        np.testing.assert_allclose(built[key], np.stack([d[key] for d in dicts]), rtol=0, atol=1e-6)
+
+
+def test_ballistic_commands_around_the_goal_env_are_box_toss_ones():
+    from box_toss_env.envs.ballistic import BallisticThrows
+
+    env, flat = BallisticThrows(make()), gymnasium.make("BoxToss-v0")
+    command = np.array([0.2, -0.1, 0.3], dtype=np.float32)
+    for seed in (5, 6):
+        env.reset(seed=seed)
+        flat_obs, _ = flat.reset(seed=seed)
+        _, reward, *_ = env.step(command)
+        actions, _ = ballistic_actions(flat_obs[None], command, flat.unwrapped.config)
+        _, flat_reward, *_ = flat.step(actions[0])
+        assert reward == pytest.approx(flat_reward, abs=1e-4)
+
+
 def test_base_box_is_refused():
     with pytest.raises(ValueError, match="base_box"):
         make(base_box=True)
