@@ -20,11 +20,13 @@ import math
 from pathlib import Path
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 
 from agents import ceiling, report, train
+from agents import config as configuration
 from agents.algorithms import ALGORITHMS
-from agents.evaluation import TEST_TARGETS, evaluate_run, make_baseline_run
+from agents.evaluation import TEST_TARGETS, evaluate_run, is_stack, make_baseline_run
 from agents.training import RUNS, latest_checkpoint, read_timing
 from box_toss_env.files import save_figure, write_atomic
 
@@ -35,19 +37,31 @@ DOCS = report.DOCS
 FACE_KINDS = ("any face", "a long side", "a short end", "face 0", "face 1", "face 2", "face 3")
 
 
-def run_dir(root: Path, env_id: str, algo: str, seed: int) -> Path:
-    return root / env_id / f"{algo}-seed{seed}"
+TIERS = {"commands": "the recipe's actions (the ballistic or the stack's throw commands where its file sets an "
+                     "env_wrapper)",
+         "raw": "the env's own actions (speed, direction, spin; the recipe without its env_wrapper)"}
+"""How the agents act: ``commands`` as the hyperparameter file says, ``raw`` without its ``env_wrapper``."""
+TIER_OVERRIDES = {"commands": [], "raw": ["env_wrapper=null"]}
 
 
-def ensure_trained(root: Path, env_id: str, algo: str, seed: int) -> Path:
-    path = run_dir(root, env_id, algo, seed)
+def run_dir(root: Path, env_id: str, algo: str, seed: int, tier: str = "commands") -> Path:
+    folder = root / env_id if tier == "commands" else root / env_id / tier
+    return folder / f"{algo}-seed{seed}"
+
+
+def ensure_trained(root: Path, env_id: str, algo: str, seed: int, tier: str = "commands",
+                   overrides: list[str] | None = None) -> Path:
+    """The run of ``algo`` on ``env_id`` with ``seed`` in ``tier``, trained (or resumed) if it has no results;
+    ``overrides`` (``--set``) change the file's hyperparameters, e.g. a shorter ``n_timesteps``."""
+    path = run_dir(root, env_id, algo, seed, tier)
     if report.read_results(path) is not None:
         return path
-    args = ["--algo", algo, "--env", env_id, "--seed", str(seed), "--no-progress"]
+    settings = ["--set", *TIER_OVERRIDES[tier], *(overrides or [])] if TIER_OVERRIDES[tier] or overrides else []
     if (path / "config.yml").exists() and latest_checkpoint(path, algo) is not None:
         train.main(["--resume", str(path), "--no-progress"])
     else:
-        train.main([*args, "--runs-dir", str(path.parent), "--name", path.name])
+        train.main(["--algo", algo, "--env", env_id, "--seed", str(seed), "--no-progress", "--runs-dir",
+                    str(path.parent), "--name", path.name, *settings])
     return path
 
 
@@ -246,24 +260,49 @@ def ratios(root: Path, envs: list[str], algos: list[str], seeds: list[int]) -> s
     return "Best learned agent's success as a share of the ceiling's: " + ", ".join(parts) + "."
 
 
+def check_options(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """Every env id registered, every training's hyperparameters (with the tier's and ``--set`` overrides) valid:
+    a one-line error before anything is created or trained."""
+    for env_id in args.envs:
+        if env_id not in gym.registry:
+            parser.error(f"--envs: {env_id!r} is not registered")
+    if args.report_only:
+        return
+    for env_id in args.envs:
+        for algo in args.algos:
+            for tier in args.tiers:
+                try:
+                    config = configuration.apply_overrides(configuration.load_hyperparams(algo, env_id),
+                                                           [*TIER_OVERRIDES[tier], *args.overrides], algo)
+                    configuration.check_config(config, algo)
+                except configuration.ConfigError as error:
+                    parser.error(f"{algo} on {env_id} ({tier}): {error}")
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--envs", nargs="+", default=list(VARIANTS))
     parser.add_argument("--algos", nargs="+", default=sorted(ALGORITHMS), choices=sorted(ALGORITHMS))
     parser.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
     parser.add_argument("--root", type=Path, default=ROOT)
+    parser.add_argument("--tiers", nargs="+", default=["commands"], choices=list(TIERS),
+                        help="commands: the recipes as their files say; raw: in the env's own actions (no env_wrapper)")
+    parser.add_argument("--set", nargs="*", default=[], action="extend", metavar="KEY=VALUE", dest="overrides",
+                        help="override the files' hyperparameters of every training, e.g. n_timesteps=16384")
     parser.add_argument("--no-ceiling", action="store_true", help="skip the oracle sweep")
     parser.add_argument("--report-only", action="store_true", help="train nothing: tables from finished runs")
     parser.add_argument("--readme", action="store_true", help="write docs/agents/benchmark.md and the README section")
     args = parser.parse_args(argv)
+    check_options(parser, args)
     if not args.report_only:
         for env_id in args.envs:
             ensure_random(args.root, env_id)
-            if not args.no_ceiling:
+            if not args.no_ceiling and not is_stack(env_id):  # the stack's ceiling: agents.stack_planner
                 ensure_ceiling(args.root, env_id)
             for seed in args.seeds:
-                for algo in args.algos:
-                    ensure_trained(args.root, env_id, algo, seed)
+                for tier in args.tiers:
+                    for algo in args.algos:
+                        ensure_trained(args.root, env_id, algo, seed, tier, args.overrides)
     text = document(args.root, args.envs, args.algos, args.seeds)
     summary = headline(args.root, args.envs, args.algos, args.seeds)
     print(summary)
