@@ -3,6 +3,12 @@
     python -m agents.benchmark                      # everything (hours on 2 cores): runs/benchmark/, docs/agents/
     python -m agents.benchmark --envs BoxToss-ShortEnd-v0 --algos ppo --seeds 0 1 2
     python -m agents.benchmark --report-only --readme   # rebuild the table and figures from finished runs
+    python -m agents.benchmark --envs BoxToss-Stack-v0 --set n_timesteps=16384   # the stack at a shorter budget
+    python -m agents.benchmark --envs BoxToss-v0 --tiers raw --algos ppo       # in the env's own actions
+
+``BoxToss-Stack-v0`` (a hand of throws per episode) is scored per episode (``agents.evaluation.evaluate_stack``);
+its ceiling is ``agents.stack_planner``'s measured rows (``docs/agents/stack_ceiling.json``). The ``raw`` tier
+trains a recipe without its ``env_wrapper`` (the env's own actions), in ``runs/benchmark/<env id>/raw/``.
 
 Each training is ``python -m agents.train`` with the hyperparameters of ``agents/hyperparams/<algo>.yml``
 for that env id, in ``runs/benchmark/<env id>/<algo>-seed<k>``; a run that has finished is kept, so
@@ -142,11 +148,12 @@ def stored_rows(path: Path = RESULTS) -> dict[str, list[dict[str, Any]]]:
 
 def table_rows(root: Path, env_id: str, tier: str, algos: list[str], seeds: list[int],
                stored: dict[str, list[dict[str, Any]]]) -> list[dict[str, Any]]:
-    """The rows of the runs in ``root`` if it holds a trained one (random alone in a tier other than the recipes'
-    is not a table), else the rows stored in ``RESULTS`` (none if neither); found rows replace the stored ones."""
+    """The rows of the runs in ``root`` if it holds a trained one in ``tier`` (random actions alone are not a
+    table: they are shared by the tiers), else the rows stored in ``RESULTS`` (none if neither); found rows replace
+    the stored ones."""
     rows = agent_rows(root, env_id, algos, seeds, tier)
     key = section_key(env_id, tier)
-    if any(row["algo"] != "random" for row in rows) or (rows and tier == "commands"):
+    if any(row["algo"] != "random" for row in rows):
         stored[key] = rows
         return rows
     return stored.get(key, [])
@@ -456,7 +463,9 @@ def main(argv: list[str] | None = None) -> None:
                                            "--report-only --readme` from the runs in `runs/benchmark/`.\n\n" + text)
         report.write_readme("### Benchmark: every variant, every algorithm, against the ceiling\n\n"
                             "`python -m agents.benchmark` (then `--report-only --readme`). Success on the test "
-                            "targets; the ceiling is the oracle whose search grew until its success stopped rising "
+                            "targets (`BoxToss-Stack-v0`: on test episodes, its ceiling the stack planner's; *raw "
+                            "actions*: the recipe without its ballistic command); the ceiling is the oracle whose "
+                            "search grew until its success stopped rising "
                             "(details, breakdowns by face and distance, the oracle's budgets and the learning curves: "
                             "[docs/agents/benchmark.md](docs/agents/benchmark.md)):\n\n" + summary + "\n\n"
                             + ratios(args.root, args.envs, args.algos, args.seeds, stored), "benchmark")

@@ -31,3 +31,15 @@ def test_stored_rows_make_the_tables_and_old_sections_stay(tmp_path):
     assert "| BoxToss-v0 | 9.9% |" in summary
     assert "| BoxToss-Stack-v0 | - | 50.0% (25.0%-75.0%) | 50.0% | - |" in summary
     json.dumps(stored)  # what --readme writes to docs/agents/benchmark_results.json
+
+
+def test_random_actions_alone_do_not_replace_a_table(tmp_path):
+    from agents.evaluation import make_baseline_run
+
+    root = tmp_path / "runs"
+    path = make_baseline_run("random", root / "BoxToss-v0" / "random", "BoxToss-v0")
+    (path / "eval" / "default").mkdir(parents=True)
+    (path / "eval" / "default" / "results.json").write_text(json.dumps({"success_rate": 0.02}))
+    stored = {"BoxToss-v0": [stack_row("ppo", 1.0, 0)]}
+    assert benchmark.table_rows(root, "BoxToss-v0", "commands", ["ppo"], [0], stored) == stored["BoxToss-v0"]
+    assert benchmark.table_rows(root, "BoxToss-v0", "raw", ["ppo"], [0], stored) == []
