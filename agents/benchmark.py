@@ -305,16 +305,18 @@ def ceiling_success(root: Path, env_id: str) -> float | None:
     return None if sweep is None else ceiling.ceiling_of(sweep)["success_rate"]
 
 
-INTRO = ("Every agent on the same {targets:,} test targets per variant (the ceiling on the first {ceiling_targets}); "
-         "success: at rest within the tolerance on a target face. Training runs: `python -m agents.train --algo A "
-         "--env E --seed S` with the file's hyperparameters, on this 2-core machine; several seeds give the mean and "
-         "(min-max). `BoxToss-Stack-v0` (an episode is a hand of 4 throws, [docs/stack.md](../stack.md)) is scored "
-         "on {episodes} test episodes (seeds 10000...): success is the whole hand stacked on the target, the ceiling "
-         "is `agents.stack_planner`'s on its own episodes. A table titled *raw actions* is the same recipe trained in "
-         "the env's own actions (speed, direction, spin: `--set env_wrapper=null`, `python -m agents.benchmark "
-         "--tiers raw`); a smaller budget than the recipe's is given by `--set n_timesteps=N` (the env steps column "
-         "says what was trained). A section whose runs are not on the machine that wrote this page is rebuilt from "
-         "`docs/agents/benchmark_results.json` (the rows as measured), or kept as it was.")
+INTRO = ("Every agent on the same {targets:,} test targets per variant (the ceiling on the first "
+         "{ceiling_targets}); success: at rest within the tolerance on a target face. Training runs: `python -m "
+         "agents.train --algo A --env E --seed S` with the file's hyperparameters, on this 2-core machine; several "
+         "seeds give the mean and (min-max). `BoxToss-Stack-v0` (an episode is a hand of 4 throws, "
+         "[docs/stack.md](../stack.md)) is scored on {episodes} test episodes (seeds 10000...): success is the "
+         "whole hand stacked on the target, the ceiling is `agents.stack_planner`'s on its own episodes. A table "
+         "titled *raw actions* is the same recipe trained in the env's own actions (speed, direction, spin: `--set "
+         "env_wrapper=null`, `python -m agents.benchmark --tiers raw`; PPO's recipes for BoxToss-v0 and BoxToss-"
+         "LongSide-v0 have no env_wrapper, so there both tiers train the same thing); a smaller budget than the "
+         "recipe's is given by `--set n_timesteps=N` (the env steps column says what was trained). A section whose "
+         "runs are not on the machine that wrote this page is rebuilt from `docs/agents/benchmark_results.json` "
+         "(the rows as measured), or kept as it was.")
 
 
 def document(root: Path, envs: list[str], algos: list[str], seeds: list[int], docs: Path = DOCS,
