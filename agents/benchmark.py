@@ -33,6 +33,7 @@ from agents import config as configuration
 from agents.algorithms import ALGORITHMS
 from agents.doc_sections import README
 from agents.evaluation import STACK_TEST_EPISODES, TEST_TARGETS, evaluate_run, is_stack, make_baseline_run
+from agents.run_folder import read_csv
 from agents.training import RUNS, latest_checkpoint, read_timing
 from box_toss_env.files import save_figure, write_atomic
 
@@ -123,8 +124,18 @@ def agent_rows(root: Path, env_id: str, algos: list[str], seeds: list[int],
         if found:
             rows.append({"agent": f"{algo.upper()} ({len(found)} seed{'s' * (len(found) > 1)})", "algo": algo,
                          "seeds": [seed for seed, _, _ in found], "results": [r for _, r, _ in found],
-                         "timing": [t for _, _, t in found]})
+                         "timing": [t for _, _, t in found],
+                         "training_return": [training_return(run_dir(root, env_id, algo, seed, tier))
+                                             for seed, _, _ in found]})
     return rows
+
+
+def training_return(path: Path) -> float | None:
+    """The mean episode return of the last rollouts while training (the exploring policy's: SB3's
+    ``rollout/ep_rew_mean`` in the last row of ``logs/progress.csv`` that has it), or None."""
+    rows = read_csv(path / "logs" / "progress.csv")[1] if (path / "logs" / "progress.csv").exists() else []
+    values = [row.get("rollout/ep_rew_mean") for row in rows if row.get("rollout/ep_rew_mean")]
+    return float(values[-1]) if values else None
 
 
 # -- tables kept between runs -------------------------------------------------------------------
@@ -183,20 +194,26 @@ def stack_ceiling() -> dict[str, Any] | None:
 
 def stack_table(title: str, rows: list[dict[str, Any]], top: dict[str, Any] | None) -> list[str]:
     lines = [title, "",
-             "| agent | success | mean final height | stack fell | mean return | throws (env steps) | wall time |",
-             "|---|---:|---:|---:|---:|---:|---:|"]
+             "| agent | success | mean final height | stack fell | mean return | return while training | "
+             "throws (env steps) | wall time |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|"]
     for row in rows:
         results, timing = row["results"], [t for t in row["timing"] if t]
         steps = f"{int(np.mean([t['timesteps'] for t in timing])):,}" if timing else "-"
         wall = report.format_seconds(float(np.mean([t["wall_seconds"] for t in timing]))) if timing else "-"
+        exploring = [v for v in row.get("training_return", []) if v is not None]
         lines.append(f"| {row['agent']} | {spread([r['success_rate'] for r in results])} | "
                      f"{np.mean([r['mean_height'] for r in results]):.3f} m | "
                      f"{np.mean([r['fall_rate'] for r in results]):.1%} | "
-                     f"{np.mean([r['mean_reward'] for r in results]):.2f} | {steps} | {wall} |")
+                     f"{np.mean([r['mean_reward'] for r in results]):.2f} | "
+                     f"{f'{np.mean(exploring):.2f}' if exploring else '-'} | {steps} | {wall} |")
     if top:
         lines.append(f"| ceiling: planner, {top['name']} budget ({top['simulated_per_throw']:.0f} throws simulated per "
                      f"throw), {top['episodes']} episodes | {top['success_rate']:.1%} | {top['mean_height']:.3f} m | "
-                     f"{top['fall_rate']:.1%} | - | - | {report.format_seconds(top['seconds'])} |")
+                     f"{top['fall_rate']:.1%} | - | - | - | {report.format_seconds(top['seconds'])} |")
+    lines += ["", "Success, height, falls and return: the final policy acting deterministically on the test episodes. "
+              "Return while training: the mean episode return of the last rollouts (SB3's `rollout/ep_rew_mean`), the "
+              "exploring policy's (PPO's Gaussian, SAC's sampled actions, TD3's action noise)."]
     return lines
 
 

@@ -25,7 +25,8 @@ def test_stored_rows_make_the_tables_and_old_sections_stay(tmp_path):
     envs = ["BoxToss-v0", "BoxToss-Stack-v0"]
     text = benchmark.document(tmp_path / "runs", envs, ["ppo", "sac", "td3"], [0, 1, 2], docs=docs, stored=stored)
     assert "| kept as it was |" in text
-    assert "### BoxToss-Stack-v0" in text and "| PPO (1 seed) | 50.0% (25.0%-75.0%) | 0.500 m | 10.0% |" in text
+    assert "### BoxToss-Stack-v0" in text
+    assert "| PPO (1 seed) | 50.0% (25.0%-75.0%) | 0.500 m | 10.0% | 2.00 | - |" in text
     assert "ceiling: planner" in text  # docs/agents/stack_ceiling.json
     summary = benchmark.headline(tmp_path / "runs", envs, ["ppo", "sac", "td3"], [0, 1, 2], stored, readme)
     assert "| BoxToss-v0 | 9.9% |" in summary
