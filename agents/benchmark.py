@@ -4,6 +4,12 @@
     python -m agents.benchmark --envs BoxToss-ShortEnd-v0 --algos ppo --seeds 0 1 2
     python -m agents.benchmark --report-only --readme   # rebuild the table and figures from finished runs
     python -m agents.benchmark --envs BoxToss-Goal-v0 --seeds 0 --readme   # the goal env's rows only (HER or not)
+    python -m agents.benchmark --envs BoxToss-Stack-v0 --set n_timesteps=16384   # the stack at a shorter budget
+    python -m agents.benchmark --envs BoxToss-v0 --tiers raw --algos ppo       # in the env's own actions
+
+``BoxToss-Stack-v0`` (a hand of throws per episode) is scored per episode (``agents.evaluation.evaluate_stack``);
+its ceiling is ``agents.stack_planner``'s measured rows (``docs/agents/stack_ceiling.json``). The ``raw`` tier
+trains a recipe without its ``env_wrapper`` (the env's own actions), in ``runs/benchmark/<env id>/raw/``.
 
 Each training is ``python -m agents.train`` with the hyperparameters of ``agents/hyperparams/<algo>.yml``
 for that env id, in ``runs/benchmark/<env id>/<algo>-seed<k>``; a run that has finished is kept, so
@@ -23,26 +29,28 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import time
 from pathlib import Path
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 import yaml
 
-from agents import algorithms, ceiling, report, train
+from agents import algorithms, ceiling, report, stack_planner, train
+from agents import config as configuration
 from agents.algorithms import ALGORITHMS
 from agents.config import algorithm_kwargs, load_hyperparams
-from agents.doc_sections import read_section, replace_section
+from agents.doc_sections import README, read_section, replace_section
 from agents.envs import read_env_wrapper
-from agents.evaluation import TEST_TARGETS, evaluate_run, make_baseline_run
+from agents.evaluation import STACK_TEST_EPISODES, TEST_TARGETS, evaluate_run, is_stack, make_baseline_run
+from agents.run_folder import read_csv
 from agents.training import RUNS, latest_checkpoint, read_timing
 from box_toss_env.envs.ballistic import BallisticThrows
 from box_toss_env.files import atomic_path, save_figure, write_atomic
 
 VARIANTS = ("BoxToss-v0", "BoxToss-LongSide-v0", "BoxToss-ShortEnd-v0", "BoxToss-ThisSideUp-v0", "BoxToss-Mixed-v0",
-            "BoxToss-OnBox-v0")
+            "BoxToss-OnBox-v0", "BoxToss-Stack-v0")
 GOAL_ENV = "BoxToss-Goal-v0"
 GOAL_AGENTS = {"sac-her": ("sac", True, True, "SAC + HER"), "td3-her": ("td3", True, True, "TD3 + HER"),
                "sac-no-her": ("sac", False, True, "SAC without HER"),
@@ -56,19 +64,31 @@ DOCS = report.DOCS
 FACE_KINDS = ("any face", "a long side", "a short end", "face 0", "face 1", "face 2", "face 3")
 
 
-def run_dir(root: Path, env_id: str, algo: str, seed: int) -> Path:
-    return root / env_id / f"{algo}-seed{seed}"
+TIERS = {"commands": "the recipe's actions (the ballistic or the stack's throw commands where its file sets an "
+                     "env_wrapper)",
+         "raw": "the env's own actions (speed, direction, spin; the recipe without its env_wrapper)"}
+"""How the agents act: ``commands`` as the hyperparameter file says, ``raw`` without its ``env_wrapper``."""
+TIER_OVERRIDES = {"commands": [], "raw": ["env_wrapper=null"]}
 
 
-def ensure_trained(root: Path, env_id: str, algo: str, seed: int) -> Path:
-    path = run_dir(root, env_id, algo, seed)
+def run_dir(root: Path, env_id: str, algo: str, seed: int, tier: str = "commands") -> Path:
+    folder = root / env_id if tier == "commands" else root / env_id / tier
+    return folder / f"{algo}-seed{seed}"
+
+
+def ensure_trained(root: Path, env_id: str, algo: str, seed: int, tier: str = "commands",
+                   overrides: list[str] | None = None) -> Path:
+    """The run of ``algo`` on ``env_id`` with ``seed`` in ``tier``, trained (or resumed) if it has no results;
+    ``overrides`` (``--set``) change the file's hyperparameters, e.g. a shorter ``n_timesteps``."""
+    path = run_dir(root, env_id, algo, seed, tier)
     if report.read_results(path) is not None:
         return path
-    args = ["--algo", algo, "--env", env_id, "--seed", str(seed), "--no-progress"]
+    settings = ["--set", *TIER_OVERRIDES[tier], *(overrides or [])] if TIER_OVERRIDES[tier] or overrides else []
     if (path / "config.yml").exists() and latest_checkpoint(path, algo) is not None:
         train.main(["--resume", str(path), "--no-progress"])
     else:
-        train.main([*args, "--runs-dir", str(path.parent), "--name", path.name])
+        train.main(["--algo", algo, "--env", env_id, "--seed", str(seed), "--no-progress", "--runs-dir",
+                    str(path.parent), "--name", path.name, *settings])
     return path
 
 
@@ -158,17 +178,23 @@ def spread(values: list[float]) -> str:
     return f"{mean:.1%}" if len(values) == 1 else f"{mean:.1%} ({min(values):.1%}-{max(values):.1%})"
 
 
-def agent_rows(root: Path, env_id: str, algos: list[str], seeds: list[int]) -> list[dict[str, Any]]:
+def agent_rows(root: Path, env_id: str, algos: list[str], seeds: list[int],
+               tier: str = "commands") -> list[dict[str, Any]]:
+    """The rows of the runs found in ``root``: random actions (the same in every tier), then each algorithm's
+    seeds in ``tier``."""
     rows = []
     random = report.read_results(root / env_id / "random")
     if random:
-        rows.append({"agent": "random actions", "results": [random], "timing": [None]})
+        rows.append({"agent": "random actions", "algo": "random", "results": [random], "timing": [None]})
     for algo in algos:
-        found = [(report.read_results(p), read_timing(p)) for seed in seeds
-                 if report.read_results(p := run_dir(root, env_id, algo, seed)) is not None]
+        found = [(seed, report.read_results(p), read_timing(p)) for seed in seeds
+                 if report.read_results(p := run_dir(root, env_id, algo, seed, tier)) is not None]
         if found:
-            rows.append({"agent": f"{algo.upper()} ({len(found)} seed{'s' * (len(found) > 1)})",
-                         "results": [r for r, _ in found], "timing": [t for _, t in found]})
+            rows.append({"agent": f"{algo.upper()} ({len(found)} seed{'s' * (len(found) > 1)})", "algo": algo,
+                         "seeds": [seed for seed, _, _ in found], "results": [r for _, r, _ in found],
+                         "timing": [t for _, _, t in found],
+                         "training_return": [training_return(run_dir(root, env_id, algo, seed, tier))
+                                             for seed, _, _ in found]})
     return rows
 
 
@@ -202,11 +228,100 @@ def goal_document(root: Path, algos: list[str], seeds: list[int]) -> str:
              "own actions where the row says so (the recipe without `env_wrapper`). "
              f"`python -m agents.benchmark --envs {GOAL_ENV} --seeds 0 --readme` trains what is missing and rewrites "
              "this section.", ""]
-    return "\n".join(lines + variant_table(GOAL_ENV, rows, None)[2:])  # under this heading, not the variant's
+    return "\n".join(lines + variant_table(f"### {GOAL_ENV}", rows, None)[2:])  # under this heading, not the variant's
 
 
-def variant_table(env_id: str, rows: list[dict[str, Any]], sweep: list[dict[str, Any]] | None) -> list[str]:
-    lines = [f"### {env_id}", "",
+def training_return(path: Path) -> float | None:
+    """The mean episode return of the last rollouts while training (the exploring policy's: SB3's
+    ``rollout/ep_rew_mean`` in the last row of ``logs/progress.csv`` that has it), or None."""
+    rows = read_csv(path / "logs" / "progress.csv")[1] if (path / "logs" / "progress.csv").exists() else []
+    values = [row.get("rollout/ep_rew_mean") for row in rows if row.get("rollout/ep_rew_mean")]
+    return float(values[-1]) if values else None
+
+
+# -- tables kept between runs -------------------------------------------------------------------
+RESULTS = DOCS / "benchmark_results.json"
+"""Every table's rows as measured (the runs' results.json and timing.json), keyed by ``section_key``: written with
+``--readme``, so that ``--report-only`` rebuilds a table whose runs are not in ``--root`` on this machine."""
+STACK = "BoxToss-Stack-v0"
+
+
+def section_key(env_id: str, tier: str) -> str:
+    return env_id if tier == "commands" else f"{env_id} ({tier})"
+
+
+def heading(env_id: str, tier: str) -> str:
+    return f"### {env_id}" if tier == "commands" else f"### {env_id}, {tier} actions (no env_wrapper)"
+
+
+def stored_rows(path: Path = RESULTS) -> dict[str, list[dict[str, Any]]]:
+    return json.loads(path.read_text()) if path.exists() else {}
+
+
+def table_rows(root: Path, env_id: str, tier: str, algos: list[str], seeds: list[int],
+               stored: dict[str, list[dict[str, Any]]]) -> list[dict[str, Any]]:
+    """The rows of the runs in ``root`` if it holds a trained one in ``tier`` (random actions alone are not a
+    table: they are shared by the tiers), else the rows stored in ``RESULTS`` (none if neither); found rows replace
+    the stored ones."""
+    rows = agent_rows(root, env_id, algos, seeds, tier)
+    key = section_key(env_id, tier)
+    if any(row["algo"] != "random" for row in rows):
+        stored[key] = rows
+        return rows
+    return stored.get(key, [])
+
+
+def previous_sections(path: Path) -> dict[str, str]:
+    """The sections of the page as it is, by heading line: a variant whose runs are neither in ``--root`` nor in
+    ``RESULTS`` keeps its section as the command last wrote it."""
+    if not path.exists():
+        return {}
+    sections: dict[str, str] = {}
+    current = None
+    for line in path.read_text().splitlines():
+        if line.startswith(f"<!-- {GOAL_SECTION}:start"):  # the goal env's section is kept on its own
+            break
+        if line.startswith("### "):
+            current = line
+            sections[current] = ""
+        if current is not None:
+            sections[current] += line + "\n"
+    return sections
+
+
+def stack_ceiling() -> dict[str, Any] | None:
+    """The stack planner's measured row of the largest budget (``agents.stack_planner --readme``), or None."""
+    rows = stack_planner.saved_rows()
+    return rows[-1] if rows else None
+
+
+def stack_table(title: str, rows: list[dict[str, Any]], top: dict[str, Any] | None) -> list[str]:
+    lines = [title, "",
+             "| agent | success | mean final height | stack fell | mean return | return while training | "
+             "throws (env steps) | wall time |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|"]
+    for row in rows:
+        results, timing = row["results"], [t for t in row["timing"] if t]
+        steps = f"{int(np.mean([t['timesteps'] for t in timing])):,}" if timing else "-"
+        wall = report.format_seconds(float(np.mean([t["wall_seconds"] for t in timing]))) if timing else "-"
+        exploring = [v for v in row.get("training_return", []) if v is not None]
+        lines.append(f"| {row['agent']} | {spread([r['success_rate'] for r in results])} | "
+                     f"{np.mean([r['mean_height'] for r in results]):.3f} m | "
+                     f"{np.mean([r['fall_rate'] for r in results]):.1%} | "
+                     f"{np.mean([r['mean_reward'] for r in results]):.2f} | "
+                     f"{f'{np.mean(exploring):.2f}' if exploring else '-'} | {steps} | {wall} |")
+    if top:
+        lines.append(f"| ceiling: planner, {top['name']} budget ({top['simulated_per_throw']:.0f} throws simulated per "
+                     f"throw), {top['episodes']} episodes | {top['success_rate']:.1%} | {top['mean_height']:.3f} m | "
+                     f"{top['fall_rate']:.1%} | - | - | - | {report.format_seconds(top['seconds'])} |")
+    lines += ["", "Success, height, falls and return: the final policy acting deterministically on the test episodes. "
+              "Return while training: the mean episode return of the last rollouts (SB3's `rollout/ep_rew_mean`), the "
+              "exploring policy's (PPO's Gaussian, SAC's sampled actions, TD3's action noise)."]
+    return lines
+
+
+def variant_table(title: str, rows: list[dict[str, Any]], sweep: list[dict[str, Any]] | None) -> list[str]:
+    lines = [title, "",
              "| agent | success | mean distance | median distance | face accuracy | env steps | wall time |",
              "|---|---:|---:|---:|---:|---:|---:|"]
     for row in rows:
@@ -260,14 +375,16 @@ def sweep_table(sweep: list[dict[str, Any]]) -> list[str]:
     return lines
 
 
-def plot_curves(root: Path, env_id: str, algos: list[str], seeds: list[int], sweep, path: Path) -> Path | None:
-    """Validation success against throws and against wall time, one line per training run."""
+def plot_curves(root: Path, env_id: str, algos: list[str], seeds: list[int], top: float | None, path: Path,
+                tier: str = "commands") -> Path | None:
+    """Validation success against throws and against wall time, one line per training run; ``top`` the ceiling's
+    success (a dashed line)."""
     plt = report.pyplot()
     fig, (ax_steps, ax_wall) = plt.subplots(1, 2, figsize=(10, 3.6))
     drawn = False
     for k, algo in enumerate(algos):
         for seed in seeds:
-            curve = report.read_evaluations(run_dir(root, env_id, algo, seed))
+            curve = report.read_evaluations(run_dir(root, env_id, algo, seed, tier))
             if curve is None:
                 continue
             label = algo.upper() if seed == seeds[0] else None
@@ -277,16 +394,16 @@ def plot_curves(root: Path, env_id: str, algos: list[str], seeds: list[int], swe
     if not drawn:
         plt.close(fig)
         return None
-    if sweep:
+    if top is not None:
         for ax in (ax_steps, ax_wall):
-            ax.axhline(ceiling.ceiling_of(sweep)["success_rate"], color="k", linestyle="--", linewidth=1,
-                       label="ceiling (oracle)")
-    ax_steps.set(xlabel="throws (env steps)", ylabel="success (validation targets)", ylim=(0, 1.02))
+            ax.axhline(top, color="k", linestyle="--", linewidth=1, label="ceiling")
+    episodes = "episodes" if is_stack(env_id) else "targets"
+    ax_steps.set(xlabel="throws (env steps)", ylabel=f"success (validation {episodes})", ylim=(0, 1.02))
     ax_wall.set(xlabel="wall time [min]", ylim=(0, 1.02))
     ax_steps.legend(fontsize=8)
     for ax in (ax_steps, ax_wall):
         ax.grid(alpha=0.3)
-    fig.suptitle(f"{env_id}: learning curves, one line per training seed")
+    fig.suptitle(f"{heading(env_id, tier)[4:]}: learning curves, one line per training seed")
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     save_figure(fig, path, dpi=100)
@@ -294,58 +411,145 @@ def plot_curves(root: Path, env_id: str, algos: list[str], seeds: list[int], swe
     return path
 
 
-def document(root: Path, envs: list[str], algos: list[str], seeds: list[int], docs: Path = DOCS) -> str:
-    lines = [f"Every agent on the same {TEST_TARGETS:,} test targets per variant (the ceiling on the first "
-             f"{ceiling.CEILING_TARGETS}); success: at rest within the tolerance on a target face. Training runs: "
-             "`python -m agents.train --algo A --env E --seed S` with the file's hyperparameters, on this 2-core "
-             "machine; several seeds give the mean and (min-max).", ""]
+def read_sweep(root: Path, env_id: str) -> list[dict[str, Any]] | None:
+    path = root / env_id / "ceiling.json"
+    return json.loads(path.read_text()) if path.exists() else None
+
+
+def ceiling_success(root: Path, env_id: str) -> float | None:
+    """The ceiling's success rate: the stack planner's for a stacking env, the oracle sweep's otherwise."""
+    if is_stack(env_id):
+        top = stack_ceiling()
+        return None if top is None else top["success_rate"]
+    sweep = read_sweep(root, env_id)
+    return None if sweep is None else ceiling.ceiling_of(sweep)["success_rate"]
+
+
+INTRO = ("Every agent on the same {targets:,} test targets per variant (the ceiling on the first "
+         "{ceiling_targets}); success: at rest within the tolerance on a target face. Training runs: `python -m "
+         "agents.train --algo A --env E --seed S` with the file's hyperparameters, on this 2-core machine; several "
+         "seeds give the mean and (min-max). `BoxToss-Stack-v0` (an episode is a hand of 4 throws, "
+         "[docs/stack.md](../stack.md)) is scored on {episodes} test episodes (seeds 10000...): success is the "
+         "whole hand stacked on the target, the ceiling is `agents.stack_planner`'s on its own episodes. A table "
+         "titled *raw actions* is the same recipe trained in the env's own actions (speed, direction, spin: `--set "
+         "env_wrapper=null`, `python -m agents.benchmark --tiers raw`; PPO's recipes for BoxToss-v0 and BoxToss-"
+         "LongSide-v0 have no env_wrapper, so there both tiers train the same thing); a smaller budget than the "
+         "recipe's is given by `--set n_timesteps=N` (the env steps column says what was trained). A section whose "
+         "runs are not on the machine that wrote this page is rebuilt from `docs/agents/benchmark_results.json` "
+         "(the rows as measured), or kept as it was.")
+
+
+def document(root: Path, envs: list[str], algos: list[str], seeds: list[int], docs: Path = DOCS,
+             stored: dict[str, list[dict[str, Any]]] | None = None) -> str:
+    stored = {} if stored is None else stored
+    previous = previous_sections(docs / "benchmark.md")
+    lines = [INTRO.format(targets=TEST_TARGETS, ceiling_targets=ceiling.CEILING_TARGETS,
+                          episodes=STACK_TEST_EPISODES), ""]
     for env_id in envs:
-        sweep_path = root / env_id / "ceiling.json"
-        sweep = json.loads(sweep_path.read_text()) if sweep_path.exists() else None
-        rows = agent_rows(root, env_id, algos, seeds)
-        if not rows and not sweep:
-            continue
-        lines += variant_table(env_id, rows, sweep) + [""]
-        lines += breakdowns(rows) + [""]
-        if sweep:
-            lines += sweep_table(sweep) + [""]
-        figure = plot_curves(root, env_id, algos, seeds, sweep, docs / f"curves_{env_id}.png")
-        if figure is not None:
-            lines += [f"![learning curves on {env_id}](curves_{env_id}.png)", ""]
+        for tier in TIERS:
+            title = heading(env_id, tier)
+            rows = table_rows(root, env_id, tier, algos, seeds, stored)
+            sweep = None if is_stack(env_id) else read_sweep(root, env_id)
+            if not rows and not (sweep and tier == "commands"):
+                if title in previous:
+                    lines += previous[title].rstrip("\n").splitlines() + [""]
+                continue
+            if is_stack(env_id):
+                lines += stack_table(title, rows, stack_ceiling()) + [""]
+            else:
+                lines += variant_table(title, rows, sweep if tier == "commands" else None) + [""]
+                lines += breakdowns(rows) + [""]
+                if sweep and tier == "commands":
+                    lines += sweep_table(sweep) + [""]
+            name = f"curves_{env_id}{'' if tier == 'commands' else '_' + tier}.png"
+            figure = plot_curves(root, env_id, algos, seeds, ceiling_success(root, env_id), docs / name, tier)
+            if figure is not None or (docs / name).exists():
+                lines += [f"![learning curves on {title[4:]}]({name})", ""]
     return "\n".join(lines)
 
 
-def headline(root: Path, envs: list[str], algos: list[str], seeds: list[int]) -> str:
-    """The README's summary: success per variant and agent, against the ceiling."""
+def previous_headline(readme: Path) -> dict[str, str]:
+    """The README's benchmark rows as they are, by their first cell (kept for a variant with no data here)."""
+    if not readme.exists():
+        return {}
+    text = readme.read_text()
+    if "<!-- benchmark:start -->" not in text:
+        return {}
+    section = text.split("<!-- benchmark:start -->", 1)[1].split("<!-- benchmark:end -->", 1)[0]
+    return {line.split("|")[1].strip(): line for line in section.splitlines()
+            if line.startswith("| ") and not line.startswith("| variant")}
+
+
+def headline(root: Path, envs: list[str], algos: list[str], seeds: list[int],
+             stored: dict[str, list[dict[str, Any]]] | None = None, readme: Path = README) -> str:
+    """The README's summary: success per variant (and tier) and agent, against the ceiling."""
+    stored = {} if stored is None else stored
+    previous = previous_headline(readme)
     lines = ["| variant | random | " + " | ".join(a.upper() for a in algos) + " | ceiling |",
              "|---|---:|" + "---:|" * len(algos) + "---:|"]
     for env_id in envs:
-        rows = {row["agent"].split(" ")[0]: row for row in agent_rows(root, env_id, algos, seeds)}
-        sweep_path = root / env_id / "ceiling.json"
-        top = math.nan
-        if sweep_path.exists():
-            top = ceiling.ceiling_of(json.loads(sweep_path.read_text()))["success_rate"]
-        cells = [spread([r["success_rate"] for r in rows[a.upper()]["results"]]) if a.upper() in rows else "-"
-                 for a in algos]
-        random = rows.get("random")
-        lines.append(f"| {env_id} | {spread([random['results'][0]['success_rate']]) if random else '-'} | "
-                     + " | ".join(cells) + f" | {'-' if math.isnan(top) else f'{top:.1%}'} |")
+        for tier in TIERS:
+            label = env_id if tier == "commands" else f"{env_id}, {tier} actions"
+            found = table_rows(root, env_id, tier, algos, seeds, stored)
+            if not found:
+                if label in previous:
+                    lines.append(previous[label])
+                continue
+            rows = {row["algo"]: row for row in found}
+            top = ceiling_success(root, env_id)
+            cells = [spread([r["success_rate"] for r in rows[a]["results"]]) if a in rows else "-" for a in algos]
+            random = rows.get("random")
+            lines.append(f"| {label} | {spread([random['results'][0]['success_rate']]) if random else '-'} | "
+                         + " | ".join(cells) + f" | {'-' if top is None else f'{top:.1%}'} |")
     return "\n".join(lines)
 
 
-def ratios(root: Path, envs: list[str], algos: list[str], seeds: list[int]) -> str:
-    """One line: the best learned agent's share of the ceiling's success, per variant."""
+def ratios(root: Path, envs: list[str], algos: list[str], seeds: list[int],
+           stored: dict[str, list[dict[str, Any]]] | None = None, readme: Path = README) -> str:
+    """One line: the best learned agent's share of the ceiling's success, per variant and tier."""
+    stored = {} if stored is None else stored
     parts = []
     for env_id in envs:
-        sweep_path = root / env_id / "ceiling.json"
-        rows = [row for row in agent_rows(root, env_id, algos, seeds) if row["agent"] != "random actions"]
-        if not sweep_path.exists() or not rows:
-            continue
-        top = ceiling.ceiling_of(json.loads(sweep_path.read_text()))["success_rate"]
-        best = max(rows, key=lambda row: np.mean([r["success_rate"] for r in row["results"]]))
-        share = np.mean([r["success_rate"] for r in best["results"]]) / top
-        parts.append(f"{env_id} {share:.0%} ({best['agent']})")
+        for tier in TIERS:
+            top = ceiling_success(root, env_id)
+            rows = [row for row in table_rows(root, env_id, tier, algos, seeds, stored) if row["algo"] != "random"]
+            label = env_id if tier == "commands" else f"{env_id} ({tier})"
+            if rows and top:
+                best = max(rows, key=lambda row: np.mean([r["success_rate"] for r in row["results"]]))
+                share = np.mean([r["success_rate"] for r in best["results"]]) / top
+                parts.append(f"{label} {share:.0%} ({best['agent']})")
+            elif tier == "commands" and (old := previous_share(readme, env_id)):
+                parts.append(old)
     return "Best learned agent's success as a share of the ceiling's: " + ", ".join(parts) + "."
+
+
+def previous_share(readme: Path, env_id: str) -> str | None:
+    """The README's share for ``env_id`` as it is (kept for a variant with no data here)."""
+    if not readme.exists() or "share of the ceiling's: " not in readme.read_text():
+        return None
+    line = readme.read_text().split("share of the ceiling's: ", 1)[1].split("\n", 1)[0].rstrip(".")
+    return next((part for part in line.split(", ") if part.startswith(env_id + " ")), None)
+
+
+def check_options(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """Every env id registered, every training's hyperparameters (with the tier's and ``--set`` overrides) valid:
+    a one-line error before anything is created or trained."""
+    for env_id in args.envs:
+        if env_id not in gym.registry:
+            parser.error(f"--envs: {env_id!r} is not registered")
+    if args.report_only:
+        return
+    for env_id in args.envs:
+        if env_id == GOAL_ENV:  # its agents' settings: GOAL_AGENTS and the goal recipes (goal_hyperparams)
+            continue
+        for algo in args.algos:
+            for tier in args.tiers:
+                try:
+                    config = configuration.apply_overrides(configuration.load_hyperparams(algo, env_id),
+                                                           [*TIER_OVERRIDES[tier], *args.overrides], algo)
+                    configuration.check_config(config, algo)
+                except configuration.ConfigError as error:
+                    parser.error(f"{algo} on {env_id} ({tier}): {error}")
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -354,20 +558,26 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--algos", nargs="+", default=sorted(ALGORITHMS), choices=sorted(ALGORITHMS))
     parser.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
     parser.add_argument("--root", type=Path, default=ROOT)
+    parser.add_argument("--tiers", nargs="+", default=["commands"], choices=list(TIERS),
+                        help="commands: the recipes as their files say; raw: in the env's own actions (no env_wrapper)")
+    parser.add_argument("--set", nargs="*", default=[], action="extend", metavar="KEY=VALUE", dest="overrides",
+                        help="override the files' hyperparameters of every training, e.g. n_timesteps=16384")
     parser.add_argument("--no-ceiling", action="store_true", help="skip the oracle sweep")
     parser.add_argument("--report-only", action="store_true", help="train nothing: tables from finished runs")
     parser.add_argument("--readme", action="store_true", help="write docs/agents/benchmark.md and the README section")
     args = parser.parse_args(argv)
     variants = [env_id for env_id in args.envs if env_id != GOAL_ENV]
     goal = GOAL_ENV in args.envs
+    check_options(parser, args)
     if not args.report_only:
         for env_id in variants:
             ensure_random(args.root, env_id)
-            if not args.no_ceiling:
+            if not args.no_ceiling and not is_stack(env_id):  # the stack's ceiling: agents.stack_planner
                 ensure_ceiling(args.root, env_id)
             for seed in args.seeds:
-                for algo in args.algos:
-                    ensure_trained(args.root, env_id, algo, seed)
+                for tier in args.tiers:
+                    for algo in args.algos:
+                        ensure_trained(args.root, env_id, algo, seed, tier, args.overrides)
         if goal:
             ensure_random(args.root, GOAL_ENV)
             for seed in args.seeds:
@@ -381,11 +591,13 @@ def main(argv: list[str] | None = None) -> None:
         if args.readme and goal_text:
             replace_section(GOAL_SECTION, goal_text)
         return
-    text = document(args.root, variants, args.algos, args.seeds)
-    summary = headline(args.root, variants, args.algos, args.seeds)
+    stored = stored_rows()
+    text = document(args.root, variants, args.algos, args.seeds, stored=stored)
+    summary = headline(args.root, variants, args.algos, args.seeds, stored)
     print(summary)
     if args.readme:
         DOCS.mkdir(parents=True, exist_ok=True)
+        write_atomic(RESULTS, json.dumps(stored, indent=1) + "\n")
         page = DOCS / "benchmark.md"
         kept = goal_text if goal_text else (read_section(GOAL_SECTION, page) or "")
         write_atomic(page, "# BoxToss benchmark\n\nGenerated by `python -m agents.benchmark --report-only --readme` "
@@ -393,10 +605,12 @@ def main(argv: list[str] | None = None) -> None:
                      + f"\n<!-- {GOAL_SECTION}:start -->\n{kept}\n<!-- {GOAL_SECTION}:end -->\n")
         report.write_readme("### Benchmark: every variant, every algorithm, against the ceiling\n\n"
                             "`python -m agents.benchmark` (then `--report-only --readme`). Success on the test "
-                            "targets; the ceiling is the oracle whose search grew until its success stopped rising "
+                            "targets (`BoxToss-Stack-v0`: on test episodes, its ceiling the stack planner's; *raw "
+                            "actions*: the recipe without its ballistic command); the ceiling is the oracle whose "
+                            "search grew until its success stopped rising "
                             "(details, breakdowns by face and distance, the oracle's budgets and the learning curves: "
                             "[docs/agents/benchmark.md](docs/agents/benchmark.md)):\n\n" + summary + "\n\n"
-                            + ratios(args.root, args.envs, args.algos, args.seeds), "benchmark")
+                            + ratios(args.root, variants, args.algos, args.seeds, stored), "benchmark")
 
 
 if __name__ == "__main__":

@@ -46,7 +46,8 @@ ZOO_KEYS = {
     "env_kwargs": "kwargs of gymnasium.make_vec and gymnasium.make",
     "noise_type": "action noise of off-policy algorithms: 'normal'",
     "noise_std": "standard deviation of that noise, in action units",
-    "env_wrapper": "wrapper of each env: box_toss_env.envs.ballistic.BallisticThrows (ballistic commands)",
+    "env_wrapper": "wrapper of each env: box_toss_env.envs.ballistic.BallisticThrows (ballistic commands), "
+                   "box_toss_env.envs.stack_commands.StackCommands (BoxToss-Stack-v0's), null: the env's own actions",
 }
 PROJECT_KEYS = {
     "vec_env_kwargs": "kwargs of gymnasium.make_vec only (engine threads)",

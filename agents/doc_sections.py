@@ -27,6 +27,7 @@ SECTION_PAGES = {
     "cold-start": DOCS / "cold-start.md",  # python -m benchmarks.cold_start --readme
     "rllib-sampling": DOCS / "rllib.md",  # python -m benchmarks.rllib_sampling --readme
     "reports": DOCS / "reports.md",  # python -m reports.precision / stability / collisions
+    "raw-actions": DOCS / "agents.md",  # python -m agents.raw_actions --readme
     "stack-ceiling": DOCS / "stack.md",  # python -m agents.stack_planner --readme
     "stack-ppo": DOCS / "stack.md",  # python -m agents.stack_planner --model RUN --readme
     "stack-throughput": DOCS / "stack.md",  # python -m benchmarks.stack_throughput --readme

@@ -27,11 +27,16 @@ from stable_baselines3.common.vec_env import VecEnv, VecEnvWrapper, VecMonitor, 
 
 import box_toss_env  # noqa: F401  (registers the BoxToss envs)
 from box_toss_env.envs.ballistic import ballistic_actions
+from box_toss_env.envs.stack_commands import batch_command_actions
 from box_toss_env.wrappers.ballistic import BallisticThrowsVector
 from box_toss_env.wrappers.sb3_adapter import SB3VecEnvAdapter
+from box_toss_env.wrappers.stack_commands import StackCommandsVector
 
 BALLISTIC = "box_toss_env.envs.ballistic.BallisticThrows"
-ENV_WRAPPERS = {BALLISTIC: "ballistic throw commands (flight time, landing offset, lean from the prior)"}
+STACK_COMMANDS = "box_toss_env.envs.stack_commands.StackCommands"
+ENV_WRAPPERS = {BALLISTIC: "ballistic throw commands (flight time, landing offset, lean from the prior)",
+                STACK_COMMANDS: "BoxToss-Stack-v0's throw commands (flight time, touchdown offset, lean, aimed at the "
+                                "stack's top)"}
 """The values of ``env_wrapper`` that training accepts (each has a vector form and a ``command_map``)."""
 
 
@@ -77,6 +82,8 @@ def wrap_vector_env(vector_env: gym.vector.VectorEnv, env_wrapper: Any) -> gym.v
     wrapper = read_env_wrapper(env_wrapper)
     if wrapper is None:
         return vector_env
+    if wrapper[0] == STACK_COMMANDS:
+        return StackCommandsVector(vector_env, **wrapper[1])
     return BallisticThrowsVector(vector_env, **wrapper[1])
 
 
@@ -87,6 +94,9 @@ def command_map(env_wrapper: Any) -> Callable[[np.ndarray, np.ndarray, gym.Env],
     if wrapper is None:
         return None
     kwargs = wrapper[1]
+    if wrapper[0] == STACK_COMMANDS:
+        return lambda observations, commands, env: batch_command_actions(observations, commands, env.unwrapped.config,
+                                                                         **kwargs)
     return lambda observations, commands, env: ballistic_actions(observations, commands, env.unwrapped.config,
                                                                  **kwargs)[0]
 

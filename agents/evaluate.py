@@ -17,7 +17,7 @@ import gymnasium as gym
 
 from agents import report
 from agents.config import ConfigError, OneLineParser, load_yaml
-from agents.evaluation import TEST_FIRST_SEED, TEST_TARGETS, evaluate_run, parse_kwargs
+from agents.evaluation import STACK_TEST_EPISODES, TEST_FIRST_SEED, TEST_TARGETS, evaluate_run, parse_kwargs
 from agents.policies import UnreadableModelError
 from agents.run_folder import RunFolderError, check_component
 
@@ -26,7 +26,8 @@ def check_args(args: argparse.Namespace) -> dict:
     """The env kwargs of the command, every option checked first (a ConfigError or RunFolderError)."""
     if not (args.run / "config.yml").exists():
         raise ConfigError(f"{args.run} is not a run folder (no config.yml)")
-    for option, value, low in (("--targets", args.targets, 1), ("--first-seed", args.first_seed, 0),
+    for option, value, low in (("--targets", 1 if args.targets is None else args.targets, 1),
+                               ("--first-seed", args.first_seed, 0),
                                ("--video", args.video, 0)):
         if value < low:
             raise ConfigError(f"{option} must be an integer >= {low}, got {value}")
@@ -51,7 +52,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--env-kwargs", nargs="*", default=[], metavar="KEY=VALUE",
                         help="change env settings for the evaluation, e.g. solver=seed dt=0.0009765625")
     parser.add_argument("--tag", help="name of the results folder RUN/eval/TAG (default: from the env kwargs)")
-    parser.add_argument("--targets", type=int, default=TEST_TARGETS, help="number of test targets")
+    parser.add_argument("--targets", type=int, help=f"number of test targets (default: {TEST_TARGETS}; a stacking "
+                                                     f"env's episodes: {STACK_TEST_EPISODES})")
     parser.add_argument("--first-seed", type=int, default=TEST_FIRST_SEED)
     parser.add_argument("--video", type=int, default=0, metavar="N", help="also write a GIF of N throws")
     parser.add_argument("--no-plots", action="store_true", help="skip the PNG figures")

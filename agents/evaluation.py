@@ -134,6 +134,60 @@ def evaluate(policy: Policy, env_id: str, env_kwargs: dict[str, Any] | None = No
         env.close()
 
 
+# -- episodes of several throws (BoxToss-Stack-v0) ------------------------------------------------
+STACK_TEST_EPISODES = 256  # the report's episodes of a stacking env (seeds 10000...): 4 throws each
+
+
+def is_stack(env_id: str) -> bool:
+    """Whether ``env_id`` is a stacking env (episodes of several throws, scored per episode)."""
+    return env_id.startswith("BoxToss-Stack")
+
+
+def evaluate_stack(policy: Policy, env_id: str, env_kwargs: dict[str, Any] | None = None,
+                   seeds=None) -> tuple[dict[str, np.ndarray], float]:
+    """One episode per seed with ``policy``'s deterministic actions, all episodes at once in the env's batched form
+    (bit for bit the single env's, one engine thread): per episode its success, final stack height [m], whether
+    the stack fell, its return and throws; and the seconds the policy took to answer."""
+    seeds = target_seeds(STACK_TEST_EPISODES) if seeds is None else np.asarray(seeds)
+    n = len(seeds)
+    env = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point", threads=1, **(env_kwargs or {}))
+    episodes = {"seeds": np.asarray(seeds), "success": np.zeros(n, dtype=bool), "height": np.zeros(n),
+                "fell": np.zeros(n, dtype=bool), "ret": np.zeros(n), "throws": np.zeros(n, dtype=np.int64)}
+    act_seconds = 0.0
+    try:
+        observations, _ = env.reset(seed=[int(seed) for seed in seeds])
+        infos = [{} for _ in range(n)]
+        done = np.zeros(n, dtype=bool)
+        while not done.all():
+            start = time.perf_counter()
+            actions = np.asarray(policy.act(observations, infos, env), dtype=np.float32).reshape(n, -1)
+            act_seconds += time.perf_counter() - start
+            observations, reward, terminated, truncated, info = env.step(np.clip(actions, -1.0, 1.0))
+            live = ~done
+            episodes["ret"][live] += reward[live]
+            episodes["throws"][live] += 1
+            ended = live & (terminated | truncated)
+            if ended.any():
+                final = info["final_info"]
+                episodes["success"][ended] = final["success"][ended]
+                episodes["height"][ended] = final["stack_height"][ended]
+                episodes["fell"][ended] = final["fell"][ended]
+            done |= ended
+    finally:
+        env.close()
+    return episodes, act_seconds
+
+
+def stack_scores(episodes: dict[str, np.ndarray]) -> dict[str, Any]:
+    """Success rate, mean final stack height, fall rate, mean return of ``evaluate_stack``'s episodes (the one-throw
+    scores that mean nothing here, distance and face accuracy, are NaN)."""
+    n = len(episodes["seeds"])
+    return {"n": n, "success_rate": float(episodes["success"].mean()), "mean_height": float(episodes["height"].mean()),
+            "fall_rate": float(episodes["fell"].mean()), "mean_reward": float(episodes["ret"].mean()),
+            "throws": int(episodes["throws"].sum()), "mean_distance": math.nan, "median_distance": math.nan,
+            "face_accuracy": math.nan, "failures": 0}
+
+
 # -- scores --------------------------------------------------------------------------------------
 def scores(throws: Throws, mask: np.ndarray | None = None) -> dict[str, Any]:
     """Success rate, landing distance (mean, median, over throws that finished), face accuracy,
@@ -252,22 +306,38 @@ def load_policy(run_dir: Path, model: str = "final") -> tuple[Policy, dict[str, 
 
 
 def evaluate_run(run_dir: Path, *, model: str = "final", env_kwargs: dict[str, Any] | None = None,
-                 tag: str | None = None, n_targets: int = TEST_TARGETS, first_seed: int = TEST_FIRST_SEED,
+                 tag: str | None = None, n_targets: int | None = None, first_seed: int = TEST_FIRST_SEED,
                  quiet: bool = False) -> dict[str, Any]:
     """Evaluate the run's policy on the test targets, under the env settings it was trained with,
     updated with ``env_kwargs``; write ``RUN/eval/TAG/`` (results.json, throws.npz) and return the
     results. The default tag names every setting that differs from the defaults (``default_tag``);
     a folder holding the results of other settings is never overwritten (a RunFolderError)."""
     run_dir = Path(run_dir)
-    tag = check_component(tag, "--tag") if tag is not None else default_tag(env_kwargs, model, n_targets, first_seed)
     policy, config = load_policy(run_dir, model)
     env_id = THROWN_IN.get(config["env_id"], config["env_id"])
+    default_count = STACK_TEST_EPISODES if is_stack(env_id) else TEST_TARGETS  # a stacking env: episodes
+    n_targets = default_count if n_targets is None else n_targets
+    tag = (check_component(tag, "--tag") if tag is not None
+           else default_tag(env_kwargs, model, n_targets, first_seed, default_count))
     kwargs = {**config.get("env_kwargs", {}), **(env_kwargs or {})}
     seeds = target_seeds(n_targets, first_seed)
     out = run_dir / "eval" / tag
     settings = {"model": model, "env_id": env_id, "env_kwargs": kwargs, "seeds": [int(seeds[0]), int(seeds[-1])]}
     check_results_folder(out, settings)
     start = time.perf_counter()
+    if is_stack(env_id):
+        episodes, act_seconds = evaluate_stack(policy, env_id, kwargs, seeds)
+        results = {"run": run_dir.name, "algo": config["algo"], "model": model, "env_id": env_id, "env_kwargs": kwargs,
+                   "seeds": [int(seeds[0]), int(seeds[-1])], "act_seconds": act_seconds,
+                   "eval_seconds": time.perf_counter() - start, "tag": tag, **stack_scores(episodes)}
+        out.mkdir(parents=True, exist_ok=True)
+        write_atomic(out / "episodes.npz", lambda file: np.savez_compressed(file, **episodes))
+        write_atomic(out / "results.json", json.dumps(results, indent=2))
+        if not quiet:
+            print(f"{run_dir.name} ({config['algo']}) on {env_id}, episodes of seeds {seeds[0]}-{seeds[-1]}: success "
+                  f"{results['success_rate']:.1%}, mean final height {results['mean_height']:.3f} m, stack fell "
+                  f"{results['fall_rate']:.1%}, mean return {results['mean_reward']:.3f}; results in {out}")
+        return results
     throws, act_seconds = evaluate(policy, env_id, kwargs, seeds)
     wall = time.perf_counter() - start
     target_x_range = gym.make(env_id, **kwargs).unwrapped.config.target_x_range
@@ -304,13 +374,13 @@ def check_results_folder(out: Path, settings: dict[str, Any]) -> None:
 
 
 def default_tag(env_kwargs: dict[str, Any] | None, model: str = "final", n_targets: int = TEST_TARGETS,
-                first_seed: int = TEST_FIRST_SEED) -> str:
+                first_seed: int = TEST_FIRST_SEED, default_count: int = TEST_TARGETS) -> str:
     """"default" for the test targets under the run's own env settings; otherwise the settings that
     differ (``best-dt=0.000976562-targets=8``), so that no evaluation overwrites another."""
     parts = [] if model == "final" else [model]
     for key, value in sorted((env_kwargs or {}).items()):
         parts.append(f"{key}={value:.6g}" if isinstance(value, float) else f"{key}={value}")
-    if n_targets != TEST_TARGETS:
+    if n_targets != default_count:
         parts.append(f"targets={n_targets}")
     if first_seed != TEST_FIRST_SEED:
         parts.append(f"first_seed={first_seed}")

@@ -43,13 +43,15 @@ class Policy(Protocol):
 
 
 class RandomPolicy:
-    """Uniform actions in [-1, 1]^3 from a seeded generator (the same throws on every evaluation)."""
+    """Uniform actions in [-1, 1]^3 from a generator seeded at construction (the same throws on every evaluation
+    with a new policy); each call draws new actions (the throws of an episode of several steps differ)."""
 
     def __init__(self, seed: int = 0):
         self.seed = seed
+        self.rng = np.random.default_rng(seed)
 
     def act(self, observations: np.ndarray, reset_infos, env: gym.Env) -> np.ndarray:
-        return np.random.default_rng(self.seed).uniform(-1.0, 1.0, (len(observations), task.ACTION_SIZE))
+        return self.rng.uniform(-1.0, 1.0, (len(observations), task.ACTION_SIZE))
 
 
 class ConstantPolicy:

@@ -202,6 +202,8 @@ def plot_run(run_dir: Path, eval_dir: Path) -> list[Path]:
     if curve is not None:
         paths.append(plot_learning_curves({run_dir.name: curve}, eval_dir / "learning_curve.png"))
     results = json.loads((eval_dir / "results.json").read_text())
+    if not (eval_dir / "throws.npz").exists():  # a stacking env's episodes: no landing errors to draw
+        return paths
     config = gym.make(results["env_id"], **results["env_kwargs"]).unwrapped.config
     paths.append(plot_landing_errors({run_dir.name: Throws.load(eval_dir / "throws.npz")},
                                      eval_dir / "landing_errors.png", config.target_x_range, config.position_tolerance))

@@ -25,11 +25,13 @@ import gymnasium as gym
 import box_toss_env  # noqa: F401  (registers the BoxToss envs)
 from agents import algorithms
 from agents import config as configuration
-from agents.envs import read_env_wrapper
+from agents.envs import BALLISTIC, STACK_COMMANDS, read_env_wrapper
 from agents.policies import UnreadableModelError
 from agents.run_folder import RunFolderError, check_component, check_runs_dir, lock_run, unlock_run
 from agents.training import RUNS, check_resume, new_run_dir, train, write_run_files
 from box_toss_env.envs.ballistic import DEFAULT_OFFSET_RANGE, DEFAULT_TURN_RANGE, check_command_settings
+from box_toss_env.envs.stack_commands import check_stack_command_settings
+from box_toss_env.envs.stack_task import StackConfig
 
 
 def parse_args(argv: list[str]) -> argparse.Namespace:
@@ -87,7 +89,14 @@ def resolve(args: argparse.Namespace) -> tuple[str, str, int, dict]:
         raise configuration.ConfigError(f"env_kwargs: {error}") from None
     try:
         wrapper = read_env_wrapper(config.get("env_wrapper"))
-        if wrapper is not None:  # the wrapper's own checks of its kwargs
+        stack = isinstance(env.unwrapped.config, StackConfig)
+        if wrapper is not None and (wrapper[0] == STACK_COMMANDS) != stack:
+            raise ValueError(f"{wrapper[0]} does not act on {env_id}; "
+                             f"{'BoxToss-Stack envs take' if stack else 'it is for BoxToss-Stack envs only, use'} "
+                             f"{STACK_COMMANDS if stack else BALLISTIC}, or no env_wrapper (the env's own actions)")
+        if wrapper is not None and stack:
+            check_stack_command_settings(**wrapper[1])
+        elif wrapper is not None:  # the wrapper's own checks of its kwargs
             defaults = {"flight_time_range": None, "offset_range": DEFAULT_OFFSET_RANGE,
                         "turn_range": DEFAULT_TURN_RANGE}
             check_command_settings(env.unwrapped.config, **{**defaults, **wrapper[1]})
@@ -126,6 +135,10 @@ def main(argv: list[str] | None = None) -> Path:
           f"(env {timing['env_share']:.0%} of the training loop, validation {timing['eval_seconds']:.1f} s)")
     if not args.no_eval:
         results = json.loads((run_dir / "eval" / "default" / "results.json").read_text())
+        if "mean_height" in results:  # a stacking env: scored per episode
+            print(f"test episodes: success {results['success_rate']:.1%}, mean final height "
+                  f"{results['mean_height']:.3f} m, stack fell {results['fall_rate']:.1%}")
+            return run_dir
         print(f"test targets: success {results['success_rate']:.1%}, mean distance {results['mean_distance']:.3f} m, "
               f"face accuracy {results['face_accuracy']:.1%}")
     return run_dir

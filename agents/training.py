@@ -36,7 +36,16 @@ from stable_baselines3.common.logger import Logger, TensorBoardOutputFormat
 from agents import algorithms
 from agents import config as configuration
 from agents.envs import TimedVecEnv, find_wrapper, make_training_env, make_vector_env, normalizer_of
-from agents.evaluation import VALIDATION_FIRST_SEED, evaluate, evaluate_run, scores, target_seeds
+from agents.evaluation import (
+    VALIDATION_FIRST_SEED,
+    evaluate,
+    evaluate_run,
+    evaluate_stack,
+    is_stack,
+    scores,
+    stack_scores,
+    target_seeds,
+)
 from agents.policies import TrainedPolicy, UnreadableModelError, load_model
 from agents.run_folder import (
     LOCK,
@@ -225,8 +234,10 @@ class ValidationCallback(BaseCallback):
         begin = time.perf_counter()
         vec_normalize = normalizer_of(self.training_env)
         policy = TrainedPolicy(self.model, vec_normalize, self.config.get("env_wrapper"))
-        throws, _ = evaluate(policy, self.env_id, self.config["env_kwargs"], self.seeds)
-        result = scores(throws)
+        if is_stack(self.env_id):
+            result = stack_scores(evaluate_stack(policy, self.env_id, self.config["env_kwargs"], self.seeds)[0])
+        else:
+            result = scores(evaluate(policy, self.env_id, self.config["env_kwargs"], self.seeds)[0])
         wall = self.clock.wall() - (time.perf_counter() - begin)
         for key in ("success_rate", "mean_distance", "face_accuracy", "mean_reward"):
             self.logger.record(f"eval/{key}", result[key])

@@ -72,3 +72,25 @@ class StackCommands(gym.Wrapper):
         observation, reward, terminated, truncated, info = self.env.step(env_action.astype(np.float32))
         self._observation = np.asarray(observation)
         return observation, reward, terminated, truncated, info
+
+
+def batch_command_actions(observations: np.ndarray, commands: np.ndarray, config: stack_task.StackConfig,
+                          flight_time_range: tuple[float, float] = FLIGHT_TIME_RANGE,
+                          offset_range: float = OFFSET_RANGE, turn_range: float = TURN_RANGE) -> np.ndarray:
+    """The env actions (n, 3) of one command per env: ``commands`` (n, 3) from ``observations`` (n, obs), row by
+    row as ``command_actions`` (a vector env's, or a policy's batch)."""
+    observations, commands = np.asarray(observations), np.asarray(commands, dtype=np.float64).reshape(-1, 3)
+    return np.concatenate([command_actions(observations[i], commands[i:i + 1], config, flight_time_range,
+                                           offset_range, turn_range) for i in range(len(commands))])
+
+
+def check_stack_command_settings(flight_time_range=FLIGHT_TIME_RANGE, offset_range=OFFSET_RANGE,
+                                 turn_range=TURN_RANGE) -> tuple[tuple[float, float], float, float]:
+    """The command settings, checked: a ValueError naming the first that is out of range."""
+    low, high = (float(v) for v in flight_time_range)
+    if not (0.0 < low < high and math.isfinite(high)):
+        raise ValueError(f"flight_time_range must be (low, high) with 0 < low < high, got {flight_time_range!r}")
+    for name, value in (("offset_range", offset_range), ("turn_range", turn_range)):
+        if not (math.isfinite(float(value)) and float(value) >= 0.0):
+            raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+    return (low, high), float(offset_range), float(turn_range)

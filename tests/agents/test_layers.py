@@ -10,7 +10,8 @@ LAYERS = {
     "evaluation": 3,
     "training": 4, "ceiling": 4,
     "report": 5, "tuning": 5, "sweep_report": 5,
-    "train": 6, "evaluate": 6, "baselines": 6, "tune": 6, "rllib_ppo": 6, "variant_gifs": 6, "benchmark": 7, "main": 7,
+    "train": 6, "evaluate": 6, "baselines": 6, "tune": 6, "rllib_ppo": 6, "variant_gifs": 6, "raw_actions": 6,
+    "benchmark": 7, "main": 7,
 }
 
 

@@ -1,0 +1,119 @@
+"""How wide a correct throw is, in the env's own actions and in ballistic commands: why SAC and TD3 trail PPO in
+the raw tier.
+
+For each of the first N test targets (seeds 10000...) of a one-throw variant, the oracle's cross-entropy search finds
+a throw that succeeds, once in the env's actions (speed, direction, spin in [-1, 1]^3) and once in ballistic
+commands (``envs.ballistic``: flight time, landing offset, lean, in [-1, 1]^3). Then ``draws`` throws per target
+are made at that solution plus Gaussian noise of standard deviation sigma in each space (clipped to [-1, 1]): the
+success of a Gaussian policy centred on a correct throw, as an off-policy learner's exploration makes them (TD3's
+action noise, SAC's stochastic policy). The width of the region that succeeds, in each space, is what those numbers
+measure; the commands' region is the wider one where they succeed at a larger sigma.
+
+    python -m agents.raw_actions --targets 64 --readme      # the table in docs/agents.md (section raw-actions)
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import gymnasium as gym
+import numpy as np
+
+import box_toss_env  # noqa: F401  (registers the BoxToss envs)
+from agents import oracle
+from agents.doc_sections import replace_section
+from agents.evaluation import draw_targets, target_seeds
+from box_toss_env.envs import task
+from box_toss_env.envs.ballistic import ballistic_actions
+
+SIGMAS = (0.01, 0.03, 0.1, 0.2, 0.3)
+ENVS = ("BoxToss-v0", "BoxToss-ThisSideUp-v0")
+
+
+class CommandSimulator:
+    """``oracle.ThrowSimulator`` acting in ballistic commands: each command mapped to the env's action from the
+    episode's first observation, as ``BallisticThrows`` does."""
+
+    def __init__(self, simulator: oracle.ThrowSimulator):
+        self.simulator, self.config = simulator, simulator.config
+
+    def actions(self, episodes: task.Episodes, commands: np.ndarray) -> np.ndarray:
+        core = self.simulator.core
+        observations = core.observation(core.for_episodes(episodes))
+        return ballistic_actions(observations, commands, self.config)[0]
+
+    def rewards(self, episodes: task.Episodes, commands: np.ndarray):
+        return self.simulator.rewards(episodes, self.actions(episodes, commands))
+
+
+def noisy_success(simulator, episodes: task.Episodes, solutions: np.ndarray, sigma: float, draws: int,
+                  rng: np.random.Generator) -> float:
+    """The success rate of ``draws`` throws per episode at its solution plus N(0, sigma^2) noise per dimension."""
+    n = len(episodes.data)
+    repeated = task.Episodes(np.repeat(episodes.data, draws, axis=0))
+    noisy = np.clip(np.repeat(solutions, draws, axis=0) + sigma * rng.standard_normal((n * draws, 3)), -1.0, 1.0)
+    return float(simulator.rewards(repeated, noisy)[1].mean())
+
+
+def measure(env_id: str, n_targets: int, draws: int, sigmas=SIGMAS, seed: int = 0) -> dict:
+    """Per space ("env actions", "ballistic commands"): the oracle's success on the targets, and the success of
+    noisy throws around its solutions (the targets it solved) per sigma."""
+    env = gym.make(env_id)
+    _, infos = draw_targets(env, target_seeds(n_targets))
+    episodes = oracle.episodes_from_infos(infos)
+    base = oracle.ThrowSimulator(env, threads=1)
+    result = {"env_id": env_id, "targets": n_targets, "draws": draws, "spaces": {}}
+    for name, simulator in (("env actions", base), ("ballistic commands", CommandSimulator(base))):
+        start = time.perf_counter()
+        planner = oracle.OraclePlanner(oracle.OracleSettings(threads=1, seed=seed))
+        solutions = planner.plan(simulator, episodes)
+        solved = simulator.rewards(episodes, solutions)[1]
+        kept = task.Episodes(episodes.data[solved])
+        rng = np.random.default_rng(seed)
+        result["spaces"][name] = {
+            "solved": float(solved.mean()),
+            "noisy": {str(sigma): noisy_success(simulator, kept, solutions[solved], sigma, draws, rng)
+                      for sigma in sigmas},
+            "seconds": time.perf_counter() - start}
+    env.close()
+    return result
+
+
+def table(results: list[dict], command: str) -> str:
+    sigmas = list(results[0]["spaces"]["env actions"]["noisy"])
+    lines = [f"Measured by `{command}`: the oracle's solution per target (the targets it solved), then "
+             f"{results[0]['draws']} throws per target at it plus Gaussian noise of standard deviation sigma per "
+             "dimension, in the space the agent acts in (both spaces are [-1, 1]^3):", "",
+             "| variant | acting in | oracle solved | " + " | ".join(f"sigma {s}" for s in sigmas) + " |",
+             "|---|---|---:|" + "---:|" * len(sigmas)]
+    for result in results:
+        for name, space in result["spaces"].items():
+            lines.append(f"| {result['env_id']} | {name} | {space['solved']:.1%} of {result['targets']} | "
+                         + " | ".join(f"{space['noisy'][s]:.1%}" for s in sigmas) + " |")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(prog="python -m agents.raw_actions", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--envs", nargs="+", default=list(ENVS))
+    parser.add_argument("--targets", type=int, default=64)
+    parser.add_argument("--draws", type=int, default=32, help="noisy throws per target and sigma")
+    parser.add_argument("--readme", action="store_true", help="write the table into docs/agents.md")
+    args = parser.parse_args(argv)
+    for env_id in args.envs:
+        if env_id not in gym.registry or env_id.startswith("BoxToss-Stack"):
+            parser.error(f"--envs: {env_id!r} is not a registered one-throw BoxToss variant")
+    if args.targets < 1 or args.draws < 1:
+        parser.error("--targets and --draws must be integers >= 1")
+    results = [measure(env_id, args.targets, args.draws) for env_id in args.envs]
+    command = (f"python -m agents.raw_actions --envs {' '.join(args.envs)} --targets {args.targets} --draws "
+               f"{args.draws} --readme")
+    text = table(results, command)
+    print(text)
+    if args.readme:
+        replace_section("raw-actions", text)
+
+
+if __name__ == "__main__":
+    main()

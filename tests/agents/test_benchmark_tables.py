@@ -1,0 +1,46 @@
+"""agents.benchmark's page: stacking and raw-tier tables from stored rows, sections without data kept as they were."""
+
+import json
+
+from agents import benchmark
+
+
+def stack_row(algo: str, success: float, seed: int) -> dict:
+    return {"agent": f"{algo.upper()} (1 seed)", "algo": algo, "seeds": [seed],
+            "results": [{"success_rate": success, "mean_height": 0.5, "fall_rate": 0.1, "mean_reward": 2.0}],
+            "timing": [{"timesteps": 16384, "wall_seconds": 120.0}]}
+
+
+def test_stored_rows_make_the_tables_and_old_sections_stay(tmp_path):
+    docs = tmp_path / "docs"
+    docs.mkdir()
+    (docs / "benchmark.md").write_text("# BoxToss benchmark\n\nintro\n\n### BoxToss-v0\n\n| kept as it was |\n")
+    readme = tmp_path / "README.md"
+    readme.write_text("<!-- benchmark:start -->\n| variant | random |\n|---|\n| BoxToss-v0 | 9.9% |\n"
+                      "<!-- benchmark:end -->\n")
+    stored = {"BoxToss-Stack-v0": [stack_row("ppo", 0.25, 0), stack_row("sac", 0.5, 0)]}
+    stored["BoxToss-Stack-v0"][0]["results"].append({**stored["BoxToss-Stack-v0"][0]["results"][0],
+                                                     "success_rate": 0.75})
+    stored["BoxToss-Stack-v0"][0]["timing"].append(stored["BoxToss-Stack-v0"][0]["timing"][0])
+    envs = ["BoxToss-v0", "BoxToss-Stack-v0"]
+    text = benchmark.document(tmp_path / "runs", envs, ["ppo", "sac", "td3"], [0, 1, 2], docs=docs, stored=stored)
+    assert "| kept as it was |" in text
+    assert "### BoxToss-Stack-v0" in text
+    assert "| PPO (1 seed) | 50.0% (25.0%-75.0%) | 0.500 m | 10.0% | 2.00 | - |" in text
+    assert "ceiling: planner" in text  # docs/agents/stack_ceiling.json
+    summary = benchmark.headline(tmp_path / "runs", envs, ["ppo", "sac", "td3"], [0, 1, 2], stored, readme)
+    assert "| BoxToss-v0 | 9.9% |" in summary
+    assert "| BoxToss-Stack-v0 | - | 50.0% (25.0%-75.0%) | 50.0% | - |" in summary
+    json.dumps(stored)  # what --readme writes to docs/agents/benchmark_results.json
+
+
+def test_random_actions_alone_do_not_replace_a_table(tmp_path):
+    from agents.evaluation import make_baseline_run
+
+    root = tmp_path / "runs"
+    path = make_baseline_run("random", root / "BoxToss-v0" / "random", "BoxToss-v0")
+    (path / "eval" / "default").mkdir(parents=True)
+    (path / "eval" / "default" / "results.json").write_text(json.dumps({"success_rate": 0.02}))
+    stored = {"BoxToss-v0": [stack_row("ppo", 1.0, 0)]}
+    assert benchmark.table_rows(root, "BoxToss-v0", "commands", ["ppo"], [0], stored) == stored["BoxToss-v0"]
+    assert benchmark.table_rows(root, "BoxToss-v0", "raw", ["ppo"], [0], stored) == []
