@@ -49,13 +49,23 @@ from agents.training import RUNS, latest_checkpoint, read_timing
 from box_toss_env.envs.ballistic import BallisticThrows
 from box_toss_env.files import atomic_path, save_figure, write_atomic
 
-VARIANTS = ("BoxToss-v0", "BoxToss-LongSide-v0", "BoxToss-ShortEnd-v0", "BoxToss-ThisSideUp-v0", "BoxToss-Mixed-v0",
-            "BoxToss-OnBox-v0", "BoxToss-Stack-v0")
+VARIANTS = (
+    "BoxToss-v0",
+    "BoxToss-LongSide-v0",
+    "BoxToss-ShortEnd-v0",
+    "BoxToss-ThisSideUp-v0",
+    "BoxToss-Mixed-v0",
+    "BoxToss-OnBox-v0",
+    "BoxToss-Stack-v0",
+)
 GOAL_ENV = "BoxToss-Goal-v0"
-GOAL_AGENTS = {"sac-her": ("sac", True, True, "SAC + HER"), "td3-her": ("td3", True, True, "TD3 + HER"),
-               "sac-no-her": ("sac", False, True, "SAC without HER"),
-               "sac-her-env-actions": ("sac", True, False, "SAC + HER, env actions"),
-               "sac-no-her-env-actions": ("sac", False, False, "SAC without HER, env actions")}
+GOAL_AGENTS = {
+    "sac-her": ("sac", True, True, "SAC + HER"),
+    "td3-her": ("td3", True, True, "TD3 + HER"),
+    "sac-no-her": ("sac", False, True, "SAC without HER"),
+    "sac-her-env-actions": ("sac", True, False, "SAC + HER, env actions"),
+    "sac-no-her-env-actions": ("sac", False, False, "SAC without HER, env actions"),
+}
 """The goal env's agents: run name -> (algorithm, with the recipe's HerReplayBuffer, in the recipe's ballistic
 commands (else in env actions), the table's label)."""
 GOAL_SECTION = "benchmark-goal"
@@ -64,9 +74,10 @@ DOCS = report.DOCS
 FACE_KINDS = ("any face", "a long side", "a short end", "face 0", "face 1", "face 2", "face 3")
 
 
-TIERS = {"commands": "the recipe's actions (the ballistic or the stack's throw commands where its file sets an "
-                     "env_wrapper)",
-         "raw": "the env's own actions (speed, direction, spin; the recipe without its env_wrapper)"}
+TIERS = {
+    "commands": "the recipe's actions (the ballistic or the stack's throw commands where its file sets an env_wrapper)",
+    "raw": "the env's own actions (speed, direction, spin; the recipe without its env_wrapper)",
+}
 """How the agents act: ``commands`` as the hyperparameter file says, ``raw`` without its ``env_wrapper``."""
 TIER_OVERRIDES = {"commands": [], "raw": ["env_wrapper=null"]}
 
@@ -76,8 +87,9 @@ def run_dir(root: Path, env_id: str, algo: str, seed: int, tier: str = "commands
     return folder / f"{algo}-seed{seed}"
 
 
-def ensure_trained(root: Path, env_id: str, algo: str, seed: int, tier: str = "commands",
-                   overrides: list[str] | None = None) -> Path:
+def ensure_trained(
+    root: Path, env_id: str, algo: str, seed: int, tier: str = "commands", overrides: list[str] | None = None
+) -> Path:
     """The run of ``algo`` on ``env_id`` with ``seed`` in ``tier``, trained (or resumed) if it has no results;
     ``overrides`` (``--set``) change the file's hyperparameters, e.g. a shorter ``n_timesteps``."""
     path = run_dir(root, env_id, algo, seed, tier)
@@ -87,8 +99,22 @@ def ensure_trained(root: Path, env_id: str, algo: str, seed: int, tier: str = "c
     if (path / "config.yml").exists() and latest_checkpoint(path, algo) is not None:
         train.main(["--resume", str(path), "--no-progress"])
     else:
-        train.main(["--algo", algo, "--env", env_id, "--seed", str(seed), "--no-progress", "--runs-dir",
-                    str(path.parent), "--name", path.name, *settings])
+        train.main(
+            [
+                "--algo",
+                algo,
+                "--env",
+                env_id,
+                "--seed",
+                str(seed),
+                "--no-progress",
+                "--runs-dir",
+                str(path.parent),
+                "--name",
+                path.name,
+                *settings,
+            ]
+        )
     return path
 
 
@@ -117,15 +143,26 @@ def ensure_goal_trained(root: Path, agent: str, seed: int) -> Path:
         return path
     algo, config = goal_hyperparams(agent)
     path.mkdir(parents=True, exist_ok=True)
-    write_atomic(path / "config.yml", yaml.safe_dump({"algo": algo, "env_id": GOAL_ENV, "env_kwargs": {}, "goal": True,
-                                                      "seed": seed, "hyperparams": config}, sort_keys=False))
+    write_atomic(
+        path / "config.yml",
+        yaml.safe_dump(
+            {"algo": algo, "env_id": GOAL_ENV, "env_kwargs": {}, "goal": True, "seed": seed, "hyperparams": config},
+            sort_keys=False,
+        ),
+    )
     write_atomic(path / "command.txt", f"python -m agents.benchmark --envs {GOAL_ENV} --seeds {seed}\n")
     torch.set_num_threads(int(config.get("torch_threads", 1)))
     wrapper = read_env_wrapper(config.get("env_wrapper"))  # ballistic commands, as the flat recipes
-    venv = make_vec_env(GOAL_ENV, n_envs=int(config["n_envs"]), seed=seed, wrapper_class=BallisticThrows if wrapper
-                        else None, wrapper_kwargs=wrapper[1] if wrapper else None)
-    model = algorithms.algorithm_class(algo)(env=venv, seed=seed, device="cpu", verbose=0,
-                                             **algorithm_kwargs(config, algo))
+    venv = make_vec_env(
+        GOAL_ENV,
+        n_envs=int(config["n_envs"]),
+        seed=seed,
+        wrapper_class=BallisticThrows if wrapper else None,
+        wrapper_kwargs=wrapper[1] if wrapper else None,
+    )
+    model = algorithms.algorithm_class(algo)(
+        env=venv, seed=seed, device="cpu", verbose=0, **algorithm_kwargs(config, algo)
+    )
     print(f"{GOAL_ENV}: {GOAL_AGENTS[agent][-1]}, seed {seed}, {int(config['n_timesteps']):,} throws ...", flush=True)
     start = time.perf_counter()
     model.learn(int(config["n_timesteps"]))
@@ -133,9 +170,18 @@ def ensure_goal_trained(root: Path, agent: str, seed: int) -> Path:
     venv.close()
     with atomic_path(path / "model.zip") as temp:
         model.save(temp)
-    write_atomic(path / "timing.json", json.dumps({"algo": algo, "timesteps": int(model.num_timesteps),
-                                                   "wall_seconds": wall, "torch_threads": torch.get_num_threads()},
-                                                  indent=2))
+    write_atomic(
+        path / "timing.json",
+        json.dumps(
+            {
+                "algo": algo,
+                "timesteps": int(model.num_timesteps),
+                "wall_seconds": wall,
+                "torch_threads": torch.get_num_threads(),
+            },
+            indent=2,
+        ),
+    )
     evaluate_run(path, quiet=True)
     return path
 
@@ -155,8 +201,10 @@ def ensure_ceiling(root: Path, env_id: str) -> dict[str, Any]:
     if not path.exists():
         partial = path.with_suffix(".partial.json")
         done = json.loads(partial.read_text()) if partial.exists() else []
-        print(f"{env_id}: oracle at {len(ceiling.BUDGETS)} search budgets on {ceiling.CEILING_TARGETS} targets"
-              f"{f' ({len(done)} done before)' if done else ''} ...")
+        print(
+            f"{env_id}: oracle at {len(ceiling.BUDGETS)} search budgets on {ceiling.CEILING_TARGETS} targets"
+            f"{f' ({len(done)} done before)' if done else ''} ..."
+        )
         path.parent.mkdir(parents=True, exist_ok=True)
         rows = ceiling.sweep(env_id, done=done, on_row=lambda rows: write_atomically(partial, rows))
         write_atomically(path, rows)
@@ -178,8 +226,9 @@ def spread(values: list[float]) -> str:
     return f"{mean:.1%}" if len(values) == 1 else f"{mean:.1%} ({min(values):.1%}-{max(values):.1%})"
 
 
-def agent_rows(root: Path, env_id: str, algos: list[str], seeds: list[int],
-               tier: str = "commands") -> list[dict[str, Any]]:
+def agent_rows(
+    root: Path, env_id: str, algos: list[str], seeds: list[int], tier: str = "commands"
+) -> list[dict[str, Any]]:
     """The rows of the runs found in ``root``: random actions (the same in every tier), then each algorithm's
     seeds in ``tier``."""
     rows = []
@@ -187,14 +236,24 @@ def agent_rows(root: Path, env_id: str, algos: list[str], seeds: list[int],
     if random:
         rows.append({"agent": "random actions", "algo": "random", "results": [random], "timing": [None]})
     for algo in algos:
-        found = [(seed, report.read_results(p), read_timing(p)) for seed in seeds
-                 if report.read_results(p := run_dir(root, env_id, algo, seed, tier)) is not None]
+        found = [
+            (seed, report.read_results(p), read_timing(p))
+            for seed in seeds
+            if report.read_results(p := run_dir(root, env_id, algo, seed, tier)) is not None
+        ]
         if found:
-            rows.append({"agent": f"{algo.upper()} ({len(found)} seed{'s' * (len(found) > 1)})", "algo": algo,
-                         "seeds": [seed for seed, _, _ in found], "results": [r for _, r, _ in found],
-                         "timing": [t for _, _, t in found],
-                         "training_return": [training_return(run_dir(root, env_id, algo, seed, tier))
-                                             for seed, _, _ in found]})
+            rows.append(
+                {
+                    "agent": f"{algo.upper()} ({len(found)} seed{'s' * (len(found) > 1)})",
+                    "algo": algo,
+                    "seeds": [seed for seed, _, _ in found],
+                    "results": [r for _, r, _ in found],
+                    "timing": [t for _, _, t in found],
+                    "training_return": [
+                        training_return(run_dir(root, env_id, algo, seed, tier)) for seed, _, _ in found
+                    ],
+                }
+            )
     return rows
 
 
@@ -205,11 +264,19 @@ def goal_rows(root: Path, algos: list[str], seeds: list[int]) -> list[dict[str, 
     if random:
         rows.append({"agent": "random actions", "results": [random], "timing": [None]})
     for agent, (algo, _, _, label) in GOAL_AGENTS.items():
-        found = [(report.read_results(p), read_timing(p)) for seed in seeds if algo in algos
-                 and report.read_results(p := run_dir(root, GOAL_ENV, agent, seed)) is not None]
+        found = [
+            (report.read_results(p), read_timing(p))
+            for seed in seeds
+            if algo in algos and report.read_results(p := run_dir(root, GOAL_ENV, agent, seed)) is not None
+        ]
         if found:
-            rows.append({"agent": f"{label} ({len(found)} seed{'s' * (len(found) > 1)})",
-                         "results": [r for r, _ in found], "timing": [t for _, t in found]})
+            rows.append(
+                {
+                    "agent": f"{label} ({len(found)} seed{'s' * (len(found) > 1)})",
+                    "results": [r for r, _ in found],
+                    "timing": [t for _, t in found],
+                }
+            )
     return rows
 
 
@@ -219,15 +286,19 @@ def goal_document(root: Path, algos: list[str], seeds: list[int]) -> str:
     if not rows:
         return ""
     budgets = sorted({int(goal_hyperparams(agent)[1]["n_timesteps"]) for agent in GOAL_AGENTS})
-    lines = [f"### {GOAL_ENV}: what HER buys, and ballistic commands", "",
-             f"The goal-conditioned form of `BoxToss-v0` (Dict observations): its throws are `BoxToss-v0`'s, scored on "
-             f"the same {TEST_TARGETS:,} test targets (the ceiling is `BoxToss-v0`'s). Each agent is trained with "
-             f"SB3 on `{GOAL_ENV}`'s recipe in `agents/hyperparams/sac.yml` or `td3.yml` "
-             f"({' / '.join(f'{b:,}' for b in budgets)} throws), with the recipe's `HerReplayBuffer` or, without HER, "
-             "the same settings with SB3's plain replay buffer; in the recipe's ballistic commands, or in the env's "
-             "own actions where the row says so (the recipe without `env_wrapper`). "
-             f"`python -m agents.benchmark --envs {GOAL_ENV} --seeds 0 --readme` trains what is missing and rewrites "
-             "this section.", ""]
+    lines = [
+        f"### {GOAL_ENV}: what HER buys, and ballistic commands",
+        "",
+        f"The goal-conditioned form of `BoxToss-v0` (Dict observations): its throws are `BoxToss-v0`'s, scored on "
+        f"the same {TEST_TARGETS:,} test targets (the ceiling is `BoxToss-v0`'s). Each agent is trained with "
+        f"SB3 on `{GOAL_ENV}`'s recipe in `agents/hyperparams/sac.yml` or `td3.yml` "
+        f"({' / '.join(f'{b:,}' for b in budgets)} throws), with the recipe's `HerReplayBuffer` or, without HER, "
+        "the same settings with SB3's plain replay buffer; in the recipe's ballistic commands, or in the env's "
+        "own actions where the row says so (the recipe without `env_wrapper`). "
+        f"`python -m agents.benchmark --envs {GOAL_ENV} --seeds 0 --readme` trains what is missing and rewrites "
+        "this section.",
+        "",
+    ]
     return "\n".join(lines + variant_table(f"### {GOAL_ENV}", rows, None)[2:])  # under this heading, not the variant's
 
 
@@ -258,8 +329,9 @@ def stored_rows(path: Path = RESULTS) -> dict[str, list[dict[str, Any]]]:
     return json.loads(path.read_text()) if path.exists() else {}
 
 
-def table_rows(root: Path, env_id: str, tier: str, algos: list[str], seeds: list[int],
-               stored: dict[str, list[dict[str, Any]]]) -> list[dict[str, Any]]:
+def table_rows(
+    root: Path, env_id: str, tier: str, algos: list[str], seeds: list[int], stored: dict[str, list[dict[str, Any]]]
+) -> list[dict[str, Any]]:
     """The rows of the runs in ``root`` if it holds a trained one in ``tier`` (random actions alone are not a
     table: they are shared by the tiers), else the rows stored in ``RESULTS`` (none if neither); found rows replace
     the stored ones."""
@@ -296,49 +368,66 @@ def stack_ceiling() -> dict[str, Any] | None:
 
 
 def stack_table(title: str, rows: list[dict[str, Any]], top: dict[str, Any] | None) -> list[str]:
-    lines = [title, "",
-             "| agent | success | mean final height | stack fell | mean return | return while training | "
-             "throws (env steps) | wall time |",
-             "|---|---:|---:|---:|---:|---:|---:|---:|"]
+    lines = [
+        title,
+        "",
+        "| agent | success | mean final height | stack fell | mean return | return while training | "
+        "throws (env steps) | wall time |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|",
+    ]
     for row in rows:
         results, timing = row["results"], [t for t in row["timing"] if t]
         steps = f"{int(np.mean([t['timesteps'] for t in timing])):,}" if timing else "-"
         wall = report.format_seconds(float(np.mean([t["wall_seconds"] for t in timing]))) if timing else "-"
         exploring = [v for v in row.get("training_return", []) if v is not None]
-        lines.append(f"| {row['agent']} | {spread([r['success_rate'] for r in results])} | "
-                     f"{np.mean([r['mean_height'] for r in results]):.3f} m | "
-                     f"{np.mean([r['fall_rate'] for r in results]):.1%} | "
-                     f"{np.mean([r['mean_reward'] for r in results]):.2f} | "
-                     f"{f'{np.mean(exploring):.2f}' if exploring else '-'} | {steps} | {wall} |")
+        lines.append(
+            f"| {row['agent']} | {spread([r['success_rate'] for r in results])} | "
+            f"{np.mean([r['mean_height'] for r in results]):.3f} m | "
+            f"{np.mean([r['fall_rate'] for r in results]):.1%} | "
+            f"{np.mean([r['mean_reward'] for r in results]):.2f} | "
+            f"{f'{np.mean(exploring):.2f}' if exploring else '-'} | {steps} | {wall} |"
+        )
     if top:
-        lines.append(f"| ceiling: planner, {top['name']} budget ({top['simulated_per_throw']:.0f} throws simulated per "
-                     f"throw), {top['episodes']} episodes | {top['success_rate']:.1%} | {top['mean_height']:.3f} m | "
-                     f"{top['fall_rate']:.1%} | - | - | - | {report.format_seconds(top['seconds'])} |")
-    lines += ["", "Success, height, falls and return: the final policy acting deterministically on the test episodes. "
-              "Return while training: the mean episode return of the last rollouts (SB3's `rollout/ep_rew_mean`), the "
-              "exploring policy's (PPO's Gaussian, SAC's sampled actions, TD3's action noise)."]
+        lines.append(
+            f"| ceiling: planner, {top['name']} budget ({top['simulated_per_throw']:.0f} throws simulated per "
+            f"throw), {top['episodes']} episodes | {top['success_rate']:.1%} | {top['mean_height']:.3f} m | "
+            f"{top['fall_rate']:.1%} | - | - | - | {report.format_seconds(top['seconds'])} |"
+        )
+    lines += [
+        "",
+        "Success, height, falls and return: the final policy acting deterministically on the test episodes. "
+        "Return while training: the mean episode return of the last rollouts (SB3's `rollout/ep_rew_mean`), the "
+        "exploring policy's (PPO's Gaussian, SAC's sampled actions, TD3's action noise).",
+    ]
     return lines
 
 
 def variant_table(title: str, rows: list[dict[str, Any]], sweep: list[dict[str, Any]] | None) -> list[str]:
-    lines = [title, "",
-             "| agent | success | mean distance | median distance | face accuracy | env steps | wall time |",
-             "|---|---:|---:|---:|---:|---:|---:|"]
+    lines = [
+        title,
+        "",
+        "| agent | success | mean distance | median distance | face accuracy | env steps | wall time |",
+        "|---|---:|---:|---:|---:|---:|---:|",
+    ]
     for row in rows:
         results, timing = row["results"], [t for t in row["timing"] if t]
         steps = f"{int(np.mean([t['timesteps'] for t in timing])):,}" if timing else "-"
         wall = report.format_seconds(float(np.mean([t["wall_seconds"] for t in timing]))) if timing else "-"
-        lines.append(f"| {row['agent']} | {spread([r['success_rate'] for r in results])} | "
-                     f"{np.mean([r['mean_distance'] for r in results]):.3f} m | "
-                     f"{np.mean([r['median_distance'] for r in results]):.3f} m | "
-                     f"{np.mean([r['face_accuracy'] for r in results]):.1%} | {steps} | {wall} |")
+        lines.append(
+            f"| {row['agent']} | {spread([r['success_rate'] for r in results])} | "
+            f"{np.mean([r['mean_distance'] for r in results]):.3f} m | "
+            f"{np.mean([r['median_distance'] for r in results]):.3f} m | "
+            f"{np.mean([r['face_accuracy'] for r in results]):.1%} | {steps} | {wall} |"
+        )
     if sweep:
         top = ceiling.ceiling_of(sweep)
         note = "" if top["converged"] else " (still rising)"
-        lines.append(f"| ceiling: oracle, {top['throws_per_target']:,.0f} simulated throws per target, "
-                     f"{top['n']} targets{note} | {top['success_rate']:.1%} | {top['mean_distance']:.3f} m | "
-                     f"{top['median_distance']:.3f} m | {top['face_accuracy']:.1%} | - | "
-                     f"{report.format_seconds(top['plan_seconds'])} |")
+        lines.append(
+            f"| ceiling: oracle, {top['throws_per_target']:,.0f} simulated throws per target, "
+            f"{top['n']} targets{note} | {top['success_rate']:.1%} | {top['mean_distance']:.3f} m | "
+            f"{top['median_distance']:.3f} m | {top['face_accuracy']:.1%} | - | "
+            f"{report.format_seconds(top['plan_seconds'])} |"
+        )
     return lines
 
 
@@ -364,19 +453,25 @@ def breakdowns(rows: list[dict[str, Any]]) -> list[str]:
 
 
 def sweep_table(sweep: list[dict[str, Any]]) -> list[str]:
-    lines = ["Oracle success as its search grows (the ceiling is the last row):", "",
-             "| initial, population x rounds (elite) | throws per target | success | face accuracy | planning |",
-             "|---|---:|---:|---:|---:|"]
+    lines = [
+        "Oracle success as its search grows (the ceiling is the last row):",
+        "",
+        "| initial, population x rounds (elite) | throws per target | success | face accuracy | planning |",
+        "|---|---:|---:|---:|---:|",
+    ]
     for row in sweep:
         b = row["budget"]
-        lines.append(f"| {b['initial']}, {b['population']} x {b['iterations']} ({b['elite']}) | "
-                     f"{row['throws_per_target']:,.0f} | {row['success_rate']:.1%} | {row['face_accuracy']:.1%} | "
-                     f"{report.format_seconds(row['plan_seconds'])} |")
+        lines.append(
+            f"| {b['initial']}, {b['population']} x {b['iterations']} ({b['elite']}) | "
+            f"{row['throws_per_target']:,.0f} | {row['success_rate']:.1%} | {row['face_accuracy']:.1%} | "
+            f"{report.format_seconds(row['plan_seconds'])} |"
+        )
     return lines
 
 
-def plot_curves(root: Path, env_id: str, algos: list[str], seeds: list[int], top: float | None, path: Path,
-                tier: str = "commands") -> Path | None:
+def plot_curves(
+    root: Path, env_id: str, algos: list[str], seeds: list[int], top: float | None, path: Path, tier: str = "commands"
+) -> Path | None:
     """Validation success against throws and against wall time, one line per training run; ``top`` the ceiling's
     success (a dashed line)."""
     plt = report.pyplot()
@@ -425,26 +520,36 @@ def ceiling_success(root: Path, env_id: str) -> float | None:
     return None if sweep is None else ceiling.ceiling_of(sweep)["success_rate"]
 
 
-INTRO = ("Every agent on the same {targets:,} test targets per variant (the ceiling on the first "
-         "{ceiling_targets}); success: at rest within the tolerance on a target face. Training runs: `python -m "
-         "agents.train --algo A --env E --seed S` with the file's hyperparameters, on this 2-core machine; several "
-         "seeds give the mean and (min-max). `BoxToss-Stack-v0` (an episode is a hand of 4 throws, "
-         "[docs/stack.md](../stack.md)) is scored on {episodes} test episodes (seeds 10000...): success is the "
-         "whole hand stacked on the target, the ceiling is `agents.stack_planner`'s on its own episodes. A table "
-         "titled *raw actions* is the same recipe trained in the env's own actions (speed, direction, spin: `--set "
-         "env_wrapper=null`, `python -m agents.benchmark --tiers raw`; PPO's recipes for BoxToss-v0 and BoxToss-"
-         "LongSide-v0 have no env_wrapper, so there both tiers train the same thing); a smaller budget than the "
-         "recipe's is given by `--set n_timesteps=N` (the env steps column says what was trained). A section whose "
-         "runs are not on the machine that wrote this page is rebuilt from `docs/agents/benchmark_results.json` "
-         "(the rows as measured), or kept as it was.")
+INTRO = (
+    "Every agent on the same {targets:,} test targets per variant (the ceiling on the first "
+    "{ceiling_targets}); success: at rest within the tolerance on a target face. Training runs: `python -m "
+    "agents.train --algo A --env E --seed S` with the file's hyperparameters, on this 2-core machine; several "
+    "seeds give the mean and (min-max). `BoxToss-Stack-v0` (an episode is a hand of 4 throws, "
+    "[docs/stack.md](../stack.md)) is scored on {episodes} test episodes (seeds 10000...): success is the "
+    "whole hand stacked on the target, the ceiling is `agents.stack_planner`'s on its own episodes. A table "
+    "titled *raw actions* is the same recipe trained in the env's own actions (speed, direction, spin: `--set "
+    "env_wrapper=null`, `python -m agents.benchmark --tiers raw`; PPO's recipes for BoxToss-v0 and BoxToss-"
+    "LongSide-v0 have no env_wrapper, so there both tiers train the same thing); a smaller budget than the "
+    "recipe's is given by `--set n_timesteps=N` (the env steps column says what was trained). A section whose "
+    "runs are not on the machine that wrote this page is rebuilt from `docs/agents/benchmark_results.json` "
+    "(the rows as measured), or kept as it was."
+)
 
 
-def document(root: Path, envs: list[str], algos: list[str], seeds: list[int], docs: Path = DOCS,
-             stored: dict[str, list[dict[str, Any]]] | None = None) -> str:
+def document(
+    root: Path,
+    envs: list[str],
+    algos: list[str],
+    seeds: list[int],
+    docs: Path = DOCS,
+    stored: dict[str, list[dict[str, Any]]] | None = None,
+) -> str:
     stored = {} if stored is None else stored
     previous = previous_sections(docs / "benchmark.md")
-    lines = [INTRO.format(targets=TEST_TARGETS, ceiling_targets=ceiling.CEILING_TARGETS,
-                          episodes=STACK_TEST_EPISODES), ""]
+    lines = [
+        INTRO.format(targets=TEST_TARGETS, ceiling_targets=ceiling.CEILING_TARGETS, episodes=STACK_TEST_EPISODES),
+        "",
+    ]
     for env_id in envs:
         for tier in TIERS:
             title = heading(env_id, tier)
@@ -476,17 +581,28 @@ def previous_headline(readme: Path) -> dict[str, str]:
     if "<!-- benchmark:start -->" not in text:
         return {}
     section = text.split("<!-- benchmark:start -->", 1)[1].split("<!-- benchmark:end -->", 1)[0]
-    return {line.split("|")[1].strip(): line for line in section.splitlines()
-            if line.startswith("| ") and not line.startswith("| variant")}
+    return {
+        line.split("|")[1].strip(): line
+        for line in section.splitlines()
+        if line.startswith("| ") and not line.startswith("| variant")
+    }
 
 
-def headline(root: Path, envs: list[str], algos: list[str], seeds: list[int],
-             stored: dict[str, list[dict[str, Any]]] | None = None, readme: Path = README) -> str:
+def headline(
+    root: Path,
+    envs: list[str],
+    algos: list[str],
+    seeds: list[int],
+    stored: dict[str, list[dict[str, Any]]] | None = None,
+    readme: Path = README,
+) -> str:
     """The README's summary: success per variant (and tier) and agent, against the ceiling."""
     stored = {} if stored is None else stored
     previous = previous_headline(readme)
-    lines = ["| variant | random | " + " | ".join(a.upper() for a in algos) + " | ceiling |",
-             "|---|---:|" + "---:|" * len(algos) + "---:|"]
+    lines = [
+        "| variant | random | " + " | ".join(a.upper() for a in algos) + " | ceiling |",
+        "|---|---:|" + "---:|" * len(algos) + "---:|",
+    ]
     for env_id in envs:
         for tier in TIERS:
             label = env_id if tier == "commands" else f"{env_id}, {tier} actions"
@@ -499,13 +615,22 @@ def headline(root: Path, envs: list[str], algos: list[str], seeds: list[int],
             top = ceiling_success(root, env_id)
             cells = [spread([r["success_rate"] for r in rows[a]["results"]]) if a in rows else "-" for a in algos]
             random = rows.get("random")
-            lines.append(f"| {label} | {spread([random['results'][0]['success_rate']]) if random else '-'} | "
-                         + " | ".join(cells) + f" | {'-' if top is None else f'{top:.1%}'} |")
+            lines.append(
+                f"| {label} | {spread([random['results'][0]['success_rate']]) if random else '-'} | "
+                + " | ".join(cells)
+                + f" | {'-' if top is None else f'{top:.1%}'} |"
+            )
     return "\n".join(lines)
 
 
-def ratios(root: Path, envs: list[str], algos: list[str], seeds: list[int],
-           stored: dict[str, list[dict[str, Any]]] | None = None, readme: Path = README) -> str:
+def ratios(
+    root: Path,
+    envs: list[str],
+    algos: list[str],
+    seeds: list[int],
+    stored: dict[str, list[dict[str, Any]]] | None = None,
+    readme: Path = README,
+) -> str:
     """One line: the best learned agent's share of the ceiling's success, per variant and tier."""
     stored = {} if stored is None else stored
     parts = []
@@ -545,8 +670,9 @@ def check_options(parser: argparse.ArgumentParser, args: argparse.Namespace) -> 
         for algo in args.algos:
             for tier in args.tiers:
                 try:
-                    config = configuration.apply_overrides(configuration.load_hyperparams(algo, env_id),
-                                                           [*TIER_OVERRIDES[tier], *args.overrides], algo)
+                    config = configuration.apply_overrides(
+                        configuration.load_hyperparams(algo, env_id), [*TIER_OVERRIDES[tier], *args.overrides], algo
+                    )
                     configuration.check_config(config, algo)
                 except configuration.ConfigError as error:
                     parser.error(f"{algo} on {env_id} ({tier}): {error}")
@@ -558,10 +684,22 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--algos", nargs="+", default=sorted(ALGORITHMS), choices=sorted(ALGORITHMS))
     parser.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
     parser.add_argument("--root", type=Path, default=ROOT)
-    parser.add_argument("--tiers", nargs="+", default=["commands"], choices=list(TIERS),
-                        help="commands: the recipes as their files say; raw: in the env's own actions (no env_wrapper)")
-    parser.add_argument("--set", nargs="*", default=[], action="extend", metavar="KEY=VALUE", dest="overrides",
-                        help="override the files' hyperparameters of every training, e.g. n_timesteps=16384")
+    parser.add_argument(
+        "--tiers",
+        nargs="+",
+        default=["commands"],
+        choices=list(TIERS),
+        help="commands: the recipes as their files say; raw: in the env's own actions (no env_wrapper)",
+    )
+    parser.add_argument(
+        "--set",
+        nargs="*",
+        default=[],
+        action="extend",
+        metavar="KEY=VALUE",
+        dest="overrides",
+        help="override the files' hyperparameters of every training, e.g. n_timesteps=16384",
+    )
     parser.add_argument("--no-ceiling", action="store_true", help="skip the oracle sweep")
     parser.add_argument("--report-only", action="store_true", help="train nothing: tables from finished runs")
     parser.add_argument("--readme", action="store_true", help="write docs/agents/benchmark.md and the README section")
@@ -600,17 +738,26 @@ def main(argv: list[str] | None = None) -> None:
         write_atomic(RESULTS, json.dumps(stored, indent=1) + "\n")
         page = DOCS / "benchmark.md"
         kept = goal_text if goal_text else (read_section(GOAL_SECTION, page) or "")
-        write_atomic(page, "# BoxToss benchmark\n\nGenerated by `python -m agents.benchmark --report-only --readme` "
-                           "from the runs in `runs/benchmark/`.\n\n" + text
-                     + f"\n<!-- {GOAL_SECTION}:start -->\n{kept}\n<!-- {GOAL_SECTION}:end -->\n")
-        report.write_readme("### Benchmark: every variant, every algorithm, against the ceiling\n\n"
-                            "`python -m agents.benchmark` (then `--report-only --readme`). Success on the test "
-                            "targets (`BoxToss-Stack-v0`: on test episodes, its ceiling the stack planner's; *raw "
-                            "actions*: the recipe without its ballistic command); the ceiling is the oracle whose "
-                            "search grew until its success stopped rising "
-                            "(details, breakdowns by face and distance, the oracle's budgets and the learning curves: "
-                            "[docs/agents/benchmark.md](docs/agents/benchmark.md)):\n\n" + summary + "\n\n"
-                            + ratios(args.root, variants, args.algos, args.seeds, stored), "benchmark")
+        write_atomic(
+            page,
+            "# BoxToss benchmark\n\nGenerated by `python -m agents.benchmark --report-only --readme` "
+            "from the runs in `runs/benchmark/`.\n\n"
+            + text
+            + f"\n<!-- {GOAL_SECTION}:start -->\n{kept}\n<!-- {GOAL_SECTION}:end -->\n",
+        )
+        report.write_readme(
+            "### Benchmark: every variant, every algorithm, against the ceiling\n\n"
+            "`python -m agents.benchmark` (then `--report-only --readme`). Success on the test "
+            "targets (`BoxToss-Stack-v0`: on test episodes, its ceiling the stack planner's; *raw "
+            "actions*: the recipe without its ballistic command); the ceiling is the oracle whose "
+            "search grew until its success stopped rising "
+            "(details, breakdowns by face and distance, the oracle's budgets and the learning curves: "
+            "[docs/agents/benchmark.md](docs/agents/benchmark.md)):\n\n"
+            + summary
+            + "\n\n"
+            + ratios(args.root, variants, args.algos, args.seeds, stored),
+            "benchmark",
+        )
 
 
 if __name__ == "__main__":

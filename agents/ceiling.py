@@ -32,9 +32,15 @@ CEILING_TARGETS = 256  # the first test targets (seeds 10000...)
 RISE_TOLERANCE = 0.01  # "stopped rising": the last budget adds at most this much success
 
 
-def sweep(env_id: str, env_kwargs: dict[str, Any] | None = None, budgets=BUDGETS, n_targets: int = CEILING_TARGETS,
-          threads: int | None = None, done: list[dict[str, Any]] | None = None,
-          on_row: Callable[[list[dict[str, Any]]], None] | None = None) -> list[dict[str, Any]]:
+def sweep(
+    env_id: str,
+    env_kwargs: dict[str, Any] | None = None,
+    budgets=BUDGETS,
+    n_targets: int = CEILING_TARGETS,
+    threads: int | None = None,
+    done: list[dict[str, Any]] | None = None,
+    on_row: Callable[[list[dict[str, Any]]], None] | None = None,
+) -> list[dict[str, Any]]:
     """For each budget: the oracle's success, distance and face accuracy on the first ``n_targets``
     test targets, the throws it simulated per target and its planning seconds.
 
@@ -57,10 +63,15 @@ def sweep(env_id: str, env_kwargs: dict[str, Any] | None = None, budgets=BUDGETS
         actions = planner.plan(simulator, episodes_from_infos(infos))
         seconds = time.perf_counter() - start
         result = scores(throw(env, seeds, actions, infos))
-        rows.append({"budget": dataclasses.asdict(settings) | {"threads": None}, "n": result["n"],
-                     "throws_per_target": planner.simulated / n_targets, "plan_seconds": seconds,
-                     **{key: result[key] for key in ("success_rate", "mean_distance", "median_distance",
-                                                     "face_accuracy")}})
+        rows.append(
+            {
+                "budget": dataclasses.asdict(settings) | {"threads": None},
+                "n": result["n"],
+                "throws_per_target": planner.simulated / n_targets,
+                "plan_seconds": seconds,
+                **{key: result[key] for key in ("success_rate", "mean_distance", "median_distance", "face_accuracy")},
+            }
+        )
         if on_row is not None:
             on_row(rows)
     env.close()

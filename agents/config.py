@@ -47,7 +47,7 @@ ZOO_KEYS = {
     "noise_type": "action noise of off-policy algorithms: 'normal'",
     "noise_std": "standard deviation of that noise, in action units",
     "env_wrapper": "wrapper of each env: box_toss_env.envs.ballistic.BallisticThrows (ballistic commands), "
-                   "box_toss_env.envs.stack_commands.StackCommands (BoxToss-Stack-v0's), null: the env's own actions",
+    "box_toss_env.envs.stack_commands.StackCommands (BoxToss-Stack-v0's), null: the env's own actions",
 }
 PROJECT_KEYS = {
     "vec_env_kwargs": "kwargs of gymnasium.make_vec only (engine threads)",
@@ -252,10 +252,14 @@ def check_config(config: dict[str, Any], algo: str = "ppo") -> None:
     if not isinstance(policy_kwargs, dict):
         raise ConfigError(f"policy_kwargs must be a mapping, got {policy_kwargs!r}")
     activation = policy_kwargs.get("activation_fn", "nn.Tanh")
-    if not (isinstance(activation, str) and activation.startswith("nn.")
-            and isinstance(getattr(torch.nn, activation[3:], None), type)):
-        raise ConfigError(f"policy_kwargs.activation_fn must name a torch.nn activation (nn.Tanh, nn.ReLU, ...), "
-                          f"got {activation!r}")
+    if not (
+        isinstance(activation, str)
+        and activation.startswith("nn.")
+        and isinstance(getattr(torch.nn, activation[3:], None), type)
+    ):
+        raise ConfigError(
+            f"policy_kwargs.activation_fn must name a torch.nn activation (nn.Tanh, nn.ReLU, ...), got {activation!r}"
+        )
     try:
         read_env_wrapper(config.get("env_wrapper"))
     except ValueError as error:
@@ -273,8 +277,17 @@ class Rule:
     ``choices``, a ``lin_<number>`` schedule (``schedule=True``), a list of layer sizes, or a mapping
     (checked by ``mapping`` rules); ``allowed`` says it in words for the error message."""
 
-    def __init__(self, kind: str, low: float | None = None, high: float | None = None, *, choices: tuple = (),
-                 schedule: bool = False, mapping: dict[str, Rule] | None = None, above: bool = False):
+    def __init__(
+        self,
+        kind: str,
+        low: float | None = None,
+        high: float | None = None,
+        *,
+        choices: tuple = (),
+        schedule: bool = False,
+        mapping: dict[str, Rule] | None = None,
+        above: bool = False,
+    ):
         self.kind, self.low, self.high, self.choices = kind, low, high, choices
         self.schedule, self.mapping, self.above = schedule, mapping or {}, above
 
@@ -302,8 +315,13 @@ class Rule:
         if self.schedule and isinstance(value, str):
             prefix, _, start = value.partition("_")
             number = read_value(start)
-            return prefix == "lin" and isinstance(number, (int, float)) and not isinstance(number, bool) \
-                and math.isfinite(number) and number > 0
+            return (
+                prefix == "lin"
+                and isinstance(number, (int, float))
+                and not isinstance(number, bool)
+                and math.isfinite(number)
+                and number > 0
+            )
         if self.kind == "bool":
             return isinstance(value, bool)
         if self.kind == "layers":
@@ -332,10 +350,17 @@ SCHEMA: dict[str, Rule] = {
     # RL Zoo's keys and ours
     "n_timesteps": Rule("int", 1),
     "n_envs": Rule("int", 1),
-    "normalize": Rule("bool", mapping={"norm_obs": Rule("bool"), "norm_reward": Rule("bool"),
-                                       "clip_obs": Rule("float", 0, above=True),
-                                       "clip_reward": Rule("float", 0, above=True),
-                                       "gamma": Rule("float", *UNIT), "epsilon": Rule("float", 0, above=True)}),
+    "normalize": Rule(
+        "bool",
+        mapping={
+            "norm_obs": Rule("bool"),
+            "norm_reward": Rule("bool"),
+            "clip_obs": Rule("float", 0, above=True),
+            "clip_reward": Rule("float", 0, above=True),
+            "gamma": Rule("float", *UNIT),
+            "epsilon": Rule("float", 0, above=True),
+        },
+    ),
     "noise_std": Rule("float", 0),
     "vec_env_kwargs": Rule("mapping", mapping={"threads": Rule("int", 1, numba.config.NUMBA_NUM_THREADS)}),
     "torch_threads": Rule("int", 1),
@@ -360,8 +385,9 @@ SCHEMA: dict[str, Rule] = {
     "policy_delay": Rule("int", 1),
     "target_policy_noise": Rule("float", 0),
     "target_noise_clip": Rule("float", 0),
-    "policy_kwargs": Rule("mapping", mapping={"net_arch": Rule("layers"), "log_std_init": Rule("float"),
-                                              "ortho_init": Rule("bool")}),
+    "policy_kwargs": Rule(
+        "mapping", mapping={"net_arch": Rule("layers"), "log_std_init": Rule("float"), "ortho_init": Rule("bool")}
+    ),
 }
 """Every key with a range. ``check_config`` applies it; the bad-option tests are generated from it."""
 
@@ -386,8 +412,10 @@ def check_schema(config: dict[str, Any]) -> None:
             check_value(key, config[key], rule)
     if "batch_size" in config and "n_steps" in config and config.get("n_envs"):
         if config["batch_size"] > config["n_steps"] * config["n_envs"]:
-            raise ConfigError(f"batch_size must be <= n_steps x n_envs = {config['n_steps'] * config['n_envs']} "
-                              f"(the rollout), got {config['batch_size']}")
+            raise ConfigError(
+                f"batch_size must be <= n_steps x n_envs = {config['n_steps'] * config['n_envs']} "
+                f"(the rollout), got {config['batch_size']}"
+            )
 
 
 # -- constructor arguments -------------------------------------------------------------------------

@@ -34,9 +34,10 @@ from box_toss_env.wrappers.stack_commands import StackCommandsVector
 
 BALLISTIC = "box_toss_env.envs.ballistic.BallisticThrows"
 STACK_COMMANDS = "box_toss_env.envs.stack_commands.StackCommands"
-ENV_WRAPPERS = {BALLISTIC: "ballistic throw commands (flight time, landing offset, lean from the prior)",
-                STACK_COMMANDS: "BoxToss-Stack-v0's throw commands (flight time, touchdown offset, lean, aimed at the "
-                                "stack's top)"}
+ENV_WRAPPERS = {
+    BALLISTIC: "ballistic throw commands (flight time, landing offset, lean from the prior)",
+    STACK_COMMANDS: "BoxToss-Stack-v0's throw commands (flight time, touchdown offset, lean, aimed at the stack's top)",
+}
 """The values of ``env_wrapper`` that training accepts (each has a vector form and a ``command_map``)."""
 
 
@@ -72,8 +73,9 @@ def read_env_wrapper(spec: Any) -> tuple[str, dict[str, Any]] | None:
         name, kwargs = next(iter(spec.items()))
         kwargs = {} if kwargs is None else kwargs
     if not isinstance(name, str) or name not in ENV_WRAPPERS or not isinstance(kwargs, dict):
-        raise ValueError(f"env_wrapper must be one of {sorted(ENV_WRAPPERS)}, optionally as {{name: {{kwargs}}}}, "
-                         f"got {spec!r}")
+        raise ValueError(
+            f"env_wrapper must be one of {sorted(ENV_WRAPPERS)}, optionally as {{name: {{kwargs}}}}, got {spec!r}"
+        )
     return name, kwargs
 
 
@@ -95,23 +97,39 @@ def command_map(env_wrapper: Any) -> Callable[[np.ndarray, np.ndarray, gym.Env],
         return None
     kwargs = wrapper[1]
     if wrapper[0] == STACK_COMMANDS:
-        return lambda observations, commands, env: batch_command_actions(observations, commands, env.unwrapped.config,
-                                                                         **kwargs)
-    return lambda observations, commands, env: ballistic_actions(observations, commands, env.unwrapped.config,
-                                                                 **kwargs)[0]
+        return lambda observations, commands, env: batch_command_actions(
+            observations, commands, env.unwrapped.config, **kwargs
+        )
+    return lambda observations, commands, env: ballistic_actions(
+        observations, commands, env.unwrapped.config, **kwargs
+    )[0]
 
 
-def make_vector_env(env_id: str, n_envs: int, env_kwargs: dict[str, Any] | None = None,
-                    vec_env_kwargs: dict[str, Any] | None = None, env_wrapper: Any = None) -> TimedVecEnv:
+def make_vector_env(
+    env_id: str,
+    n_envs: int,
+    env_kwargs: dict[str, Any] | None = None,
+    vec_env_kwargs: dict[str, Any] | None = None,
+    env_wrapper: Any = None,
+) -> TimedVecEnv:
     """``n_envs`` BoxToss envs as one SB3 VecEnv (timed), from the env's own vector entry point."""
-    vector_env = gym.make_vec(env_id, num_envs=n_envs, vectorization_mode="vector_entry_point",
-                              **(env_kwargs or {}), **(vec_env_kwargs or {}))
+    vector_env = gym.make_vec(
+        env_id, num_envs=n_envs, vectorization_mode="vector_entry_point", **(env_kwargs or {}), **(vec_env_kwargs or {})
+    )
     return TimedVecEnv(SB3VecEnvAdapter(wrap_vector_env(vector_env, env_wrapper)))
 
 
-def make_training_env(env_id: str, n_envs: int, *, seed: int, env_kwargs: dict[str, Any] | None = None,
-                      vec_env_kwargs: dict[str, Any] | None = None, normalize: dict[str, Any] | bool = True,
-                      normalize_path: str | None = None, env_wrapper: Any = None) -> VecEnv:
+def make_training_env(
+    env_id: str,
+    n_envs: int,
+    *,
+    seed: int,
+    env_kwargs: dict[str, Any] | None = None,
+    vec_env_kwargs: dict[str, Any] | None = None,
+    normalize: dict[str, Any] | bool = True,
+    normalize_path: str | None = None,
+    env_wrapper: Any = None,
+) -> VecEnv:
     """The full training stack (module docstring), seeded; with ``normalize_path`` the observation
     statistics are loaded from a saved ``VecNormalize`` (to resume training)."""
     venv: VecEnv = make_vector_env(env_id, n_envs, env_kwargs, vec_env_kwargs, env_wrapper)

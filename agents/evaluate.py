@@ -26,9 +26,11 @@ def check_args(args: argparse.Namespace) -> dict:
     """The env kwargs of the command, every option checked first (a ConfigError or RunFolderError)."""
     if not (args.run / "config.yml").exists():
         raise ConfigError(f"{args.run} is not a run folder (no config.yml)")
-    for option, value, low in (("--targets", 1 if args.targets is None else args.targets, 1),
-                               ("--first-seed", args.first_seed, 0),
-                               ("--video", args.video, 0)):
+    for option, value, low in (
+        ("--targets", 1 if args.targets is None else args.targets, 1),
+        ("--first-seed", args.first_seed, 0),
+        ("--video", args.video, 0),
+    ):
         if value < low:
             raise ConfigError(f"{option} must be an integer >= {low}, got {value}")
     if args.tag is not None:
@@ -47,13 +49,25 @@ def check_args(args: argparse.Namespace) -> dict:
 def main(argv: list[str] | None = None) -> None:
     parser = OneLineParser(prog="python -m agents.evaluate", description=__doc__.split("\n\n")[0])
     parser.add_argument("run", type=Path, help="run folder (runs/NAME)")
-    parser.add_argument("--model", default="final", choices=("final", "best"),
-                        help="the model at the end of training, or the one with the best validation success")
-    parser.add_argument("--env-kwargs", nargs="*", default=[], metavar="KEY=VALUE",
-                        help="change env settings for the evaluation, e.g. solver=seed dt=0.0009765625")
+    parser.add_argument(
+        "--model",
+        default="final",
+        choices=("final", "best"),
+        help="the model at the end of training, or the one with the best validation success",
+    )
+    parser.add_argument(
+        "--env-kwargs",
+        nargs="*",
+        default=[],
+        metavar="KEY=VALUE",
+        help="change env settings for the evaluation, e.g. solver=seed dt=0.0009765625",
+    )
     parser.add_argument("--tag", help="name of the results folder RUN/eval/TAG (default: from the env kwargs)")
-    parser.add_argument("--targets", type=int, help=f"number of test targets (default: {TEST_TARGETS}; a stacking "
-                                                     f"env's episodes: {STACK_TEST_EPISODES})")
+    parser.add_argument(
+        "--targets",
+        type=int,
+        help=f"number of test targets (default: {TEST_TARGETS}; a stacking env's episodes: {STACK_TEST_EPISODES})",
+    )
     parser.add_argument("--first-seed", type=int, default=TEST_FIRST_SEED)
     parser.add_argument("--video", type=int, default=0, metavar="N", help="also write a GIF of N throws")
     parser.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
@@ -64,8 +78,14 @@ def main(argv: list[str] | None = None) -> None:
         print(f"agents.evaluate: {error}", file=sys.stderr)
         sys.exit(2)
     try:
-        results = evaluate_run(args.run, model=args.model, env_kwargs=env_kwargs, tag=args.tag,
-                               n_targets=args.targets, first_seed=args.first_seed)
+        results = evaluate_run(
+            args.run,
+            model=args.model,
+            env_kwargs=env_kwargs,
+            tag=args.tag,
+            n_targets=args.targets,
+            first_seed=args.first_seed,
+        )
     except (UnreadableModelError, RunFolderError) as error:
         sys.exit(f"agents.evaluate: {error}")
     out = args.run / "eval" / results["tag"]
@@ -73,8 +93,9 @@ def main(argv: list[str] | None = None) -> None:
         for path in report.plot_run(args.run, out):
             print(f"figure: {path}")
     if args.video:
-        path = report.record_video(args.run, out / "throws.gif", args.video, model=args.model,
-                                   env_kwargs=results["env_kwargs"])
+        path = report.record_video(
+            args.run, out / "throws.gif", args.video, model=args.model, env_kwargs=results["env_kwargs"]
+        )
         print(f"video: {path}")
 
 

@@ -69,8 +69,20 @@ class Throws:
 
     def save(self, path: Path) -> None:
         """``throws.npz``, written atomically."""
-        arrays = {name: getattr(self, name) for name in ("seeds", "target_x", "target_faces", "actions", "final_x",
-                                                         "face_down", "at_rest", "success", "reward")}
+        arrays = {
+            name: getattr(self, name)
+            for name in (
+                "seeds",
+                "target_x",
+                "target_faces",
+                "actions",
+                "final_x",
+                "face_down",
+                "at_rest",
+                "success",
+                "reward",
+            )
+        }
         write_atomic(path, lambda file: np.savez_compressed(file, failure=np.array(self.failure, dtype=str), **arrays))
 
     @classmethod
@@ -113,10 +125,18 @@ def throw(env: gym.Env, seeds, actions: np.ndarray, reset_infos: list[dict[str, 
             continue
         final_x[i], reward[i], face_down[i] = info["final_x"], r, info["face_down"]
         at_rest[i], success[i] = info["at_rest"], info["success"]
-    return Throws(seeds=np.asarray(seeds), target_x=np.array([info["target_x"] for info in reset_infos]),
-                  target_faces=np.array([info["target_faces"] for info in reset_infos], dtype=np.int8),
-                  actions=np.asarray(actions, dtype=np.float64), final_x=final_x, face_down=face_down,
-                  at_rest=at_rest, success=success, reward=reward, failure=failure)
+    return Throws(
+        seeds=np.asarray(seeds),
+        target_x=np.array([info["target_x"] for info in reset_infos]),
+        target_faces=np.array([info["target_faces"] for info in reset_infos], dtype=np.int8),
+        actions=np.asarray(actions, dtype=np.float64),
+        final_x=final_x,
+        face_down=face_down,
+        at_rest=at_rest,
+        success=success,
+        reward=reward,
+        failure=failure,
+    )
 
 
 def evaluate(policy: Policy, env_id: str, env_kwargs: dict[str, Any] | None = None, seeds=None) -> tuple[Throws, float]:
@@ -143,16 +163,23 @@ def is_stack(env_id: str) -> bool:
     return env_id.startswith("BoxToss-Stack")
 
 
-def evaluate_stack(policy: Policy, env_id: str, env_kwargs: dict[str, Any] | None = None,
-                   seeds=None) -> tuple[dict[str, np.ndarray], float]:
+def evaluate_stack(
+    policy: Policy, env_id: str, env_kwargs: dict[str, Any] | None = None, seeds=None
+) -> tuple[dict[str, np.ndarray], float]:
     """One episode per seed with ``policy``'s deterministic actions, all episodes at once in the env's batched form
     (bit for bit the single env's, one engine thread): per episode its success, final stack height [m], whether
     the stack fell, its return and throws; and the seconds the policy took to answer."""
     seeds = target_seeds(STACK_TEST_EPISODES) if seeds is None else np.asarray(seeds)
     n = len(seeds)
     env = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point", threads=1, **(env_kwargs or {}))
-    episodes = {"seeds": np.asarray(seeds), "success": np.zeros(n, dtype=bool), "height": np.zeros(n),
-                "fell": np.zeros(n, dtype=bool), "ret": np.zeros(n), "throws": np.zeros(n, dtype=np.int64)}
+    episodes = {
+        "seeds": np.asarray(seeds),
+        "success": np.zeros(n, dtype=bool),
+        "height": np.zeros(n),
+        "fell": np.zeros(n, dtype=bool),
+        "ret": np.zeros(n),
+        "throws": np.zeros(n, dtype=np.int64),
+    }
     act_seconds = 0.0
     try:
         observations, _ = env.reset(seed=[int(seed) for seed in seeds])
@@ -182,10 +209,18 @@ def stack_scores(episodes: dict[str, np.ndarray]) -> dict[str, Any]:
     """Success rate, mean final stack height, fall rate, mean return of ``evaluate_stack``'s episodes (the one-throw
     scores that mean nothing here, distance and face accuracy, are NaN)."""
     n = len(episodes["seeds"])
-    return {"n": n, "success_rate": float(episodes["success"].mean()), "mean_height": float(episodes["height"].mean()),
-            "fall_rate": float(episodes["fell"].mean()), "mean_reward": float(episodes["ret"].mean()),
-            "throws": int(episodes["throws"].sum()), "mean_distance": math.nan, "median_distance": math.nan,
-            "face_accuracy": math.nan, "failures": 0}
+    return {
+        "n": n,
+        "success_rate": float(episodes["success"].mean()),
+        "mean_height": float(episodes["height"].mean()),
+        "fall_rate": float(episodes["fell"].mean()),
+        "mean_reward": float(episodes["ret"].mean()),
+        "throws": int(episodes["throws"].sum()),
+        "mean_distance": math.nan,
+        "median_distance": math.nan,
+        "face_accuracy": math.nan,
+        "failures": 0,
+    }
 
 
 # -- scores --------------------------------------------------------------------------------------
@@ -232,13 +267,18 @@ def summarize(throws: Throws, target_x_range: tuple[float, float]) -> dict[str, 
     """``scores`` over all throws, by target distance bin and by target face kind."""
     edges = distance_bins(target_x_range)
     which = np.clip(np.searchsorted(edges, throws.target_x, side="right") - 1, 0, len(edges) - 2)
-    by_distance = [{"bin": f"{edges[k]:.2f}-{edges[k + 1]:.2f} m", **scores(throws, which == k)}
-                   for k in range(len(edges) - 1)]
+    by_distance = [
+        {"bin": f"{edges[k]:.2f}-{edges[k + 1]:.2f} m", **scores(throws, which == k)} for k in range(len(edges) - 1)
+    ]
     kinds = np.array([task.describe_target_faces(mask) for mask in throws.target_faces])
     by_face = [{"kind": kind, **scores(throws, kinds == kind)} for kind in dict.fromkeys(kinds.tolist())]
     reasons = sorted({reason for reason in throws.failure if reason})
-    return {**scores(throws), "by_distance": by_distance, "by_face": by_face,
-            "failure_reasons": {reason: throws.failure.count(reason) for reason in reasons}}
+    return {
+        **scores(throws),
+        "by_distance": by_distance,
+        "by_face": by_face,
+        "failure_reasons": {reason: throws.failure.count(reason) for reason in reasons},
+    }
 
 
 def format_table(rows: list[dict[str, Any]], label: str = "agent") -> str:
@@ -248,18 +288,29 @@ def format_table(rows: list[dict[str, Any]], label: str = "agent") -> str:
     lines = [header, "-" * len(header)]
     for row in rows:
         failures = f"  ({row['failures']} failed)" if row.get("failures") else ""
-        lines.append(f"{row[label]:<{width}} {row['n']:>7d} {row['success_rate']:>7.1%} {row['mean_distance']:>8.3f} m "
-                     f"{row['median_distance']:>10.3f} m {row['face_accuracy']:>8.1%}{failures}")
+        lines.append(
+            f"{row[label]:<{width}} {row['n']:>7d} {row['success_rate']:>7.1%} {row['mean_distance']:>8.3f} m "
+            f"{row['median_distance']:>10.3f} m {row['face_accuracy']:>8.1%}{failures}"
+        )
     return "\n".join(lines)
 
 
 def format_summary(name: str, summary: dict[str, Any]) -> str:
-    text = [format_table([{"agent": name, **summary}]), "", "by target distance:",
-            format_table(summary["by_distance"], "bin"), "", "by target face:",
-            format_table(summary["by_face"], "kind")]
+    text = [
+        format_table([{"agent": name, **summary}]),
+        "",
+        "by target distance:",
+        format_table(summary["by_distance"], "bin"),
+        "",
+        "by target face:",
+        format_table(summary["by_face"], "kind"),
+    ]
     if summary["failure_reasons"]:
-        text += ["", "throws the env refused to finish (counted as failures): "
-                 + ", ".join(f"{n} x {reason}" for reason, n in summary["failure_reasons"].items())]
+        text += [
+            "",
+            "throws the env refused to finish (counted as failures): "
+            + ", ".join(f"{n} x {reason}" for reason, n in summary["failure_reasons"].items()),
+        ]
     return "\n".join(text)
 
 
@@ -279,12 +330,23 @@ def make_baseline(algo: str, settings: dict[str, Any] | None = None) -> Policy:
     raise ValueError(f"unknown baseline {algo!r}; choose one of {BASELINES}")
 
 
-def make_baseline_run(algo: str, run_dir: Path, env_id: str = "BoxToss-v0", env_kwargs: dict[str, Any] | None = None,
-                      settings: dict[str, Any] | None = None, command: str | None = None) -> Path:
+def make_baseline_run(
+    algo: str,
+    run_dir: Path,
+    env_id: str = "BoxToss-v0",
+    env_kwargs: dict[str, Any] | None = None,
+    settings: dict[str, Any] | None = None,
+    command: str | None = None,
+) -> Path:
     """A run folder for a baseline (config.yml, command.txt), evaluated like any run."""
     run_dir.mkdir(parents=True, exist_ok=True)
-    write_atomic(run_dir / "config.yml", yaml.safe_dump({"algo": algo, "env_id": env_id, "env_kwargs": env_kwargs or {},
-                                                         "baseline": settings or {}}, sort_keys=False))
+    write_atomic(
+        run_dir / "config.yml",
+        yaml.safe_dump(
+            {"algo": algo, "env_id": env_id, "env_kwargs": env_kwargs or {}, "baseline": settings or {}},
+            sort_keys=False,
+        ),
+    )
     if command:
         write_atomic(run_dir / "command.txt", command + "\n")
     return run_dir
@@ -297,17 +359,56 @@ def load_policy(run_dir: Path, model: str = "final") -> tuple[Policy, dict[str, 
     if algo in BASELINES:
         return make_baseline(algo, config.get("baseline", {})), config
     if config.get("goal"):  # Dict observations (BoxToss-Goal-v0): HER's replay buffer is not needed to act
-        model = load_model(algo, run_dir / "model.zip",
-                           custom_objects={"replay_buffer_class": None, "replay_buffer_kwargs": {}, "buffer_size": 1})
+        model = load_model(
+            algo,
+            run_dir / "model.zip",
+            custom_objects={"replay_buffer_class": None, "replay_buffer_kwargs": {}, "buffer_size": 1},
+        )
         return GoalPolicy(model, config.get("hyperparams", {}).get("env_wrapper")), config
     hyperparams = config.get("hyperparams", {})
-    return TrainedPolicy.load(run_dir, algo, model, hyperparams.get("env_wrapper"),
-                              normalized=bool(hyperparams.get("normalize", True))), config
+    return TrainedPolicy.load(
+        run_dir, algo, model, hyperparams.get("env_wrapper"), normalized=bool(hyperparams.get("normalize", True))
+    ), config
 
 
-def evaluate_run(run_dir: Path, *, model: str = "final", env_kwargs: dict[str, Any] | None = None,
-                 tag: str | None = None, n_targets: int | None = None, first_seed: int = TEST_FIRST_SEED,
-                 quiet: bool = False) -> dict[str, Any]:
+def evaluate_stack_run(run_dir, config, policy, model, env_id, kwargs, seeds, tag, out, start, quiet):
+    """``evaluate_run`` for a stacking env: whole episodes, scored per episode (``stack_scores``), into
+    ``out`` (results.json, episodes.npz)."""
+    episodes, act_seconds = evaluate_stack(policy, env_id, kwargs, seeds)
+    results = {
+        "run": run_dir.name,
+        "algo": config["algo"],
+        "model": model,
+        "env_id": env_id,
+        "env_kwargs": kwargs,
+        "seeds": [int(seeds[0]), int(seeds[-1])],
+        "act_seconds": act_seconds,
+        "eval_seconds": time.perf_counter() - start,
+        "tag": tag,
+        **stack_scores(episodes),
+    }
+    out.mkdir(parents=True, exist_ok=True)
+    write_atomic(out / "episodes.npz", lambda file: np.savez_compressed(file, **episodes))
+    write_atomic(out / "results.json", json.dumps(results, indent=2))
+    if not quiet:
+        print(
+            f"{run_dir.name} ({config['algo']}) on {env_id}, episodes of seeds {seeds[0]}-{seeds[-1]}: success "
+            f"{results['success_rate']:.1%}, mean final height {results['mean_height']:.3f} m, stack fell "
+            f"{results['fall_rate']:.1%}, mean return {results['mean_reward']:.3f}; results in {out}"
+        )
+    return results
+
+
+def evaluate_run(
+    run_dir: Path,
+    *,
+    model: str = "final",
+    env_kwargs: dict[str, Any] | None = None,
+    tag: str | None = None,
+    n_targets: int | None = None,
+    first_seed: int = TEST_FIRST_SEED,
+    quiet: bool = False,
+) -> dict[str, Any]:
     """Evaluate the run's policy on the test targets, under the env settings it was trained with,
     updated with ``env_kwargs``; write ``RUN/eval/TAG/`` (results.json, throws.npz) and return the
     results. The default tag names every setting that differs from the defaults (``default_tag``);
@@ -317,8 +418,11 @@ def evaluate_run(run_dir: Path, *, model: str = "final", env_kwargs: dict[str, A
     env_id = THROWN_IN.get(config["env_id"], config["env_id"])
     default_count = STACK_TEST_EPISODES if is_stack(env_id) else TEST_TARGETS  # a stacking env: episodes
     n_targets = default_count if n_targets is None else n_targets
-    tag = (check_component(tag, "--tag") if tag is not None
-           else default_tag(env_kwargs, model, n_targets, first_seed, default_count))
+    tag = (
+        check_component(tag, "--tag")
+        if tag is not None
+        else default_tag(env_kwargs, model, n_targets, first_seed, default_count)
+    )
     kwargs = {**config.get("env_kwargs", {}), **(env_kwargs or {})}
     seeds = target_seeds(n_targets, first_seed)
     out = run_dir / "eval" / tag
@@ -326,32 +430,32 @@ def evaluate_run(run_dir: Path, *, model: str = "final", env_kwargs: dict[str, A
     check_results_folder(out, settings)
     start = time.perf_counter()
     if is_stack(env_id):
-        episodes, act_seconds = evaluate_stack(policy, env_id, kwargs, seeds)
-        results = {"run": run_dir.name, "algo": config["algo"], "model": model, "env_id": env_id, "env_kwargs": kwargs,
-                   "seeds": [int(seeds[0]), int(seeds[-1])], "act_seconds": act_seconds,
-                   "eval_seconds": time.perf_counter() - start, "tag": tag, **stack_scores(episodes)}
-        out.mkdir(parents=True, exist_ok=True)
-        write_atomic(out / "episodes.npz", lambda file: np.savez_compressed(file, **episodes))
-        write_atomic(out / "results.json", json.dumps(results, indent=2))
-        if not quiet:
-            print(f"{run_dir.name} ({config['algo']}) on {env_id}, episodes of seeds {seeds[0]}-{seeds[-1]}: success "
-                  f"{results['success_rate']:.1%}, mean final height {results['mean_height']:.3f} m, stack fell "
-                  f"{results['fall_rate']:.1%}, mean return {results['mean_reward']:.3f}; results in {out}")
-        return results
+        return evaluate_stack_run(run_dir, config, policy, model, env_id, kwargs, seeds, tag, out, start, quiet)
     throws, act_seconds = evaluate(policy, env_id, kwargs, seeds)
     wall = time.perf_counter() - start
     target_x_range = gym.make(env_id, **kwargs).unwrapped.config.target_x_range
     summary = summarize(throws, target_x_range)
     out.mkdir(parents=True, exist_ok=True)
-    results = {"run": run_dir.name, "algo": config["algo"], "model": model, "env_id": env_id, "env_kwargs": kwargs,
-               "seeds": [int(seeds[0]), int(seeds[-1])], "act_seconds": act_seconds, "eval_seconds": wall,
-               "tag": tag, **summary}
+    results = {
+        "run": run_dir.name,
+        "algo": config["algo"],
+        "model": model,
+        "env_id": env_id,
+        "env_kwargs": kwargs,
+        "seeds": [int(seeds[0]), int(seeds[-1])],
+        "act_seconds": act_seconds,
+        "eval_seconds": wall,
+        "tag": tag,
+        **summary,
+    }
     throws.save(out / "throws.npz")
     write_atomic(out / "results.json", json.dumps(results, indent=2))
     if not quiet:
         which = "" if config["algo"] in BASELINES else f", {model} model"
-        print(f"{run_dir.name} ({config['algo']}{which}) on {env_id}{' ' + str(kwargs) if kwargs else ''}, "
-              f"targets of seeds {seeds[0]}-{seeds[-1]}:")
+        print(
+            f"{run_dir.name} ({config['algo']}{which}) on {env_id}{' ' + str(kwargs) if kwargs else ''}, "
+            f"targets of seeds {seeds[0]}-{seeds[-1]}:"
+        )
         print(format_summary(run_dir.name, summary))
         print(f"results in {out}")
     return results
@@ -368,14 +472,22 @@ def check_results_folder(out: Path, settings: dict[str, Any]) -> None:
         return  # not results: replaced
     held = {key: held.get(key) for key in settings}
     if held != json.loads(json.dumps(settings)):
-        differ = ", ".join(f"{key} {held[key]} there, {settings[key]} here" for key in settings
-                           if held[key] != json.loads(json.dumps(settings[key])))
+        differ = ", ".join(
+            f"{key} {held[key]} there, {settings[key]} here"
+            for key in settings
+            if held[key] != json.loads(json.dumps(settings[key]))
+        )
         raise RunFolderError(f"{out} holds an evaluation with other settings ({differ}); choose another --tag")
 
 
-def default_tag(env_kwargs: dict[str, Any] | None, model: str = "final", n_targets: int = TEST_TARGETS,
-                first_seed: int = TEST_FIRST_SEED, default_count: int = TEST_TARGETS) -> str:
-    """"default" for the test targets under the run's own env settings; otherwise the settings that
+def default_tag(
+    env_kwargs: dict[str, Any] | None,
+    model: str = "final",
+    n_targets: int = TEST_TARGETS,
+    first_seed: int = TEST_FIRST_SEED,
+    default_count: int = TEST_TARGETS,
+) -> str:
+    """ "default" for the test targets under the run's own env settings; otherwise the settings that
     differ (``best-dt=0.000976562-targets=8``), so that no evaluation overwrites another."""
     parts = [] if model == "final" else [model]
     for key, value in sorted((env_kwargs or {}).items()):

@@ -39,8 +39,11 @@ def free_name(runs_dir: Path, name: str) -> str:
     if not (runs_dir / name).exists():
         return name
     stamped = f"{name}-{time.strftime('%Y%m%d-%H%M%S')}"
-    return next(candidate for n in range(1, 10_000)
-                if not (runs_dir / (candidate := stamped if n == 1 else f"{stamped}-{n}")).exists())
+    return next(
+        candidate
+        for n in range(1, 10_000)
+        if not (runs_dir / (candidate := stamped if n == 1 else f"{stamped}-{n}")).exists()
+    )
 
 
 def baseline(algo: str, runs_dir: Path, *, replan: bool = True) -> Path:
@@ -96,8 +99,10 @@ def main(argv: list[str] | None = None) -> None:
 
     table = [row for name, run in rows.items() if (row := report.summary_row(name, run)) is not None]
     print()
-    print(f"{ENV_ID}: {evaluation.TEST_TARGETS:,} fixed test targets (seeds {evaluation.TEST_FIRST_SEED}-"
-          f"{evaluation.TEST_FIRST_SEED + evaluation.TEST_TARGETS - 1}), deterministic policies")
+    print(
+        f"{ENV_ID}: {evaluation.TEST_TARGETS:,} fixed test targets (seeds {evaluation.TEST_FIRST_SEED}-"
+        f"{evaluation.TEST_FIRST_SEED + evaluation.TEST_TARGETS - 1}), deterministic policies"
+    )
     print(report.text_table(table))
     if "oracle" in rows:
         print(report.ceiling_note(ENV_ID))
@@ -105,13 +110,17 @@ def main(argv: list[str] | None = None) -> None:
         print("\nphysics fidelity (the same targets under another solver or step; failures: throws the env refused)")
         print(evaluation.format_table(fidelity))
     ppo = report.summary_row("short", rows["short"])
-    print(f"\nPPO: the env took {ppo['env_share']:.0%} of the training loop's wall time; the run is in {rows['short']} "
-          f"(python -m agents.evaluate {rows['short']} --video 4 for plots and a GIF; "
-          f"tensorboard --logdir {rows['short'] / 'logs'})")
+    print(
+        f"\nPPO: the env took {ppo['env_share']:.0%} of the training loop's wall time; the run is in {rows['short']} "
+        f"(python -m agents.evaluate {rows['short']} --video 4 for plots and a GIF; "
+        f"tensorboard --logdir {rows['short'] / 'logs'})"
+    )
     if args.readme:
         report.write_docs(rows, FIDELITY)
-    print(f"total wall time {time.perf_counter() - start:.0f} s  "
-          f"(command: python -m agents.main {shlex.join(argv if argv is not None else sys.argv[1:])})")
+    print(
+        f"total wall time {time.perf_counter() - start:.0f} s  "
+        f"(command: python -m agents.main {shlex.join(argv if argv is not None else sys.argv[1:])})"
+    )
 
 
 if __name__ == "__main__":

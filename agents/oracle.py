@@ -92,11 +92,19 @@ class OraclePlanner:
             draws = np.clip(mean + std * rng.standard_normal((active.size, s.population, task.ACTION_SIZE)), -1, 1)
             self.simulated += draws.shape[0] * draws.shape[1]
             elite[active], elite_scores[active], elite_settled[active] = self._select(
-                simulator, episodes, active, draws, keep, (elite[active], elite_scores[active], elite_settled[active]))
+                simulator, episodes, active, draws, keep, (elite[active], elite_scores[active], elite_settled[active])
+            )
         return elite[:, 0]
 
-    def _select(self, simulator: ThrowSimulator, episodes: task.Episodes, rows: np.ndarray, candidates: np.ndarray,
-                keep: int, incumbents=None):
+    def _select(
+        self,
+        simulator: ThrowSimulator,
+        episodes: task.Episodes,
+        rows: np.ndarray,
+        candidates: np.ndarray,
+        keep: int,
+        incumbents=None,
+    ):
         """Simulate ``candidates`` (len(rows), k, 3) and keep the ``keep`` best per row, with the
         incumbents (actions, scores, settled) if given: (actions, scores, settled), best first."""
         k = candidates.shape[1]
@@ -110,5 +118,8 @@ class OraclePlanner:
             scores = np.concatenate((incumbents[1], scores), axis=1)
             settled = np.concatenate((incumbents[2], settled), axis=1)
         order = np.argsort(-scores, axis=1, kind="stable")[:, :keep]
-        return (np.take_along_axis(candidates, order[..., None], axis=1), np.take_along_axis(scores, order, axis=1),
-                np.take_along_axis(settled, order, axis=1))
+        return (
+            np.take_along_axis(candidates, order[..., None], axis=1),
+            np.take_along_axis(scores, order, axis=1),
+            np.take_along_axis(settled, order, axis=1),
+        )

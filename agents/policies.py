@@ -34,8 +34,10 @@ def load_model(algo: str, path: Path, **kwargs) -> BaseAlgorithm:
     try:
         return algorithms.algorithm_class(algo).load(path, device="cpu", **kwargs)
     except (zipfile.BadZipFile, EOFError, KeyError, ValueError, RuntimeError, OSError) as error:
-        raise UnreadableModelError(f"{path} cannot be read as a {algo.upper()} model ({type(error).__name__}: "
-                                   f"{error}); it may be truncated: retrain, or --resume from a checkpoint") from None
+        raise UnreadableModelError(
+            f"{path} cannot be read as a {algo.upper()} model ({type(error).__name__}: "
+            f"{error}); it may be truncated: retrain, or --resume from a checkpoint"
+        ) from None
 
 
 class Policy(Protocol):
@@ -97,8 +99,9 @@ class TrainedPolicy:
         return actions
 
     @classmethod
-    def load(cls, run_dir: Path, algo: str, which: str = "final", env_wrapper: Any = None,
-             normalized: bool = False) -> TrainedPolicy:
+    def load(
+        cls, run_dir: Path, algo: str, which: str = "final", env_wrapper: Any = None, normalized: bool = False
+    ) -> TrainedPolicy:
         """The final model of a run folder (``which="best"``: the best by validation success); a model
         trained on ``normalized`` observations refuses to load without its statistics."""
         prefix = "" if which == "final" else "best_"
@@ -106,8 +109,10 @@ class TrainedPolicy:
         stats = Path(run_dir) / f"{prefix}vecnormalize.pkl"
         vec_normalize = None
         if normalized and not stats.exists():
-            raise UnreadableModelError(f"{stats} is missing: the model was trained on normalised observations and "
-                                       f"acts at random without their statistics")
+            raise UnreadableModelError(
+                f"{stats} is missing: the model was trained on normalised observations and "
+                f"acts at random without their statistics"
+            )
         if stats.exists():
             with open(stats, "rb") as file:
                 vec_normalize = pickle.load(file)  # the statistics only (SB3 pickles it without its venv)

@@ -47,8 +47,9 @@ class CommandSimulator:
         return self.simulator.rewards(episodes, self.actions(episodes, commands))
 
 
-def noisy_success(simulator, episodes: task.Episodes, solutions: np.ndarray, sigma: float, draws: int,
-                  rng: np.random.Generator) -> float:
+def noisy_success(
+    simulator, episodes: task.Episodes, solutions: np.ndarray, sigma: float, draws: int, rng: np.random.Generator
+) -> float:
     """The success rate of ``draws`` throws per episode at its solution plus N(0, sigma^2) noise per dimension."""
     n = len(episodes.data)
     repeated = task.Episodes(np.repeat(episodes.data, draws, axis=0))
@@ -73,24 +74,32 @@ def measure(env_id: str, n_targets: int, draws: int, sigmas=SIGMAS, seed: int = 
         rng = np.random.default_rng(seed)
         result["spaces"][name] = {
             "solved": float(solved.mean()),
-            "noisy": {str(sigma): noisy_success(simulator, kept, solutions[solved], sigma, draws, rng)
-                      for sigma in sigmas},
-            "seconds": time.perf_counter() - start}
+            "noisy": {
+                str(sigma): noisy_success(simulator, kept, solutions[solved], sigma, draws, rng) for sigma in sigmas
+            },
+            "seconds": time.perf_counter() - start,
+        }
     env.close()
     return result
 
 
 def table(results: list[dict], command: str) -> str:
     sigmas = list(results[0]["spaces"]["env actions"]["noisy"])
-    lines = [f"Measured by `{command}`: the oracle's solution per target (the targets it solved), then "
-             f"{results[0]['draws']} throws per target at it plus Gaussian noise of standard deviation sigma per "
-             "dimension, in the space the agent acts in (both spaces are [-1, 1]^3):", "",
-             "| variant | acting in | oracle solved | " + " | ".join(f"sigma {s}" for s in sigmas) + " |",
-             "|---|---|---:|" + "---:|" * len(sigmas)]
+    lines = [
+        f"Measured by `{command}`: the oracle's solution per target (the targets it solved), then "
+        f"{results[0]['draws']} throws per target at it plus Gaussian noise of standard deviation sigma per "
+        "dimension, in the space the agent acts in (both spaces are [-1, 1]^3):",
+        "",
+        "| variant | acting in | oracle solved | " + " | ".join(f"sigma {s}" for s in sigmas) + " |",
+        "|---|---|---:|" + "---:|" * len(sigmas),
+    ]
     for result in results:
         for name, space in result["spaces"].items():
-            lines.append(f"| {result['env_id']} | {name} | {space['solved']:.1%} of {result['targets']} | "
-                         + " | ".join(f"{space['noisy'][s]:.1%}" for s in sigmas) + " |")
+            lines.append(
+                f"| {result['env_id']} | {name} | {space['solved']:.1%} of {result['targets']} | "
+                + " | ".join(f"{space['noisy'][s]:.1%}" for s in sigmas)
+                + " |"
+            )
     return "\n".join(lines)
 
 
@@ -107,8 +116,10 @@ def main(argv: list[str] | None = None) -> None:
     if args.targets < 1 or args.draws < 1:
         parser.error("--targets and --draws must be integers >= 1")
     results = [measure(env_id, args.targets, args.draws) for env_id in args.envs]
-    command = (f"python -m agents.raw_actions --envs {' '.join(args.envs)} --targets {args.targets} --draws "
-               f"{args.draws} --readme")
+    command = (
+        f"python -m agents.raw_actions --envs {' '.join(args.envs)} --targets {args.targets} --draws "
+        f"{args.draws} --readme"
+    )
     text = table(results, command)
     print(text)
     if args.readme:

@@ -28,9 +28,13 @@ from box_toss_env.rendering import write_video
 RUNS = Path("runs")
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "agents"  # figures the README shows
 ORACLE_MAX_THROWS = OracleSettings().initial + OracleSettings().iterations * OracleSettings().population
-AGENT_LABELS = {"random": "random actions", "short": "PPO, short (agents.main)", "full": "PPO, full",
-                # the oracle at its default search budget, which is not the ceiling (agents.ceiling)
-                "oracle": f"oracle, default search (at most {ORACLE_MAX_THROWS} simulated throws per target)"}
+AGENT_LABELS = {
+    "random": "random actions",
+    "short": "PPO, short (agents.main)",
+    "full": "PPO, full",
+    # the oracle at its default search budget, which is not the ceiling (agents.ceiling)
+    "oracle": f"oracle, default search (at most {ORACLE_MAX_THROWS} simulated throws per target)",
+}
 CEILING_ROOT = RUNS / "benchmark"  # agents.benchmark keeps each variant's ceiling sweep here
 COLOURS = {"random": "tab:gray", "short": "tab:orange", "full": "tab:blue", "oracle": "tab:green"}
 
@@ -61,9 +65,15 @@ def summary_row(name: str, run_dir: Path, tag: str = "default") -> dict[str, Any
     if results is None:
         return None
     timing = read_timing(run_dir)
-    return {"name": name, "label": AGENT_LABELS.get(name, name), **results, "run": str(run_dir),
-            "wall_seconds": wall_seconds(run_dir, results), "timesteps": timing["timesteps"] if timing else None,
-            "env_share": timing["env_share"] if timing else None}
+    return {
+        "name": name,
+        "label": AGENT_LABELS.get(name, name),
+        **results,
+        "run": str(run_dir),
+        "wall_seconds": wall_seconds(run_dir, results),
+        "timesteps": timing["timesteps"] if timing else None,
+        "env_share": timing["env_share"] if timing else None,
+    }
 
 
 # -- tables --------------------------------------------------------------------------------------
@@ -76,53 +86,65 @@ def format_seconds(seconds: float) -> str:
 
 
 def markdown_table(rows: list[dict[str, Any]]) -> str:
-    lines = ["| agent | env steps | success | mean distance error | median distance error | face accuracy | "
-             "wall time |", "|---|---:|---:|---:|---:|---:|---:|"]
+    lines = [
+        "| agent | env steps | success | mean distance error | median distance error | face accuracy | wall time |",
+        "|---|---:|---:|---:|---:|---:|---:|",
+    ]
     for row in rows:
         steps = f"{row['timesteps']:,}" if row.get("timesteps") else "-"
-        lines.append(f"| {row['label']} | {steps} | {row['success_rate']:.1%} | {row['mean_distance']:.3f} m | "
-                     f"{row['median_distance']:.3f} m | {row['face_accuracy']:.1%} | "
-                     f"{format_seconds(row['wall_seconds'])} |")
+        lines.append(
+            f"| {row['label']} | {steps} | {row['success_rate']:.1%} | {row['mean_distance']:.3f} m | "
+            f"{row['median_distance']:.3f} m | {row['face_accuracy']:.1%} | "
+            f"{format_seconds(row['wall_seconds'])} |"
+        )
     return "\n".join(lines)
 
 
 def text_table(rows: list[dict[str, Any]]) -> str:
     width = max([36, *(len(row["label"]) for row in rows)])
-    header = (f"{'agent':<{width}} {'env steps':>10} {'success':>8} {'mean dist':>10} {'median dist':>12} "
-              f"{'face acc':>9} {'wall time':>10}")
+    header = (
+        f"{'agent':<{width}} {'env steps':>10} {'success':>8} {'mean dist':>10} {'median dist':>12} "
+        f"{'face acc':>9} {'wall time':>10}"
+    )
     lines = [header, "-" * len(header)]
     for row in rows:
         steps = f"{row['timesteps']:,}" if row.get("timesteps") else "-"
-        lines.append(f"{row['label']:<{width}} {steps:>10} {row['success_rate']:>8.1%} {row['mean_distance']:>8.3f} m "
-                     f"{row['median_distance']:>10.3f} m {row['face_accuracy']:>9.1%} "
-                     f"{format_seconds(row['wall_seconds']):>10}")
+        lines.append(
+            f"{row['label']:<{width}} {steps:>10} {row['success_rate']:>8.1%} {row['mean_distance']:>8.3f} m "
+            f"{row['median_distance']:>10.3f} m {row['face_accuracy']:>9.1%} "
+            f"{format_seconds(row['wall_seconds']):>10}"
+        )
     return "\n".join(lines)
 
 
 def breakdown_table(rows: list[dict[str, Any]]) -> str:
     """Success rate by target distance bin, one column per agent (markdown)."""
     bins = [entry["bin"] for entry in rows[0]["by_distance"]]
-    lines = ["| target x | " + " | ".join(row["label"] for row in rows) + " |",
-             "|---|" + "---:|" * len(rows)]
+    lines = ["| target x | " + " | ".join(row["label"] for row in rows) + " |", "|---|" + "---:|" * len(rows)]
     for k, label in enumerate(bins):
-        lines.append(f"| {label} | " + " | ".join(f"{row['by_distance'][k]['success_rate']:.1%}" for row in rows)
-                     + " |")
+        lines.append(
+            f"| {label} | " + " | ".join(f"{row['by_distance'][k]['success_rate']:.1%}" for row in rows) + " |"
+        )
     return "\n".join(lines)
 
 
 def ceiling_note(env_id: str, root: Path = CEILING_ROOT) -> str:
     """What the oracle row is and where the ceiling is: the ceiling's figures if ``agents.benchmark`` has
     saved the variant's sweep under ``root``, else the command that measures it."""
-    note = (f"oracle: the default search, at most {ORACLE_MAX_THROWS} simulated throws per target; it is not the "
-            "ceiling, which the search reaches as it grows")
+    note = (
+        f"oracle: the default search, at most {ORACLE_MAX_THROWS} simulated throws per target; it is not the "
+        "ceiling, which the search reaches as it grows"
+    )
     path = Path(root) / env_id / "ceiling.json"
     if not path.exists():
         return f"{note} (python -m agents.benchmark --envs {env_id}; docs/agents/benchmark.md)"
     sweep = json.loads(path.read_text())
     top, first = ceiling_of(sweep), sweep[0]
-    return (f"{note}.\nceiling ({path}): {top['success_rate']:.1%} with {top['throws_per_target']:,.0f} simulated "
-            f"throws per target, on the first {top['n']} targets (the first budget of its sweep: "
-            f"{first['success_rate']:.1%} with {first['throws_per_target']:,.0f})")
+    return (
+        f"{note}.\nceiling ({path}): {top['success_rate']:.1%} with {top['throws_per_target']:,.0f} simulated "
+        f"throws per target, on the first {top['n']} targets (the first budget of its sweep: "
+        f"{first['success_rate']:.1%} with {first['throws_per_target']:,.0f})"
+    )
 
 
 # -- figures -------------------------------------------------------------------------------------
@@ -135,8 +157,9 @@ def pyplot():
     return plt
 
 
-def plot_learning_curves(curves: dict[str, dict[str, np.ndarray]], path: Path,
-                         levels: dict[str, float] | None = None) -> Path:
+def plot_learning_curves(
+    curves: dict[str, dict[str, np.ndarray]], path: Path, levels: dict[str, float] | None = None
+) -> Path:
     """Validation success rate and mean landing distance against env steps (one line per run),
     with the baselines' success rates as horizontal lines."""
     plt = pyplot()
@@ -147,8 +170,9 @@ def plot_learning_curves(curves: dict[str, dict[str, np.ndarray]], path: Path,
         ax_success.plot(curve["timesteps"], curve["success_rate"], marker=".", color=colour, label=label)
         ax_distance.plot(curve["timesteps"], curve["mean_distance"], marker=".", color=colour, label=label)
     for name, level in (levels or {}).items():
-        ax_success.axhline(level, color=COLOURS.get(name, "k"), linestyle="--", linewidth=1,
-                           label=AGENT_LABELS.get(name, name))
+        ax_success.axhline(
+            level, color=COLOURS.get(name, "k"), linestyle="--", linewidth=1, label=AGENT_LABELS.get(name, name)
+        )
     ax_success.set(xlabel="env steps (throws)", ylabel="success rate (validation targets)", ylim=(0, 1.02))
     ax_distance.set(xlabel="env steps (throws)", ylabel="mean landing distance [m]", yscale="log")
     ax_success.legend(fontsize=8, loc="lower right")
@@ -162,8 +186,9 @@ def plot_learning_curves(curves: dict[str, dict[str, np.ndarray]], path: Path,
     return path
 
 
-def plot_landing_errors(throws: dict[str, Throws], path: Path, target_x_range: tuple[float, float],
-                        tolerance: float = 0.1) -> Path:
+def plot_landing_errors(
+    throws: dict[str, Throws], path: Path, target_x_range: tuple[float, float], tolerance: float = 0.1
+) -> Path:
     """Left: the distribution of landing distances |x - target x| (the fraction of throws landing
     closer than d, log d). Right: the signed landing error against the target's x, per agent."""
     plt = pyplot()
@@ -171,19 +196,39 @@ def plot_landing_errors(throws: dict[str, Throws], path: Path, target_x_range: t
     for name, t in throws.items():
         distance = np.sort(np.where(np.isfinite(t.final_x), t.distance, np.inf))
         fraction = np.arange(1, len(distance) + 1) / len(distance)
-        ax_cdf.step(np.maximum(distance, 1e-4), fraction, where="post", color=COLOURS.get(name),
-                    label=AGENT_LABELS.get(name, name))
+        ax_cdf.step(
+            np.maximum(distance, 1e-4),
+            fraction,
+            where="post",
+            color=COLOURS.get(name),
+            label=AGENT_LABELS.get(name, name),
+        )
         if name == "random":  # off the scale
             continue
         error = t.final_x - t.target_x
-        ax_error.scatter(t.target_x, np.clip(error, -3 * tolerance, 3 * tolerance), s=4, alpha=0.6,
-                         color=COLOURS.get(name), label=AGENT_LABELS.get(name, name))
+        ax_error.scatter(
+            t.target_x,
+            np.clip(error, -3 * tolerance, 3 * tolerance),
+            s=4,
+            alpha=0.6,
+            color=COLOURS.get(name),
+            label=AGENT_LABELS.get(name, name),
+        )
     ax_cdf.axvline(tolerance, color="k", linestyle=":", linewidth=1, label="success tolerance")
-    ax_cdf.set(xscale="log", xlim=(1e-3, 10), ylim=(0, 1.02), xlabel="landing distance |x - target x| [m]",
-               ylabel="fraction of throws closer than that")
+    ax_cdf.set(
+        xscale="log",
+        xlim=(1e-3, 10),
+        ylim=(0, 1.02),
+        xlabel="landing distance |x - target x| [m]",
+        ylabel="fraction of throws closer than that",
+    )
     ax_error.axhspan(-tolerance, tolerance, color="tab:green", alpha=0.1)
-    ax_error.set(xlim=target_x_range, ylim=(-3 * tolerance, 3 * tolerance), xlabel="target x [m]",
-                 ylabel="landing x - target x [m]")
+    ax_error.set(
+        xlim=target_x_range,
+        ylim=(-3 * tolerance, 3 * tolerance),
+        xlabel="target x [m]",
+        ylabel="landing x - target x [m]",
+    )
     for ax in (ax_cdf, ax_error):
         ax.grid(alpha=0.3)
     fig.suptitle(f"Landing errors on the {len(next(iter(throws.values())).seeds):,} test targets")
@@ -205,13 +250,26 @@ def plot_run(run_dir: Path, eval_dir: Path) -> list[Path]:
     if not (eval_dir / "throws.npz").exists():  # a stacking env's episodes: no landing errors to draw
         return paths
     config = gym.make(results["env_id"], **results["env_kwargs"]).unwrapped.config
-    paths.append(plot_landing_errors({run_dir.name: Throws.load(eval_dir / "throws.npz")},
-                                     eval_dir / "landing_errors.png", config.target_x_range, config.position_tolerance))
+    paths.append(
+        plot_landing_errors(
+            {run_dir.name: Throws.load(eval_dir / "throws.npz")},
+            eval_dir / "landing_errors.png",
+            config.target_x_range,
+            config.position_tolerance,
+        )
+    )
     return paths
 
 
-def record_video(run_dir: Path, path: Path, n_throws: int, *, model: str = "final",
-                 env_kwargs: dict[str, Any] | None = None, first_seed: int = 10_000) -> Path:
+def record_video(
+    run_dir: Path,
+    path: Path,
+    n_throws: int,
+    *,
+    model: str = "final",
+    env_kwargs: dict[str, Any] | None = None,
+    first_seed: int = 10_000,
+) -> Path:
     """A GIF (or MP4) of the run's policy throwing at the first ``n_throws`` test targets
     (needs the ``render`` extra)."""
     policy, config = load_policy(run_dir, model)
@@ -282,9 +340,39 @@ where the search grows until its success stops rising.
 
 def validation_targets(runs: dict[str, Path]) -> int | str:
     """The number of validation targets of the PPO runs (from their config.yml)."""
-    counts = {load_yaml(run / "config.yml")["hyperparams"]["eval_targets"] for run in runs.values()
-              if (run / "config.yml").exists() and load_yaml(run / "config.yml")["algo"] == "ppo"}
+    counts = {
+        load_yaml(run / "config.yml")["hyperparams"]["eval_targets"]
+        for run in runs.values()
+        if (run / "config.yml").exists() and load_yaml(run / "config.yml")["algo"] == "ppo"
+    }
     return counts.pop() if len(counts) == 1 else "/".join(str(c) for c in sorted(counts)) or "-"
+
+
+def fidelity_lines(runs: dict[str, Path], fidelity: list[tuple[str, str, str]]) -> list[str]:
+    """The physics-fidelity table: the same policies under another solver or step (none if not evaluated)."""
+    fidelity_rows = []
+    for name, tag, label in fidelity:
+        results = read_results(runs[name], tag)
+        if results is not None:
+            failures = results["failures"]
+            fidelity_rows.append(
+                f"| {AGENT_LABELS[name]} | {label} | {results['success_rate']:.1%} | "
+                f"{results['mean_distance']:.3f} m | "
+                f"{failures} |"
+            )
+    if not fidelity_rows:
+        return []
+    return [
+        "Physics fidelity: the same policies evaluated on the same targets under another solver or step "
+        "(PPO trained on the default, robust solver at dt = 1/128 s; the oracle plans again with the "
+        "physics it is evaluated under). Throws the seed scheme blows up (`EnergyGainError`) count as "
+        "failures.",
+        "",
+        "| agent | physics | success | mean distance error | throws refused |",
+        "|---|---|---:|---:|---:|",
+        *fidelity_rows,
+        "",
+    ]
 
 
 def readme_section(runs: dict[str, Path], fidelity: list[tuple[str, str, str]], docs: Path = DOCS) -> str:
@@ -296,51 +384,56 @@ def readme_section(runs: dict[str, Path], fidelity: list[tuple[str, str, str]], 
     levels = {row["name"]: row["success_rate"] for row in rows if row["name"] in ("random", "oracle")}
     plot_learning_curves(curves, docs / "learning_curve.png", levels)
     throws = {row["name"]: Throws.load(Path(row["run"]) / "eval" / "default" / "throws.npz") for row in rows}
-    plot_landing_errors(throws, docs / "landing_errors.png", env.config.target_x_range,
-                        env.config.position_tolerance)
+    plot_landing_errors(throws, docs / "landing_errors.png", env.config.target_x_range, env.config.position_tolerance)
     by_name = {row["name"]: row for row in rows}
-    lines = [INTRO.format(targets=f"{TEST_TARGETS:,}", first=TEST_FIRST_SEED, last=TEST_FIRST_SEED + TEST_TARGETS - 1,
-                          tolerance=env.config.position_tolerance, validation=VALIDATION_FIRST_SEED,
-                          validation_targets=validation_targets(runs),
-                          settle=OracleSettings().settle * env.config.position_tolerance, env_id=rows[0]["env_id"]),
-             markdown_table(rows), ""]
+    lines = [
+        INTRO.format(
+            targets=f"{TEST_TARGETS:,}",
+            first=TEST_FIRST_SEED,
+            last=TEST_FIRST_SEED + TEST_TARGETS - 1,
+            tolerance=env.config.position_tolerance,
+            validation=VALIDATION_FIRST_SEED,
+            validation_targets=validation_targets(runs),
+            settle=OracleSettings().settle * env.config.position_tolerance,
+            env_id=rows[0]["env_id"],
+        ),
+        markdown_table(rows),
+        "",
+    ]
     if "oracle" in by_name:
-        lines += [f"The oracle row is its default search (at most {ORACLE_MAX_THROWS} simulated throws per target), "
-                  f"not the ceiling: the ceiling of `{rows[0]['env_id']}`, the search grown until its success stops "
-                  "rising, is in [the benchmark](docs/agents/benchmark.md).", ""]
+        lines += [
+            f"The oracle row is its default search (at most {ORACLE_MAX_THROWS} simulated throws per target), "
+            f"not the ceiling: the ceiling of `{rows[0]['env_id']}`, the search grown until its success stops "
+            "rising, is in [the benchmark](docs/agents/benchmark.md).",
+            "",
+        ]
     if "short" in by_name and "random" in by_name:
         short, random = by_name["short"], by_name["random"]
-        lines.append(f"The default run (`python -m agents.main`) lands {short['success_rate']:.1%} of the throws "
-                     f"after {format_seconds(short['wall_seconds'])} of training; random actions land "
-                     f"{random['success_rate']:.1%}.")
+        lines.append(
+            f"The default run (`python -m agents.main`) lands {short['success_rate']:.1%} of the throws "
+            f"after {format_seconds(short['wall_seconds'])} of training; random actions land "
+            f"{random['success_rate']:.1%}."
+        )
     if "full" in by_name and "oracle" in by_name:
         full, oracle = by_name["full"], by_name["oracle"]
-        lines.append(f"PPO (full) reaches {full['success_rate'] / oracle['success_rate']:.1%} of the "
-                     "default-search oracle's success "
-                     f"rate in {full['timesteps']:,} env steps and {format_seconds(full['wall_seconds'])}.")
+        lines.append(
+            f"PPO (full) reaches {full['success_rate'] / oracle['success_rate']:.1%} of the "
+            "default-search oracle's success "
+            f"rate in {full['timesteps']:,} env steps and {format_seconds(full['wall_seconds'])}."
+        )
     shares = [f"{AGENT_LABELS[row['name']]} {row['env_share']:.0%}" for row in rows if row.get("env_share")]
     if shares:
-        lines.append("The env's share of the training loop's wall time (rollouts and updates, periodic "
-                     f"validation excluded): {', '.join(shares)}; the rest is the network.")
+        lines.append(
+            "The env's share of the training loop's wall time (rollouts and updates, periodic "
+            f"validation excluded): {', '.join(shares)}; the rest is the network."
+        )
     lines += ["", "Success rate by target distance:", "", breakdown_table(rows), ""]
-    fidelity_rows = []
-    for name, tag, label in fidelity:
-        results = read_results(runs[name], tag)
-        if results is not None:
-            failures = results["failures"]
-            fidelity_rows.append(
-                f"| {AGENT_LABELS[name]} | {label} | {results['success_rate']:.1%} | "
-                f"{results['mean_distance']:.3f} m | "
-                f"{failures} |")
-    if fidelity_rows:
-        lines += ["Physics fidelity: the same policies evaluated on the same targets under another solver or step "
-                  "(PPO trained on the default, robust solver at dt = 1/128 s; the oracle plans again with the "
-                  "physics it is evaluated under). Throws the seed scheme blows up (`EnergyGainError`) count as "
-                  "failures.", "",
-                  "| agent | physics | success | mean distance error | throws refused |", "|---|---|---:|---:|---:|",
-                  *fidelity_rows, ""]
-    lines += ["![learning curve](docs/agents/learning_curve.png)", "",
-              "![landing errors](docs/agents/landing_errors.png)"]
+    lines += fidelity_lines(runs, fidelity)
+    lines += [
+        "![learning curve](docs/agents/learning_curve.png)",
+        "",
+        "![landing errors](docs/agents/landing_errors.png)",
+    ]
     if (docs / "throws.gif").exists():
         lines += ["", "![PPO (full) throwing at the first test targets](docs/agents/throws.gif)"]
     return "\n".join(lines)

@@ -26,8 +26,14 @@ from box_toss_env.envs.ballistic import BallisticThrows
 from box_toss_env.wrappers.ballistic import BallisticThrowsVector
 from box_toss_env.wrappers.next_step import NextStepAutoreset
 
-ENV_IDS = ("BoxToss-v0", "BoxToss-LongSide-v0", "BoxToss-ShortEnd-v0", "BoxToss-ThisSideUp-v0", "BoxToss-Mixed-v0",
-           "BoxToss-OnBox-v0")
+ENV_IDS = (
+    "BoxToss-v0",
+    "BoxToss-LongSide-v0",
+    "BoxToss-ShortEnd-v0",
+    "BoxToss-ThisSideUp-v0",
+    "BoxToss-Mixed-v0",
+    "BoxToss-OnBox-v0",
+)
 VECTORIZE_MODES = {"native": "vector_entry_point", "sync": "sync"}  # ours -> RLlib's gym_env_vectorize_mode
 BALLISTIC = "box_toss_env.envs.ballistic.BallisticThrows"  # ppo.yml's env_wrapper; env_config["ballistic"]
 

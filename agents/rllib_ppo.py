@@ -108,20 +108,36 @@ def recipe(env_id: str) -> dict[str, Any]:
     if wrapper not in (None, BALLISTIC):
         raise ValueError(f"ppo.yml's {env_id} names env_wrapper {wrapper!r}; recipe() maps only {BALLISTIC}")
     return {
-        "n_throws": entry["n_timesteps"], "train_batch_size": entry["n_envs"] * entry["n_steps"],
-        "minibatch_size": entry["batch_size"], "num_epochs": entry["n_epochs"],
-        "lr": float(rate.partition("_")[2]) if decays else float(rate), "lr_decays": decays,
-        "gamma": entry.get("gamma", 0.99), "lambda_": entry.get("gae_lambda", 0.95), "clip_param": clip,
-        "entropy_coeff": entry.get("ent_coef", 0.0), "vf_loss_coeff": entry.get("vf_coef", 0.5),
-        "grad_clip": entry.get("max_grad_norm", 0.5), "hiddens": list(policy.get("net_arch", [64, 64])),
+        "n_throws": entry["n_timesteps"],
+        "train_batch_size": entry["n_envs"] * entry["n_steps"],
+        "minibatch_size": entry["batch_size"],
+        "num_epochs": entry["n_epochs"],
+        "lr": float(rate.partition("_")[2]) if decays else float(rate),
+        "lr_decays": decays,
+        "gamma": entry.get("gamma", 0.99),
+        "lambda_": entry.get("gae_lambda", 0.95),
+        "clip_param": clip,
+        "entropy_coeff": entry.get("ent_coef", 0.0),
+        "vf_loss_coeff": entry.get("vf_coef", 0.5),
+        "grad_clip": entry.get("max_grad_norm", 0.5),
+        "hiddens": list(policy.get("net_arch", [64, 64])),
         "activation": ACTIVATIONS[policy.get("activation_fn", "nn.Tanh")],
-        "log_std_init": policy.get("log_std_init", 0.0), "ballistic": wrapper == BALLISTIC,
+        "log_std_init": policy.get("log_std_init", 0.0),
+        "ballistic": wrapper == BALLISTIC,
     }
 
 
-def make_config(env_id: str, env_config: dict[str, Any] | None = None, *, num_envs: int = 256,
-                vectorize: str = "native", num_env_runners: int = 0, seed: int = 0, masked_advantages: bool = True,
-                **overrides: Any) -> PPOConfig:
+def make_config(
+    env_id: str,
+    env_config: dict[str, Any] | None = None,
+    *,
+    num_envs: int = 256,
+    vectorize: str = "native",
+    num_env_runners: int = 0,
+    seed: int = 0,
+    masked_advantages: bool = True,
+    **overrides: Any,
+) -> PPOConfig:
     """RLlib PPO on ``env_id`` with SB3's recipe (``recipe``; ``overrides`` replace its keys, e.g.
     ``train_batch_size=256``), the advantages standardised over the real timesteps of each minibatch
     (``MaskedAdvantagePPOLearner``; ``masked_advantages=False``: RLlib's, over the batch with its artificial
@@ -139,21 +155,38 @@ def make_config(env_id: str, env_config: dict[str, Any] | None = None, *, num_en
     if settings["ballistic"]:
         env_config.setdefault("ballistic", True)
     lr = [[0, settings["lr"]], [settings["n_throws"], 0.0]] if settings["lr_decays"] else settings["lr"]
-    model_config = {"fcnet_hiddens": settings["hiddens"], "fcnet_activation": settings["activation"],
-                    "vf_share_layers": False, "free_log_std": True, "log_std_init": settings["log_std_init"]}
+    model_config = {
+        "fcnet_hiddens": settings["hiddens"],
+        "fcnet_activation": settings["activation"],
+        "vf_share_layers": False,
+        "free_log_std": True,
+        "log_std_init": settings["log_std_init"],
+    }
     return (
         PPOConfig()
         .environment(env_id, env_config=env_config)
-        .env_runners(num_env_runners=num_env_runners, num_envs_per_env_runner=num_envs,
-                     gym_env_vectorize_mode=VECTORIZE_MODES[vectorize],
-                     env_to_module_connector=lambda env, spaces, device: MeanStdFilter())
-        .training(train_batch_size_per_learner=settings["train_batch_size"],
-                  minibatch_size=settings["minibatch_size"] * ROWS_PER_THROW,
-                  num_epochs=settings["num_epochs"], lr=lr, gamma=settings["gamma"], lambda_=settings["lambda_"],
-                  clip_param=settings["clip_param"], entropy_coeff=settings["entropy_coeff"],
-                  vf_loss_coeff=settings["vf_loss_coeff"], grad_clip=settings["grad_clip"],
-                  grad_clip_by="global_norm", use_kl_loss=False, vf_clip_param=math.inf,
-                  learner_class=MaskedAdvantagePPOLearner if masked_advantages else PPOTorchLearner)
+        .env_runners(
+            num_env_runners=num_env_runners,
+            num_envs_per_env_runner=num_envs,
+            gym_env_vectorize_mode=VECTORIZE_MODES[vectorize],
+            env_to_module_connector=lambda env, spaces, device: MeanStdFilter(),
+        )
+        .training(
+            train_batch_size_per_learner=settings["train_batch_size"],
+            minibatch_size=settings["minibatch_size"] * ROWS_PER_THROW,
+            num_epochs=settings["num_epochs"],
+            lr=lr,
+            gamma=settings["gamma"],
+            lambda_=settings["lambda_"],
+            clip_param=settings["clip_param"],
+            entropy_coeff=settings["entropy_coeff"],
+            vf_loss_coeff=settings["vf_loss_coeff"],
+            grad_clip=settings["grad_clip"],
+            grad_clip_by="global_norm",
+            use_kl_loss=False,
+            vf_clip_param=math.inf,
+            learner_class=MaskedAdvantagePPOLearner if masked_advantages else PPOTorchLearner,
+        )
         .rl_module(rl_module_spec=RLModuleSpec(module_class=PPOModule, model_config=model_config))
         .callbacks(on_episode_end=log_success)
         .debugging(seed=seed)
@@ -168,17 +201,28 @@ def iterations_of(config: PPOConfig, env_id: str) -> int:
 def evaluate(algo: PPO, episodes: int) -> dict[str, float]:
     """Success and mean return of the policy's mean action (``explore=False``) on at least ``episodes`` fresh
     throws of the local env runner (its env's own draws, not the SB3 test seeds)."""
-    done = [episode for episode in algo.env_runner.sample(num_episodes=episodes, explore=False, force_reset=True)
-            if episode.is_done]
+    done = [
+        episode
+        for episode in algo.env_runner.sample(num_episodes=episodes, explore=False, force_reset=True)
+        if episode.is_done
+    ]
     success = [float(episode.get_infos(-1)["success"]) for episode in done]
-    return {"episodes": len(done), "success": float(np.mean(success)),
-            "return": float(np.mean([episode.get_return() for episode in done]))}
+    return {
+        "episodes": len(done),
+        "success": float(np.mean(success)),
+        "return": float(np.mean([episode.get_return() for episode in done])),
+    }
 
 
-LEARNER_FIGURES = {"lr": "default_optimizer_learning_rate", "entropy": "entropy", "policy_loss": "policy_loss",
-                   "vf_loss": "vf_loss", "vf_explained_var": "vf_explained_var",
-                   "grad_norm": "gradients_default_optimizer_global_norm",
-                   "rows_trained": "num_module_steps_trained"}
+LEARNER_FIGURES = {
+    "lr": "default_optimizer_learning_rate",
+    "entropy": "entropy",
+    "policy_loss": "policy_loss",
+    "vf_loss": "vf_loss",
+    "vf_explained_var": "vf_explained_var",
+    "grad_norm": "gradients_default_optimizer_global_norm",
+    "rows_trained": "num_module_steps_trained",
+}
 """The learner's figures ``--diagnostics`` prints (ours -> the key in RLlib's learner results)."""
 
 
@@ -187,13 +231,18 @@ def summary(result: dict[str, Any]) -> dict[str, float]:
     those RLlib reports)."""
     runners = result["env_runners"]
     learner = result.get("learners", {}).get("default_policy", {})
-    return {"env_steps": runners["num_env_steps_sampled_lifetime"], "return": runners["episode_return_mean"],
-            "success": runners[SUCCESS], "episode_length": runners["episode_len_mean"],
-            **{name: float(learner[key]) for name, key in LEARNER_FIGURES.items() if key in learner}}
+    return {
+        "env_steps": runners["num_env_steps_sampled_lifetime"],
+        "return": runners["episode_return_mean"],
+        "success": runners[SUCCESS],
+        "episode_length": runners["episode_len_mean"],
+        **{name: float(learner[key]) for name, key in LEARNER_FIGURES.items() if key in learner},
+    }
 
 
-def train(config: PPOConfig, iterations: int, diagnostics: bool = False, eval_every: int = 0,
-          eval_episodes: int = 256) -> tuple[PPO, list[dict[str, float]]]:
+def train(
+    config: PPOConfig, iterations: int, diagnostics: bool = False, eval_every: int = 0, eval_episodes: int = 256
+) -> tuple[PPO, list[dict[str, float]]]:
     """``iterations`` of ``algo.train()``; with ``diagnostics`` each line adds the learner's figures and the
     action std (``exp`` of the free log std) after the update; every ``eval_every`` iterations (0: never) the
     mean action's success on ``eval_episodes`` fresh throws (``evaluate``), as SB3's runs validate."""
@@ -205,15 +254,19 @@ def train(config: PPOConfig, iterations: int, diagnostics: bool = False, eval_ev
         figures["seconds"] = time.perf_counter() - start
         figures["action_std"] = [float(v) for v in algo.get_module().pi.log_std.detach().exp()]
         history.append(figures)
-        line = (f"iteration {iteration + 1}: {figures['env_steps']:,.0f} throws, return {figures['return']:.3f}, "
-                f"success {figures['success']:.1%} ({figures['seconds']:.1f} s)")
+        line = (
+            f"iteration {iteration + 1}: {figures['env_steps']:,.0f} throws, return {figures['return']:.3f}, "
+            f"success {figures['success']:.1%} ({figures['seconds']:.1f} s)"
+        )
         if diagnostics:
             line += "".join(f", {name} {figures[name]:.4g}" for name in LEARNER_FIGURES if name in figures)
             line += ", action std " + " ".join(f"{v:.3f}" for v in figures["action_std"])
         if eval_every and (iteration + 1) % eval_every == 0:
             figures["mean_action"] = evaluate(algo, eval_episodes)
-            line += (f"; mean action: success {figures['mean_action']['success']:.1%} of "
-                     f"{figures['mean_action']['episodes']} throws")
+            line += (
+                f"; mean action: success {figures['mean_action']['success']:.1%} of "
+                f"{figures['mean_action']['episodes']} throws"
+            )
         print(line, flush=True)
     return algo, history
 
@@ -222,24 +275,43 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--env", default="BoxToss-v0", choices=ENV_IDS)
     parser.add_argument("--env-config", nargs="*", default=[], metavar="KEY=VALUE", help="env kwargs")
-    parser.add_argument("--iterations", type=int, default=None,
-                        help="training iterations (default: the recipe's throws / the train batch)")
+    parser.add_argument(
+        "--iterations",
+        type=int,
+        default=None,
+        help="training iterations (default: the recipe's throws / the train batch)",
+    )
     parser.add_argument("--num-envs", type=int, default=256, help="envs per env runner")
     parser.add_argument("--vectorize", default="native", choices=sorted(VECTORIZE_MODES))
     parser.add_argument("--num-env-runners", type=int, default=0, help="0: sample in the training process")
     parser.add_argument("--train-batch-size", type=int, default=None, help="default: the recipe's n_envs x n_steps")
     parser.add_argument("--eval-episodes", type=int, default=1024, help="deterministic throws at the end (0: none)")
-    parser.add_argument("--eval-every", type=int, default=0,
-                        help="iterations between evaluations of the mean action on 256 fresh throws (0: none)")
+    parser.add_argument(
+        "--eval-every",
+        type=int,
+        default=0,
+        help="iterations between evaluations of the mean action on 256 fresh throws (0: none)",
+    )
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--address", help="a running Ray cluster; default: a local Ray")
     parser.add_argument("--num-cpus", type=int, help="CPUs of the local Ray (default: all)")
-    parser.add_argument("--diagnostics", action="store_true",
-                        help="print the learner's figures (rate, entropy, losses, gradient norm) and the action std")
-    parser.add_argument("--rllib-advantages", action="store_true",
-                        help="RLlib's advantage standardisation (over the batch with its artificial timesteps)")
-    parser.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE",
-                        help="replace settings of the recipe (recipe()'s keys, e.g. num_epochs=5)")
+    parser.add_argument(
+        "--diagnostics",
+        action="store_true",
+        help="print the learner's figures (rate, entropy, losses, gradient norm) and the action std",
+    )
+    parser.add_argument(
+        "--rllib-advantages",
+        action="store_true",
+        help="RLlib's advantage standardisation (over the batch with its artificial timesteps)",
+    )
+    parser.add_argument(
+        "--set",
+        nargs="*",
+        default=[],
+        metavar="KEY=VALUE",
+        help="replace settings of the recipe (recipe()'s keys, e.g. num_epochs=5)",
+    )
     return parser.parse_args(argv)
 
 
@@ -264,15 +336,25 @@ def main(argv: list[str] | None = None) -> list[dict[str, float]]:
     overrides = env_config_of(args.set)
     if args.train_batch_size is not None:
         overrides["train_batch_size"] = args.train_batch_size
-    config = make_config(args.env, env_config, num_envs=args.num_envs, vectorize=args.vectorize,
-                         num_env_runners=args.num_env_runners, seed=args.seed,
-                         masked_advantages=not args.rllib_advantages, **overrides)
+    config = make_config(
+        args.env,
+        env_config,
+        num_envs=args.num_envs,
+        vectorize=args.vectorize,
+        num_env_runners=args.num_env_runners,
+        seed=args.seed,
+        masked_advantages=not args.rllib_advantages,
+        **overrides,
+    )
     iterations = args.iterations if args.iterations is not None else iterations_of(config, args.env)
     algo, history = train(config, iterations, args.diagnostics, args.eval_every)
     if args.eval_episodes > 0:
         result = evaluate(algo, args.eval_episodes)
-        print(f"deterministic (mean action): success {result['success']:.1%} of {result['episodes']} throws, "
-              f"return {result['return']:.3f}", flush=True)
+        print(
+            f"deterministic (mean action): success {result['success']:.1%} of {result['episodes']} throws, "
+            f"return {result['return']:.3f}",
+            flush=True,
+        )
         history.append({"evaluation": result})
     algo.stop()
     return history

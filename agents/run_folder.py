@@ -33,8 +33,14 @@ class RunFolderError(ValueError):
 # -- names ---------------------------------------------------------------------------------------
 def check_component(value: str, option: str) -> str:
     """``value`` if it is a single path component (a folder name, not a path), else a RunFolderError."""
-    if (not isinstance(value, str) or value in ("", ".", "..") or "/" in value or "\0" in value
-            or (os.altsep and os.altsep in value) or os.sep in value):
+    if (
+        not isinstance(value, str)
+        or value in ("", ".", "..")
+        or "/" in value
+        or "\0" in value
+        or (os.altsep and os.altsep in value)
+        or os.sep in value
+    ):
         raise RunFolderError(f"{option} must be a single folder name (no '/', not '.' or '..'), got {value!r}")
     return value
 
@@ -160,14 +166,19 @@ class AppendingCSVOutput(KVWriter):
         self.columns, _ = read_csv(self.path)
 
     def write(self, key_values: dict[str, Any], key_excluded: dict[str, Any], step: int = 0) -> None:
-        values = {key: value for key, value in key_values.items()
-                  if not (key_excluded.get(key) and "csv" in key_excluded[key])}
+        values = {
+            key: value
+            for key, value in key_values.items()
+            if not (key_excluded.get(key) and "csv" in key_excluded[key])
+        }
         new = [key for key in values if key not in self.columns]
         if new or not self.path.exists():
             _, rows = read_csv(self.path)
             self.columns = self.columns + sorted(new)
-            write_atomic(self.path, "".join([csv_line(self.columns)]
-                                            + [csv_line([row.get(c, "") for c in self.columns]) for row in rows]))
+            write_atomic(
+                self.path,
+                "".join([csv_line(self.columns)] + [csv_line([row.get(c, "") for c in self.columns]) for row in rows]),
+            )
         append_line(self.path, csv_line([plain(values.get(column, "")) for column in self.columns]))
 
     def close(self) -> None:

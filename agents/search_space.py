@@ -46,7 +46,7 @@ class Dimension:
         if self.write != "{}":
             if not (isinstance(value, str) and value.startswith(prefix) and value.endswith(suffix)):
                 return None
-            value = configuration.read_value(value[len(prefix):len(value) - len(suffix)])
+            value = configuration.read_value(value[len(prefix) : len(value) - len(suffix)])
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             return None
         if isinstance(self.distribution, distributions.IntDistribution) and not float(value).is_integer():
@@ -68,8 +68,10 @@ def read_space(entries: dict[str, Any], algo: str, where: str) -> dict[str, Dime
     space = {}
     for key, entry in entries.items():
         if key.split(".")[0] not in configuration.known_keys(algo):
-            raise configuration.ConfigError(f"{where}.{key}: {key.split('.')[0]!r} is not a hyperparameter "
-                                            f"of {algo}; known: {configuration.known_keys(algo)}")
+            raise configuration.ConfigError(
+                f"{where}.{key}: {key.split('.')[0]!r} is not a hyperparameter "
+                f"of {algo}; known: {configuration.known_keys(algo)}"
+            )
         space[key] = read_dimension(entry, f"{where}.{key}")
     return space
 
@@ -77,10 +79,13 @@ def read_space(entries: dict[str, Any], algo: str, where: str) -> dict[str, Dime
 def read_dimension(entry: Any, where: str) -> Dimension:
     """``{low, high[, log, step]}`` or ``{choices}``, with an optional ``write`` template."""
     if not isinstance(entry, dict):
-        raise configuration.ConfigError(f"{where} must be a mapping like {{low: 0.1, high: 0.4}} or "
-                                        f"{{choices: [a, b]}}, got {entry!r}")
-    entry = {key: configuration.coerce_numbers(value) if key in ("low", "high", "step") else value
-             for key, value in entry.items()}  # YAML 1.1 reads 1e-4 as a string; choices stay as written
+        raise configuration.ConfigError(
+            f"{where} must be a mapping like {{low: 0.1, high: 0.4}} or {{choices: [a, b]}}, got {entry!r}"
+        )
+    entry = {
+        key: configuration.coerce_numbers(value) if key in ("low", "high", "step") else value
+        for key, value in entry.items()
+    }  # YAML 1.1 reads 1e-4 as a string; choices stay as written
     write = entry.pop("write", "{}")
     if not isinstance(write, str) or write.count("{}") != 1:
         raise configuration.ConfigError(f"{where}: write must be a string holding one {{}}, got {write!r}")
@@ -88,15 +93,20 @@ def read_dimension(entry: Any, where: str) -> Dimension:
         choices = entry.pop("choices")
         if entry:
             raise configuration.ConfigError(f"{where}: choices takes no other key than write, got {sorted(entry)}")
-        if (not isinstance(choices, list) or not choices
-                or not all(isinstance(c, (bool, int, float, str)) for c in choices)):
-            raise configuration.ConfigError(f"{where}: choices must be a non-empty list of numbers, strings or "
-                                            f"booleans, got {choices!r}")
+        if (
+            not isinstance(choices, list)
+            or not choices
+            or not all(isinstance(c, (bool, int, float, str)) for c in choices)
+        ):
+            raise configuration.ConfigError(
+                f"{where}: choices must be a non-empty list of numbers, strings or booleans, got {choices!r}"
+            )
         return Dimension(distributions.CategoricalDistribution(choices), write)
     unknown = set(entry) - {"low", "high", "log", "step"}
     if unknown or "low" not in entry or "high" not in entry:
-        raise configuration.ConfigError(f"{where} must have low and high (and optionally log, step), or choices; "
-                                        f"got {sorted(entry)}")
+        raise configuration.ConfigError(
+            f"{where} must have low and high (and optionally log, step), or choices; got {sorted(entry)}"
+        )
     low, high, log, step = entry["low"], entry["high"], entry.get("log", False), entry.get("step")
     for name, value in (("low", low), ("high", high)):
         if isinstance(value, bool) or not isinstance(value, (int, float)):
@@ -127,8 +137,9 @@ def overrides(space: dict[str, Dimension], params: dict[str, Any]) -> list[str]:
     return [space[key].override(key, params[key]) for key in space]
 
 
-def trial_config(base: dict[str, Any], space: dict[str, Dimension], params: dict[str, Any],
-                 algo: str) -> dict[str, Any]:
+def trial_config(
+    base: dict[str, Any], space: dict[str, Dimension], params: dict[str, Any], algo: str
+) -> dict[str, Any]:
     """``base`` with a trial's sampled values applied, checked (a ConfigError names a bad value)."""
     config = configuration.apply_overrides(base, overrides(space, params), algo)
     configuration.check_config(config, algo)
@@ -153,6 +164,11 @@ def current_point(space: dict[str, Dimension], config: dict[str, Any]) -> dict[s
 def first_point(space: dict[str, Dimension]) -> dict[str, Any]:
     """Each dimension's low end or first choice: a point to check that the space's values make a
     valid configuration before a sweep starts."""
-    return {key: (dimension.distribution.choices[0]
-                  if isinstance(dimension.distribution, distributions.CategoricalDistribution)
-                  else dimension.distribution.low) for key, dimension in space.items()}
+    return {
+        key: (
+            dimension.distribution.choices[0]
+            if isinstance(dimension.distribution, distributions.CategoricalDistribution)
+            else dimension.distribution.low
+        )
+        for key, dimension in space.items()
+    }

@@ -50,11 +50,13 @@ class StackPlannerSettings:
     threads: int | None = 1
 
 
-def command_actions(observation: np.ndarray, commands: np.ndarray, config: stack_task.StackConfig,
-                    settings: StackPlannerSettings) -> np.ndarray:
+def command_actions(
+    observation: np.ndarray, commands: np.ndarray, config: stack_task.StackConfig, settings: StackPlannerSettings
+) -> np.ndarray:
     """The env actions (m, 3) of ``commands`` (m, 3) in [-1, 1] from ``observation`` (``envs.stack_commands``)."""
-    return stack_commands.command_actions(observation, commands, config, settings.flight_time_range,
-                                          settings.offset_range, settings.turn_range)
+    return stack_commands.command_actions(
+        observation, commands, config, settings.flight_time_range, settings.offset_range, settings.turn_range
+    )
 
 
 PRIOR_COMMANDS = np.array([[c0, 0.0, 0.0] for c0 in (-0.6, -0.2, 0.2, 0.6, 1.0)])
@@ -77,8 +79,8 @@ class StackPlanner:
         k = unwrapped.thrown
         width = float(observation[stack_task.BODY_SIZE * k + stack_task.B_WIDTH])  # of the box in the hand
         commands = self.rng.uniform(-1.0, 1.0, (settings.initial, 3))
-        prior = PRIOR_COMMANDS[:settings.initial]
-        commands[:len(prior)] = prior
+        prior = PRIOR_COMMANDS[: settings.initial]
+        commands[: len(prior)] = prior
         best_score, best_action = -np.inf, None
         all_commands, all_scores = np.zeros((0, 3)), np.zeros(0)
         for round_ in range(settings.iterations + 1):
@@ -88,8 +90,12 @@ class StackPlanner:
             centre = np.abs(unwrapped.last_tried[:, k, 0] - unwrapped.target_x)
             # a box lying flat is the best base for the next: height beyond its width is not credited
             height = outcomes.terms["reward_height"]
-            scores = (outcomes.reward - height + np.minimum(height, config.height_weight * width)
-                      - settings.centring_weight * centre)
+            scores = (
+                outcomes.reward
+                - height
+                + np.minimum(height, config.height_weight * width)
+                - settings.centring_weight * centre
+            )
             i = int(np.argmax(scores))
             if scores[i] > best_score:
                 best_score, best_action = scores[i], actions[i]
@@ -99,7 +105,7 @@ class StackPlanner:
                 break
             if round_ == settings.iterations:
                 break
-            elite = all_commands[np.argsort(all_scores)[-settings.elite:]]
+            elite = all_commands[np.argsort(all_scores)[-settings.elite :]]
             mean, std = elite.mean(axis=0), np.maximum(elite.std(axis=0), 0.02)
             commands = np.clip(self.rng.normal(mean, std, (settings.population, 3)), -1.0, 1.0)
         return best_action
@@ -122,12 +128,22 @@ def play_episodes(n_episodes: int, act, first_seed: int = TEST_FIRST_SEED, env_k
         falls.append(info["fell"])
     seconds = time.perf_counter() - start
     env.close()
-    return {"episodes": n_episodes, "success_rate": float(np.mean(successes)), "mean_height": float(np.mean(heights)),
-            "fall_rate": float(np.mean(falls)), "throws": throws, "seconds": seconds}
+    return {
+        "episodes": n_episodes,
+        "success_rate": float(np.mean(successes)),
+        "mean_height": float(np.mean(heights)),
+        "fall_rate": float(np.mean(falls)),
+        "throws": throws,
+        "seconds": seconds,
+    }
 
 
-def run_episodes(n_episodes: int, settings: StackPlannerSettings = StackPlannerSettings(),
-                 first_seed: int = TEST_FIRST_SEED, env_kwargs: dict | None = None) -> dict:
+def run_episodes(
+    n_episodes: int,
+    settings: StackPlannerSettings = StackPlannerSettings(),
+    first_seed: int = TEST_FIRST_SEED,
+    env_kwargs: dict | None = None,
+) -> dict:
     """The planner on ``play_episodes``' episodes, with the candidate throws it simulated per throw made."""
     planner = StackPlanner(settings)
     result = play_episodes(n_episodes, planner.plan, first_seed, env_kwargs)
@@ -171,18 +187,25 @@ table."""
 
 def budget_table(rows: list[dict]) -> str:
     """The measured rows (``run_episodes``' results with their budget's ``name``) as docs/stack.md's section."""
-    lines = ["| budget (initial, population, elite, rounds) | episodes (seeds) | success | mean final height | "
-             "stack fell | throws simulated per throw | seconds |", "|---|---|---|---|---|---|---|"]
+    lines = [
+        "| budget (initial, population, elite, rounds) | episodes (seeds) | success | mean final height | "
+        "stack fell | throws simulated per throw | seconds |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for result in rows:
         b = result["budget"]
-        lines.append(f"| {result['name']} ({b['initial']}, {b['population']}, {b['elite']}, {b['iterations']}) | "
-                     f"{result['episodes']} ({result['first_seed']}...) | {100 * result['success_rate']:.1f}% | "
-                     f"{result['mean_height']:.3f} m | {100 * result['fall_rate']:.1f}% | "
-                     f"{result['simulated_per_throw']:.0f} | {result['seconds']:.0f} |")
-    return ("Measured on the default `BoxToss-Stack-v0` (a hand of 4), one engine thread, the 2 cores shared with "
-            "other jobs (seconds are wall time), by `python -m agents.stack_planner --episodes N --budgets NAME "
-            "--readme` (each run adds its rows to `docs/agents/stack_ceiling.json` and writes the table of all):"
-            "\n\n" + "\n".join(lines))
+        lines.append(
+            f"| {result['name']} ({b['initial']}, {b['population']}, {b['elite']}, {b['iterations']}) | "
+            f"{result['episodes']} ({result['first_seed']}...) | {100 * result['success_rate']:.1f}% | "
+            f"{result['mean_height']:.3f} m | {100 * result['fall_rate']:.1f}% | "
+            f"{result['simulated_per_throw']:.0f} | {result['seconds']:.0f} |"
+        )
+    return (
+        "Measured on the default `BoxToss-Stack-v0` (a hand of 4), one engine thread, the 2 cores shared with "
+        "other jobs (seconds are wall time), by `python -m agents.stack_planner --episodes N --budgets NAME "
+        "--readme` (each run adds its rows to `docs/agents/stack_ceiling.json` and writes the table of all):"
+        "\n\n" + "\n".join(lines)
+    )
 
 
 def saved_rows(path: Path = RESULTS) -> list[dict]:
@@ -203,27 +226,38 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--episodes", type=int, default=50)
     parser.add_argument("--first-seed", type=int, default=TEST_FIRST_SEED)
     parser.add_argument("--budgets", nargs="+", choices=sorted(BUDGETS), default=list(BUDGETS))
-    parser.add_argument("--readme", action="store_true",
-                        help="save the rows in docs/agents/stack_ceiling.json and write the table into docs/stack.md "
-                             "(with --model: the PPO section)")
+    parser.add_argument(
+        "--readme",
+        action="store_true",
+        help="save the rows in docs/agents/stack_ceiling.json and write the table into docs/stack.md "
+        "(with --model: the PPO section)",
+    )
     parser.add_argument("--model", type=Path, help="evaluate this RL Zoo run folder's PPO instead of the planner")
     args = parser.parse_args(argv)
     if args.model is not None:
         result = play_episodes(args.episodes, zoo_policy(args.model), args.first_seed)
-        line = (f"success {100 * result['success_rate']:.1f}%, mean final height {result['mean_height']:.3f} m, "
-                f"stack fell {100 * result['fall_rate']:.1f}% on {result['episodes']} episodes (seeds "
-                f"{args.first_seed}...)")
+        line = (
+            f"success {100 * result['success_rate']:.1f}%, mean final height {result['mean_height']:.3f} m, "
+            f"stack fell {100 * result['fall_rate']:.1f}% on {result['episodes']} episodes (seeds "
+            f"{args.first_seed}...)"
+        )
         print(f"{args.model}: {line}")
         if args.readme:
             command = f"python -m agents.stack_planner --model {args.model} --episodes {args.episodes} --readme"
             replace_section("stack-ppo", f"PPO, acting deterministically: {line}; by `{command}`.")
         return
     for name in args.budgets:
-        result = {"name": name, "first_seed": args.first_seed,
-                  **run_episodes(args.episodes, BUDGETS[name], args.first_seed)}
-        print(f"{name}: success {100 * result['success_rate']:.1f}%, mean final height {result['mean_height']:.3f} m, "
-              f"falls {100 * result['fall_rate']:.1f}%, {result['simulated_per_throw']:.0f} candidate throws "
-              f"simulated per throw, {result['seconds']:.1f} s", flush=True)
+        result = {
+            "name": name,
+            "first_seed": args.first_seed,
+            **run_episodes(args.episodes, BUDGETS[name], args.first_seed),
+        }
+        print(
+            f"{name}: success {100 * result['success_rate']:.1f}%, mean final height {result['mean_height']:.3f} m, "
+            f"falls {100 * result['fall_rate']:.1f}%, {result['simulated_per_throw']:.0f} candidate throws "
+            f"simulated per throw, {result['seconds']:.1f} s",
+            flush=True,
+        )
         if args.readme:
             replace_section("stack-ceiling", budget_table(save_row(result)))
 

@@ -30,8 +30,19 @@ from agents.search_space import Dimension
 from agents.training import read_timing
 from box_toss_env.files import atomic_path, write_atomic
 
-TRIAL_COLUMNS = ("trial", "status", "timesteps", "validation_success", "best_validation_success", "mean_distance",
-                 "objective", "test_success", "train_seconds", "overrides", "run")
+TRIAL_COLUMNS = (
+    "trial",
+    "status",
+    "timesteps",
+    "validation_success",
+    "best_validation_success",
+    "mean_distance",
+    "objective",
+    "test_success",
+    "train_seconds",
+    "overrides",
+    "run",
+)
 
 
 def read_rows(path: Path) -> list[dict[str, str]]:
@@ -68,8 +79,9 @@ def trial_row(trial_dir: Path, n_timesteps: int, space: dict[str, Dimension]) ->
         "validation_success": float(last["success_rate"]) if last else math.nan,
         "best_validation_success": max((float(row["success_rate"]) for row in validations), default=math.nan),
         "mean_distance": float(last["mean_distance"]) if last else math.nan,
-        "objective": (search_objective(float(last["success_rate"]), float(last["mean_distance"]), targets)
-                      if last else -math.inf),
+        "objective": (
+            search_objective(float(last["success_rate"]), float(last["mean_distance"]), targets) if last else -math.inf
+        ),
         "test_success": results["success_rate"] if results else math.nan,
         "train_seconds": timing["wall_seconds"] if timing else (float(last["wall_seconds"]) if last else 0.0),
         "params": params,
@@ -103,10 +115,12 @@ def best_entry(row: dict[str, Any], sweep_name: str) -> str:
     config = row["config"]
     entry = configuration.zoo_entry(config["hyperparams"])
     text = yaml.safe_dump({config["env_id"]: entry}, sort_keys=False)
-    return (f"# Best of sweep {sweep_name} ({config['algo']} on {config['env_id']}): trial {row['trial']}, "
-            f"validation success {row['validation_success']:.1%}, test success {row['test_success']:.1%}\n"
-            f"# after n_timesteps={entry['n_timesteps']:,} throws (the sweep's budget per trial). Ready for "
-            f"agents/hyperparams/{config['algo']}.yml\n{text}")
+    return (
+        f"# Best of sweep {sweep_name} ({config['algo']} on {config['env_id']}): trial {row['trial']}, "
+        f"validation success {row['validation_success']:.1%}, test success {row['test_success']:.1%}\n"
+        f"# after n_timesteps={entry['n_timesteps']:,} throws (the sweep's budget per trial). Ready for "
+        f"agents/hyperparams/{config['algo']}.yml\n{text}"
+    )
 
 
 def percent(value: float) -> str:
@@ -114,18 +128,24 @@ def percent(value: float) -> str:
 
 
 def trials_markdown(rows: list[dict[str, Any]]) -> str:
-    lines = ["| trial | status | env steps | validation success | mean distance | test success | training time | "
-             "sampled values |", "|---|---|---:|---:|---:|---:|---:|---|"]
+    lines = [
+        "| trial | status | env steps | validation success | mean distance | test success | training time | "
+        "sampled values |",
+        "|---|---|---:|---:|---:|---:|---:|---|",
+    ]
     for row in rows:
         distance = "-" if not math.isfinite(row["mean_distance"]) else f"{row['mean_distance']:.3f} m"
-        lines.append(f"| {row['trial']} | {row['status']} | {row['timesteps']:,} | "
-                     f"{percent(row['validation_success'])} | {distance} | {percent(row['test_success'])} | "
-                     f"{row['train_seconds']:.0f} s | `{row['overrides']}` |")
+        lines.append(
+            f"| {row['trial']} | {row['status']} | {row['timesteps']:,} | "
+            f"{percent(row['validation_success'])} | {distance} | {percent(row['test_success'])} | "
+            f"{row['train_seconds']:.0f} s | `{row['overrides']}` |"
+        )
     return "\n".join(lines)
 
 
-def write_experiment_tables(experiment: Path, n_timesteps: int, space: dict[str, Dimension],
-                            sweep_name: str) -> list[dict[str, Any]]:
+def write_experiment_tables(
+    experiment: Path, n_timesteps: int, space: dict[str, Dimension], sweep_name: str
+) -> list[dict[str, Any]]:
     """``trials.csv``, ``trials.md`` and (when a trial finished) ``best.yml`` of one experiment."""
     rows = experiment_rows(experiment, n_timesteps, space)
     with atomic_path(experiment / "trials.csv") as temp, open(temp, "w", newline="") as file:
@@ -163,15 +183,24 @@ def summary(sweep_dir: Path) -> tuple[str, list[dict[str, Any]]]:
         rows = write_experiment_tables(experiment, n_timesteps, space, sweep_dir.name)
         best = best_trial(rows)
         start = next((row for row in rows if entry.get("start_point") and row["params"] == entry["start_point"]), None)
-        variants.append({
-            "env_id": env_id, "trials": len(rows), "finished": sum(row["status"] == "finished" for row in rows),
-            "pruned": sum(row["status"].startswith("pruned") for row in rows),
-            "errors": sum(row["status"] == "error" for row in rows), "wall_seconds": walls.get(env_id, math.nan),
-            "throws": sum(row["timesteps"] for row in rows), "best": best, "start": start,
-        })
-    lines = ["| variant | trials (finished / pruned / failed) | throws trained | wall time | best validation success "
-             "| its test success | the file's values: validation success | best trial's values |",
-             "|---|---|---:|---:|---:|---:|---:|---|"]
+        variants.append(
+            {
+                "env_id": env_id,
+                "trials": len(rows),
+                "finished": sum(row["status"] == "finished" for row in rows),
+                "pruned": sum(row["status"].startswith("pruned") for row in rows),
+                "errors": sum(row["status"] == "error" for row in rows),
+                "wall_seconds": walls.get(env_id, math.nan),
+                "throws": sum(row["timesteps"] for row in rows),
+                "best": best,
+                "start": start,
+            }
+        )
+    lines = [
+        "| variant | trials (finished / pruned / failed) | throws trained | wall time | best validation success "
+        "| its test success | the file's values: validation success | best trial's values |",
+        "|---|---|---:|---:|---:|---:|---:|---|",
+    ]
     for variant in variants:
         best, start = variant["best"] or {}, variant["start"] or {}
         start_text = percent(start.get("validation_success", math.nan))
@@ -181,35 +210,59 @@ def summary(sweep_dir: Path) -> tuple[str, list[dict[str, Any]]]:
             f"| {variant['env_id']} | {variant['trials']} ({variant['finished']} / {variant['pruned']} / "
             f"{variant['errors']}) | {variant['throws']:,} | {format_minutes(variant['wall_seconds'])} | "
             f"{percent(best.get('validation_success', math.nan))} | {percent(best.get('test_success', math.nan))} | "
-            f"{start_text} | {'`' + best['overrides'] + '`' if best else '-'} |")
+            f"{start_text} | {'`' + best['overrides'] + '`' if best else '-'} |"
+        )
     return "\n".join(lines), variants
 
 
 def sweep_command(settings: dict[str, Any]) -> str:
     """The command as a user types it (``python -m ...``)."""
-    return "python " + settings["command"].split(" ", 1)[1] if settings["command"].startswith("python") \
+    return (
+        "python " + settings["command"].split(" ", 1)[1]
+        if settings["command"].startswith("python")
         else settings["command"]
+    )
 
 
 def docs_page(sweep_dir: Path, settings: dict[str, Any], table: str, variants: list[dict[str, Any]]) -> str:
     """``docs/tune.md``: the sweep's command, the per-variant table, every trial and the best entries."""
-    lines = [f"# Hyperparameter sweep `{Path(sweep_dir).name}`", "",
-             f"Written by `python -m agents.tune --report {sweep_dir} --readme` from the sweep folder of:", "",
-             f"```bash\n{sweep_command(settings)}\n```", "",
-             f"{settings['algo'].upper()}, {settings['trials']} trials per variant, pruner {settings['pruner']}, "
-             f"{settings['cpus_per_trial']} CPU per trial, seed {settings['seed']}; search space: "
-             "`agents/search_space.yml` as below. Success is measured on the "
-             "validation targets during training and on the 1,024 test targets at the end of a finished trial. "
-             "Wall times are from a 2-core machine shared with other work.", "", table, ""]
+    lines = [
+        f"# Hyperparameter sweep `{Path(sweep_dir).name}`",
+        "",
+        f"Written by `python -m agents.tune --report {sweep_dir} --readme` from the sweep folder of:",
+        "",
+        f"```bash\n{sweep_command(settings)}\n```",
+        "",
+        f"{settings['algo'].upper()}, {settings['trials']} trials per variant, pruner {settings['pruner']}, "
+        f"{settings['cpus_per_trial']} CPU per trial, seed {settings['seed']}; search space: "
+        "`agents/search_space.yml` as below. Success is measured on the "
+        "validation targets during training and on the 1,024 test targets at the end of a finished trial. "
+        "Wall times are from a 2-core machine shared with other work.",
+        "",
+        table,
+        "",
+    ]
     space = settings["space"]
-    lines += ["Search space:", "", "```yaml", yaml.safe_dump(space, sort_keys=False, default_flow_style=None).strip(),
-              "```", ""]
+    lines += [
+        "Search space:",
+        "",
+        "```yaml",
+        yaml.safe_dump(space, sort_keys=False, default_flow_style=None).strip(),
+        "```",
+        "",
+    ]
     for variant in variants:
         experiment = Path(sweep_dir) / variant["env_id"]
         lines += [f"## {variant['env_id']}", "", (experiment / "trials.md").read_text().strip(), ""]
         if (experiment / "best.yml").exists():
-            lines += ["Best configuration (`best.yml`):", "", "```yaml", (experiment / "best.yml").read_text().strip(),
-                      "```", ""]
+            lines += [
+                "Best configuration (`best.yml`):",
+                "",
+                "```yaml",
+                (experiment / "best.yml").read_text().strip(),
+                "```",
+                "",
+            ]
     return "\n".join(lines)
 
 

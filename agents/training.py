@@ -66,8 +66,16 @@ from agents.run_folder import (
 )
 
 RUNS = Path("runs")
-EVAL_COLUMNS = ("timesteps", "wall_seconds", "success_rate", "mean_distance", "median_distance", "face_accuracy",
-                "mean_reward", "failures")
+EVAL_COLUMNS = (
+    "timesteps",
+    "wall_seconds",
+    "success_rate",
+    "mean_distance",
+    "median_distance",
+    "face_accuracy",
+    "mean_reward",
+    "failures",
+)
 
 
 class RunClock:
@@ -77,8 +85,9 @@ class RunClock:
     def __init__(self, run_dir: Path, algo: str, previous: dict[str, Any] | None = None):
         self.path = run_dir / "timing.json"
         self.algo = algo
-        self.previous = {key: float((previous or {}).get(key, 0.0))
-                         for key in ("wall_seconds", "env_seconds", "eval_seconds")}
+        self.previous = {
+            key: float((previous or {}).get(key, 0.0)) for key in ("wall_seconds", "env_seconds", "eval_seconds")
+        }
         self.start = time.perf_counter()
         self.written = 0.0
         self.timed: TimedVecEnv | None = None
@@ -194,8 +203,14 @@ class ValidationCallback(BaseCallback):
     ``wall_seconds`` in the file counts training time over every session of the run. A session
     starts with a validation unless the file has a row of the steps it starts from."""
 
-    def __init__(self, run_dir: Path, config: dict[str, Any], env_id: str, clock: RunClock | None = None,
-                 on_validation: Callable[[dict[str, Any]], None] | None = None):
+    def __init__(
+        self,
+        run_dir: Path,
+        config: dict[str, Any],
+        env_id: str,
+        clock: RunClock | None = None,
+        on_validation: Callable[[dict[str, Any]], None] | None = None,
+    ):
         super().__init__()
         self.run_dir, self.config, self.env_id = run_dir, config, env_id
         self.on_validation = on_validation
@@ -301,8 +316,11 @@ def latest_checkpoint(run_dir: Path, algo: str) -> tuple[Path, Path | None, int]
     if not found:
         return None
     steps, _, path = max(found)
-    stats = (run_dir / "vecnormalize.pkl" if path.name == "model.zip"
-             else path.with_name(f"{algo}_vecnormalize_{steps}_steps.pkl"))
+    stats = (
+        run_dir / "vecnormalize.pkl"
+        if path.name == "model.zip"
+        else path.with_name(f"{algo}_vecnormalize_{steps}_steps.pkl")
+    )
     return path, (stats if stats.exists() else None), steps
 
 
@@ -349,9 +367,20 @@ def package_version() -> str:
 
 def write_run_files(run_dir: Path, algo: str, env_id: str, seed: int, config: dict[str, Any], command: str) -> None:
     """``config.yml`` (what the run trains, and the package version) and a line of ``command.txt``."""
-    write_atomic(run_dir / "config.yml", yaml.safe_dump(
-        {"algo": algo, "env_id": env_id, "seed": seed, "version": package_version(),
-         "env_kwargs": config["env_kwargs"], "hyperparams": config}, sort_keys=False))
+    write_atomic(
+        run_dir / "config.yml",
+        yaml.safe_dump(
+            {
+                "algo": algo,
+                "env_id": env_id,
+                "seed": seed,
+                "version": package_version(),
+                "env_kwargs": config["env_kwargs"],
+                "hyperparams": config,
+            },
+            sort_keys=False,
+        ),
+    )
     append_line(run_dir / "command.txt", command)
 
 
@@ -360,13 +389,20 @@ def check_resume(run_dir: Path, algo: str, config: dict[str, Any]) -> tuple[Path
     if there is none, or if the run normalises observations and the checkpoint's statistics are gone."""
     checkpoint = latest_checkpoint(run_dir, algo)
     if checkpoint is None:
-        raise RunFolderError(f"--resume {run_dir}: no checkpoint to resume from (no {run_dir}/checkpoints/"
-                             f"{algo}_<steps>_steps.zip nor {run_dir}/model.zip); train it afresh")
+        raise RunFolderError(
+            f"--resume {run_dir}: no checkpoint to resume from (no {run_dir}/checkpoints/"
+            f"{algo}_<steps>_steps.zip nor {run_dir}/model.zip); train it afresh"
+        )
     if config.get("normalize", True) and checkpoint[1] is None:
-        missing = (run_dir / "vecnormalize.pkl" if checkpoint[0].name == "model.zip"
-                   else checkpoint[0].with_name(f"{algo}_vecnormalize_{checkpoint[2]}_steps.pkl"))
-        raise RunFolderError(f"--resume {run_dir}: {missing} is missing (the observation statistics of "
-                             f"{checkpoint[0].name}); cannot resume without them")
+        missing = (
+            run_dir / "vecnormalize.pkl"
+            if checkpoint[0].name == "model.zip"
+            else checkpoint[0].with_name(f"{algo}_vecnormalize_{checkpoint[2]}_steps.pkl")
+        )
+        raise RunFolderError(
+            f"--resume {run_dir}: {missing} is missing (the observation statistics of "
+            f"{checkpoint[0].name}); cannot resume without them"
+        )
     return checkpoint
 
 
@@ -379,9 +415,42 @@ def warm_up_engine(env_id: str, config: dict[str, Any]) -> None:
     venv.close()
 
 
-def train(run_dir: Path, config: dict[str, Any], env_id: str, seed: int, algo: str = "ppo", *, resume: bool = False,
-          progress_bar: bool = True, final_eval: bool = True,
-          on_validation: Callable[[dict[str, Any]], None] | None = None) -> dict[str, Any]:
+def resume_model(run_dir: Path, algo: str, checkpoint, venv, off_policy: bool):
+    """The model of ``checkpoint`` (path, normaliser, steps) on ``venv``, with its replay buffer; the files a kill
+    left half-written are removed and the log rows written after the checkpoint dropped (and said)."""
+    model = load_model(algo, checkpoint[0], env=venv)
+    if model.num_timesteps != checkpoint[2]:
+        raise UnreadableModelError(f"{checkpoint[0]} holds a model of {model.num_timesteps} steps, not {checkpoint[2]}")
+    buffer = checkpoint[0].with_name(f"{algo}_replay_buffer_{checkpoint[2]}_steps.pkl")
+    if off_policy and buffer.exists():
+        model.load_replay_buffer(buffer)
+    for leftover in [*run_dir.glob(".*.tmp*"), *run_dir.glob("checkpoints/.*.tmp*")]:  # cut by a kill
+        leftover.unlink()
+    _, progress_dropped = truncate_csv(run_dir / "logs" / "progress.csv", "time/total_timesteps", checkpoint[2])
+    _, evaluations_dropped = truncate_csv(run_dir / "evaluations.csv", "timesteps", checkpoint[2])
+    dropped = (
+        f"; dropped the rows written after it: {progress_dropped} of logs/progress.csv, "
+        f"{evaluations_dropped} of evaluations.csv"
+        if progress_dropped or evaluations_dropped
+        else ""
+    )
+    dropped += restore_best(run_dir, algo, checkpoint[2])
+    print(f"resuming {run_dir} from {checkpoint[0]} at {model.num_timesteps} steps{dropped}")
+    return model
+
+
+def train(
+    run_dir: Path,
+    config: dict[str, Any],
+    env_id: str,
+    seed: int,
+    algo: str = "ppo",
+    *,
+    resume: bool = False,
+    progress_bar: bool = True,
+    final_eval: bool = True,
+    on_validation: Callable[[dict[str, Any]], None] | None = None,
+) -> dict[str, Any]:
     """Train (or continue) the run in ``run_dir`` up to ``config["n_timesteps"]``; returns the timing.
     ``on_validation`` receives each periodic validation's row of evaluations.csv (a dict)."""
     checkpoint = check_resume(run_dir, algo, config) if resume else None
@@ -389,34 +458,35 @@ def train(run_dir: Path, config: dict[str, Any], env_id: str, seed: int, algo: s
     torch.set_num_threads(int(config.get("torch_threads", 1)))
     # a resumed run draws new episodes (seeded after the steps already taken), not the first ones again
     env_seed = seed + (checkpoint[2] if checkpoint else 0)
-    venv = make_training_env(env_id, config["n_envs"], seed=env_seed, env_kwargs=config["env_kwargs"],
-                             vec_env_kwargs=config.get("vec_env_kwargs"), normalize=config.get("normalize", True),
-                             normalize_path=str(checkpoint[1]) if checkpoint and checkpoint[1] else None,
-                             env_wrapper=config.get("env_wrapper"))
+    venv = make_training_env(
+        env_id,
+        config["n_envs"],
+        seed=env_seed,
+        env_kwargs=config["env_kwargs"],
+        vec_env_kwargs=config.get("vec_env_kwargs"),
+        normalize=config.get("normalize", True),
+        normalize_path=str(checkpoint[1]) if checkpoint and checkpoint[1] else None,
+        env_wrapper=config.get("env_wrapper"),
+    )
     cls = algorithms.algorithm_class(algo)
     off_policy = algorithms.is_off_policy(algo)
     (run_dir / "logs").mkdir(exist_ok=True)
     if checkpoint:
-        model = load_model(algo, checkpoint[0], env=venv)
-        if model.num_timesteps != checkpoint[2]:
-            raise UnreadableModelError(f"{checkpoint[0]} holds a model of {model.num_timesteps} steps, not "
-                                       f"{checkpoint[2]}")
-        buffer = checkpoint[0].with_name(f"{algo}_replay_buffer_{checkpoint[2]}_steps.pkl")
-        if off_policy and buffer.exists():
-            model.load_replay_buffer(buffer)
-        for leftover in [*run_dir.glob(".*.tmp*"), *run_dir.glob("checkpoints/.*.tmp*")]:  # cut by a kill
-            leftover.unlink()
-        _, progress_dropped = truncate_csv(run_dir / "logs" / "progress.csv", "time/total_timesteps", checkpoint[2])
-        _, evaluations_dropped = truncate_csv(run_dir / "evaluations.csv", "timesteps", checkpoint[2])
-        dropped = (f"; dropped the rows written after it: {progress_dropped} of logs/progress.csv, "
-                   f"{evaluations_dropped} of evaluations.csv" if progress_dropped or evaluations_dropped else "")
-        dropped += restore_best(run_dir, algo, checkpoint[2])
-        print(f"resuming {run_dir} from {checkpoint[0]} at {model.num_timesteps} steps{dropped}")
+        model = resume_model(run_dir, algo, checkpoint, venv, off_policy)
     else:
-        model = cls(env=venv, seed=seed, device="cpu", verbose=0,
-                    **configuration.algorithm_kwargs(config, algo, venv.action_space.shape[0]))
-    model.set_logger(Logger(str(run_dir / "logs"), [AppendingCSVOutput(run_dir / "logs" / "progress.csv"),
-                                                     TensorBoardOutputFormat(str(run_dir / "logs"))]))
+        model = cls(
+            env=venv,
+            seed=seed,
+            device="cpu",
+            verbose=0,
+            **configuration.algorithm_kwargs(config, algo, venv.action_space.shape[0]),
+        )
+    model.set_logger(
+        Logger(
+            str(run_dir / "logs"),
+            [AppendingCSVOutput(run_dir / "logs" / "progress.csv"), TensorBoardOutputFormat(str(run_dir / "logs"))],
+        )
+    )
     # time of earlier sessions, killed ones included (timing.json is written as training goes)
     clock = RunClock(run_dir, algo, read_timing(run_dir) if checkpoint else None)
     clock.timed = find_wrapper(venv, TimedVecEnv)

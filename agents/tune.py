@@ -41,40 +41,56 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     parser.add_argument("--env", nargs="+", default=["BoxToss-v0"], help="env ids, one experiment each")
     parser.add_argument("--trials", type=int, default=12, help="trials per env id")
     parser.add_argument("--timesteps", type=int, help="env steps (throws) per trial (default: the file's n_timesteps)")
-    parser.add_argument("--set", nargs="*", default=[], action="extend", metavar="KEY=VALUE", dest="overrides",
-                        help="override the hyperparameters every trial starts from")
-    parser.add_argument("--hyperparams", type=Path, default=configuration.HYPERPARAMS,
-                        help="folder of <algo>.yml and project.yml")
+    parser.add_argument(
+        "--set",
+        nargs="*",
+        default=[],
+        action="extend",
+        metavar="KEY=VALUE",
+        dest="overrides",
+        help="override the hyperparameters every trial starts from",
+    )
+    parser.add_argument(
+        "--hyperparams", type=Path, default=configuration.HYPERPARAMS, help="folder of <algo>.yml and project.yml"
+    )
     parser.add_argument("--space", type=Path, default=search_space.SEARCH_SPACE, help="search space file")
     parser.add_argument("--seed", type=int, default=0, help="training seed of every trial, and the sampler's")
     parser.add_argument("--pruner", default="asha", choices=tuning.PRUNERS)
-    parser.add_argument("--grace-period", type=int, help="env steps before a trial can be pruned "
-                                                          "(default: a quarter of the budget)")
+    parser.add_argument(
+        "--grace-period", type=int, help="env steps before a trial can be pruned (default: a quarter of the budget)"
+    )
     parser.add_argument("--cpus-per-trial", type=int, default=1)
     parser.add_argument("--max-concurrent", type=int, help="trials at once (default: as many as the CPUs allow)")
-    parser.add_argument("--address", help="a running Ray cluster (ray start --head ...; 'auto' finds it on this "
-                                          "node); default: start a local Ray")
+    parser.add_argument(
+        "--address",
+        help="a running Ray cluster (ray start --head ...; 'auto' finds it on this node); default: start a local Ray",
+    )
     parser.add_argument("--num-cpus", type=int, help="CPUs of the local Ray (default: all)")
     parser.add_argument("--name", help="sweep folder name (default: algorithm and time)")
-    parser.add_argument("--runs-dir", type=Path, default=RUNS,
-                        help="where sweep folders go (on a cluster: a path every node sees)")
+    parser.add_argument(
+        "--runs-dir", type=Path, default=RUNS, help="where sweep folders go (on a cluster: a path every node sees)"
+    )
     parser.add_argument("--resume", type=Path, metavar="SWEEP", help="continue a killed sweep")
     parser.add_argument("--report", type=Path, metavar="SWEEP", help="only write the tables of a sweep")
-    parser.add_argument("--readme", action="store_true",
-                        help="also write docs/tune.md and docs/hyperparameter-search.md")
+    parser.add_argument(
+        "--readme", action="store_true", help="also write docs/tune.md and docs/hyperparameter-search.md"
+    )
     return parser.parse_args(argv)
 
 
 def base_config(args: argparse.Namespace, env_id: str) -> dict:
     """What every trial on ``env_id`` starts from, checked."""
     overrides = list(args.overrides) + ([f"n_timesteps={args.timesteps}"] if args.timesteps else [])
-    config = configuration.apply_overrides(configuration.load_hyperparams(args.algo, env_id, args.hyperparams),
-                                           overrides, args.algo)
+    config = configuration.apply_overrides(
+        configuration.load_hyperparams(args.algo, env_id, args.hyperparams), overrides, args.algo
+    )
     config.setdefault("env_kwargs", {})
     configuration.check_config(config, args.algo)
     if env_id not in gym.registry:
-        raise configuration.ConfigError(f"--env {env_id!r} is not registered; BoxToss ids: "
-                                        f"{sorted(k for k in gym.registry if k.startswith('BoxToss'))}")
+        raise configuration.ConfigError(
+            f"--env {env_id!r} is not registered; BoxToss ids: "
+            f"{sorted(k for k in gym.registry if k.startswith('BoxToss'))}"
+        )
     return config
 
 
@@ -90,11 +106,21 @@ def new_sweep(args: argparse.Namespace, command: str) -> tuple[Path, dict]:
     name = args.name or f"{args.algo}-{time.strftime('%Y%m%d-%H%M%S')}"
     sweep_dir = args.runs_dir / name
     if (sweep_dir / "sweep.yml").exists():
-        raise configuration.ConfigError(f"{sweep_dir} already holds a sweep: choose another --name, or "
-                                        f"--resume {sweep_dir}")
-    settings = {"command": command, "algo": args.algo, "trials": args.trials, "seed": args.seed,
-                "pruner": args.pruner, "grace_period": args.grace_period, "cpus_per_trial": args.cpus_per_trial,
-                "max_concurrent": args.max_concurrent, "space": space_entries, "envs": envs}
+        raise configuration.ConfigError(
+            f"{sweep_dir} already holds a sweep: choose another --name, or --resume {sweep_dir}"
+        )
+    settings = {
+        "command": command,
+        "algo": args.algo,
+        "trials": args.trials,
+        "seed": args.seed,
+        "pruner": args.pruner,
+        "grace_period": args.grace_period,
+        "cpus_per_trial": args.cpus_per_trial,
+        "max_concurrent": args.max_concurrent,
+        "space": space_entries,
+        "envs": envs,
+    }
     sweep = make_sweep(settings, args.env[0])
     tuning.check_sweep(sweep)
     sweep_dir.mkdir(parents=True, exist_ok=True)
@@ -105,10 +131,19 @@ def new_sweep(args: argparse.Namespace, command: str) -> tuple[Path, dict]:
 def make_sweep(settings: dict, env_id: str) -> tuning.Sweep:
     entry = settings["envs"][env_id]
     space = search_space.read_space(settings["space"], settings["algo"], "sweep.yml: space")
-    return tuning.Sweep(algo=settings["algo"], env_id=env_id, base=entry["base"], space=space,
-                        trials=settings["trials"], seed=settings["seed"], cpus_per_trial=settings["cpus_per_trial"],
-                        pruner=settings["pruner"], grace_period=settings["grace_period"],
-                        command=settings["command"], start_point=entry["start_point"])
+    return tuning.Sweep(
+        algo=settings["algo"],
+        env_id=env_id,
+        base=entry["base"],
+        space=space,
+        trials=settings["trials"],
+        seed=settings["seed"],
+        cpus_per_trial=settings["cpus_per_trial"],
+        pruner=settings["pruner"],
+        grace_period=settings["grace_period"],
+        command=settings["command"],
+        start_point=entry["start_point"],
+    )
 
 
 def run(sweep_dir: Path, settings: dict) -> None:
@@ -123,13 +158,17 @@ def run(sweep_dir: Path, settings: dict) -> None:
             print(f"{env_id}: resuming {experiment}")
             tuner = tuning.restore_tuner(sweep, experiment)
         else:
-            print(f"{env_id}: {sweep.trials} trials of {sweep.n_timesteps:,} throws, {sweep.algo.upper()}, "
-                  f"pruner {sweep.pruner}, into {experiment}")
+            print(
+                f"{env_id}: {sweep.trials} trials of {sweep.n_timesteps:,} throws, {sweep.algo.upper()}, "
+                f"pruner {sweep.pruner}, into {experiment}"
+            )
             tuner = tuning.make_tuner(sweep, sweep_dir, env_id, settings["max_concurrent"])
         grid = tuner.fit()
         if grid.num_terminated + grid.num_errors < sweep.trials:
-            sys.exit(f"agents.tune: {env_id} stopped before its {sweep.trials} trials ended; "
-                     f"continue with: python -m agents.tune --resume {sweep_dir}")
+            sys.exit(
+                f"agents.tune: {env_id} stopped before its {sweep.trials} trials ended; "
+                f"continue with: python -m agents.tune --resume {sweep_dir}"
+            )
         sweep_report.write_experiment_tables(experiment, sweep.n_timesteps, sweep.space, sweep_dir.name)
 
 
@@ -137,8 +176,10 @@ def report(sweep_dir: Path, readme: bool) -> str:
     table, variants = sweep_report.summary(sweep_dir)
     print(table)
     for variant in variants:
-        print(f"\n{variant['env_id']}: {sweep_dir / variant['env_id'] / 'trials.md'}"
-              + (f", best configuration {sweep_dir / variant['env_id'] / 'best.yml'}" if variant["best"] else ""))
+        print(
+            f"\n{variant['env_id']}: {sweep_dir / variant['env_id'] / 'trials.md'}"
+            + (f", best configuration {sweep_dir / variant['env_id'] / 'best.yml'}" if variant["best"] else "")
+        )
     if readme:
         settings = configuration.load_yaml(sweep_dir / "sweep.yml")
         section = sweep_report.readme_section(sweep_dir, settings, table, variants)

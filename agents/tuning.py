@@ -82,11 +82,14 @@ def check_sweep(sweep: Sweep) -> None:
     if sweep.pruner not in PRUNERS:
         raise ConfigError(f"pruner must be one of {PRUNERS}, got {sweep.pruner!r}")
     if not sweep.base.get("eval_freq") or sweep.base["eval_freq"] >= sweep.n_timesteps:
-        raise ConfigError(f"eval_freq must be in [1, n_timesteps) so that trials report their validation success, "
-                          f"got eval_freq={sweep.base.get('eval_freq')!r}, n_timesteps={sweep.n_timesteps}")
+        raise ConfigError(
+            f"eval_freq must be in [1, n_timesteps) so that trials report their validation success, "
+            f"got eval_freq={sweep.base.get('eval_freq')!r}, n_timesteps={sweep.n_timesteps}"
+        )
     if sweep.grace_period is not None and not 0 < sweep.grace_period < sweep.n_timesteps:
-        raise ConfigError(f"grace_period must be in (0, n_timesteps={sweep.n_timesteps}) env steps, "
-                          f"got {sweep.grace_period}")
+        raise ConfigError(
+            f"grace_period must be in (0, n_timesteps={sweep.n_timesteps}) env steps, got {sweep.grace_period}"
+        )
 
 
 # -- one trial (runs in a Ray actor) ----------------------------------------------------------------
@@ -101,8 +104,11 @@ def pin_threads(config: dict[str, Any], cpus: int) -> dict[str, Any]:
     kernels that do not take ``threads``); ``train`` sets torch's after the engine's first step."""
     cpus = min(cpus, numba.config.NUMBA_NUM_THREADS)
     numba.set_num_threads(cpus)
-    return {**config, "torch_threads": cpus, "vec_env_kwargs": {**(config.get("vec_env_kwargs") or {}),
-                                                                   "threads": cpus}}
+    return {
+        **config,
+        "torch_threads": cpus,
+        "vec_env_kwargs": {**(config.get("vec_env_kwargs") or {}), "threads": cpus},
+    }
 
 
 def trial_run_dir() -> Path:
@@ -118,8 +124,11 @@ def snapshot(run_dir: Path, algo: str, destination: Path) -> None:
     newest = latest_checkpoint(run_dir, algo)
     keep = {path.name for path in (newest[0], newest[1]) if path is not None} if newest else set()
     if newest:
-        keep |= {f"{algo}_replay_buffer_{newest[2]}_steps.pkl", f"{algo}_best_model_{newest[2]}_steps.zip",
-                 f"{algo}_best_vecnormalize_{newest[2]}_steps.pkl"}
+        keep |= {
+            f"{algo}_replay_buffer_{newest[2]}_steps.pkl",
+            f"{algo}_best_model_{newest[2]}_steps.zip",
+            f"{algo}_best_vecnormalize_{newest[2]}_steps.pkl",
+        }
 
     def ignore(directory: str, names: list[str]) -> list[str]:
         return [name for name in names if Path(directory).name == "checkpoints" and name not in keep]
@@ -163,14 +172,30 @@ def run_trial(params: dict[str, Any], sweep: Sweep) -> None:
     newest = latest_checkpoint(run_dir, sweep.algo)
     resume = newest is not None
     overrides = " ".join(search_space.overrides(sweep.space, params))
-    write_run_files(run_dir, sweep.algo, sweep.env_id, sweep.seed, config,
-                    f"{sweep.command}  # trial of {sweep.env_id}: --set {overrides}")
+    write_run_files(
+        run_dir,
+        sweep.algo,
+        sweep.env_id,
+        sweep.seed,
+        config,
+        f"{sweep.command}  # trial of {sweep.env_id}: --set {overrides}",
+    )
     reporter = TrialReporter(run_dir, sweep.algo, sweep.validation_targets, newest[2] if newest else -1)
-    train(run_dir, config, sweep.env_id, sweep.seed, sweep.algo, resume=resume, progress_bar=False,
-          final_eval=True, on_validation=reporter)
+    train(
+        run_dir,
+        config,
+        sweep.env_id,
+        sweep.seed,
+        sweep.algo,
+        resume=resume,
+        progress_bar=False,
+        final_eval=True,
+        on_validation=reporter,
+    )
     results = json.loads((run_dir / "eval" / "default" / "results.json").read_text())
-    reporter.report_with_checkpoint({**reporter.last, "test_success_rate": results["success_rate"],
-                                     "test_mean_distance": results["mean_distance"]})
+    reporter.report_with_checkpoint(
+        {**reporter.last, "test_success_rate": results["success_rate"], "test_mean_distance": results["mean_distance"]}
+    )
 
 
 # -- the experiment -----------------------------------------------------------------------------------
@@ -180,11 +205,18 @@ def make_scheduler(sweep: Sweep) -> TrialScheduler:
     not be stopped at its last validation, before its test evaluation."""
     grace = sweep.grace_period or max(sweep.n_timesteps // 4, 1)
     if sweep.pruner == "asha":
-        return ASHAScheduler(time_attr="timesteps", metric=OBJECTIVE, mode="max", max_t=2 * sweep.n_timesteps,
-                             grace_period=grace, reduction_factor=3)
+        return ASHAScheduler(
+            time_attr="timesteps",
+            metric=OBJECTIVE,
+            mode="max",
+            max_t=2 * sweep.n_timesteps,
+            grace_period=grace,
+            reduction_factor=3,
+        )
     if sweep.pruner == "median":
-        return MedianStoppingRule(time_attr="timesteps", metric=OBJECTIVE, mode="max", grace_period=grace,
-                                  min_samples_required=3)
+        return MedianStoppingRule(
+            time_attr="timesteps", metric=OBJECTIVE, mode="max", grace_period=grace, min_samples_required=3
+        )
     return FIFOScheduler()
 
 
@@ -192,8 +224,13 @@ def make_searcher(sweep: Sweep, max_concurrent: int | None) -> ConcurrencyLimite
     """Optuna's TPE sampler over the declared space, starting from the file's values; a third of the
     trials (at least 2) are drawn at random before TPE models the results."""
     sampler = optuna.samplers.TPESampler(seed=sweep.seed, n_startup_trials=max(2, sweep.trials // 3))
-    searcher = OptunaSearch(search_space.optuna_space(sweep.space), metric=OBJECTIVE, mode="max", sampler=sampler,
-                            points_to_evaluate=[sweep.start_point] if sweep.start_point else None)
+    searcher = OptunaSearch(
+        search_space.optuna_space(sweep.space),
+        metric=OBJECTIVE,
+        mode="max",
+        sampler=sampler,
+        points_to_evaluate=[sweep.start_point] if sweep.start_point else None,
+    )
     return ConcurrencyLimiter(searcher, max_concurrent) if max_concurrent else searcher
 
 
@@ -239,20 +276,28 @@ def make_tuner(sweep: Sweep, storage: Path, name: str, max_concurrent: int | Non
     storage = Path(storage).resolve()
     return tune.Tuner(
         trainable(sweep),
-        tune_config=tune.TuneConfig(num_samples=sweep.trials, search_alg=make_searcher(sweep, max_concurrent),
-                                    scheduler=make_scheduler(sweep), trial_dirname_creator=trial_folder_name),
-        run_config=tune.RunConfig(name=name, storage_path=str(storage), verbose=1,
-                                  callbacks=[WallClock(storage / "wall_seconds.json", name)],
-                                  checkpoint_config=tune.CheckpointConfig(num_to_keep=1),
-                                  sync_config=tune.SyncConfig(sync_artifacts=True),
-                                  failure_config=tune.FailureConfig(max_failures=1)))
+        tune_config=tune.TuneConfig(
+            num_samples=sweep.trials,
+            search_alg=make_searcher(sweep, max_concurrent),
+            scheduler=make_scheduler(sweep),
+            trial_dirname_creator=trial_folder_name,
+        ),
+        run_config=tune.RunConfig(
+            name=name,
+            storage_path=str(storage),
+            verbose=1,
+            callbacks=[WallClock(storage / "wall_seconds.json", name)],
+            checkpoint_config=tune.CheckpointConfig(num_to_keep=1),
+            sync_config=tune.SyncConfig(sync_artifacts=True),
+            failure_config=tune.FailureConfig(max_failures=1),
+        ),
+    )
 
 
 def restore_tuner(sweep: Sweep, path: Path) -> tune.Tuner:
     """The interrupted experiment at ``path``: unfinished (and errored) trials continue from their last
     checkpoint, the sampler and the scheduler from their saved state, then the remaining trials run."""
-    return tune.Tuner.restore(str(Path(path).resolve()), trainable(sweep), resume_unfinished=True,
-                              resume_errored=True)
+    return tune.Tuner.restore(str(Path(path).resolve()), trainable(sweep), resume_unfinished=True, resume_errored=True)
 
 
 def start_ray(address: str | None = None, num_cpus: int | None = None) -> None:

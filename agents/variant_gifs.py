@@ -55,8 +55,9 @@ def episode_key(info: dict[str, Any]) -> tuple:
     return tuple(round(float(info[key]), 9) for key in keys if key in info) + tuple(info["target_faces"].tolist())
 
 
-def good_throw(env_id: str, first_seed: int = TEST_FIRST_SEED, tries: int = 8, threads: int | None = None,
-               shown: set | None = None) -> tuple[int, np.ndarray]:
+def good_throw(
+    env_id: str, first_seed: int = TEST_FIRST_SEED, tries: int = 8, threads: int | None = None, shown: set | None = None
+) -> tuple[int, np.ndarray]:
     """(seed, action): the oracle's throw at the first of ``tries`` seeds from ``first_seed`` where it succeeds
     (the last one tried if none does). Seeds whose episode is in ``shown`` (``episode_key``; another variant's
     figure) are skipped, and the chosen one is added to it."""
@@ -96,8 +97,14 @@ def write_atomically(frames: list[np.ndarray], path: Path, fps: float) -> Path:
     return path
 
 
-def record_variant(env_id: str, out: Path, first_seed: int = TEST_FIRST_SEED, tries: int = 8,
-                   threads: int | None = None, shown: set | None = None) -> dict[str, Any]:
+def record_variant(
+    env_id: str,
+    out: Path,
+    first_seed: int = TEST_FIRST_SEED,
+    tries: int = 8,
+    threads: int | None = None,
+    shown: set | None = None,
+) -> dict[str, Any]:
     """Plan a good throw of ``env_id`` (``good_throw``), record it to ``out/variant_<env_id>.gif`` with the path
     the box took; its row (seed, result, size)."""
     seed, action = good_throw(env_id, first_seed, tries, threads, shown)
@@ -108,19 +115,34 @@ def record_variant(env_id: str, out: Path, first_seed: int = TEST_FIRST_SEED, tr
     frames = env.render()
     env.close()
     path = write_atomically(frames, out / f"variant_{env_id}.gif", GIF_ENV_KWARGS["render_fps"])
-    return {"env_id": env_id, "seed": seed, "success": bool(info["success"]), "distance": float(info["distance"]),
-            "face_down": int(info["face_down"]), "frames": len(frames), "bytes": path.stat().st_size, "path": path}
+    return {
+        "env_id": env_id,
+        "seed": seed,
+        "success": bool(info["success"]),
+        "distance": float(info["distance"]),
+        "face_down": int(info["face_down"]),
+        "frames": len(frames),
+        "bytes": path.stat().st_size,
+        "path": path,
+    }
 
 
 def docs_section(rows: list[dict[str, Any]]) -> str:
     """The ``variant-gifs`` section: one figure per variant with its seed and result."""
-    lines = ["Written by `python -m agents.variant_gifs` (each variant's throw planned by the oracle at its third "
-             "search budget; 360 x 240 at 20 fps):", ""]
+    lines = [
+        "Written by `python -m agents.variant_gifs` (each variant's throw planned by the oracle at its third "
+        "search budget; 360 x 240 at 20 fps):",
+        "",
+    ]
     for row in rows:
         result = "success" if row["success"] else "no success"
-        lines += [f"**{row['env_id']}**: seed {row['seed']}, {result}, {row['distance'] * 100:.1f} cm from the "
-                  f"target, face {row['face_down']} down ({row['frames']} frames, {row['bytes'] / 1000:.0f} kB)", "",
-                  f"![{row['env_id']}: the oracle's throw](docs/figures/{row['path'].name})", ""]
+        lines += [
+            f"**{row['env_id']}**: seed {row['seed']}, {result}, {row['distance'] * 100:.1f} cm from the "
+            f"target, face {row['face_down']} down ({row['frames']} frames, {row['bytes'] / 1000:.0f} kB)",
+            "",
+            f"![{row['env_id']}: the oracle's throw](docs/figures/{row['path'].name})",
+            "",
+        ]
     return "\n".join(lines)
 
 
@@ -143,8 +165,10 @@ def main(argv: list[str] | None = None) -> None:
     for env_id in envs:  # each variant's figure shows an episode no earlier one showed
         row = record_variant(env_id, args.out, args.first_seed, args.tries, args.threads, shown)
         rows.append(row)
-        print(f"{env_id}: seed {row['seed']}, success {row['success']}, {row['frames']} frames, "
-              f"{row['bytes']} bytes -> {row['path']}")
+        print(
+            f"{env_id}: seed {row['seed']}, success {row['success']}, {row['frames']} frames, "
+            f"{row['bytes']} bytes -> {row['path']}"
+        )
         if row["bytes"] > MAX_BYTES:
             print(f"warning: {row['path']} is above {MAX_BYTES} bytes")
     if not args.no_docs:

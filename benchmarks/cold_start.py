@@ -119,8 +119,15 @@ CASES = {
 
 def run_case(case: str, cache: str, pythonpath: str) -> dict:
     env = {**os.environ, "NUMBA_CACHE_DIR": cache, "PYTHONPATH": pythonpath, "BOX_TOSS_ENV_START_INTERPRETED": "1"}
-    done = subprocess.run([sys.executable, "-c", PROBE, case], env=env, capture_output=True, text=True, check=False,
-                          cwd=tempfile.gettempdir(), timeout=1800)
+    done = subprocess.run(
+        [sys.executable, "-c", PROBE, case],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=False,
+        cwd=tempfile.gettempdir(),
+        timeout=1800,
+    )
     if done.returncode != 0:
         raise RuntimeError(f"case {case} failed:\n{done.stderr}")
     return json.loads(done.stdout.strip().splitlines()[-1])
@@ -152,13 +159,16 @@ def report(results: dict[str, dict[str, list]], repeats: int) -> str:
     import numba
 
     load = ", ".join(f"{value:.1f}" for value in os.getloadavg()) if hasattr(os, "getloadavg") else "n/a"
-    lines = [f"numba {numba.__version__}, {os.cpu_count()} cores (load average {load} at the end: a shared machine)",
-             f"first throw in a fresh interpreter: wall time [s], median of {repeats} (min-max), and the interpreter's "
-             "CPU time [s], median", "cold: NUMBA_CACHE_DIR empty; warm: filled by the cold run; compiled after: when "
-             "the throws (going on) ran the compiled kernel, not its interpreted copy, in the cold run [s], median; "
-             "compilations: numba compilations in the measured process in the cold run", "",
-             f"{'case':44} {'cold':>19} {'cpu':>5} {'warm':>17} {'cpu':>5} {'compiled after':>15} "
-             f"{'compilations':>13}"]
+    lines = [
+        f"numba {numba.__version__}, {os.cpu_count()} cores (load average {load} at the end: a shared machine)",
+        f"first throw in a fresh interpreter: wall time [s], median of {repeats} (min-max), and the interpreter's "
+        "CPU time [s], median",
+        "cold: NUMBA_CACHE_DIR empty; warm: filled by the cold run; compiled after: when "
+        "the throws (going on) ran the compiled kernel, not its interpreted copy, in the cold run [s], median; "
+        "compilations: numba compilations in the measured process in the cold run",
+        "",
+        f"{'case':44} {'cold':>19} {'cpu':>5} {'warm':>17} {'cpu':>5} {'compiled after':>15} {'compilations':>13}",
+    ]
     for case, runs in results.items():
         cells = []
         for state in ("cold", "warm"):
@@ -167,8 +177,9 @@ def report(results: dict[str, dict[str, list]], repeats: int) -> str:
             cells.append(f"{statistics.median(cpu):.2f}" if cpu else "-")
         after = f"{statistics.median(r['compiled_after'] for r in runs['cold']):.2f}"
         compiled = "-" if case.startswith("subproc") else str(runs["cold"][0]["compiled"])
-        lines.append(f"{CASES[case]:44} {cells[0]:>19} {cells[1]:>5} {cells[2]:>17} {cells[3]:>5} {after:>15} "
-                     f"{compiled:>13}")
+        lines.append(
+            f"{CASES[case]:44} {cells[0]:>19} {cells[1]:>5} {cells[2]:>17} {cells[3]:>5} {after:>15} {compiled:>13}"
+        )
     numba_import = [r["numba_import"] for runs in results.values() for r in runs["warm"]]
     lines += ["", f"of which `import numba` alone: {statistics.median(numba_import):.2f} s of CPU (median, warm runs)"]
     return "\n".join(lines)
@@ -178,8 +189,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--repeats", type=int, default=3, help="cold and warm runs per case (default 3)")
     parser.add_argument("--cases", nargs="+", choices=list(CASES), default=list(CASES))
-    parser.add_argument("--pythonpath", default=str(REPO), help="where the measured box_toss_env is (default: this "
-                                                                "checkout)")
+    parser.add_argument(
+        "--pythonpath", default=str(REPO), help="where the measured box_toss_env is (default: this checkout)"
+    )
     parser.add_argument("--readme", action="store_true", help="also write the figures into docs/cold-start.md")
     args = parser.parse_args()
     results = measure(args.repeats, args.pythonpath, args.cases)

@@ -63,16 +63,26 @@ def runner(scene: Scene, max_steps: int, until_rest: bool, parallel: bool | None
 def many(scene: Scene, n: int, spread: float = 1e-3) -> Scene:
     """``n`` copies of a one-box scene, each nudged so no two are identical."""
     box = scene.boxes[0]
-    boxes = tuple(Box(length=box.length, width=box.width, mass=box.mass,
-                      position=(box.position[0], box.position[1] + spread * k / n), angle=box.angle,
-                      velocity=box.velocity, spin=box.spin) for k in range(n))
+    boxes = tuple(
+        Box(
+            length=box.length,
+            width=box.width,
+            mass=box.mass,
+            position=(box.position[0], box.position[1] + spread * k / n),
+            angle=box.angle,
+            velocity=box.velocity,
+            spin=box.spin,
+        )
+        for k in range(n)
+    )
     return scene.replace(boxes=boxes)
 
 
 STEP_SCENES = {
     "flight": lambda solver: scenes.free_flight(solver=solver, dt=1 / 256),  # no contact within 1 s
-    "resting": lambda solver: scenes.resting(solver=solver, dt=1 / 256, restitution=0.3, friction=0.5,
-                                             penalty_stiffness=1e4),
+    "resting": lambda solver: scenes.resting(
+        solver=solver, dt=1 / 256, restitution=0.3, friction=0.5, penalty_stiffness=1e4
+    ),
     "toss": lambda solver: scenes.toss(solver=solver, dt=1 / 256, penalty_stiffness=1e4),
 }
 
@@ -101,8 +111,7 @@ def throw_costs(repeats: int) -> list[tuple]:
         scene = scenes.toss(solver=solver, dt=dt, penalty_stiffness=1e4)
         run, stats = runner(scene, int(10 / dt), until_rest=True)
         seconds = best_time(run, repeats)
-        rows.append((solver, dt, seconds * 1e6, int(stats[0, layout.N_STEPS]),
-                     stats[0, layout.REST_TIME]))
+        rows.append((solver, dt, seconds * 1e6, int(stats[0, layout.N_STEPS]), stats[0, layout.REST_TIME]))
     return rows
 
 
@@ -128,8 +137,15 @@ def pile_cost(n: int, solver: str = "robust", settle: float = 2.0, steps: int = 
         simulator.run(state, params, settings, stats)
 
     seconds = best_time(run, repeats)
-    return {"n": n, "solver": solver, "dt": scene.dt, "steps": steps, "ns_per_body_step": seconds / (n * steps) * 1e9,
-            "settled_state": settled, "moving_at_end": int(np.sum(np.abs(state[:, 3:]).max(axis=1) > 1e-2))}
+    return {
+        "n": n,
+        "solver": solver,
+        "dt": scene.dt,
+        "steps": steps,
+        "ns_per_body_step": seconds / (n * steps) * 1e9,
+        "settled_state": settled,
+        "moving_at_end": int(np.sum(np.abs(state[:, 3:]).max(axis=1) > 1e-2)),
+    }
 
 
 NEVER_SLEEP = 1e6  # [s] a sleep_time no pile run reaches
@@ -141,8 +157,11 @@ def pile_energy(scene: Scene, state: np.ndarray) -> float:
     """Total energy of every box, 0.5 m |v|^2 + 0.5 I w^2 - m g y [J] (floor at y = 0, g < 0)."""
     mass = np.array([box.mass for box in scene.boxes])
     inertia = np.array([box.inertia for box in scene.boxes])
-    return float(0.5 * mass @ (state[:, 3:5] ** 2).sum(axis=1) + 0.5 * inertia @ state[:, 5] ** 2
-                 - scene.gravity * mass @ state[:, 1])
+    return float(
+        0.5 * mass @ (state[:, 3:5] ** 2).sum(axis=1)
+        + 0.5 * inertia @ state[:, 5] ** 2
+        - scene.gravity * mass @ state[:, 1]
+    )
 
 
 def time_from(scene: Scene, start: np.ndarray, steps: int, repeats: int) -> tuple[float, np.ndarray, np.ndarray]:
@@ -160,8 +179,9 @@ def time_from(scene: Scene, start: np.ndarray, steps: int, repeats: int) -> tupl
     return best_time(run, repeats), state, stats
 
 
-def pile_comparison(sizes=PILE_SIZES, steps: int = PILE_STEPS, settle: float = PILE_SETTLE,
-                    repeats: int = 3) -> list[tuple]:
+def pile_comparison(
+    sizes=PILE_SIZES, steps: int = PILE_STEPS, settle: float = PILE_SETTLE, repeats: int = 3
+) -> list[tuple]:
     """(method, boxes, ns per body-step or nan, note) on the same piles in every engine: ``scenes.pile(n)``
     settled for ``settle`` s by our robust solver with nobody sleeping, then ``steps`` steps from that state
     timed in each method, nobody sleeping (``sleep_time`` NEVER_SLEEP, Box2D's sleeping off), so every step
@@ -189,12 +209,15 @@ def pile_comparison(sizes=PILE_SIZES, steps: int = PILE_STEPS, settle: float = P
                 continue
             rows.append((solver, n, seconds / (steps * n) * 1e9, ""))
         default = pile_cost(n, settle=settle, steps=steps, repeats=repeats)
-        rows.append(("robust, sleeping", n, default["ns_per_body_step"],
-                     f"{default['moving_at_end']} boxes moving at the end"))
+        rows.append(
+            ("robust, sleeping", n, default["ns_per_body_step"], f"{default['moving_at_end']} boxes moving at the end")
+        )
         for engine in available_scene_engines():
             try:
-                runs = [simulate_scene(engine, scene, steps, record=False, sleep=False, state=settled)
-                        for _ in range(repeats + 1)]
+                runs = [
+                    simulate_scene(engine, scene, steps, record=False, sleep=False, state=settled)
+                    for _ in range(repeats + 1)
+                ]
             except UnsupportedScene as error:
                 rows.append((engine, n, math.nan, str(error)))
                 continue
@@ -210,8 +233,12 @@ def pile_lines(rows) -> list[str]:
     cost = {(m, n): (ns, note) for m, n, ns, note in rows}
     lines = [f"{'method':17} " + " ".join(f"{boxes_text(n):>11}" for n in sizes)]
     for method in methods:
-        lines.append(f"{method:17} " + " ".join(f"{cost[(method, n)][0]:11.1f}" if not math.isnan(cost[(method, n)][0])
-                                                else f"{'-':>11}" for n in sizes))
+        lines.append(
+            f"{method:17} "
+            + " ".join(
+                f"{cost[(method, n)][0]:11.1f}" if not math.isnan(cost[(method, n)][0]) else f"{'-':>11}" for n in sizes
+            )
+        )
     return lines + [f"  {method}, {boxes_text(n)}: {note}" for method, n, _, note in rows if note]
 
 
@@ -239,8 +266,9 @@ def compile_times() -> tuple[float, float, float]:
         env = {**os.environ, "NUMBA_CACHE_DIR": cache}
         figures = []
         for _ in range(2):
-            out = subprocess.run([sys.executable, "-c", COMPILE_PROBE], env=env, capture_output=True, text=True,
-                                 check=True).stdout.split()
+            out = subprocess.run(
+                [sys.executable, "-c", COMPILE_PROBE], env=env, capture_output=True, text=True, check=True
+            ).stdout.split()
             figures.append((float(out[0]), float(out[1])))
     return figures[1][0], figures[0][1], figures[1][1]
 
@@ -271,14 +299,20 @@ def main() -> None:
     for solver, dt, micros, n_steps, rest in throw_costs(repeats):
         lines.append(f"{solver:8} {dt:10.6f} {micros:10.1f} {n_steps:7d} {rest:12.3f}")
     pile_steps = QUICK_PILE_STEPS if args.quick else PILE_STEPS
-    lines += ["", f"boxes that collide: ns per body-step of a settled pile (scenes.pile, dt = 1/256 s, settled "
-              f"{PILE_SETTLE:g} s by the robust solver, then {pile_steps} steps timed from that same state in every "
-              "method, nobody sleeping but in 'robust, sleeping' (pile_cost); ours single-thread on raw arrays, "
-              f"pymunk and Box2D stepped from Python, the loop alone; best of {repeats})"]
+    lines += [
+        "",
+        f"boxes that collide: ns per body-step of a settled pile (scenes.pile, dt = 1/256 s, settled "
+        f"{PILE_SETTLE:g} s by the robust solver, then {pile_steps} steps timed from that same state in every "
+        "method, nobody sleeping but in 'robust, sleeping' (pile_cost); ours single-thread on raw arrays, "
+        f"pymunk and Box2D stepped from Python, the loop alone; best of {repeats})",
+    ]
     lines += pile_lines(pile_comparison(steps=pile_steps, repeats=repeats))
     imported, cold, warm = compile_times()
-    lines += ["", f"import {imported:.2f} s; compile of the robust toss kernel: {cold:.2f} s cold, "
-              f"{warm:.2f} s from the on-disk cache"]
+    lines += [
+        "",
+        f"import {imported:.2f} s; compile of the robust toss kernel: {cold:.2f} s cold, "
+        f"{warm:.2f} s from the on-disk cache",
+    ]
     report = "\n".join(lines)
     print(report)
     if args.readme:

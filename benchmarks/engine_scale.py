@@ -92,10 +92,15 @@ def wide_pile(n: int, layers: int = WIDE_LAYERS, seed: int = 0) -> Scene:
     boxes = []
     for k in range(n):
         row, column = divmod(k, columns)
-        boxes.append(Box(length=0.4, width=0.2, mass=2.0,
-                         position=(0.6 * (column - 0.5 * (columns - 1)) + float(rng.uniform(-0.08, 0.08)),
-                                   0.15 + 0.3 * row),
-                         angle=float(rng.uniform(-0.2, 0.2))))
+        boxes.append(
+            Box(
+                length=0.4,
+                width=0.2,
+                mass=2.0,
+                position=(0.6 * (column - 0.5 * (columns - 1)) + float(rng.uniform(-0.08, 0.08)), 0.15 + 0.3 * row),
+                angle=float(rng.uniform(-0.2, 0.2)),
+            )
+        )
     return template.replace(boxes=tuple(boxes))
 
 
@@ -133,7 +138,7 @@ def max_penetration(scene: Scene, state: np.ndarray) -> float:
     order = np.argsort(low[:, 0])
     half = np.array([[0.5 * b.length, 0.5 * b.width] for b in scene.boxes])
     for a_rank, i in enumerate(order):
-        for j in order[a_rank + 1:]:
+        for j in order[a_rank + 1 :]:
             if low[j, 0] > high[i, 0]:
                 break
             if low[j, 1] > high[i, 1] or low[i, 1] > high[j, 1]:
@@ -209,12 +214,21 @@ def time_ours(case: str, scene: Scene, start: np.ndarray, sleep: bool, window: f
     steps = budget_steps(probe / MIN_STEPS, scene.dt, window, budget)
     wall, state = best_of(lambda: run_ours(scene, start, steps, sleep)[:2], budget)
     # until_rest stops early: the rest of the window is simulated for free, so the figure is per ``steps``
-    return Row(case, scene.n_bodies, OURS, scene.dt, "settled" if sleep else "awake", steps, wall,
-               *quality(scene, start, state))
+    return Row(
+        case,
+        scene.n_bodies,
+        OURS,
+        scene.dt,
+        "settled" if sleep else "awake",
+        steps,
+        wall,
+        *quality(scene, start, state),
+    )
 
 
-def time_other(engine: str, case: str, scene: Scene, start: np.ndarray, sleep: bool, window: float,
-               budget: float) -> Row:
+def time_other(
+    engine: str, case: str, scene: Scene, start: np.ndarray, sleep: bool, window: float, budget: float
+) -> Row:
     dt = DEFAULT_DT[engine]
     mode = "settled" if sleep else "awake"
     try:
@@ -247,9 +261,15 @@ def settle(scene: Scene, engines: list[str], our_max: int = OUR_SETTLE_MAX) -> t
     return simulate(scene, duration=SETTLE).final_state, OURS
 
 
-def scale_rows(sizes=PILE_SIZES, engines: list[str] | None = None, window: float = WINDOW, budget: float = BUDGET,
-               log: Callable[[str], None] = lambda _: None, our_settle_max: int = OUR_SETTLE_MAX,
-               pyramid: bool = True) -> tuple[list[Row], dict[str, str]]:
+def scale_rows(
+    sizes=PILE_SIZES,
+    engines: list[str] | None = None,
+    window: float = WINDOW,
+    budget: float = BUDGET,
+    log: Callable[[str], None] = lambda _: None,
+    our_settle_max: int = OUR_SETTLE_MAX,
+    pyramid: bool = True,
+) -> tuple[list[Row], dict[str, str]]:
     """Every case in every engine, awake and settled: (rows, who settled each case)."""
     engines = [OURS, *available_scene_engines()] if engines is None else engines
     others = [e for e in engines if e != OURS]
@@ -323,17 +343,21 @@ def table(rows: list[Row]) -> list[str]:
     """One markdown table: a line per (case, engine), awake and settled side by side."""
     by = {(r.case, r.engine, r.mode): r for r in rows}
     keys = list(dict.fromkeys((r.case, r.engine) for r in rows))
-    lines = ["| case | boxes | engine | dt [s] | awake ns/body-step | awake us/body/sim-s | steps | "
-             "settled ns/body-step | settled us/body/sim-s | steps | max penetration [m] | top drift [m] |",
-             "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    lines = [
+        "| case | boxes | engine | dt [s] | awake ns/body-step | awake us/body/sim-s | steps | "
+        "settled ns/body-step | settled us/body/sim-s | steps | max penetration [m] | top drift [m] |",
+        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+    ]
     for case, engine in keys:
         awake, rest = by[(case, engine, "awake")], by[(case, engine, "settled")]
         drift = fmt(awake.drift, ".2e") if case.startswith("pyramid") else ""
-        lines.append(f"| {case} | {awake.n} | {engine} | {dt_text(awake.dt)} | "
-                     f"{fmt(awake.ns_per_body_step, ',.0f')} | {fmt(awake.us_per_body_second, ',.1f')} | "
-                     f"{awake.steps} | {fmt(rest.ns_per_body_step, ',.0f')} | {fmt(rest.us_per_body_second, ',.1f')} | "
-                     f"{rest.steps} | "
-                     f"{fmt(awake.penetration, '.2e')} | {drift} |")
+        lines.append(
+            f"| {case} | {awake.n} | {engine} | {dt_text(awake.dt)} | "
+            f"{fmt(awake.ns_per_body_step, ',.0f')} | {fmt(awake.us_per_body_second, ',.1f')} | "
+            f"{awake.steps} | {fmt(rest.ns_per_body_step, ',.0f')} | {fmt(rest.us_per_body_second, ',.1f')} | "
+            f"{rest.steps} | "
+            f"{fmt(awake.penetration, '.2e')} | {drift} |"
+        )
     return lines + [f"- {r.engine}, {r.case}: {r.note}" for r in rows if r.note and r.mode == "awake"]
 
 
@@ -385,20 +409,30 @@ def report(args: argparse.Namespace, log: Callable[[str], None]) -> str:
     rows, settlers = scale_rows(sizes, engines, window, budget, log)
     log("OnBox throws")
     onbox = onbox_rows(QUICK_ONBOX_THROWS if quick else ONBOX_THROWS, QUICK_BATCHES if quick else BATCHES)
-    lines = [f"`python -m benchmarks.engine_scale{' --quick' if quick else ''}`: numba {numba.__version__}, "
-             f"one thread for every engine; {load_text()}.", "",
-             f"Window {window:g} s of simulated time per case, per-case budget {budget:g} s of wall time: "
-             f"where the window would take longer, fewer steps are timed (`steps`, at least {MIN_STEPS}): "
-             f"{shortened_text(rows, window)}. "
-             "Settled: sleeping allowed (ours until rest, so fewer steps when everyone sleeps). Piles settled "
-             f"{SETTLE:g} s first by " + ", ".join(f"{case}: {who}" for case, who in settlers.items()) + ".", ""]
+    lines = [
+        f"`python -m benchmarks.engine_scale{' --quick' if quick else ''}`: numba {numba.__version__}, "
+        f"one thread for every engine; {load_text()}.",
+        "",
+        f"Window {window:g} s of simulated time per case, per-case budget {budget:g} s of wall time: "
+        f"where the window would take longer, fewer steps are timed (`steps`, at least {MIN_STEPS}): "
+        f"{shortened_text(rows, window)}. "
+        "Settled: sleeping allowed (ours until rest, so fewer steps when everyone sleeps). Piles settled "
+        f"{SETTLE:g} s first by " + ", ".join(f"{case}: {who}" for case, who in settlers.items()) + ".",
+        "",
+    ]
     lines += table(rows)
-    lines += ["", "Our engine per throw (until rest, random actions): the kernel alone, one env, and a batch of "
-              f"`make_vec({BATCH}, threads=1)` with the env's own work included:", "",
-              "| env | bodies | kernel us per throw | kernel us/body/sim-s | batched us per throw |",
-              "|---|---:|---:|---:|---:|"]
-    lines += [f"| {env_id} | {bodies} | {micros:,.0f} | {per:,.1f} | {batched:,.0f} |"
-              for env_id, bodies, micros, per, batched in onbox]
+    lines += [
+        "",
+        "Our engine per throw (until rest, random actions): the kernel alone, one env, and a batch of "
+        f"`make_vec({BATCH}, threads=1)` with the env's own work included:",
+        "",
+        "| env | bodies | kernel us per throw | kernel us/body/sim-s | batched us per throw |",
+        "|---|---:|---:|---:|---:|",
+    ]
+    lines += [
+        f"| {env_id} | {bodies} | {micros:,.0f} | {per:,.1f} | {batched:,.0f} |"
+        for env_id, bodies, micros, per, batched in onbox
+    ]
     if quick:
         lines += ["", "(quick run: shorter window, smaller budget, no 5,000-box pile)"]
     plot(rows)
@@ -407,16 +441,20 @@ def report(args: argparse.Namespace, log: Callable[[str], None]) -> str:
 
 def shortened_text(rows: list[Row], window: float) -> str:
     """Which awake runs the budget cut short, for the generated text."""
-    cut = [f"{row.engine} on {row.case}" for row in rows
-           if row.mode == "awake" and row.steps and row.steps < round(window / row.dt)]
+    cut = [
+        f"{row.engine} on {row.case}"
+        for row in rows
+        if row.mode == "awake" and row.steps and row.steps < round(window / row.dt)
+    ]
     return "so were " + ", ".join(cut) if cut else "no run was cut short"
 
 
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="1 s window, 1.5 s budget, piles up to 1,000 boxes")
-    parser.add_argument("--budget", type=budget_seconds, default=None,
-                        help="wall seconds per (case, engine, mode), in [0.1, 600]")
+    parser.add_argument(
+        "--budget", type=budget_seconds, default=None, help="wall seconds per (case, engine, mode), in [0.1, 600]"
+    )
     parser.add_argument("--write-docs", action="store_true", help=f"write the table into {DOCS_PAGE.name}")
     args = parser.parse_args(argv)
     began = time.perf_counter()

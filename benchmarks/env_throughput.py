@@ -41,8 +41,9 @@ def kernel_seconds_per_throw(env: gym.Env, actions: np.ndarray) -> float:
     for action in actions:
         unwrapped.reset()
         unwrapped.step(action)  # draws the episode; its initial state is rebuilt below
-        batch = dataclasses.replace(unwrapped._batch, state=unwrapped._batch.state.copy(),
-                                    params=unwrapped._batch.params.copy())
+        batch = dataclasses.replace(
+            unwrapped._batch, state=unwrapped._batch.state.copy(), params=unwrapped._batch.params.copy()
+        )
         batches.append(core.launch(batch, core.check_actions(action, (3,))))
     stats = unwrapped._stats.copy()
     simulator = unwrapped._simulator
@@ -71,12 +72,20 @@ def main() -> None:
     kernel = kernel_seconds_per_throw(env, actions[: min(2000, args.throws)])
     median = statistics.median(rates)
     print(f"{args.env} via gymnasium.make, solver={args.solver}, dt={args.dt:g} s, random actions")
-    print(f"throws/s (reset + step), median of {args.repeats} x {args.throws}: {median:,.0f} "
-          f"(min {min(rates):,.0f}, max {max(rates):,.0f})")
+    print(
+        f"throws/s (reset + step), median of {args.repeats} x {args.throws}: {median:,.0f} "
+        f"(min {min(rates):,.0f}, max {max(rates):,.0f})"
+    )
     print(f"per throw: {1e6 / median:.0f} us, of which engine kernel {1e6 * kernel:.0f} us")
     if args.batch:
-        envs = gym.make_vec(args.env, num_envs=args.batch, vectorization_mode="vector_entry_point", threads=1,
-                            solver=args.solver, dt=args.dt)
+        envs = gym.make_vec(
+            args.env,
+            num_envs=args.batch,
+            vectorization_mode="vector_entry_point",
+            threads=1,
+            solver=args.solver,
+            dt=args.dt,
+        )
         envs.reset(seed=args.seed)
         batch_actions = actions[: args.batch * (len(actions) // args.batch)].reshape(-1, args.batch, 3)
         envs.step(batch_actions[0])  # warm-up
@@ -86,8 +95,10 @@ def main() -> None:
             for step_actions in batch_actions:
                 envs.step(step_actions)
             rates.append(batch_actions.size / 3 / (time.perf_counter() - start))
-        print(f"batched, make_vec num_envs={args.batch}, 1 engine thread: {statistics.median(rates):,.0f} throws/s "
-              f"(min {min(rates):,.0f}, max {max(rates):,.0f})")
+        print(
+            f"batched, make_vec num_envs={args.batch}, 1 engine thread: {statistics.median(rates):,.0f} throws/s "
+            f"(min {min(rates):,.0f}, max {max(rates):,.0f})"
+        )
 
 
 if __name__ == "__main__":

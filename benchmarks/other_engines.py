@@ -329,9 +329,7 @@ class Box2DEngine(Engine):
         half = BOX2D_FLOOR_HALF_LENGTH
         ground = world.CreateStaticBody(position=(0.0, 0.0))
         # the edge's skin surface is y = 0; friction mixes as sqrt(mu_a mu_b), restitution as max(e_a, e_b)
-        ground.CreateEdgeFixture(
-            vertices=[(-half, -skin), (half, -skin)], friction=toss.friction, restitution=0.0
-        )
+        ground.CreateEdgeFixture(vertices=[(-half, -skin), (half, -skin)], friction=toss.friction, restitution=0.0)
 
         body = world.CreateDynamicBody(position=(toss.x, toss.y), angle=toss.angle)
         body.CreatePolygonFixture(

@@ -115,8 +115,13 @@ def boxes_collide(scene: Scene) -> bool:
 
 def materials(scene: Scene) -> list[tuple[float, float]]:
     """(restitution, friction) of each box: its own where given, else the scene's."""
-    return [(scene.restitution if box.restitution is None else box.restitution,
-             scene.friction if box.friction is None else box.friction) for box in scene.boxes]
+    return [
+        (
+            scene.restitution if box.restitution is None else box.restitution,
+            scene.friction if box.friction is None else box.friction,
+        )
+        for box in scene.boxes
+    ]
 
 
 def one_material(scene: Scene, engine: str, why: str) -> tuple[float, float]:
@@ -127,8 +132,13 @@ def one_material(scene: Scene, engine: str, why: str) -> tuple[float, float]:
     return pairs.pop()
 
 
-def build_pymunk(scene: Scene, sleep: bool = True, state: np.ndarray | None = None, dt: float | None = None,
-                 iterations: int = PYMUNK_ITERATIONS) -> tuple[Callable[[], object], Callable[[np.ndarray], None]]:
+def build_pymunk(
+    scene: Scene,
+    sleep: bool = True,
+    state: np.ndarray | None = None,
+    dt: float | None = None,
+    iterations: int = PYMUNK_ITERATIONS,
+) -> tuple[Callable[[], object], Callable[[np.ndarray], None]]:
     """A pymunk space of ``scene``: (step, read_states into an (n, 6) array). pymunk does not sleep by default
     (``sleep_time_threshold`` infinite), so ``sleep`` changes nothing; ``dt`` replaces the scene's step."""
     pymunk = _import("pymunk", "pymunk")
@@ -173,8 +183,9 @@ def build_pymunk(scene: Scene, sleep: bool = True, state: np.ndarray | None = No
     return lambda: space.step(dt), read_states
 
 
-def build_box2d(scene: Scene, sleep: bool = True, state: np.ndarray | None = None, dt: float | None = None
-                ) -> tuple[Callable[[], object], Callable[[np.ndarray], None]]:
+def build_box2d(
+    scene: Scene, sleep: bool = True, state: np.ndarray | None = None, dt: float | None = None
+) -> tuple[Callable[[], object], Callable[[np.ndarray], None]]:
     """A Box2D 2.3 world of ``scene``: (step, read_states into an (n, 6) array). ``sleep=False`` keeps every
     body awake: ``doSleep=False`` on the world alone does not (bodies still fall asleep), so each body also
     gets ``sleepingAllowed=False``. ``dt`` replaces the scene's step."""
@@ -183,15 +194,19 @@ def build_box2d(scene: Scene, sleep: bool = True, state: np.ndarray | None = Non
     skin = Box2D.b2_polygonRadius
     mixed = set(materials(scene))
     if len({mu for _, mu in mixed}) > 1:
-        raise UnsupportedScene(f"box2d needs one friction for every box (it mixes sqrt(mu_a mu_b), so no floor "
-                               f"friction gives each box its own); this scene has {sorted(mixed)}")
+        raise UnsupportedScene(
+            f"box2d needs one friction for every box (it mixes sqrt(mu_a mu_b), so no floor "
+            f"friction gives each box its own); this scene has {sorted(mixed)}"
+        )
     if boxes_collide(scene) and len(mixed) > 1:
         one_material(scene, "box2d", "that collide (it mixes restitution as max(e_a, e_b))")
     floor_mu = next(iter(mixed))[1]
     for k, box in enumerate(scene.boxes):
         if min(box.length, box.width) <= 2.0 * skin:
-            raise UnsupportedScene(f"box2d needs sides above 2 b2_polygonRadius = {2 * skin:.3g} m; box {k} is "
-                                   f"{box.length:g} x {box.width:g} m")
+            raise UnsupportedScene(
+                f"box2d needs sides above 2 b2_polygonRadius = {2 * skin:.3g} m; box {k} is "
+                f"{box.length:g} x {box.width:g} m"
+            )
     group = 0 if boxes_collide(scene) else -1  # a shared negative group never collides with itself
     half = BOX2D_FLOOR_HALF_LENGTH
     ground = world.CreateStaticBody(position=(0.0, 0.0))
@@ -200,9 +215,13 @@ def build_box2d(scene: Scene, sleep: bool = True, state: np.ndarray | None = Non
     start = scene.initial_state() if state is None else np.asarray(state, dtype=float)
     for box, (e, mu), (x, y, angle, vx, vy, spin) in zip(scene.boxes, materials(scene), start, strict=True):
         body = world.CreateDynamicBody(position=(x, y), angle=angle)
-        body.CreatePolygonFixture(box=(box.length / 2 - skin, box.width / 2 - skin),
-                                  density=box.mass / (box.length * box.width), friction=mu, restitution=e,
-                                  groupIndex=group)
+        body.CreatePolygonFixture(
+            box=(box.length / 2 - skin, box.width / 2 - skin),
+            density=box.mass / (box.length * box.width),
+            friction=mu,
+            restitution=e,
+            groupIndex=group,
+        )
         body.massData = Box2D.b2MassData(mass=box.mass, center=(0.0, 0.0), I=box.inertia)
         body.linearVelocity = (vx, vy)
         body.angularVelocity = spin
@@ -226,8 +245,13 @@ BOX2D3_DT = 1 / 60  # [s] its documented default step
 BOX2D3_FLOOR_HALF_LENGTH = 1.0e3  # [m] float32 engine, as Box2D 2.3
 
 
-def build_box2d3(scene: Scene, sleep: bool = True, state: np.ndarray | None = None, dt: float | None = None,
-                 substeps: int = BOX2D3_SUBSTEPS) -> tuple[Callable[[], object], Callable[[np.ndarray], None]]:
+def build_box2d3(
+    scene: Scene,
+    sleep: bool = True,
+    state: np.ndarray | None = None,
+    dt: float | None = None,
+    substeps: int = BOX2D3_SUBSTEPS,
+) -> tuple[Callable[[], object], Callable[[np.ndarray], None]]:
     """A Box2D v3 world (pyb2d3, float32) of ``scene``: (step, read_states into an (n, 6) array).
 
     Box2D v3 at its defaults but for gravity: soft-step solver with ``substeps`` substeps per step
@@ -242,8 +266,10 @@ def build_box2d3(scene: Scene, sleep: bool = True, state: np.ndarray | None = No
     b2 = _import("pyb2d3", "pyb2d3")
     mixed = set(materials(scene))
     if len({mu for _, mu in mixed}) > 1:
-        raise UnsupportedScene(f"box2d3 needs one friction for every box (it mixes sqrt(mu_a mu_b), so no floor "
-                               f"friction gives each box its own); this scene has {sorted(mixed)}")
+        raise UnsupportedScene(
+            f"box2d3 needs one friction for every box (it mixes sqrt(mu_a mu_b), so no floor "
+            f"friction gives each box its own); this scene has {sorted(mixed)}"
+        )
     if boxes_collide(scene) and len(mixed) > 1:
         one_material(scene, "box2d3", "that collide (it mixes restitution as max(e_a, e_b))")
     floor_mu = next(iter(mixed))[1]
@@ -251,17 +277,24 @@ def build_box2d3(scene: Scene, sleep: bool = True, state: np.ndarray | None = No
     world.sleeping_enabled = sleep
     ground = world.create_static_body(position=(0.0, 0.0))
     half = BOX2D3_FLOOR_HALF_LENGTH
-    ground.create_segment_shape(b2.shape_def(material=b2.surface_material(friction=floor_mu, restitution=0.0)),
-                                b2.segment((-half, 0.0), (half, 0.0)))
+    ground.create_segment_shape(
+        b2.shape_def(material=b2.surface_material(friction=floor_mu, restitution=0.0)),
+        b2.segment((-half, 0.0), (half, 0.0)),
+    )
     group = 0 if boxes_collide(scene) else -1  # a shared negative group never collides with itself
     bodies = []
     start = scene.initial_state() if state is None else np.asarray(state, dtype=float)
     for box, (e, mu), (x, y, angle, vx, vy, spin) in zip(scene.boxes, materials(scene), start, strict=True):
-        body = world.create_dynamic_body(position=(float(x), float(y)), rotation=float(angle),
-                                         linear_velocity=(float(vx), float(vy)), angular_velocity=float(spin),
-                                         enable_sleep=sleep)
-        shape = b2.shape_def(density=box.mass / (box.length * box.width),
-                             material=b2.surface_material(friction=mu, restitution=e))
+        body = world.create_dynamic_body(
+            position=(float(x), float(y)),
+            rotation=float(angle),
+            linear_velocity=(float(vx), float(vy)),
+            angular_velocity=float(spin),
+            enable_sleep=sleep,
+        )
+        shape = b2.shape_def(
+            density=box.mass / (box.length * box.width), material=b2.surface_material(friction=mu, restitution=e)
+        )
         if group:
             shape.filter = b2.make_filter(group_index=group)
         body.create_polygon_shape(shape, b2.box(box.length / 2, box.width / 2))
@@ -292,8 +325,15 @@ def available_scene_engines() -> list[str]:
     return [name for name in SCENE_ENGINES if _importable(SCENE_ENGINE_MODULES[name])]
 
 
-def simulate_scene(engine: str, scene: Scene, steps: int, record: bool = True, sleep: bool = True,
-                   state: np.ndarray | None = None, dt: float | None = None) -> SceneRun:
+def simulate_scene(
+    engine: str,
+    scene: Scene,
+    steps: int,
+    record: bool = True,
+    sleep: bool = True,
+    state: np.ndarray | None = None,
+    dt: float | None = None,
+) -> SceneRun:
     """Build ``scene`` in ``engine`` and step it ``steps`` times of ``scene.dt``, timing the loop alone
     (with ``record``, reading every box's state after each step is inside the loop: time without it).
     ``sleep=False`` keeps every body awake (Box2D's ``doSleep``; pymunk never sleeps by default);

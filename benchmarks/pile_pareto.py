@@ -49,16 +49,32 @@ def time_loop(step, read_states, steps: int, n: int) -> tuple[float, np.ndarray]
 def variants(engines: list[str]):
     """(engine, knob text, dt, run(scene, start, steps) -> (wall, final state))."""
     for dt in OUR_DTS:
-        yield (engine_scale.OURS, f"dt 1/{round(1 / dt)}", dt,
-               lambda scene, start, steps, dt=dt: engine_scale.run_ours(scene.replace(dt=dt), start, steps, False)[:2])
+        yield (
+            engine_scale.OURS,
+            f"dt 1/{round(1 / dt)}",
+            dt,
+            lambda scene, start, steps, dt=dt: engine_scale.run_ours(scene.replace(dt=dt), start, steps, False)[:2],
+        )
     if "box2d3" in engines:
         for sub in BOX2D3_SUBSTEPS:
-            yield ("box2d3", f"{sub} substeps", BOX2D3_DT, lambda scene, start, steps, sub=sub: time_loop(
-                *build_box2d3(scene, False, start, BOX2D3_DT, sub), steps, scene.n_bodies))
+            yield (
+                "box2d3",
+                f"{sub} substeps",
+                BOX2D3_DT,
+                lambda scene, start, steps, sub=sub: time_loop(
+                    *build_box2d3(scene, False, start, BOX2D3_DT, sub), steps, scene.n_bodies
+                ),
+            )
     if "pymunk" in engines:
         for it in PYMUNK_ITERATIONS:
-            yield ("pymunk", f"{it} iterations", PYMUNK_DT, lambda scene, start, steps, it=it: time_loop(
-                *build_pymunk(scene, False, start, PYMUNK_DT, it), steps, scene.n_bodies))
+            yield (
+                "pymunk",
+                f"{it} iterations",
+                PYMUNK_DT,
+                lambda scene, start, steps, it=it: time_loop(
+                    *build_pymunk(scene, False, start, PYMUNK_DT, it), steps, scene.n_bodies
+                ),
+            )
 
 
 def pareto_rows(window: float = WINDOW, pile: int = PILE, log=lambda _: None) -> list[tuple]:
@@ -75,17 +91,22 @@ def pareto_rows(window: float = WINDOW, pile: int = PILE, log=lambda _: None) ->
             log(f"{name}: {engine}, {knob}")
             steps = max(1, round(window / dt))
             wall, state = engine_scale.best_of(
-                lambda run=run, scene=scene, start=start, steps=steps: run(scene, start, steps), REPEAT_BUDGET)
+                lambda run=run, scene=scene, start=start, steps=steps: run(scene, start, steps), REPEAT_BUDGET
+            )
             penetration, drift = engine_scale.quality(scene, start, state)
             rows.append((name, engine, knob, 1e6 * wall / (scene.n_bodies * steps * dt), penetration, drift))
     return rows
 
 
 def table(rows) -> list[str]:
-    lines = ["| case | engine | knob | us/body/sim-s | max penetration [m] | top drift [m] |",
-             "|---|---|---|---:|---:|---:|"]
-    return lines + [f"| {case} | {engine} | {knob} | {cost:,.1f} | {pen:.2e} | {drift:.2e} |"
-                    for case, engine, knob, cost, pen, drift in rows]
+    lines = [
+        "| case | engine | knob | us/body/sim-s | max penetration [m] | top drift [m] |",
+        "|---|---|---|---:|---:|---:|",
+    ]
+    return lines + [
+        f"| {case} | {engine} | {knob} | {cost:,.1f} | {pen:.2e} | {drift:.2e} |"
+        for case, engine, knob, cost, pen, drift in rows
+    ]
 
 
 def plot(rows, path: Path = FIGURE) -> None:
@@ -125,8 +146,12 @@ def main(argv=None) -> None:
     began = time.perf_counter()
     rows = pareto_rows(window, log=lambda line: print(f"[{time.perf_counter() - began:6.1f} s] {line}", flush=True))
     plot(rows)
-    lines = [f"`python -m benchmarks.pile_pareto{' --quick' if args.quick else ''}`: {window:g} s of simulated time "
-             f"per variant, awake; {engine_scale.load_text()}.", "", *table(rows)]
+    lines = [
+        f"`python -m benchmarks.pile_pareto{' --quick' if args.quick else ''}`: {window:g} s of simulated time "
+        f"per variant, awake; {engine_scale.load_text()}.",
+        "",
+        *table(rows),
+    ]
     if args.quick:
         lines += ["", "(quick run: shorter window)"]
     text = "\n".join(lines)

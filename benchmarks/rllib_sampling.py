@@ -91,8 +91,10 @@ def main() -> None:
             algo.stop()
             rows.append({"mode": mode, "num_envs": num_envs, "rllib": sampled[mode], "alone": alone[mode]})
 
-    lines = ["| vectorisation | envs per runner | RLlib sampling [throws/s] | the env alone [throws/s] |",
-             "|---|---:|---:|---:|"]
+    lines = [
+        "| vectorisation | envs per runner | RLlib sampling [throws/s] | the env alone [throws/s] |",
+        "|---|---:|---:|---:|",
+    ]
     for row in rows:
         lines.append(f"| {LABELS[row['mode']]} | {row['num_envs']} | {spread(row['rllib'])} | {spread(row['alone'])} |")
     ratios = []
@@ -100,14 +102,23 @@ def main() -> None:
         by_mode = {row["mode"]: row for row in rows if row["num_envs"] == num_envs}
         paired = [a / b for a, b in zip(by_mode["native"]["rllib"], by_mode["sync"]["rllib"], strict=True)]
         alone = [a / b for a, b in zip(by_mode["native"]["alone"], by_mode["sync"]["alone"], strict=True)]
-        ratios.append(f"- {num_envs} envs: RLlib sampling, native / default: {statistics.median(paired):.2f}x "
-                      f"({min(paired):.2f}-{max(paired):.2f}x over the repeats); the env alone: "
-                      f"{statistics.median(alone):.1f}x")
-    text = "\n".join([
-        f"`python -m benchmarks.rllib_sampling --num-envs {' '.join(map(str, args.num_envs))} --throws {args.throws} "
-        f"--repeats {args.repeats}` (ray {ray.__version__}, PPO's local env runner, {os.cpu_count()} cores shared "
-        f"with other work; median and range of {args.repeats} repeats, the two vectorisations sampled in turn):",
-        "", *lines, "", *ratios])
+        ratios.append(
+            f"- {num_envs} envs: RLlib sampling, native / default: {statistics.median(paired):.2f}x "
+            f"({min(paired):.2f}-{max(paired):.2f}x over the repeats); the env alone: "
+            f"{statistics.median(alone):.1f}x"
+        )
+    text = "\n".join(
+        [
+            f"`python -m benchmarks.rllib_sampling --num-envs {' '.join(map(str, args.num_envs))} "
+            f"--throws {args.throws} "
+            f"--repeats {args.repeats}` (ray {ray.__version__}, PPO's local env runner, {os.cpu_count()} cores shared "
+            f"with other work; median and range of {args.repeats} repeats, the two vectorisations sampled in turn):",
+            "",
+            *lines,
+            "",
+            *ratios,
+        ]
+    )
     print(text)
     if args.readme:
         replace_section("rllib-sampling", text)

@@ -71,8 +71,10 @@ def main(argv: list[str] | None = None) -> None:
     env = gym.make("BoxToss-Stack-v0")
     config = env.unwrapped.config
     rng = np.random.default_rng(0)
-    policies = {"random actions": lambda observation: rng.uniform(-1, 1, 3).astype(np.float32),
-                "lob onto the stack": lambda observation: command_actions(observation, LOB, config)[0]}
+    policies = {
+        "random actions": lambda observation: rng.uniform(-1, 1, 3).astype(np.float32),
+        "lob onto the stack": lambda observation: command_actions(observation, LOB, config)[0],
+    }
     episodes_per_policy(env, 1, policies["lob onto the stack"])  # load the compiled kernel
     lines = []
     for name, act in policies.items():
@@ -85,10 +87,16 @@ def main(argv: list[str] | None = None) -> None:
         lines.append(f"- {line}")
     if args.readme:
         load = os.getloadavg()[0]
-        command = f"python -m benchmarks.stack_throughput --episodes {args.episodes}" + (
-            f" --batch {args.batch}" if args.batch else "") + " --readme"
-        replace_section("stack-throughput", f"Measured by `{command}` ({args.episodes} episodes each; load average "
-                        f"{load:.1f} on the 2 shared cores):\n\n" + "\n".join(lines))
+        command = (
+            f"python -m benchmarks.stack_throughput --episodes {args.episodes}"
+            + (f" --batch {args.batch}" if args.batch else "")
+            + " --readme"
+        )
+        replace_section(
+            "stack-throughput",
+            f"Measured by `{command}` ({args.episodes} episodes each; load average "
+            f"{load:.1f} on the 2 shared cores):\n\n" + "\n".join(lines),
+        )
 
 
 if __name__ == "__main__":

@@ -96,9 +96,19 @@ def toss_per_throw(repeats: int) -> tuple[float, float, float, int]:
 def other_engine_rows(duration: float, dt: float, repeats: int) -> list[tuple[str, float]]:
     """Seconds per throw of the same toss in each available engine, simulated for ``duration``."""
     box = scenes.toss().boxes[0]
-    toss = Toss(length=box.length, width=box.width, mass=box.mass, x=box.position[0], y=box.position[1],
-                angle=box.angle, vx=box.velocity[0], vy=box.velocity[1], omega=box.spin,
-                restitution=scenes.TOSS_MATERIAL["restitution"], friction=scenes.TOSS_MATERIAL["friction"])
+    toss = Toss(
+        length=box.length,
+        width=box.width,
+        mass=box.mass,
+        x=box.position[0],
+        y=box.position[1],
+        angle=box.angle,
+        vx=box.velocity[0],
+        vy=box.velocity[1],
+        omega=box.spin,
+        restitution=scenes.TOSS_MATERIAL["restitution"],
+        friction=scenes.TOSS_MATERIAL["friction"],
+    )
     n_steps = steps_for_duration(duration, dt)
     rows = []
     for name, engine in ENGINES.items():
@@ -141,8 +151,11 @@ def main() -> None:
     repeats = 2 if args.quick else 5
     import numba
 
-    lines = [f"Measured by `python -m benchmarks.throughput` on {os.cpu_count()} cores "
-             f"(numba {numba.__version__}, {numba.get_num_threads()} threads available), random actions.", ""]
+    lines = [
+        f"Measured by `python -m benchmarks.throughput` on {os.cpu_count()} cores "
+        f"(numba {numba.__version__}, {numba.get_num_threads()} threads available), random actions.",
+        "",
+    ]
     lines += ["| setting | throws/s |", "|---|---:|"]
     single = single_env_rate(1000 if args.quick else 5000, repeats)
     lines.append(f"| one `BoxToss-v0` via `gymnasium.make` | {single:,.0f} |")
@@ -150,30 +163,42 @@ def main() -> None:
         steps = max(2, 4096 // n) if not args.quick else max(1, 512 // n)
         for threads in (1, 2):
             rate = vector_rate(gym.make_vec("BoxToss-v0", num_envs=n, threads=threads), steps, repeats)
-            lines.append(f"| `make_vec(\"BoxToss-v0\", num_envs={n})`, {threads} thread{'s' * (threads > 1)} "
-                         f"| {rate:,.0f} |")
-    sync = gym.make_vec("BoxToss-v0", num_envs=16, vectorization_mode="sync",
-                        vector_kwargs={"autoreset_mode": AutoresetMode.SAME_STEP})
+            lines.append(
+                f'| `make_vec("BoxToss-v0", num_envs={n})`, {threads} thread{"s" * (threads > 1)} | {rate:,.0f} |'
+            )
+    sync = gym.make_vec(
+        "BoxToss-v0", num_envs=16, vectorization_mode="sync", vector_kwargs={"autoreset_mode": AutoresetMode.SAME_STEP}
+    )
     sync_rate = vector_rate(sync, 32 if args.quick else 256, repeats)
     lines.append(f"| Gymnasium `SyncVectorEnv`, 16 envs | {sync_rate:,.0f} |")
 
     ours_one, ours_batch, rest, steps = toss_per_throw(repeats)
     dt = scenes.toss().dt
-    lines += ["", "The same toss (`scenes.toss()`: a 0.4 x 0.2 m, 2 kg box, e 0.3, mu 0.5) at "
-              f"dt = 1/{round(1 / dt)} s, simulated for {rest:.2f} s (until our robust solver finds it at rest "
-              f"after {steps} contact steps), one thread:", "",
-              "| engine | us per throw | ours faster by |", "|---|---:|---:|",
-              f"| BoxToss engine, one box per call | {ours_one * 1e6:.1f} | 1.0x |",
-              f"| BoxToss engine, batch of 256 | {ours_batch * 1e6:.1f} | {ours_one / ours_batch:.1f}x |"]
+    lines += [
+        "",
+        "The same toss (`scenes.toss()`: a 0.4 x 0.2 m, 2 kg box, e 0.3, mu 0.5) at "
+        f"dt = 1/{round(1 / dt)} s, simulated for {rest:.2f} s (until our robust solver finds it at rest "
+        f"after {steps} contact steps), one thread:",
+        "",
+        "| engine | us per throw | ours faster by |",
+        "|---|---:|---:|",
+        f"| BoxToss engine, one box per call | {ours_one * 1e6:.1f} | 1.0x |",
+        f"| BoxToss engine, batch of 256 | {ours_batch * 1e6:.1f} | {ours_one / ours_batch:.1f}x |",
+    ]
     for name, seconds in other_engine_rows(rest, dt, repeats):
-        lines.append(f"| {name} (Python loop over its `step`) | {seconds * 1e6:.1f} | "
-                     f"{seconds / ours_one:.0f}x (batch: {seconds / ours_batch:.0f}x) |")
+        lines.append(
+            f"| {name} (Python loop over its `step`) | {seconds * 1e6:.1f} | "
+            f"{seconds / ours_one:.0f}x (batch: {seconds / ours_batch:.0f}x) |"
+        )
     missing = missing_engines()
     if missing:
-        lines.append(f"\nNot installed (`pip install -e \".[benchmark]\"`): {', '.join(missing)}.")
+        lines.append(f'\nNot installed (`pip install -e ".[benchmark]"`): {", ".join(missing)}.')
     per_env, beyond_obs = memory_per_env()
-    lines += ["", f"Memory of the batched env: {per_env:,.0f} bytes per env, {beyond_obs:,.0f} beyond the "
-              "observation buffers (growth from 256 to 4,096 envs, measured with tracemalloc)."]
+    lines += [
+        "",
+        f"Memory of the batched env: {per_env:,.0f} bytes per env, {beyond_obs:,.0f} beyond the "
+        "observation buffers (growth from 256 to 4,096 envs, measured with tracemalloc).",
+    ]
     load = ", ".join(f"{value:.1f}" for value in os.getloadavg()) if hasattr(os, "getloadavg") else "n/a"
     lines[0] = lines[0][:-1] + f"; load average {load} at the end (a shared machine: other jobs' load lowers these)."
     report = "\n".join(lines)

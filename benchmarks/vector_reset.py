@@ -70,24 +70,30 @@ def main() -> None:
         parser.error(f"--repeats must be >= 1, got {args.repeats}")
     runs = []
     for _ in range(args.repeats):
-        done = subprocess.run([sys.executable, "-c", ONE_RUN, str(args.envs)], capture_output=True, text=True,
-                              check=False)
+        done = subprocess.run(
+            [sys.executable, "-c", ONE_RUN, str(args.envs)], capture_output=True, text=True, check=False
+        )
         if done.returncode != 0:
             sys.exit(f"the measuring process failed:\n{done.stderr}")
         runs.append(json.loads(done.stdout.strip().splitlines()[-1]))
     load = ", ".join(f"{value:.1f}" for value in os.getloadavg())
-    lines = [f"Measured by `python -m benchmarks.vector_reset` on {os.cpu_count()} cores: "
-             f"`make_vec(\"BoxToss-v0\", num_envs={args.envs:,})` and its resets in {args.repeats} fresh processes, "
-             f"median [min-max] seconds; load average {load} at the end (a shared machine: wall time above CPU time "
-             "is other jobs' share of the cores).", "",
-             "| stage | wall | CPU, user | CPU, system |", "|---|---:|---:|---:|"]
+    lines = [
+        f"Measured by `python -m benchmarks.vector_reset` on {os.cpu_count()} cores: "
+        f'`make_vec("BoxToss-v0", num_envs={args.envs:,})` and its resets in {args.repeats} fresh processes, '
+        f"median [min-max] seconds; load average {load} at the end (a shared machine: wall time above CPU time "
+        "is other jobs' share of the cores).",
+        "",
+        "| stage | wall | CPU, user | CPU, system |",
+        "|---|---:|---:|---:|",
+    ]
     for stage in runs[0]:
         cells = []
         for key in ("wall", "user", "system"):
             values = [run[stage][key] for run in runs]
             scale, unit = (1e6, " us") if "per env" in stage else (1.0, "")
-            cells.append(f"{statistics.median(values) * scale:.2f} [{min(values) * scale:.2f}-"
-                         f"{max(values) * scale:.2f}]{unit}")
+            cells.append(
+                f"{statistics.median(values) * scale:.2f} [{min(values) * scale:.2f}-{max(values) * scale:.2f}]{unit}"
+            )
         lines.append(f"| {stage} | {' | '.join(cells)} |")
     report = "\n".join(lines)
     print(report)

@@ -30,8 +30,11 @@ def _register_envs() -> None:
             kwargs=kwargs,
         )
     if "BoxToss-Stack-v0" not in gymnasium.registry:  # a sequence of throws building a stack (its own env class)
-        gymnasium.register(id="BoxToss-Stack-v0", entry_point="box_toss_env.envs.stack:BoxTossStackEnv",
-                           vector_entry_point="box_toss_env.envs.stack_vector:BoxTossStackVectorEnv")
+        gymnasium.register(
+            id="BoxToss-Stack-v0",
+            entry_point="box_toss_env.envs.stack:BoxTossStackEnv",
+            vector_entry_point="box_toss_env.envs.stack_vector:BoxTossStackVectorEnv",
+        )
 
     if "BoxToss-Goal-v0" not in gymnasium.registry:
         gymnasium.register(id="BoxToss-Goal-v0", entry_point="box_toss_env.envs.goal:BoxTossGoalEnv")

@@ -36,8 +36,13 @@ BENCHMARKS = {
 
 def usage() -> str:
     width = max(map(len, COMMANDS))
-    lines = ["usage: box-toss {" + ",".join(COMMANDS) + "} [options]", "",
-             __doc__.split("\n\n")[0], "", "subcommands (box-toss SUBCOMMAND --help lists every option):"]
+    lines = [
+        "usage: box-toss {" + ",".join(COMMANDS) + "} [options]",
+        "",
+        __doc__.split("\n\n")[0],
+        "",
+        "subcommands (box-toss SUBCOMMAND --help lists every option):",
+    ]
     lines += [f"  {name:<{width}}  {text} (python -m {module})" for name, (module, text) in COMMANDS.items()]
     lines += ["", "benchmarks (box-toss bench NAME --help):"]
     lines += [f"  {name:<14}  {text}" for name, text in BENCHMARKS.items()]
@@ -68,8 +73,10 @@ def main(argv: list[str] | None = None) -> None:
     module, rest = module_for(list(sys.argv[1:] if argv is None else argv))
     sys.path.insert(0, os.getcwd())  # python -m finds agents/ and benchmarks/ in the current directory
     if importlib.util.find_spec(module.split(".")[0]) is None:
-        raise SystemExit(f"box-toss: {module} not found: run this subcommand from the repository's root "
-                         "(agents/ and benchmarks/ are not installed with the package)")
+        raise SystemExit(
+            f"box-toss: {module} not found: run this subcommand from the repository's root "
+            "(agents/ and benchmarks/ are not installed with the package)"
+        )
     os.execv(sys.executable, [sys.executable, "-m", module, *rest])
 
 

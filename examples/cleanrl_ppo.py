@@ -83,8 +83,9 @@ def parse_args() -> Args:
     for field in dataclasses.fields(Args):
         flag = "--" + field.name.replace("_", "-")
         if field.type == "bool":
-            parser.add_argument(flag, type=lambda s: s.lower() in ("1", "true", "yes"), default=field.default,
-                                metavar="BOOL")
+            parser.add_argument(
+                flag, type=lambda s: s.lower() in ("1", "true", "yes"), default=field.default, metavar="BOOL"
+            )
         elif field.type == "float | None":
             parser.add_argument(flag, type=float, default=field.default)
         else:
@@ -102,13 +103,17 @@ class Agent(nn.Module):
     def __init__(self, obs_dim: int, act_dim: int, hidden: int, log_std_init: float):
         super().__init__()
         self.critic = nn.Sequential(
-            layer_init(nn.Linear(obs_dim, hidden)), nn.Tanh(),
-            layer_init(nn.Linear(hidden, hidden)), nn.Tanh(),
+            layer_init(nn.Linear(obs_dim, hidden)),
+            nn.Tanh(),
+            layer_init(nn.Linear(hidden, hidden)),
+            nn.Tanh(),
             layer_init(nn.Linear(hidden, 1), std=1.0),
         )
         self.actor_mean = nn.Sequential(
-            layer_init(nn.Linear(obs_dim, hidden)), nn.Tanh(),
-            layer_init(nn.Linear(hidden, hidden)), nn.Tanh(),
+            layer_init(nn.Linear(obs_dim, hidden)),
+            nn.Tanh(),
+            layer_init(nn.Linear(hidden, hidden)),
+            nn.Tanh(),
             layer_init(nn.Linear(hidden, act_dim), std=0.01),
         )
         self.actor_logstd = nn.Parameter(torch.full((1, act_dim), log_std_init))
@@ -128,8 +133,11 @@ class Agent(nn.Module):
 def evaluate(agent: Agent, train_envs: NormalizeObservation, args: Args) -> dict[str, float]:
     """Throw once at each of ``eval_targets`` fixed targets with the mean action; the observation
     statistics are the training ones, frozen."""
-    envs = NormalizeObservation(gym.make_vec(args.env_id, num_envs=args.eval_targets,
-                                             vectorization_mode="vector_entry_point", threads=args.env_threads))
+    envs = NormalizeObservation(
+        gym.make_vec(
+            args.env_id, num_envs=args.eval_targets, vectorization_mode="vector_entry_point", threads=args.env_threads
+        )
+    )
     envs.obs_rms = train_envs.obs_rms
     envs.update_running_mean = False
     obs, _ = envs.reset(seed=args.eval_seed)
@@ -150,8 +158,9 @@ def main(args: Args) -> dict[str, float]:
     torch.manual_seed(args.seed)
     torch.set_num_threads(args.torch_threads)
 
-    envs = gym.make_vec(args.env_id, num_envs=args.num_envs, vectorization_mode="vector_entry_point",
-                        threads=args.env_threads)
+    envs = gym.make_vec(
+        args.env_id, num_envs=args.num_envs, vectorization_mode="vector_entry_point", threads=args.env_threads
+    )
     envs = NormalizeObservation(envs)
     obs_dim = envs.single_observation_space.shape[0]
     act_dim = envs.single_action_space.shape[0]
@@ -221,7 +230,7 @@ def main(args: Args) -> dict[str, float]:
         for _epoch in range(args.update_epochs):
             rng.shuffle(b_inds)
             for begin in range(0, batch_size, minibatch_size):
-                mb_inds = b_inds[begin:begin + minibatch_size]
+                mb_inds = b_inds[begin : begin + minibatch_size]
                 _, newlogprob, entropy, newvalue = agent.get_action_and_value(b_obs[mb_inds], b_actions[mb_inds])
                 logratio = newlogprob - b_logprobs[mb_inds]
                 ratio = logratio.exp()
@@ -239,8 +248,9 @@ def main(args: Args) -> dict[str, float]:
                 newvalue = newvalue.view(-1)
                 if args.clip_vloss:
                     v_loss_unclipped = (newvalue - b_returns[mb_inds]) ** 2
-                    v_clipped = b_values[mb_inds] + torch.clamp(newvalue - b_values[mb_inds],
-                                                                -args.clip_coef, args.clip_coef)
+                    v_clipped = b_values[mb_inds] + torch.clamp(
+                        newvalue - b_values[mb_inds], -args.clip_coef, args.clip_coef
+                    )
                     v_loss = 0.5 * torch.max(v_loss_unclipped, (v_clipped - b_returns[mb_inds]) ** 2).mean()
                 else:
                     v_loss = 0.5 * ((newvalue - b_returns[mb_inds]) ** 2).mean()
@@ -255,16 +265,20 @@ def main(args: Args) -> dict[str, float]:
                 break
 
         if args.log_every and (iteration % args.log_every == 0 or iteration == num_iterations):
-            print(f"throws {global_step:>8,}  rollout success {successes.mean():6.1%}  "
-                  f"mean reward {rewards.mean().item():7.3f}  std {agent.actor_logstd.exp().mean().item():.3f}  "
-                  f"clipfrac {np.mean(clipfracs):.3f}  {global_step / (time.time() - start):,.0f} throws/s",
-                  flush=True)
+            print(
+                f"throws {global_step:>8,}  rollout success {successes.mean():6.1%}  "
+                f"mean reward {rewards.mean().item():7.3f}  std {agent.actor_logstd.exp().mean().item():.3f}  "
+                f"clipfrac {np.mean(clipfracs):.3f}  {global_step / (time.time() - start):,.0f} throws/s",
+                flush=True,
+            )
 
     envs.close()
     result = evaluate(agent, envs, args)
     print(f"trained on {global_step:,} throws in {time.time() - start:.1f} s")
-    print(f"deterministic policy on {args.eval_targets} fixed targets (seeds {args.eval_seed}...): "
-          f"mean distance {result['distance']:.3f} m")
+    print(
+        f"deterministic policy on {args.eval_targets} fixed targets (seeds {args.eval_seed}...): "
+        f"mean distance {result['distance']:.3f} m"
+    )
     print(f"success rate: {result['success']:.4f}")
     return result
 

@@ -27,7 +27,7 @@ STIFFNESS = float(ENV_DEFAULTS["penalty_stiffness"])
 
 def dt_of(exponent: int) -> float:
     """The grid's time step 2^-exponent [s]."""
-    return 2.0 ** -exponent
+    return 2.0**-exponent
 
 
 # -- quantities measured on states -----------------------------------------------------------------
@@ -72,10 +72,20 @@ def velocity_error(state: np.ndarray, exact: np.ndarray, radius: float) -> float
 def toss_of(scene: Scene) -> Toss:
     """The one-box ``scene`` as the other engines' ``Toss`` (same box, pose, velocity, material)."""
     box = scene.boxes[0]
-    return Toss(length=box.length, width=box.width, mass=box.mass, x=box.position[0], y=box.position[1],
-                angle=box.angle, vx=box.velocity[0], vy=box.velocity[1], omega=box.spin, gravity=scene.gravity,
-                restitution=scene.restitution if box.restitution is None else box.restitution,
-                friction=scene.friction if box.friction is None else box.friction)
+    return Toss(
+        length=box.length,
+        width=box.width,
+        mass=box.mass,
+        x=box.position[0],
+        y=box.position[1],
+        angle=box.angle,
+        vx=box.velocity[0],
+        vy=box.velocity[1],
+        omega=box.spin,
+        gravity=scene.gravity,
+        restitution=scene.restitution if box.restitution is None else box.restitution,
+        friction=scene.friction if box.friction is None else box.friction,
+    )
 
 
 def with_box(scene: Scene, **changes) -> Scene:
@@ -125,9 +135,16 @@ class FreeFlight(ExactCase):
 
     def exact(self, time: float) -> np.ndarray:
         box, g = self.box, self.base.gravity
-        return np.array([box.position[0] + box.velocity[0] * time,
-                         box.position[1] + box.velocity[1] * time + 0.5 * g * time**2,
-                         box.angle + box.spin * time, box.velocity[0], box.velocity[1] + g * time, box.spin])
+        return np.array(
+            [
+                box.position[0] + box.velocity[0] * time,
+                box.position[1] + box.velocity[1] * time + 0.5 * g * time**2,
+                box.angle + box.spin * time,
+                box.velocity[0],
+                box.velocity[1] + g * time,
+                box.spin,
+            ]
+        )
 
     def error(self, state, dt):
         return pose_error(state, self.exact(self.steps(dt) * dt), corner_radius(self.box))
@@ -143,8 +160,10 @@ class CornerImpact(ExactCase):
         box = self.box
         angle = box.angle + box.spin * time
         c, s = math.cos(angle), math.sin(angle)
-        offsets = [(c * sx * box.length / 2 - s * sy * box.width / 2, s * sx * box.length / 2 + c * sy * box.width / 2)
-                   for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+        offsets = [
+            (c * sx * box.length / 2 - s * sy * box.width / 2, s * sx * box.length / 2 + c * sy * box.width / 2)
+            for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))
+        ]
         rx, ry = min(offsets, key=lambda r: r[1])
         return box.position[1] + box.velocity[1] * time + ry, rx
 
@@ -237,21 +256,47 @@ def exact_cases() -> tuple[ExactCase, ...]:
     k = dict(penalty_stiffness=STIFFNESS)
     drop = scenes.flat_drop(height=1.0, restitution=0.5, **k)
     corner = CornerImpact(
-        "corner_impact", "Frictionless corner impact",
+        "corner_impact",
+        "Frictionless corner impact",
         "Newton's impact law at the lowest corner (zero gravity, e = 0.5, no friction), then free flight",
         "velocity error |dv| + R |dw| at t = 0.25 s [m/s]",
-        scenes.corner_impact(angle=0.9, velocity=(0.3, -3.0), spin=1.0, restitution=0.5, **k), 0.25)
+        scenes.corner_impact(angle=0.9, velocity=(0.3, -3.0), spin=1.0, restitution=0.5, **k),
+        0.25,
+    )
     return (
-        FreeFlight("free_flight", "Free flight", "parabola x0 + v t + g t^2 / 2, angle a0 + w t",
-                   "pose error |dx| + R |da| at t = 1 s [m]", scenes.free_flight(**k), 1.0),
+        FreeFlight(
+            "free_flight",
+            "Free flight",
+            "parabola x0 + v t + g t^2 / 2, angle a0 + w t",
+            "pose error |dx| + R |da| at t = 1 s [m]",
+            scenes.free_flight(**k),
+            1.0,
+        ),
         corner,
-        FlatDrop("flat_drop", "Flat drop", "a level drop from h = 1 m rebounds to the apex e^2 h (e = 0.5), no spin",
-                 "apex error |apex - e^2 h| [m], read at the apex time", drop,
-                 FlatDrop.apex_time(1.0, 0.5, drop.gravity)),
-        Slide("slide", "Sliding to rest", "a box sliding at 2 m/s with mu = 0.3 stops after v0^2 / (2 mu g)",
-              "stopping distance error [m] at t = 1.5 s", scenes.slide(speed=2.0, friction=0.3, **k), 1.5),
-        Resting("resting", "Resting 10 s", "a box lying on the floor does not move (e = 0.5, mu = 0.02)",
-                "pose drift |dx| + R |da| at t = 10 s [m]", scenes.resting(restitution=0.5, friction=0.02, **k), 10.0),
+        FlatDrop(
+            "flat_drop",
+            "Flat drop",
+            "a level drop from h = 1 m rebounds to the apex e^2 h (e = 0.5), no spin",
+            "apex error |apex - e^2 h| [m], read at the apex time",
+            drop,
+            FlatDrop.apex_time(1.0, 0.5, drop.gravity),
+        ),
+        Slide(
+            "slide",
+            "Sliding to rest",
+            "a box sliding at 2 m/s with mu = 0.3 stops after v0^2 / (2 mu g)",
+            "stopping distance error [m] at t = 1.5 s",
+            scenes.slide(speed=2.0, friction=0.3, **k),
+            1.5,
+        ),
+        Resting(
+            "resting",
+            "Resting 10 s",
+            "a box lying on the floor does not move (e = 0.5, mu = 0.02)",
+            "pose drift |dx| + R |da| at t = 10 s [m]",
+            scenes.resting(restitution=0.5, friction=0.02, **k),
+            10.0,
+        ),
     )
 
 
@@ -304,7 +349,7 @@ class Throws:
         """(low, high) of (x, y) that no throw can leave: the env's observation bounds, which follow
         from the throw's energy; a landing outside them is a blow-up."""
         low, high = task.observation_bounds(self.config, self.config.max_sim_time)
-        return low[task.OBS_X:task.OBS_Y + 1].astype(float), high[task.OBS_X:task.OBS_Y + 1].astype(float)
+        return low[task.OBS_X : task.OBS_Y + 1].astype(float), high[task.OBS_X : task.OBS_Y + 1].astype(float)
 
     def blown_up(self, states: np.ndarray, stats: np.ndarray) -> np.ndarray:
         """(n,) True where a throw went non-finite or landed where its energy cannot take it."""
@@ -361,12 +406,18 @@ def embedded(share: float = 0.25, **scene) -> Scene:
     return with_box(base, position=(0.0, 0.5 * box.width - share * box.width))
 
 
-def friction_corner_hit(friction: float, restitution: float, angle: float = 0.4, velocity=(2.0, -3.0),
-                        spin: float = 1.0, **scene) -> Scene:
+def friction_corner_hit(
+    friction: float, restitution: float, angle: float = 0.4, velocity=(2.0, -3.0), spin: float = 1.0, **scene
+) -> Scene:
     """An angled corner hit with friction in zero gravity (``scenes.corner_impact``), so its kinetic
     energy can only fall."""
-    return scenes.corner_impact(angle=angle, velocity=velocity, spin=spin, restitution=restitution,
-                                **{"friction": friction, "penalty_stiffness": STIFFNESS, **scene})
+    return scenes.corner_impact(
+        angle=angle,
+        velocity=velocity,
+        spin=spin,
+        restitution=restitution,
+        **{"friction": friction, "penalty_stiffness": STIFFNESS, **scene},
+    )
 
 
 def tipping_box(restitution: float, friction: float, **scene) -> Scene:
@@ -401,8 +452,11 @@ def box_overlap(a: Box, b: Box, state_a: np.ndarray, state_b: np.ndarray) -> np.
     d = (state_b[..., layout.X] - state_a[..., layout.X], state_b[..., layout.Y] - state_a[..., layout.Y])
     depth = np.full(np.shape(d[0]), np.inf)
     for axis in (*axes_of[id(a)], *axes_of[id(b)]):
-        reach = sum(h * np.abs(axis[0] * u[0] + axis[1] * u[1])
-                    for box in (a, b) for h, u in zip(half[id(box)], axes_of[id(box)], strict=True))
+        reach = sum(
+            h * np.abs(axis[0] * u[0] + axis[1] * u[1])
+            for box in (a, b)
+            for h, u in zip(half[id(box)], axes_of[id(box)], strict=True)
+        )
         depth = np.minimum(depth, reach - np.abs(axis[0] * d[0] + axis[1] * d[1]))
     return np.maximum(depth, 0.0)
 
@@ -446,9 +500,13 @@ def body_impact(speed: float, onto_floor: bool, **scene) -> Scene:
     reach_x = 0.5 * size["length"] * math.cos(angle) + 0.5 * size["width"] * math.sin(angle)
     reach_y = 0.5 * size["length"] * math.sin(angle) + 0.5 * size["width"] * math.cos(angle)
     if onto_floor:
-        boxes = (Box(**size, position=(0.0, 0.5 * size["width"])),
-                 Box(**size, position=(0.05, size["width"] + 0.5 + reach_y), angle=angle, velocity=(0.0, -speed)))
+        boxes = (
+            Box(**size, position=(0.0, 0.5 * size["width"])),
+            Box(**size, position=(0.05, size["width"] + 0.5 + reach_y), angle=angle, velocity=(0.0, -speed)),
+        )
         return Scene(boxes=boxes, boxes_collide=True, **{**material, "dt": 1 / 256, **scene})
-    boxes = (Box(**size, position=(-0.5 - reach_x - 0.5 * size["length"], 10.0), angle=angle, velocity=(speed, 0.0)),
-             Box(**size, position=(0.0, 10.05)))
+    boxes = (
+        Box(**size, position=(-0.5 - reach_x - 0.5 * size["length"], 10.0), angle=angle, velocity=(speed, 0.0)),
+        Box(**size, position=(0.0, 10.05)),
+    )
     return Scene(boxes=boxes, boxes_collide=True, **{**material, "gravity": 0.0, "dt": 1 / 256, **scene})

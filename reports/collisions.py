@@ -119,8 +119,9 @@ def angular_momentum(scene: Scene, states: np.ndarray) -> np.ndarray:
     velocity = np.einsum("n,...nk->...k", mass, states[..., 3:5]) / total
     r = states[..., 0:2] - centre[..., None, :]
     v = states[..., 3:5] - velocity[..., None, :]
-    return np.einsum("n,...n->...", mass, r[..., 0] * v[..., 1] - r[..., 1] * v[..., 0]) + \
-        np.einsum("n,...n->...", inertia, states[..., 5])
+    return np.einsum("n,...n->...", mass, r[..., 0] * v[..., 1] - r[..., 1] * v[..., 0]) + np.einsum(
+        "n,...n->...", inertia, states[..., 5]
+    )
 
 
 def relative_kinetic_energy(scene: Scene, states: np.ndarray) -> np.ndarray:
@@ -135,8 +136,9 @@ def kinetic_energy(scene: Scene, states: np.ndarray) -> np.ndarray:
     """(...,) 0.5 m |v|^2 + 0.5 I w^2 summed over the boxes [J]."""
     mass = np.array([box.mass for box in scene.boxes])
     inertia = np.array([box.inertia for box in scene.boxes])
-    return 0.5 * (np.einsum("n,...nk->...", mass, states[..., 3:5] ** 2) + np.einsum("n,...n->...", inertia,
-                                                                                      states[..., 5] ** 2))
+    return 0.5 * (
+        np.einsum("n,...nk->...", mass, states[..., 3:5] ** 2) + np.einsum("n,...n->...", inertia, states[..., 5] ** 2)
+    )
 
 
 @dataclass(frozen=True)
@@ -174,9 +176,11 @@ class Stack(CollisionScene):
         start = states[0]
         sink = float(start[-1, 1] - final[-1, 1])
         moves = pose_moves(final[None], start, radius)[0]
-        return Outcome({"drift after 1 s [m]": drift, "top sinks [m]": sink, "largest move from start [m]":
-                        float(moves.max())}, moves_vector(final, radius),
-                       checks={"rests (drift < 1 mm)": drift < REST_DRIFT_MAX})
+        return Outcome(
+            {"drift after 1 s [m]": drift, "top sinks [m]": sink, "largest move from start [m]": float(moves.max())},
+            moves_vector(final, radius),
+            checks={"rests (drift < 1 mm)": drift < REST_DRIFT_MAX},
+        )
 
     def distance(self, a, b):
         return largest_pose_difference(a.compared, b.compared)
@@ -189,11 +193,15 @@ class Pyramid(CollisionScene):
         settle = min(int(round(SETTLE_TIME / scene.dt)), states.shape[0] - 1)
         moves = pose_moves(states[-1][None], states[0], radius)[0]
         holds = bool(moves.max() <= HOLD_MOVE_MAX)
-        top_drift = float(pose_moves(states[settle:, top:top + 1], states[settle, top:top + 1], radius[top:top + 1])
-                          .max())
-        return Outcome({"largest move from start [m]": float(moves.max()), "top drift after 1 s [m]": top_drift},
-                       moves_vector(states[-1], radius)[top:top + 1], label="holds" if holds else "falls",
-                       checks={"holds (no box moves > 2 cm)": holds})
+        top_drift = float(
+            pose_moves(states[settle:, top : top + 1], states[settle, top : top + 1], radius[top : top + 1]).max()
+        )
+        return Outcome(
+            {"largest move from start [m]": float(moves.max()), "top drift after 1 s [m]": top_drift},
+            moves_vector(states[-1], radius)[top : top + 1],
+            label="holds" if holds else "falls",
+            checks={"holds (no box moves > 2 cm)": holds},
+        )
 
     def distance(self, a, b):
         return math.inf if a.label != b.label else largest_pose_difference(a.compared, b.compared)
@@ -205,9 +213,12 @@ class DropOnBox(CollisionScene):
         x, y, angle = states[-1, dropped, :3]
         face = face_down(float(angle))
         speed = float(np.abs(states[-1, :, 3:5]).max())
-        return Outcome({"rest x [m]": float(x), "rest y [m]": float(y), "face down": face,
-                        "largest final speed [m/s]": speed}, np.array([x, y]), label=f"face {face}",
-                       checks={"at rest (< 1 cm/s)": speed < 0.01})
+        return Outcome(
+            {"rest x [m]": float(x), "rest y [m]": float(y), "face down": face, "largest final speed [m/s]": speed},
+            np.array([x, y]),
+            label=f"face {face}",
+            checks={"at rest (< 1 cm/s)": speed < 0.01},
+        )
 
     def distance(self, a, b):
         return math.inf if a.label != b.label else float(np.hypot(*(a.compared - b.compared)))
@@ -228,12 +239,21 @@ class FlightCollision(CollisionScene):
         gain = float((relative - relative[0]).max() / relative[0])
         final = states[-1]
         velocity = np.concatenate([final[:, 3:5], (body_radius(scene) * final[:, 5])[:, None]], axis=1)
-        return Outcome({"momentum error (rel.)": p_error, "angular momentum error (rel.)": l_error,
-                        "energy gain (rel.)": max(gain, 0.0), "energy kept": float(relative[-1] / relative[0]),
-                        "final vx per box [m/s]": tuple(final[:, 3])},
-                       velocity, checks={"momentum kept to 1e-9": p_error <= KEPT_TO,
-                                         "angular momentum kept to 1e-9": l_error <= KEPT_TO,
-                                         "no energy gain": gain <= KEPT_TO})
+        return Outcome(
+            {
+                "momentum error (rel.)": p_error,
+                "angular momentum error (rel.)": l_error,
+                "energy gain (rel.)": max(gain, 0.0),
+                "energy kept": float(relative[-1] / relative[0]),
+                "final vx per box [m/s]": tuple(final[:, 3]),
+            },
+            velocity,
+            checks={
+                "momentum kept to 1e-9": p_error <= KEPT_TO,
+                "angular momentum kept to 1e-9": l_error <= KEPT_TO,
+                "no energy gain": gain <= KEPT_TO,
+            },
+        )
 
 
 class NewtonRow(CollisionScene):
@@ -243,10 +263,18 @@ class NewtonRow(CollisionScene):
         p = momentum(scene, states)
         p_error = float(np.abs(p[-1, 0] - p[0, 0]) / max(abs(p[0, 0]), 1e-300))
         ke = kinetic_energy(scene, states)
-        return Outcome({"final vx per box [m/s]": tuple(vx), "momentum error (rel.)": p_error,
-                        "kinetic energy kept": float(ke[-1] / ke[0])}, vx,
-                       checks={"momentum kept to 1e-9": p_error <= KEPT_TO,
-                               "last box leaves at v0 (within 1%)": abs(vx[-1] - v0) <= 0.01 * abs(v0)})
+        return Outcome(
+            {
+                "final vx per box [m/s]": tuple(vx),
+                "momentum error (rel.)": p_error,
+                "kinetic energy kept": float(ke[-1] / ke[0]),
+            },
+            vx,
+            checks={
+                "momentum kept to 1e-9": p_error <= KEPT_TO,
+                "last box leaves at v0 (within 1%)": abs(vx[-1] - v0) <= 0.01 * abs(v0),
+            },
+        )
 
 
 def moves_vector(final: np.ndarray, radius: np.ndarray) -> np.ndarray:
@@ -262,17 +290,56 @@ def largest_pose_difference(a: np.ndarray, b: np.ndarray) -> float:
 def collision_scenes() -> tuple[CollisionScene, ...]:
     """The report's scenes, each the named scene of ``box_toss_env.physics.scenes``."""
     return (
-        Stack("stack", "Stack of 10", lambda: scene_of("stack", n=10), 60.0, 5.0,
-              "final pose of every box (|dx| + R |da|, largest over the boxes)", 5e-3, "m"),
-        Pyramid("pyramid", "Pyramid of 15", lambda: scene_of("pyramid", rows=5), 20.0, 3.0,
-                "whether it holds, then the top box's final pose", 5e-3, "m"),
-        DropOnBox("drop_on_box", "Box dropped on a box", lambda: scene_of("drop_on_box"), 5.0, 3.0,
-                  "the dropped box's face down, then its rest position", 0.02, "m"),
-        FlightCollision("flight_collision", "Collision in flight", lambda: scene_of("flight_collision"), 0.5, 0.5,
-                        "every box's velocity after the collision (|dv| + R |dw|, largest over the boxes)", 0.01,
-                        "m/s"),
-        NewtonRow("newton_row", "Newton row of 5 (e = 1, mu = 0)", lambda: scene_of("newton_row", n=5), 2.0, 2.0,
-                  "every box's final vx", 0.05, "m/s"),
+        Stack(
+            "stack",
+            "Stack of 10",
+            lambda: scene_of("stack", n=10),
+            60.0,
+            5.0,
+            "final pose of every box (|dx| + R |da|, largest over the boxes)",
+            5e-3,
+            "m",
+        ),
+        Pyramid(
+            "pyramid",
+            "Pyramid of 15",
+            lambda: scene_of("pyramid", rows=5),
+            20.0,
+            3.0,
+            "whether it holds, then the top box's final pose",
+            5e-3,
+            "m",
+        ),
+        DropOnBox(
+            "drop_on_box",
+            "Box dropped on a box",
+            lambda: scene_of("drop_on_box"),
+            5.0,
+            3.0,
+            "the dropped box's face down, then its rest position",
+            0.02,
+            "m",
+        ),
+        FlightCollision(
+            "flight_collision",
+            "Collision in flight",
+            lambda: scene_of("flight_collision"),
+            0.5,
+            0.5,
+            "every box's velocity after the collision (|dv| + R |dw|, largest over the boxes)",
+            0.01,
+            "m/s",
+        ),
+        NewtonRow(
+            "newton_row",
+            "Newton row of 5 (e = 1, mu = 0)",
+            lambda: scene_of("newton_row", n=5),
+            2.0,
+            2.0,
+            "every box's final vx",
+            0.05,
+            "m/s",
+        ),
     )
 
 
@@ -313,7 +380,7 @@ class CollisionReport:
         return next(r for r in self.results if r.spec.name == name)
 
     def pairs(self) -> list[tuple[str, str]]:
-        return [(a, b) for i, a in enumerate(self.methods) for b in self.methods[i + 1:]]
+        return [(a, b) for i, a in enumerate(self.methods) for b in self.methods[i + 1 :]]
 
 
 def run_scene(spec: CollisionScene, methods, quick: bool, log=print) -> SceneResult:
@@ -359,8 +426,11 @@ def method_table(result: SceneResult, methods) -> str:
         if outcome is None:
             rows.append([method] + [run.problem] + [""] * (len(names) + len(checks) - 1))
             continue
-        rows.append([method] + [value_text(outcome.values[n]) for n in names]
-                    + [("pass" if outcome.checks[c] else "**FAIL**") for c in checks])
+        rows.append(
+            [method]
+            + [value_text(outcome.values[n]) for n in names]
+            + [("pass" if outcome.checks[c] else "**FAIL**") for c in checks]
+        )
     if not names and not checks:
         return table(["method", "result"], [[m, result.runs[m].problem] for m in methods])
     return table(["method"] + names + checks, rows)
@@ -403,15 +473,17 @@ def checks_table(report: CollisionReport) -> str:
 
 
 def settings_text() -> str:
-    return ("Our engine runs each scene as it is defined in `box_toss_env/physics/scenes.py` (its dt, material, "
-            "penalty stiffness and thresholds), once per solver. pymunk and Box2D run the same boxes, material, dt "
-            "and gravity through `benchmarks/other_scenes.py`, with their documented defaults otherwise: pymunk "
-            "10 iterations, no sleeping, collision slop 1 mm (its default 0.1 is meant for pixels), every shape "
-            "sqrt(e) and sqrt(mu) so that every pair multiplies back to e and mu; Box2D 2.3 (float32) 8 velocity and "
-            "3 position iterations, sleeping on, boxes not bullets, 1 cm polygon skin (the polygon is the box shrunk "
-            "by it, the floor edge 1 cm low), restitution only above 1 m/s of approach, up to 5 mm of overlap left "
-            "per contact. Neither has a counterpart to our penalty stiffness, restitution threshold or sleep "
-            "settings.")
+    return (
+        "Our engine runs each scene as it is defined in `box_toss_env/physics/scenes.py` (its dt, material, "
+        "penalty stiffness and thresholds), once per solver. pymunk and Box2D run the same boxes, material, dt "
+        "and gravity through `benchmarks/other_scenes.py`, with their documented defaults otherwise: pymunk "
+        "10 iterations, no sleeping, collision slop 1 mm (its default 0.1 is meant for pixels), every shape "
+        "sqrt(e) and sqrt(mu) so that every pair multiplies back to e and mu; Box2D 2.3 (float32) 8 velocity and "
+        "3 position iterations, sleeping on, boxes not bullets, 1 cm polygon skin (the polygon is the box shrunk "
+        "by it, the floor edge 1 cm low), restitution only above 1 m/s of approach, up to 5 mm of overlap left "
+        "per contact. Neither has a counterpart to our penalty stiffness, restitution threshold or sleep "
+        "settings."
+    )
 
 
 def markdown(report: CollisionReport) -> str:
@@ -425,7 +497,8 @@ def markdown(report: CollisionReport) -> str:
         "## What is compared",
         "",
         f"Methods: {', '.join(report.methods)}"
-        + (f"; not installed, so not shown: {', '.join(report.missing)}" if report.missing else "") + ". "
+        + (f"; not installed, so not shown: {', '.join(report.missing)}" if report.missing else "")
+        + ". "
         + settings_text(),
         "",
         "Two methods agree on a scene when the distance between their outcomes is at most the scene's tolerance; "
@@ -453,9 +526,15 @@ def markdown(report: CollisionReport) -> str:
         if result.scene is None:
             parts += [result.problem, ""]
             continue
-        parts += [f"`scenes.{spec.name}`: {describe_scene(result.scene)}; {duration:g} s. Compared: "
-                  f"{spec.outcome_text}; tolerance {sci(spec.tolerance)} {spec.unit}.", "",
-                  method_table(result, report.methods), "", agreement_matrix(result, report.methods), ""]
+        parts += [
+            f"`scenes.{spec.name}`: {describe_scene(result.scene)}; {duration:g} s. Compared: "
+            f"{spec.outcome_text}; tolerance {sci(spec.tolerance)} {spec.unit}.",
+            "",
+            method_table(result, report.methods),
+            "",
+            agreement_matrix(result, report.methods),
+            "",
+        ]
     return "\n".join(parts)
 
 
@@ -467,31 +546,44 @@ def explanations(report: CollisionReport) -> str:
     if row.scene is not None:
         v0 = max(abs(box.velocity[0]) for box in row.scene.boxes)
         if v0 <= BOX2D_RESTITUTION_THRESHOLD:
-            lines.append(f"- Newton row, Box2D: the first box arrives at {v0:g} m/s, not above Box2D's compiled-in "
-                         f"restitution threshold (b2_velocityThreshold = {BOX2D_RESTITUTION_THRESHOLD:g} m/s), so "
-                         "Box2D treats every impact of the row as perfectly inelastic and the boxes end moving "
-                         "together.")
+            lines.append(
+                f"- Newton row, Box2D: the first box arrives at {v0:g} m/s, not above Box2D's compiled-in "
+                f"restitution threshold (b2_velocityThreshold = {BOX2D_RESTITUTION_THRESHOLD:g} m/s), so "
+                "Box2D treats every impact of the row as perfectly inelastic and the boxes end moving "
+                "together."
+            )
     explained = {("newton_row", "box2d")} if lines else set()
     for result in report.results:
         for method in outliers(result):
             if method == "box2d" and (result.spec.name, method) not in explained:
-                lines.append(f"- {result.spec.title}, Box2D against the rest: its boxes have corners rounded to 1 cm "
-                             "(the polygon skin), so a corner-first contact has its point and normal off a sharp "
-                             "corner's (the difference shrinks in proportion when the scene is scaled up).")
+                lines.append(
+                    f"- {result.spec.title}, Box2D against the rest: its boxes have corners rounded to 1 cm "
+                    "(the polygon skin), so a corner-first contact has its point and normal off a sharp "
+                    "corner's (the difference shrinks in proportion when the scene is scaled up)."
+                )
             elif (result.spec.name, method) not in explained:
                 others = [m for m in IMPULSE_METHODS if m != method]
-                lines.append(f"- {result.spec.title}: {method} differs from {' and '.join(others)}, which agree with "
-                             "each other; no known cause.")
+                lines.append(
+                    f"- {result.spec.title}: {method} differs from {' and '.join(others)}, which agree with "
+                    "each other; no known cause."
+                )
     stack = report.result("stack")
     if "pymunk" in stack.outcomes and not all(stack.outcomes["pymunk"].checks.values()):
-        lines.append(f"- Stack, pymunk: with its default {PYMUNK_ITERATIONS} solver iterations a stack of "
-                     f"{stack.scene.n_bodies} is still settling after {SETTLE_TIME:g} s (it sinks by up to its 1 mm "
-                     "collision slop per contact and shifts sideways meanwhile); more iterations settle it sooner.")
-    seed_failed = [r.spec.title for r in report.results if "seed" in r.runs
-                   and ("seed" not in r.outcomes or not all(r.outcomes["seed"].checks.values()))]
+        lines.append(
+            f"- Stack, pymunk: with its default {PYMUNK_ITERATIONS} solver iterations a stack of "
+            f"{stack.scene.n_bodies} is still settling after {SETTLE_TIME:g} s (it sinks by up to its 1 mm "
+            "collision slop per contact and shifts sideways meanwhile); more iterations settle it sooner."
+        )
+    seed_failed = [
+        r.spec.title
+        for r in report.results
+        if "seed" in r.runs and ("seed" not in r.outcomes or not all(r.outcomes["seed"].checks.values()))
+    ]
     if seed_failed:
-        lines.append(f"- The seed scheme (the text's formulas, extended to pairs of boxes) fails the checks of: "
-                     f"{', '.join(seed_failed)} (see `docs/stability.md` for where its explicit scheme holds).")
+        lines.append(
+            f"- The seed scheme (the text's formulas, extended to pairs of boxes) fails the checks of: "
+            f"{', '.join(seed_failed)} (see `docs/stability.md` for where its explicit scheme holds)."
+        )
     return "\n".join(lines)
 
 
@@ -511,21 +603,25 @@ def outliers(result: SceneResult) -> list[str]:
 def describe_scene(scene: Scene) -> str:
     sizes = sorted({(b.length, b.width) for b in scene.boxes})
     masses = sorted({b.mass for b in scene.boxes})
-    return (f"{scene.n_bodies} boxes of {', '.join(f'{a:g} x {b:g} m' for a, b in sizes)}, "
-            f"{', '.join(f'{m:g}' for m in masses)} kg, e {scene.restitution:g}, mu {scene.friction:g}, "
-            f"dt {scene.dt:.6g} s, g {scene.gravity:g} m/s^2")
+    return (
+        f"{scene.n_bodies} boxes of {', '.join(f'{a:g} x {b:g} m' for a, b in sizes)}, "
+        f"{', '.join(f'{m:g}' for m in masses)} kg, e {scene.restitution:g}, mu {scene.friction:g}, "
+        f"dt {scene.dt:.6g} s, g {scene.gravity:g} m/s^2"
+    )
 
 
 def readme_block(report: CollisionReport) -> str:
-    return "\n".join([
-        f"**Boxes that collide** (`docs/collisions.md`): `python -m reports.collisions` "
-        f"({report.run_seconds / 60:.1f} min on {document.machine().split(',')[1].strip()}, {report.load}; "
-        "`--quick` for the reduced version the tests run). The named multi-box scenes in our two solvers, pymunk "
-        "and Box2D; a cell is the distance between two methods' outcomes and whether it is within the scene's "
-        "tolerance:",
-        "",
-        summary_table(report),
-    ])
+    return "\n".join(
+        [
+            f"**Boxes that collide** (`docs/collisions.md`): `python -m reports.collisions` "
+            f"({report.run_seconds / 60:.1f} min on {document.machine().split(',')[1].strip()}, {report.load}; "
+            "`--quick` for the reduced version the tests run). The named multi-box scenes in our two solvers, pymunk "
+            "and Box2D; a cell is the distance between two methods' outcomes and whether it is within the scene's "
+            "tolerance:",
+            "",
+            summary_table(report),
+        ]
+    )
 
 
 def write_report(report: CollisionReport, out: Path, readme: Path | None = None) -> Path:

@@ -70,8 +70,10 @@ def machine() -> str:
     import numba
     import numpy
 
-    return (f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-            f"Python {platform.python_version()}, numpy {numpy.__version__}, numba {numba.__version__}")
+    return (
+        f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+        f"Python {platform.python_version()}, numpy {numpy.__version__}, numba {numba.__version__}"
+    )
 
 
 def load() -> str:
@@ -101,9 +103,13 @@ def update_readme(name: str, body: str, readme: Path = README) -> None:
     if SECTION_START not in text or SECTION_END not in text:
         text = text.rstrip("\n") + f"\n\n{SECTION_START}\n{SECTION_END}\n"
     start, end = text.index(SECTION_START), text.index(SECTION_END)
-    section = text[start + len(SECTION_START):end]
-    blocks = {match[0]: match[1] for match in
-              re.findall(r"<!-- reports:(\w+):start -->\n(.*?)\n<!-- reports:\1:end -->", section, flags=re.DOTALL)}
+    section = text[start + len(SECTION_START) : end]
+    blocks = {
+        match[0]: match[1]
+        for match in re.findall(
+            r"<!-- reports:(\w+):start -->\n(.*?)\n<!-- reports:\1:end -->", section, flags=re.DOTALL
+        )
+    }
     blocks[name] = body.strip()
     names = [n for n in BLOCK_ORDER if n in blocks] + sorted(n for n in blocks if n not in BLOCK_ORDER)
     inner = "\n".join(f"<!-- reports:{n}:start -->\n{blocks[n]}\n<!-- reports:{n}:end -->" for n in names)
@@ -115,9 +121,13 @@ def report_command(name: str, doc: str, run, write_report, argv=None) -> int:
     tests do) and write it to docs/ (and its block of docs/reports.md) or to ``--out``."""
     parser = argparse.ArgumentParser(prog=f"python -m reports.{name}", description=doc.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="a few points of each part (what the tests run)")
-    parser.add_argument("--out", type=Path, default=None,
-                        help=f"output folder (default: docs/, or {QUICK_OUT.relative_to(REPO)} with --quick); the "
-                             "section of docs/reports.md is rewritten only for the full report written to docs/")
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        help=f"output folder (default: docs/, or {QUICK_OUT.relative_to(REPO)} with --quick); the "
+        "section of docs/reports.md is rewritten only for the full report written to docs/",
+    )
     args = parser.parse_args(argv)
     out = args.out or (QUICK_OUT if args.quick else DOCS)
     report = run(quick=args.quick)

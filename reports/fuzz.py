@@ -72,21 +72,23 @@ def log_uniform(st, low: float, high: float):
 def engine_strategy():
     from hypothesis import strategies as st
 
-    return st.fixed_dictionaries({
-        "length": log_uniform(st, *DECLARED["length"]),
-        "aspect": log_uniform(st, *DECLARED["aspect"]),
-        "mass": log_uniform(st, *DECLARED["mass"]),
-        "height": st.floats(0.0, 3.0),  # [m] of the centre above the corner radius
-        "x": st.floats(-DECLARED["distance"][1], DECLARED["distance"][1]),
-        "angle": st.floats(-math.pi, math.pi),
-        "speed": st.floats(*DECLARED["speed"]),
-        "direction": st.floats(-math.pi, math.pi),
-        "spin": st.floats(-DECLARED["spin"][1], DECLARED["spin"][1]),
-        "restitution": st.floats(*DECLARED["restitution"]),
-        "friction": st.floats(*DECLARED["friction"]),
-        "penalty_stiffness": log_uniform(st, *DECLARED["penalty_stiffness"]),
-        "dt": log_uniform(st, *DECLARED["dt"]),
-    })
+    return st.fixed_dictionaries(
+        {
+            "length": log_uniform(st, *DECLARED["length"]),
+            "aspect": log_uniform(st, *DECLARED["aspect"]),
+            "mass": log_uniform(st, *DECLARED["mass"]),
+            "height": st.floats(0.0, 3.0),  # [m] of the centre above the corner radius
+            "x": st.floats(-DECLARED["distance"][1], DECLARED["distance"][1]),
+            "angle": st.floats(-math.pi, math.pi),
+            "speed": st.floats(*DECLARED["speed"]),
+            "direction": st.floats(-math.pi, math.pi),
+            "spin": st.floats(-DECLARED["spin"][1], DECLARED["spin"][1]),
+            "restitution": st.floats(*DECLARED["restitution"]),
+            "friction": st.floats(*DECLARED["friction"]),
+            "penalty_stiffness": log_uniform(st, *DECLARED["penalty_stiffness"]),
+            "dt": log_uniform(st, *DECLARED["dt"]),
+        }
+    )
 
 
 def engine_scene(example: dict, solver: str = "robust") -> Scene:
@@ -96,12 +98,24 @@ def engine_scene(example: dict, solver: str = "robust") -> Scene:
     radius = 0.5 * math.hypot(example["length"], width)
     fall = math.sqrt(2.0 * GRAVITY * (example["height"] + radius))
     launch = math.sqrt(max(example["speed"] ** 2 - fall**2, 0.0))
-    box = Box(length=example["length"], width=width, mass=example["mass"],
-              position=(example["x"], radius + example["height"]), angle=example["angle"],
-              velocity=(launch * math.cos(example["direction"]), launch * math.sin(example["direction"])),
-              spin=example["spin"])
-    return Scene(boxes=(box,), dt=example["dt"], gravity=-GRAVITY, restitution=example["restitution"],
-                 friction=example["friction"], penalty_stiffness=example["penalty_stiffness"], solver=solver)
+    box = Box(
+        length=example["length"],
+        width=width,
+        mass=example["mass"],
+        position=(example["x"], radius + example["height"]),
+        angle=example["angle"],
+        velocity=(launch * math.cos(example["direction"]), launch * math.sin(example["direction"])),
+        spin=example["spin"],
+    )
+    return Scene(
+        boxes=(box,),
+        dt=example["dt"],
+        gravity=-GRAVITY,
+        restitution=example["restitution"],
+        friction=example["friction"],
+        penalty_stiffness=example["penalty_stiffness"],
+        solver=solver,
+    )
 
 
 def check_engine(example: dict, duration: float, solver: str = "robust") -> list[str]:
@@ -122,8 +136,9 @@ def check_engine(example: dict, duration: float, solver: str = "robust") -> list
     if depth >= PENETRATION_SHARE * min(box.length, box.width):
         problems.append(f"penetration {depth:.3g} m >= {PENETRATION_SHARE:g} of the smaller side")
     speed_squared = states[:, 3] ** 2 + states[:, 4] ** 2
-    energy = (0.5 * box.mass * speed_squared + 0.5 * box.inertia * states[:, 5] ** 2
-              - box.mass * scene.gravity * states[:, 1])
+    energy = (
+        0.5 * box.mass * speed_squared + 0.5 * box.inertia * states[:, 5] ** 2 - box.mass * scene.gravity * states[:, 1]
+    )
     # a step may gain rounding, and the potential energy of pushing out what penetrated (less than m g depth)
     gain = float(np.diff(energy).max(initial=0.0))
     if gain > ENERGY_ROUNDING * energy[0] + box.mass * GRAVITY * depth:
@@ -148,21 +163,42 @@ def env_declared_strategy(profile: Profile):
     def kwargs(d):
         width = d["length"] / d["aspect"]
         radius = 0.5 * math.hypot(d["length"], width)
-        return {"box_length": d["length"], "box_width": width, "mass": d["mass"], "friction": d["friction"],
-                "restitution": d["restitution"], "penalty_stiffness": d["penalty_stiffness"], "dt": d["dt"],
-                "release_height_range": (radius + 0.01, radius + 0.01 + d["height"]),
-                "release_x_range": (d["x"], d["x"]), "target_x_range": (d["x"], d["x"] + 4.0),
-                "max_speed": d["max_speed"], "max_spin": d["max_spin"], "solver": "robust",
-                "max_sim_time": min(profile.env_max_sim_time, profile.env_max_steps * d["dt"])}
+        return {
+            "box_length": d["length"],
+            "box_width": width,
+            "mass": d["mass"],
+            "friction": d["friction"],
+            "restitution": d["restitution"],
+            "penalty_stiffness": d["penalty_stiffness"],
+            "dt": d["dt"],
+            "release_height_range": (radius + 0.01, radius + 0.01 + d["height"]),
+            "release_x_range": (d["x"], d["x"]),
+            "target_x_range": (d["x"], d["x"] + 4.0),
+            "max_speed": d["max_speed"],
+            "max_spin": d["max_spin"],
+            "solver": "robust",
+            "max_sim_time": min(profile.env_max_sim_time, profile.env_max_steps * d["dt"]),
+        }
 
-    return st.tuples(st.fixed_dictionaries({
-        "length": log_uniform(st, *DECLARED["length"]), "aspect": log_uniform(st, *DECLARED["aspect"]),
-        "mass": log_uniform(st, *DECLARED["mass"]), "friction": st.floats(*DECLARED["friction"]),
-        "restitution": st.floats(*DECLARED["restitution"]),
-        "penalty_stiffness": log_uniform(st, *DECLARED["penalty_stiffness"]), "dt": log_uniform(st, *DECLARED["dt"]),
-        "height": st.floats(0.0, 3.0), "x": st.floats(-996.0, 996.0),
-        "max_speed": st.floats(1.0, 150.0), "max_spin": st.floats(0.0, DECLARED["spin"][1]),
-    }).map(kwargs), st.integers(0, 2**31 - 1), st.lists(st.floats(-1.0, 1.0), min_size=3, max_size=3))
+    return st.tuples(
+        st.fixed_dictionaries(
+            {
+                "length": log_uniform(st, *DECLARED["length"]),
+                "aspect": log_uniform(st, *DECLARED["aspect"]),
+                "mass": log_uniform(st, *DECLARED["mass"]),
+                "friction": st.floats(*DECLARED["friction"]),
+                "restitution": st.floats(*DECLARED["restitution"]),
+                "penalty_stiffness": log_uniform(st, *DECLARED["penalty_stiffness"]),
+                "dt": log_uniform(st, *DECLARED["dt"]),
+                "height": st.floats(0.0, 3.0),
+                "x": st.floats(-996.0, 996.0),
+                "max_speed": st.floats(1.0, 150.0),
+                "max_spin": st.floats(0.0, DECLARED["spin"][1]),
+            }
+        ).map(kwargs),
+        st.integers(0, 2**31 - 1),
+        st.lists(st.floats(-1.0, 1.0), min_size=3, max_size=3),
+    )
 
 
 def env_accepted_strategy(profile: Profile):
@@ -185,27 +221,43 @@ def env_accepted_strategy(profile: Profile):
         if low_height <= radius:  # a box too big to be released under the highest allowed height
             low_height = math.nextafter(radius, math.inf)
         d = dict(d)
-        d["release_height_range"] = (low_height, min(low_height * (1.0 + d.pop("height_span")),
-                                                     ranges["release_height_range"].high))
+        d["release_height_range"] = (
+            low_height,
+            min(low_height * (1.0 + d.pop("height_span")), ranges["release_height_range"].high),
+        )
         d.pop("clearance")
         d["max_sim_time"] = min(d["max_sim_time"], profile.env_max_steps * d["dt"])
         return d
 
-    return st.tuples(st.fixed_dictionaries({
-        "box_length": positive("box_length"), "box_width": positive("box_width"), "mass": positive("mass"),
-        "friction": st.floats(ranges["friction"].low, ranges["friction"].high),
-        "restitution": st.floats(0.0, 1.0),
-        "penalty_stiffness": st.one_of(st.just(0.0), log_uniform(st, 1e-3, 1e15)),
-        "gravity": positive("gravity"),
-        "release_x_range": pair("release_x_range", ranges["release_x_range"].low, ranges["release_x_range"].high),
-        "release_angle_range": pair("release_angle_range", -math.pi, math.pi),
-        "target_x_range": pair("target_x_range", ranges["target_x_range"].low, ranges["target_x_range"].high),
-        "launch_angle_range": pair("launch_angle_range", -math.pi, math.pi),
-        "max_speed": positive("max_speed", 1e-3), "max_spin": st.floats(0.0, ranges["max_spin"].high),
-        "dt": positive("dt"), "max_sim_time": positive("max_sim_time", 1e-3),
-        "clearance": st.floats(1e-6, 10.0), "height_span": st.floats(0.0, 10.0),
-        "target_face": st.sampled_from(task.TARGET_FACE_KINDS), "solver": st.sampled_from(("robust", "seed")),
-    }).map(kwargs), st.integers(0, 2**31 - 1), st.lists(st.floats(-1.0, 1.0), min_size=3, max_size=3))
+    return st.tuples(
+        st.fixed_dictionaries(
+            {
+                "box_length": positive("box_length"),
+                "box_width": positive("box_width"),
+                "mass": positive("mass"),
+                "friction": st.floats(ranges["friction"].low, ranges["friction"].high),
+                "restitution": st.floats(0.0, 1.0),
+                "penalty_stiffness": st.one_of(st.just(0.0), log_uniform(st, 1e-3, 1e15)),
+                "gravity": positive("gravity"),
+                "release_x_range": pair(
+                    "release_x_range", ranges["release_x_range"].low, ranges["release_x_range"].high
+                ),
+                "release_angle_range": pair("release_angle_range", -math.pi, math.pi),
+                "target_x_range": pair("target_x_range", ranges["target_x_range"].low, ranges["target_x_range"].high),
+                "launch_angle_range": pair("launch_angle_range", -math.pi, math.pi),
+                "max_speed": positive("max_speed", 1e-3),
+                "max_spin": st.floats(0.0, ranges["max_spin"].high),
+                "dt": positive("dt"),
+                "max_sim_time": positive("max_sim_time", 1e-3),
+                "clearance": st.floats(1e-6, 10.0),
+                "height_span": st.floats(0.0, 10.0),
+                "target_face": st.sampled_from(task.TARGET_FACE_KINDS),
+                "solver": st.sampled_from(("robust", "seed")),
+            }
+        ).map(kwargs),
+        st.integers(0, 2**31 - 1),
+        st.lists(st.floats(-1.0, 1.0), min_size=3, max_size=3),
+    )
 
 
 def throw_once(kwargs: dict, seed: int, action) -> tuple[object, object, dict]:
@@ -310,8 +362,15 @@ def draw_examples(strategy, count: int) -> list:
 
     # a fixed seed, not derandomize=True: a derandomized run draws differently after other hypothesis runs in
     # the same process (measured), a seeded one does not
-    seed(FUZZ_SEED)(settings(max_examples=count, database=None, deadline=None, phases=[Phase.generate],
-                             suppress_health_check=list(HealthCheck))(given(strategy)(keep)))()
+    seed(FUZZ_SEED)(
+        settings(
+            max_examples=count,
+            database=None,
+            deadline=None,
+            phases=[Phase.generate],
+            suppress_health_check=list(HealthCheck),
+        )(given(strategy)(keep))
+    )()
     return drawn
 
 

@@ -32,8 +32,7 @@ RESOLVE_SHARE = 0.1  # a reference resolves the criterion where halving its step
 ORDER_GOAL, ORDER_GOAL_SHARE = 1.0, 0.95  # landings converge: per-throw order of landing x >= 1 on >= 95% of throws
 ORDER_FLOOR_FACTOR = 10.0  # a landing error below 10 times the reference's own half-step change is not fitted
 ORDER_FLOOR = 1e-9  # [m] nor one below this
-COLORS = {"seed": "tab:red", "robust": "tab:blue", "pymunk": "tab:green", "box2d": "tab:orange",
-          "mujoco": "tab:purple"}
+COLORS = {"seed": "tab:red", "robust": "tab:blue", "pymunk": "tab:green", "box2d": "tab:orange", "mujoco": "tab:purple"}
 
 
 # -- 1. exact-answer cases ---------------------------------------------------------------------------
@@ -126,5 +125,3 @@ def fit_order(points: list[Point]) -> float:
         return math.nan
     dts, errors = np.array(valid).T
     return float(np.polyfit(np.log(dts), np.log(errors), 1)[0])
-
-

@@ -91,8 +91,12 @@ class Setting:
         percentile landing errors <= 1 cm and <= 1 degree."""
         if not self.decidable:
             return False
-        return (not self.failed.any() and self.judged_face_agreement >= FACE_AGREEMENT_MIN
-                and self.judged("position") <= POSITION_ERROR_MAX and self.judged("angle") <= ANGLE_ERROR_MAX)
+        return (
+            not self.failed.any()
+            and self.judged_face_agreement >= FACE_AGREEMENT_MIN
+            and self.judged("position") <= POSITION_ERROR_MAX
+            and self.judged("angle") <= ANGLE_ERROR_MAX
+        )
 
 
 @dataclass
@@ -117,8 +121,14 @@ class Reference:
 def measure_setting(throws: Throws, solver: str, exponent: int, repeats: int, budget: float) -> Setting:
     run, state, stats = throws.runner(solver, dt_of(exponent), parallel=False)
     wall = best_time(run, repeats, budget)
-    return Setting(solver, exponent, wall / throws.n, state.copy(), throws.blown_up(state, stats),
-                   ~np.isnan(stats[:, layout.REST_TIME]))
+    return Setting(
+        solver,
+        exponent,
+        wall / throws.n,
+        state.copy(),
+        throws.blown_up(state, stats),
+        ~np.isnan(stats[:, layout.REST_TIME]),
+    )
 
 
 def make_reference(throws: Throws, solver: str, exponent: int, parallel: bool = True) -> Reference:
@@ -128,8 +138,19 @@ def make_reference(throws: Throws, solver: str, exponent: int, parallel: bool = 
         check, check_stats = throws.run(solver, dt_of(exponent + 1), parallel=parallel)
     position, angle, same_face = landing_differences(check, states)
     valid = same_face & ~throws.blown_up(states, stats) & ~throws.blown_up(check, check_stats)
-    return Reference(solver, exponent, states, check, np.where(valid, position, np.inf),
-                     np.where(valid, angle, np.inf), valid, valid.copy(), {}, valid.copy(), watch.seconds)
+    return Reference(
+        solver,
+        exponent,
+        states,
+        check,
+        np.where(valid, position, np.inf),
+        np.where(valid, angle, np.inf),
+        valid,
+        valid.copy(),
+        {},
+        valid.copy(),
+        watch.seconds,
+    )
 
 
 def compare(settings: list[Setting], reference: Reference) -> None:
@@ -144,10 +165,16 @@ def compare(settings: list[Setting], reference: Reference) -> None:
         errors[np.array([s.failed for s in settings]) | ~np.isfinite(errors)] = np.inf
         smallest[quantity] = np.maximum(errors.min(axis=0), ACCEPT_FLOOR[quantity])
     reference.tolerance = {quantity: 0.1 * values for quantity, values in smallest.items()}
-    reference.accepted = (reference.valid & (reference.position_change < reference.tolerance["position"])
-                          & (reference.angle_change < reference.tolerance["angle"]))
-    reference.judged = (reference.valid & (reference.position_change < RESOLVE_SHARE * POSITION_ERROR_MAX)
-                        & (reference.angle_change < RESOLVE_SHARE * ANGLE_ERROR_MAX))
+    reference.accepted = (
+        reference.valid
+        & (reference.position_change < reference.tolerance["position"])
+        & (reference.angle_change < reference.tolerance["angle"])
+    )
+    reference.judged = (
+        reference.valid
+        & (reference.position_change < RESOLVE_SHARE * POSITION_ERROR_MAX)
+        & (reference.angle_change < RESOLVE_SHARE * ANGLE_ERROR_MAX)
+    )
     for setting in settings:
         fill_errors(setting, reference, reference.accepted)
         position, angle, same_face = landing_differences(setting.states, reference.states)
@@ -209,16 +236,23 @@ class OrderSummary:
     def text(self) -> str:
         if not self.measured.size:
             return f"{self.label}: not measurable"
-        return (f"{self.label}: median {self.median:.2f}, >= 1 on {percent(self.share_at_least(1.0))}, >= 0.9 on "
-                f"{percent(self.share_at_least(0.9))} of the {self.measured.size} throws with >= 3 resolved errors")
+        return (
+            f"{self.label}: median {self.median:.2f}, >= 1 on {percent(self.share_at_least(1.0))}, >= 0.9 on "
+            f"{percent(self.share_at_least(0.9))} of the {self.measured.size} throws with >= 3 resolved errors"
+        )
 
 
 def order_summaries(settings: list[Setting], reference: Reference) -> list[OrderSummary]:
     """Per-throw orders over every step, the coarse half and the fine half of the steps."""
     half = len(settings) // 2
     parts = [("every step", settings), ("coarse half", settings[:half]), ("fine half", settings[half:])]
-    return [OrderSummary(f"{label} ({dt_label(part[0].exponent)} to {dt_label(part[-1].exponent)} s)",
-                         throw_orders(part, reference)) for label, part in parts if len(part) >= 3]
+    return [
+        OrderSummary(
+            f"{label} ({dt_label(part[0].exponent)} to {dt_label(part[-1].exponent)} s)", throw_orders(part, reference)
+        )
+        for label, part in parts
+        if len(part) >= 3
+    ]
 
 
 def measure_throws(throws: Throws, exponents, repeats: int, budget: float, parallel: bool = True, log=print):
@@ -247,8 +281,12 @@ def measure_tipping(exponents) -> dict:
 
     from .cases import tipping_box
 
-    return {(e, mu): [(k, simulate(tipping_box(e, mu, dt=dt_of(k)), duration=TIPPING_TIME).final_state[0])
-                      for k in exponents] for e, mu in TIPPING_MATERIALS}
+    return {
+        (e, mu): [
+            (k, simulate(tipping_box(e, mu, dt=dt_of(k)), duration=TIPPING_TIME).final_state[0]) for k in exponents
+        ]
+        for e, mu in TIPPING_MATERIALS
+    }
 
 
 def recommend(results) -> Setting | None:
@@ -279,14 +317,21 @@ class PrecisionReport:
         return (*SOLVERS, *self.engines)
 
     def orders(self) -> dict:
-        return {(case.name, method): fit_order(self.points_of(case.name, method))
-                for case in exact_cases() for method in self.methods}
+        return {
+            (case.name, method): fit_order(self.points_of(case.name, method))
+            for case in exact_cases()
+            for method in self.methods
+        }
 
     def throw_order(self, solver: str) -> float:
         """Fitted order of the median landing position error over every throw on the reference face."""
         settings, _ = self.throw_results[solver]
-        points = [Point("throws", solver, s.exponent, all_throws(s, 50), s.seconds_per_throw,
-                        "failed" if s.failed.any() else "") for s in settings]
+        points = [
+            Point(
+                "throws", solver, s.exponent, all_throws(s, 50), s.seconds_per_throw, "failed" if s.failed.any() else ""
+            )
+            for s in settings
+        ]
         return fit_order(points)
 
     def env_default(self) -> Setting | None:
@@ -299,5 +344,3 @@ def all_throws(setting: Setting, quantile: float) -> float:
     """A percentile of the landing position error over every throw on the reference face (nan if none)."""
     values = setting.position_errors_all
     return float(np.percentile(values, quantile)) if values.size else math.nan
-
-

@@ -53,8 +53,9 @@ class BodiesRun:
         return f"overlap {sci(self.overlap_boxes)} m between boxes, {sci(self.overlap_floor)} m into the floor"
 
 
-def run_bodies(scene: Scene, duration: float, order: Callable[[Scene, np.ndarray], np.ndarray] | None = None
-               ) -> BodiesRun:
+def run_bodies(
+    scene: Scene, duration: float, order: Callable[[Scene, np.ndarray], np.ndarray] | None = None
+) -> BodiesRun:
     """Run a scene of several boxes in one recorded call (restarting a run from its last state would wake
     sleeping boxes and drop the solver's warm start, which moves a stack) and check every grid state;
     ``order(scene, states) -> (T,) bool`` is a condition that must hold throughout (e.g. no box passed
@@ -84,8 +85,9 @@ def run_bodies(scene: Scene, duration: float, order: Callable[[Scene, np.ndarray
     run.end = states[-1].copy()
     mass = np.array([box.mass for box in scene.boxes])
     elapsed = float(result.end_time.max())
-    run.momentum_change = mass @ run.end[:, 3:5] - mass @ start[:, 3:5] - np.array([0.0, mass.sum() * scene.gravity
-                                                                                       * elapsed])
+    run.momentum_change = (
+        mass @ run.end[:, 3:5] - mass @ start[:, 3:5] - np.array([0.0, mass.sum() * scene.gravity * elapsed])
+    )
     return run
 
 
@@ -112,10 +114,14 @@ def passed_through(scene: Scene, states: np.ndarray, along: int) -> np.ndarray:
 
 
 def stacks(sizes, exponents, duration: float) -> Row:
-    criterion = ("finite; every box within 1 mm of where it started (|dx| + R |da|, every step; no settling allowed); "
-                 "the total energy never rises above its start (allowance: rounding and M g times the deepest overlap)")
-    declared = (f"stacks of {', '.join(str(n) for n in sizes)} boxes (`scenes.stack`), {duration:g} s, "
-                f"dt {dt_label(min(exponents))} to {dt_label(max(exponents))} s, k = {STIFFNESS:g} N/m")
+    criterion = (
+        "finite; every box within 1 mm of where it started (|dx| + R |da|, every step; no settling allowed); "
+        "the total energy never rises above its start (allowance: rounding and M g times the deepest overlap)"
+    )
+    declared = (
+        f"stacks of {', '.join(str(n) for n in sizes)} boxes (`scenes.stack`), {duration:g} s, "
+        f"dt {dt_label(min(exponents))} to {dt_label(max(exponents))} s, k = {STIFFNESS:g} N/m"
+    )
 
     def build():
         checks = []
@@ -129,9 +135,16 @@ def stacks(sizes, exponents, duration: float) -> Row:
                         continue
                     allowed = run.energy_allowance()
                     passed = run.drift < 1e-3 and run.energy_rise <= allowed
-                    checks.append(Check(point, solver, passed, f"drift {sci(run.drift)} m, energy rise "
-                                                               f"{sci(max(run.energy_rise, 0.0))} J (allowed "
-                                                               f"{sci(allowed)})"))
+                    checks.append(
+                        Check(
+                            point,
+                            solver,
+                            passed,
+                            f"drift {sci(run.drift)} m, energy rise "
+                            f"{sci(max(run.energy_rise, 0.0))} J (allowed "
+                            f"{sci(allowed)})",
+                        )
+                    )
         return Row("stacks", f"Stacks resting {duration:g} s", criterion, declared, checks)
 
     return build()
@@ -139,15 +152,19 @@ def stacks(sizes, exponents, duration: float) -> Row:
 
 def body_impacts(speeds, exponents) -> Row:
     title = f"Box-box impacts at {' and '.join(f'{v:g}' for v in speeds)} m/s"
-    criterion = ("finite; no tunnelling (from one step to the next the line of centres never flips along the impact "
-                 "direction while the boxes are within reach of each other across it, and both centres stay above "
-                 "the floor); overlap <= 1% of the box width (2 mm), between the boxes and into the floor; in "
-                 "flight (zero gravity) momentum kept to 1e-9 of m v and kinetic energy never rises from one step to "
-                 "the next; onto a box, the total energy never rises above its start (allowance as "
-                 "above)")
-    declared = (f"the toss box corner first (angle 0.3) at {', '.join(f'{v:g}' for v in speeds)} m/s into a level toss "
-                f"box, in flight or falling onto it lying on the floor, e 0, mu 0.5, dt {dt_label(min(exponents))} to "
-                f"{dt_label(max(exponents))} s")
+    criterion = (
+        "finite; no tunnelling (from one step to the next the line of centres never flips along the impact "
+        "direction while the boxes are within reach of each other across it, and both centres stay above "
+        "the floor); overlap <= 1% of the box width (2 mm), between the boxes and into the floor; in "
+        "flight (zero gravity) momentum kept to 1e-9 of m v and kinetic energy never rises from one step to "
+        "the next; onto a box, the total energy never rises above its start (allowance as "
+        "above)"
+    )
+    declared = (
+        f"the toss box corner first (angle 0.3) at {', '.join(f'{v:g}' for v in speeds)} m/s into a level toss "
+        f"box, in flight or falling onto it lying on the floor, e 0, mu 0.5, dt {dt_label(min(exponents))} to "
+        f"{dt_label(max(exponents))} s"
+    )
 
     def apart_in_flight(scene, states):
         return ~passed_through(scene, states, along=layout.X)
@@ -162,8 +179,11 @@ def body_impacts(speeds, exponents) -> Row:
                 for exponent in exponents:
                     for solver in SOLVERS:
                         scene = cases.body_impact(speed, onto_floor, dt=dt_of(exponent), solver=solver)
-                        point = {"speed": f"{speed:g} m/s", "where": "onto a box" if onto_floor else "in flight",
-                                 "dt": dt_label(exponent)}
+                        point = {
+                            "speed": f"{speed:g} m/s",
+                            "where": "onto a box" if onto_floor else "in flight",
+                            "dt": dt_label(exponent),
+                        }
                         apart = apart_on_floor if onto_floor else apart_in_flight
                         run = run_bodies(scene, 2.0 if onto_floor else 0.5, apart)
                         if not run.finite:
@@ -190,11 +210,15 @@ def body_impacts(speeds, exponents) -> Row:
 
 def mass_ratio_stacks(ratio: float, orders, exponents, duration: float) -> Row:
     title = f"Mass ratio 1:{ratio:g} in a stack"
-    criterion = ("finite; every box within 1 mm of where it started (every step); overlap <= 1% of the box width "
-                 "(2 mm), between the boxes and into the floor; the total energy never rises above its start "
-                 "(allowance as above)")
-    declared = (f"stacks of `scenes.stack` whose boxes weigh 2 kg or {ratio:g} times that ({', '.join(orders)}), "
-                f"material unchanged, {duration:g} s, dt {dt_label(min(exponents))} to {dt_label(max(exponents))} s")
+    criterion = (
+        "finite; every box within 1 mm of where it started (every step); overlap <= 1% of the box width "
+        "(2 mm), between the boxes and into the floor; the total energy never rises above its start "
+        "(allowance as above)"
+    )
+    declared = (
+        f"stacks of `scenes.stack` whose boxes weigh 2 kg or {ratio:g} times that ({', '.join(orders)}), "
+        f"material unchanged, {duration:g} s, dt {dt_label(min(exponents))} to {dt_label(max(exponents))} s"
+    )
 
     def build():
         checks = []
@@ -208,13 +232,19 @@ def mass_ratio_stacks(ratio: float, orders, exponents, duration: float) -> Row:
                         checks.append(Check(point, solver, False, run.error))
                         continue
                     allowed = run.energy_allowance()
-                    passed = (run.drift < 1e-3 and run.overlap <= 0.01 * scene.boxes[0].width
-                              and run.energy_rise <= allowed)
-                    checks.append(Check(point, solver, passed, f"drift {sci(run.drift)} m, {run.overlap_text()}, "
-                                                               f"energy rise {sci(max(run.energy_rise, 0.0))} J "
-                                                               f"(allowed {sci(allowed)})"))
+                    passed = (
+                        run.drift < 1e-3 and run.overlap <= 0.01 * scene.boxes[0].width and run.energy_rise <= allowed
+                    )
+                    checks.append(
+                        Check(
+                            point,
+                            solver,
+                            passed,
+                            f"drift {sci(run.drift)} m, {run.overlap_text()}, "
+                            f"energy rise {sci(max(run.energy_rise, 0.0))} J "
+                            f"(allowed {sci(allowed)})",
+                        )
+                    )
         return Row("mass_ratio_stacks", title, criterion, declared, checks)
 
     return build()
-
-

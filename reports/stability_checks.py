@@ -142,5 +142,3 @@ class StabilityReport:
         """(seed failures, seed points) beyond omega dt = 2 in the map."""
         beyond = [c for c in self.row("stiffness_map").of("seed") if c.values["omega_dt"] > 2.0]
         return sum(not c.passed for c in beyond), len(beyond)
-
-

@@ -42,13 +42,24 @@ def stiffness_map(stiffnesses, exponents) -> Row:
                 rise = float(run.states[:, layout.Y].max() - run.states[0, layout.Y])
                 gain, allowed = run.energy_gain()
                 passed = rise <= 0.01 and gain <= allowed
-                checks.append(Check(point, solver, passed, f"rise {sci(max(rise, 0.0))} m, energy rise "
-                                                           f"{sci(max(gain, 0.0))} J (allowed {sci(allowed)})", values))
-    return Row("stiffness_map", "Penalty stiffness against dt",
-               "finite; the resting box never rises more than 1 cm; its energy never rises above its start "
-               "(allowance: rounding and m g times the deepest penetration)",
-               f"k {k_text(min(stiffnesses))} to {k_text(max(stiffnesses))} N/m, dt {dt_label(min(exponents))} to "
-               f"{dt_label(max(exponents))} s", checks)
+                checks.append(
+                    Check(
+                        point,
+                        solver,
+                        passed,
+                        f"rise {sci(max(rise, 0.0))} m, energy rise {sci(max(gain, 0.0))} J (allowed {sci(allowed)})",
+                        values,
+                    )
+                )
+    return Row(
+        "stiffness_map",
+        "Penalty stiffness against dt",
+        "finite; the resting box never rises more than 1 cm; its energy never rises above its start "
+        "(allowance: rounding and m g times the deepest penetration)",
+        f"k {k_text(min(stiffnesses))} to {k_text(max(stiffnesses))} N/m, dt {dt_label(min(exponents))} to "
+        f"{dt_label(max(exponents))} s",
+        checks,
+    )
 
 
 def elastic_bouncing(exponents) -> Row:
@@ -64,9 +75,13 @@ def elastic_bouncing(exponents) -> Row:
             e = run.energy()
             drift = float(np.abs(e / e[0] - 1.0).max())
             checks.append(Check(point, solver, drift <= 0.01, f"energy within {sci(drift)} of its start"))
-    return Row("elastic_bouncing", "e = 1 bouncing for 20 s",
-               "total energy within 1% of its start at every step (flat drop from 1 m, e = 1, no friction)",
-               f"dt {dt_label(min(exponents))} to {dt_label(max(exponents))} s, k = {STIFFNESS:g} N/m", checks)
+    return Row(
+        "elastic_bouncing",
+        "e = 1 bouncing for 20 s",
+        "total energy within 1% of its start at every step (flat drop from 1 m, e = 1, no friction)",
+        f"dt {dt_label(min(exponents))} to {dt_label(max(exponents))} s, k = {STIFFNESS:g} N/m",
+        checks,
+    )
 
 
 def long_rest(exponents, minutes: float = 10.0) -> Row:
@@ -74,18 +89,22 @@ def long_rest(exponents, minutes: float = 10.0) -> Row:
     checks = []
     for exponent in exponents:
         for solver in SOLVERS:
-            scene = scenes.resting(restitution=0.5, friction=0.02, penalty_stiffness=STIFFNESS, dt=dt_of(exponent),
-                                   solver=solver)
+            scene = scenes.resting(
+                restitution=0.5, friction=0.02, penalty_stiffness=STIFFNESS, dt=dt_of(exponent), solver=solver
+            )
             point = {"dt": dt_label(exponent)}
             drift, gain, finite = resting_drift(scene, minutes * 60.0)
             e0 = float(energy(scene.boxes[0], scene.gravity, scene.initial_state()[0]))
             passed = finite and drift < 1e-3 and gain <= ENERGY_ROUNDING * abs(e0)
             measured = f"drift {sci(drift)} m, energy gain {sci(gain)} J" if finite else "non-finite"
             checks.append(Check(point, solver, passed, measured))
-    return Row("long_rest", f"Resting for {minutes:g} minutes",
-               "drift (|dx| + R |da|, every step) < 1 mm and no energy gain; sleeping off (the box is stepped "
-               "throughout)", f"dt {dt_label(min(exponents))} to {dt_label(max(exponents))} s, e 0.5, mu 0.02, "
-               f"k = {STIFFNESS:g} N/m", checks)
+    return Row(
+        "long_rest",
+        f"Resting for {minutes:g} minutes",
+        "drift (|dx| + R |da|, every step) < 1 mm and no energy gain; sleeping off (the box is stepped throughout)",
+        f"dt {dt_label(min(exponents))} to {dt_label(max(exponents))} s, e 0.5, mu 0.02, k = {STIFFNESS:g} N/m",
+        checks,
+    )
 
 
 def resting_drift(scene: Scene, duration: float) -> tuple[float, float, bool]:
@@ -118,8 +137,9 @@ def sliding(speeds, frictions, exponents) -> Row:
         for friction in frictions:
             for exponent in exponents:
                 for solver in SOLVERS:
-                    scene = scenes.slide(speed=speed, friction=friction, dt=dt_of(exponent),
-                                         penalty_stiffness=STIFFNESS, solver=solver)
+                    scene = scenes.slide(
+                        speed=speed, friction=friction, dt=dt_of(exponent), penalty_stiffness=STIFFNESS, solver=solver
+                    )
                     point = {"v0": f"{speed:g} m/s", "mu": f"{friction:g}", "dt": dt_label(exponent)}
                     run = run_scene(scene, speed / (friction * -scene.gravity) + 1.0)
                     if not run.finite:
@@ -129,13 +149,18 @@ def sliding(speeds, frictions, exponents) -> Row:
                     end = run.states[-1]
                     end_speed = math.hypot(end[3], end[4]) + corner_radius(run.box) * abs(end[5])
                     passed = lowest >= -1e-9 * speed and end_speed <= 1e-3
-                    checks.append(Check(point, solver, passed,
-                                        f"lowest vx {sci(lowest)} m/s, end speed {sci(end_speed)} m/s"))
-    return Row("sliding", "Sliding to rest",
-               "vx never below -1e-9 v0 (it never reverses; the slack is rounding) and the box stops "
-               "(every point slower than 1 mm/s at the end)",
-               f"v0 {', '.join(f'{v:g}' for v in speeds)} m/s, mu {', '.join(f'{m:g}' for m in frictions)}, "
-               f"dt {dt_label(min(exponents))} to {dt_label(max(exponents))} s", checks)
+                    checks.append(
+                        Check(point, solver, passed, f"lowest vx {sci(lowest)} m/s, end speed {sci(end_speed)} m/s")
+                    )
+    return Row(
+        "sliding",
+        "Sliding to rest",
+        "vx never below -1e-9 v0 (it never reverses; the slack is rounding) and the box stops "
+        "(every point slower than 1 mm/s at the end)",
+        f"v0 {', '.join(f'{v:g}' for v in speeds)} m/s, mu {', '.join(f'{m:g}' for m in frictions)}, "
+        f"dt {dt_label(min(exponents))} to {dt_label(max(exponents))} s",
+        checks,
+    )
 
 
 def fast_impacts(speeds, exponents) -> Row:
@@ -156,14 +181,25 @@ def fast_impacts(speeds, exponents) -> Row:
                 rebound = float(run.states[after, layout.VY].max()) if after is not None and after.any() else 0.0
                 lowest_centre = float(run.states[:, layout.Y].min())
                 passed = penetration <= bound and rebound <= 0.01 * speed and lowest_centre > 0.0
-                checks.append(Check(point, solver, passed,
-                                    f"penetration {sci(penetration)} m, rebound vy {sci(rebound)} m/s, "
-                                    f"lowest centre {sci(lowest_centre)} m"))
-    return Row("fast_impacts", "Impacts at 5 to 200 m/s",
-               "penetration <= 1% of the box width (2 mm); no rebound with e = 0 (after the first contact the "
-               "centre never rises faster than 1% of the impact speed); no tunnelling (the centre stays above "
-               "the floor)", f"speeds {', '.join(f'{v:g}' for v in speeds)} m/s, corner first, e 0, mu 0.5, "
-               f"dt {dt_label(min(exponents))} to {dt_label(max(exponents))} s", checks)
+                checks.append(
+                    Check(
+                        point,
+                        solver,
+                        passed,
+                        f"penetration {sci(penetration)} m, rebound vy {sci(rebound)} m/s, "
+                        f"lowest centre {sci(lowest_centre)} m",
+                    )
+                )
+    return Row(
+        "fast_impacts",
+        "Impacts at 5 to 200 m/s",
+        "penetration <= 1% of the box width (2 mm); no rebound with e = 0 (after the first contact the "
+        "centre never rises faster than 1% of the impact speed); no tunnelling (the centre stays above "
+        "the floor)",
+        f"speeds {', '.join(f'{v:g}' for v in speeds)} m/s, corner first, e 0, mu 0.5, "
+        f"dt {dt_label(min(exponents))} to {dt_label(max(exponents))} s",
+        checks,
+    )
 
 
 def energy_check(run: Run, point: dict, solver: str, extra: Callable[[Run], tuple[bool, str]] | None = None) -> Check:
@@ -193,10 +229,15 @@ def fast_spin(spins, exponents) -> Row:
                     return depth <= 0.01 * run.box.width, f"penetration {sci(depth)} m"
 
                 checks.append(energy_check(run_scene(scene, 3.0), point, solver, penetration))
-    return Row("fast_spin", "Landing spinning at 50 to 600 rad/s",
-               "finite; energy never rises (allowance: rounding and m g times the deepest penetration); "
-               "penetration <= 1% of the box width", f"spin {', '.join(f'{s:g}' for s in spins)} rad/s, the toss box "
-               f"released 0.5 m up, dt {dt_label(min(exponents))} to {dt_label(max(exponents))} s", checks)
+    return Row(
+        "fast_spin",
+        "Landing spinning at 50 to 600 rad/s",
+        "finite; energy never rises (allowance: rounding and m g times the deepest penetration); "
+        "penetration <= 1% of the box width",
+        f"spin {', '.join(f'{s:g}' for s in spins)} rad/s, the toss box "
+        f"released 0.5 m up, dt {dt_label(min(exponents))} to {dt_label(max(exponents))} s",
+        checks,
+    )
 
 
 def thin_boxes(ratios, exponents) -> Row:
@@ -210,14 +251,21 @@ def thin_boxes(ratios, exponents) -> Row:
                 def lands(run):
                     depth = run.max_penetration()
                     rests = bool(run.result.at_rest[0])
-                    return (depth <= 0.05 * run.box.width and rests,
-                            f"penetration {sci(depth)} m, {'rests' if rests else 'not at rest'} after 10 s")
+                    return (
+                        depth <= 0.05 * run.box.width and rests,
+                        f"penetration {sci(depth)} m, {'rests' if rests else 'not at rest'} after 10 s",
+                    )
 
                 checks.append(energy_check(run_scene(scene, 10.0, until_rest=True), point, solver, lands))
-    return Row("thin_boxes", "Thin boxes 1:10 to 1:200",
-               "finite; energy never rises (allowance as above); penetration <= 5% of the width; comes to rest "
-               "lying on a face within 10 s", f"1 m long boxes, widths 1/{', 1/'.join(f'{r:g}' for r in ratios)} m, "
-               f"the typical toss, dt {dt_label(min(exponents))} to {dt_label(max(exponents))} s", checks)
+    return Row(
+        "thin_boxes",
+        "Thin boxes 1:10 to 1:200",
+        "finite; energy never rises (allowance as above); penetration <= 5% of the width; comes to rest "
+        "lying on a face within 10 s",
+        f"1 m long boxes, widths 1/{', 1/'.join(f'{r:g}' for r in ratios)} m, "
+        f"the typical toss, dt {dt_label(min(exponents))} to {dt_label(max(exponents))} s",
+        checks,
+    )
 
 
 def masses(values, exponents) -> Row:
@@ -236,11 +284,15 @@ def masses(values, exponents) -> Row:
                     return off <= 0.01, f"landing {sci(off)} m from the 2 kg box's"
 
                 checks.append(energy_check(run_scene(scene, 10.0, until_rest=True), point, solver, same_landing))
-    return Row("masses", "Masses 1e-3 to 1e3 kg, material unchanged",
-               "finite; energy never rises (allowance as above); lands within 1 cm (|dx| + R |da|) of the same "
-               "throw of the 2 kg box (rigid-body motion does not depend on the mass)",
-               f"masses {', '.join(f'{m:g}' for m in values)} kg, e 0.3, mu 0.5, k {STIFFNESS:g} N/m, the typical "
-               f"toss, dt {dt_label(min(exponents))} to {dt_label(max(exponents))} s", checks)
+    return Row(
+        "masses",
+        "Masses 1e-3 to 1e3 kg, material unchanged",
+        "finite; energy never rises (allowance as above); lands within 1 cm (|dx| + R |da|) of the same "
+        "throw of the 2 kg box (rigid-body motion does not depend on the mass)",
+        f"masses {', '.join(f'{m:g}' for m in values)} kg, e 0.3, mu 0.5, k {STIFFNESS:g} N/m, the typical "
+        f"toss, dt {dt_label(min(exponents))} to {dt_label(max(exponents))} s",
+        checks,
+    )
 
 
 def embedded_box(stiffnesses, exponents) -> Row:
@@ -258,21 +310,33 @@ def embedded_box(stiffnesses, exponents) -> Row:
                 highest = float(run.states[:, layout.Y].max())
                 end = float(run.states[-1, layout.Y])
                 passed = abs(end - rest) <= 1e-3 and highest <= rest + 1e-3
-                checks.append(Check(point, solver, passed, f"centre at {end:.4f} m after 3 s (rest {rest:g} m), "
-                                                           f"highest {highest:.4f} m"))
-    return Row("embedded", "Started 25% inside the floor",
-               "pushed out: the centre within 1 mm of its resting height after 3 s; not launched: never more "
-               "than 1 mm above it (energy is not checked: pushing out raises the potential energy)",
-               f"the 2 x 1 m box 25 cm deep, k {', '.join(k_text(k) for k in stiffnesses)} N/m, "
-               f"dt {dt_label(min(exponents))} to {dt_label(max(exponents))} s", checks)
+                checks.append(
+                    Check(
+                        point,
+                        solver,
+                        passed,
+                        f"centre at {end:.4f} m after 3 s (rest {rest:g} m), highest {highest:.4f} m",
+                    )
+                )
+    return Row(
+        "embedded",
+        "Started 25% inside the floor",
+        "pushed out: the centre within 1 mm of its resting height after 3 s; not launched: never more "
+        "than 1 mm above it (energy is not checked: pushing out raises the potential energy)",
+        f"the 2 x 1 m box 25 cm deep, k {', '.join(k_text(k) for k in stiffnesses)} N/m, "
+        f"dt {dt_label(min(exponents))} to {dt_label(max(exponents))} s",
+        checks,
+    )
 
 
 def far_from_origin(exponents, distance: float = 1e5) -> Row:
     checks = []
     for exponent in exponents:
         for solver in SOLVERS:
-            runs = [run_scene(cases.far_toss(x, dt=dt_of(exponent), solver=solver), 10.0, until_rest=True)
-                    for x in (0.0, distance)]
+            runs = [
+                run_scene(cases.far_toss(x, dt=dt_of(exponent), solver=solver), 10.0, until_rest=True)
+                for x in (0.0, distance)
+            ]
             point = {"dt": dt_label(exponent)}
             if not all(run.finite for run in runs):
                 checks.append(Check(point, solver, False, "non-finite"))
@@ -280,9 +344,14 @@ def far_from_origin(exponents, distance: float = 1e5) -> Row:
             shifted = runs[1].states[-1] - np.array([distance, 0, 0, 0, 0, 0])
             off = cases.pose_error(shifted, runs[0].states[-1], corner_radius(runs[0].box))
             checks.append(Check(point, solver, off <= 1e-3, f"landings differ by {sci(off)} m"))
-    return Row("far_from_origin", f"Far from the origin (x = {distance:g} m)",
-               "the typical toss released at x = 1e5 m lands within 1 mm (|dx| + R |da|) of the same toss at x = 0, "
-               "shifted (float64)", f"dt {dt_label(min(exponents))} to {dt_label(max(exponents))} s", checks)
+    return Row(
+        "far_from_origin",
+        f"Far from the origin (x = {distance:g} m)",
+        "the typical toss released at x = 1e5 m lands within 1 mm (|dx| + R |da|) of the same toss at x = 0, "
+        "shifted (float64)",
+        f"dt {dt_label(min(exponents))} to {dt_label(max(exponents))} s",
+        checks,
+    )
 
 
 CORNER_HITS = ((0.4, (2.0, -3.0), 1.0), (1.2, (-3.0, -1.0), -2.0))  # angle, velocity, spin
@@ -295,10 +364,15 @@ def corner_friction(frictions, restitutions, exponents, hits=CORNER_HITS) -> Row
             for hit, (angle, velocity, spin) in enumerate(hits):
                 for exponent in exponents:
                     for solver in SOLVERS:
-                        scene = cases.friction_corner_hit(friction, restitution, angle, velocity, spin,
-                                                          dt=dt_of(exponent), solver=solver)
-                        point = {"mu": f"{friction:g}", "e": f"{restitution:g}", "hit": hit + 1,
-                                 "dt": dt_label(exponent)}
+                        scene = cases.friction_corner_hit(
+                            friction, restitution, angle, velocity, spin, dt=dt_of(exponent), solver=solver
+                        )
+                        point = {
+                            "mu": f"{friction:g}",
+                            "e": f"{restitution:g}",
+                            "hit": hit + 1,
+                            "dt": dt_label(exponent),
+                        }
                         run = run_scene(scene, 1.0)
                         if not run.finite:
                             checks.append(not_finite(run, point, solver))
@@ -306,13 +380,19 @@ def corner_friction(frictions, restitutions, exponents, hits=CORNER_HITS) -> Row
                         ke = kinetic_energy(run.box, run.states)
                         rise = float(np.diff(ke).max(initial=0.0))
                         passed = rise <= ENERGY_ROUNDING * ke[0]
-                        checks.append(Check(point, solver, passed, f"largest step-to-step KE rise {sci(rise)} J "
-                                                                   f"(KE0 {ke[0]:.3g} J)"))
-    hits_text = "; ".join(f"hit {i + 1}: angle {a:g}, v ({v[0]:g}, {v[1]:g}) m/s, spin {w:g} rad/s"
-                          for i, (a, v, w) in enumerate(hits))
-    return Row("corner_friction", "Angled corner hit with friction",
-               "kinetic energy never rises from one step to the next (zero gravity, so nothing feeds it)",
-               f"mu {', '.join(f'{m:g}' for m in frictions)}, e {', '.join(f'{e:g}' for e in restitutions)}, "
-               f"2 x 1 m box ({hits_text}), dt {dt_label(min(exponents))} to {dt_label(max(exponents))} s", checks)
-
-
+                        checks.append(
+                            Check(
+                                point, solver, passed, f"largest step-to-step KE rise {sci(rise)} J (KE0 {ke[0]:.3g} J)"
+                            )
+                        )
+    hits_text = "; ".join(
+        f"hit {i + 1}: angle {a:g}, v ({v[0]:g}, {v[1]:g}) m/s, spin {w:g} rad/s" for i, (a, v, w) in enumerate(hits)
+    )
+    return Row(
+        "corner_friction",
+        "Angled corner hit with friction",
+        "kinetic energy never rises from one step to the next (zero gravity, so nothing feeds it)",
+        f"mu {', '.join(f'{m:g}' for m in frictions)}, e {', '.join(f'{e:g}' for e in restitutions)}, "
+        f"2 x 1 m box ({hits_text}), dt {dt_label(min(exponents))} to {dt_label(max(exponents))} s",
+        checks,
+    )

@@ -33,13 +33,25 @@ def plot_map(report: StabilityReport, path: Path) -> None:
             grid[ks.index(c.values["k"]), exponents.index(c.values["exponent"])] = 1.0 if c.passed else 0.0
         log_dt = [math.log10(dt_of(e)) for e in exponents]
         log_k = [math.log10(k) for k in ks]
-        ax.pcolormesh(_edges(log_dt), _edges(log_k), grid, cmap=ListedColormap(["#e45756", "#54a24b"]), vmin=0,
-                      vmax=1, edgecolors="white", linewidth=0.5)
+        ax.pcolormesh(
+            _edges(log_dt),
+            _edges(log_k),
+            grid,
+            cmap=ListedColormap(["#e45756", "#54a24b"]),
+            vmin=0,
+            vmax=1,
+            edgecolors="white",
+            linewidth=0.5,
+        )
         line_k = np.logspace(log_k[0] - 0.5, log_k[-1] + 0.5, 50)
         omega = np.array([contact_omega(scene.replace(penalty_stiffness=k)) for k in line_k])
         ax.plot(np.log10(2.0 / omega), np.log10(line_k), "k--", lw=1.5, label="omega dt = 2")
-        ax.set(xlim=(_edges(log_dt)[0], _edges(log_dt)[-1]), ylim=(_edges(log_k)[0], _edges(log_k)[-1]),
-               xlabel="log10 dt [s]", title=f"{solver}: green pass, red fail")
+        ax.set(
+            xlim=(_edges(log_dt)[0], _edges(log_dt)[-1]),
+            ylim=(_edges(log_k)[0], _edges(log_k)[-1]),
+            xlabel="log10 dt [s]",
+            title=f"{solver}: green pass, red fail",
+        )
         ax.legend(loc="upper right", fontsize=8)
     axes[0].set_ylabel("log10 penalty stiffness k [N/m]")
     figure.suptitle("Resting 2 x 1 m box, 2 s: omega = sqrt(k / m_eff), m_eff of the stiffest contact mode")
@@ -58,12 +70,16 @@ def map_findings(report: StabilityReport) -> str:
     seed = row.of("seed")
     inside_failed = [c.values["omega_dt"] for c in seed if not c.passed and c.values["omega_dt"] <= 2.0]
     passed = [c.values["omega_dt"] for c in seed if c.passed]
-    text = (f"The seed scheme fails at {failed} of the {total} map points beyond omega dt = 2, as the explicit "
-            "spring's stability limit says")
+    text = (
+        f"The seed scheme fails at {failed} of the {total} map points beyond omega dt = 2, as the explicit "
+        "spring's stability limit says"
+    )
     if inside_failed:
-        text += (f", and also at {len(inside_failed)} points below it, from omega dt = {min(inside_failed):.2f} up: "
-                 "there the explicit spring is stable, but the seed's impulses, applied with restitution to corners "
-                 "that are still inside the floor, feed the contact's oscillation until the box is thrown off")
+        text += (
+            f", and also at {len(inside_failed)} points below it, from omega dt = {min(inside_failed):.2f} up: "
+            "there the explicit spring is stable, but the seed's impulses, applied with restitution to corners "
+            "that are still inside the floor, feed the contact's oscillation until the box is thrown off"
+        )
     if passed:
         text += f". The largest omega dt at which it passed is {max(passed):.2f}"
     robust = row.of("robust")
@@ -76,8 +92,10 @@ def findings(report: StabilityReport) -> str:
     for solver in SOLVERS:
         checks = [c for row in report.rows for c in row.of(solver)]
         passed_rows = [row for row in report.rows if row.passed(solver)]
-        lines.append(f"- **{solver}**: passes {len(passed_rows)} of {len(report.rows)} rows "
-                     f"({sum(c.passed for c in checks)} of {len(checks)} points).")
+        lines.append(
+            f"- **{solver}**: passes {len(passed_rows)} of {len(report.rows)} rows "
+            f"({sum(c.passed for c in checks)} of {len(checks)} points)."
+        )
     for row in report.rows:
         failed = [c for c in row.of("robust") if not c.passed]
         for c in failed[:4]:
@@ -87,6 +105,40 @@ def findings(report: StabilityReport) -> str:
     failed, total = report.seed_beyond_line()
     lines.append(f"- The seed scheme fails at {failed} of the {total} map points beyond omega dt = 2.")
     return "\n".join(lines)
+
+
+def every_point_lines(rows) -> list[str]:
+    """The "Every point" section: each row's points with both solvers' verdicts (the random scenes: the first 10
+    and every failure of the robust default)."""
+    parts = ["## Every point", ""]
+    for row in rows:
+        pairs = list(zip(row.of("robust"), row.of("seed"), strict=True))
+        note = ""
+        if len(pairs) > MAX_LISTED:  # the random scenes: the robust default's failures and the first few
+            shown = [pair for i, pair in enumerate(pairs) if i < 10 or not pair[0].passed]
+            seed_failed = sum(not b.passed for _, b in pairs)
+            note = (
+                f" Listed: the first 10 points and every robust failure; of all {len(pairs)}, the robust default "
+                f"fails {sum(not a.passed for a, _ in pairs)} and the seed scheme {seed_failed}."
+            )
+            pairs = shown
+        lines = [
+            [
+                point_text(a.point),
+                ("pass" if a.passed else "**FAIL**") + ": " + a.measured,
+                ("pass" if b.passed else "**FAIL**") + ": " + b.measured,
+            ]
+            for a, b in pairs
+        ]
+        parts += [
+            f"### {row.title}",
+            "",
+            f"Criterion: {row.criterion}. Points: {row.declared}.{note}",
+            "",
+            table(["point", "robust", "seed"], lines),
+            "",
+        ]
+    return parts
 
 
 def markdown(report: StabilityReport, figure: str) -> str:
@@ -111,8 +163,10 @@ def markdown(report: StabilityReport, figure: str) -> str:
         "",
         "## Summary",
         "",
-        table(["row", "pass criterion", "points (inside the declared range)", "robust", "seed"],
-              [[r.title, r.criterion, r.declared, r.verdict("robust"), r.verdict("seed")] for r in rows]),
+        table(
+            ["row", "pass criterion", "points (inside the declared range)", "robust", "seed"],
+            [[r.title, r.criterion, r.declared, r.verdict("robust"), r.verdict("seed")] for r in rows],
+        ),
         "",
         "## Findings",
         "",
@@ -128,45 +182,48 @@ def markdown(report: StabilityReport, figure: str) -> str:
     random_row = report.row("random_scenes")
     smallest = random_row.smallest_failure
     if smallest is not None:
-        parts += ["## Smallest random failure of the robust default", "",
-                  "hypothesis's smallest example on which the robust default fails the random-scene criterion, "
-                  f"as ({', '.join(RANDOM_FIELDS)}):", "", f"    {tuple(smallest)!r}", "",
-                  f"measured: {random_check(smallest, 'robust').measured}.", ""]
+        parts += [
+            "## Smallest random failure of the robust default",
+            "",
+            "hypothesis's smallest example on which the robust default fails the random-scene criterion, "
+            f"as ({', '.join(RANDOM_FIELDS)}):",
+            "",
+            f"    {tuple(smallest)!r}",
+            "",
+            f"measured: {random_check(smallest, 'robust').measured}.",
+            "",
+        ]
     parts += fuzz_section(report)
-    parts += ["## Every point", ""]
-    for row in rows:
-        pairs = list(zip(row.of("robust"), row.of("seed"), strict=True))
-        note = ""
-        if len(pairs) > MAX_LISTED:  # the random scenes: the robust default's failures and the first few
-            shown = [pair for i, pair in enumerate(pairs) if i < 10 or not pair[0].passed]
-            seed_failed = sum(not b.passed for _, b in pairs)
-            note = (f" Listed: the first 10 points and every robust failure; of all {len(pairs)}, the robust default "
-                    f"fails {sum(not a.passed for a, _ in pairs)} and the seed scheme {seed_failed}.")
-            pairs = shown
-        lines = [[point_text(a.point), ("pass" if a.passed else "**FAIL**") + ": " + a.measured,
-                  ("pass" if b.passed else "**FAIL**") + ": " + b.measured] for a, b in pairs]
-        parts += [f"### {row.title}", "", f"Criterion: {row.criterion}. Points: {row.declared}.{note}", "",
-                  table(["point", "robust", "seed"], lines), ""]
+    parts += every_point_lines(rows)
     return "\n".join(parts)
 
 
 FUZZ_TEXT = {
-    "engine": ("robust-solver scenes over the declared range (length 0.02 to 5 m and the quantities above)",
-               "finite; penetration < 5% of the smaller side; no recorded step gains energy (allowance: rounding "
-               "and m g times the deepest penetration); at rest lying on a face, or ran the whole duration"),
-    "env_declared": ("BoxToss-v0, robust, arguments inside the declared range, one throw each",
-                     "no exception (EnergyGainError included); observations finite and inside the space; "
-                     "penetration < 5% of the smaller side"),
-    "env_accepted": ("BoxToss-v0, both solvers, arguments anywhere in the accepted ranges (docs/ranges.md)",
-                     "no exception but the documented EnergyGainError and NonFiniteStateError; what is returned "
-                     "is finite and inside the observation space"),
+    "engine": (
+        "robust-solver scenes over the declared range (length 0.02 to 5 m and the quantities above)",
+        "finite; penetration < 5% of the smaller side; no recorded step gains energy (allowance: rounding "
+        "and m g times the deepest penetration); at rest lying on a face, or ran the whole duration",
+    ),
+    "env_declared": (
+        "BoxToss-v0, robust, arguments inside the declared range, one throw each",
+        "no exception (EnergyGainError included); observations finite and inside the space; "
+        "penetration < 5% of the smaller side",
+    ),
+    "env_accepted": (
+        "BoxToss-v0, both solvers, arguments anywhere in the accepted ranges (docs/ranges.md)",
+        "no exception but the documented EnergyGainError and NonFiniteStateError; what is returned "
+        "is finite and inside the observation space",
+    ),
 }
 
 
 def fuzz_verdict(result: fuzz.FuzzResult) -> str:
     failed = len(result.failures)
-    return f"PASS {result.examples}/{result.examples}" if not failed else \
-        f"**FAIL** {result.examples - failed}/{result.examples}"
+    return (
+        f"PASS {result.examples}/{result.examples}"
+        if not failed
+        else f"**FAIL** {result.examples - failed}/{result.examples}"
+    )
 
 
 def fuzz_section(report: StabilityReport) -> list[str]:
@@ -177,15 +234,24 @@ def fuzz_section(report: StabilityReport) -> list[str]:
     rows = []
     for result in report.fuzz:
         draws, checks = FUZZ_TEXT[result.name]
-        documented = ", ".join(f"{solver}: {error} x{count}" for (solver, error), count in
-                               sorted(result.documented_errors.items())) or "-"
+        documented = (
+            ", ".join(
+                f"{solver}: {error} x{count}" for (solver, error), count in sorted(result.documented_errors.items())
+            )
+            or "-"
+        )
         rows.append([result.name, draws, checks, fuzz_verdict(result), documented])
-    parts = ["## Property-based fuzz (hypothesis)", "",
-             f"`reports/fuzz.py`, the {profile.name} profile: {profile.examples} derandomized examples per fuzz, "
-             f"engine scenes {profile.engine_duration:g} s each, env throws at most {profile.env_max_sim_time:g} s "
-             f"and {profile.env_max_steps:,} steps (the tests run the reduced profile: {fuzz.REDUCED.examples} "
-             "examples each).", "",
-             table(["fuzz", "draws", "properties", "result", "documented errors raised"], rows), ""]
+    parts = [
+        "## Property-based fuzz (hypothesis)",
+        "",
+        f"`reports/fuzz.py`, the {profile.name} profile: {profile.examples} derandomized examples per fuzz, "
+        f"engine scenes {profile.engine_duration:g} s each, env throws at most {profile.env_max_sim_time:g} s "
+        f"and {profile.env_max_steps:,} steps (the tests run the reduced profile: {fuzz.REDUCED.examples} "
+        "examples each).",
+        "",
+        table(["fuzz", "draws", "properties", "result", "documented errors raised"], rows),
+        "",
+    ]
     for result in report.fuzz:
         for example, problems in result.failures[:4]:
             parts += [f"- {result.name} fails on `{example!r}`: {'; '.join(problems)}."]
@@ -193,19 +259,25 @@ def fuzz_section(report: StabilityReport) -> list[str]:
 
 
 def readme_block(report: StabilityReport) -> str:
-    return "\n".join([
-        f"**Stability on stiff and extreme cases** (`docs/stability.md`): `python -m reports.stability` "
-        f"({report.run_seconds / 60:.1f} min on {document.machine().split(',')[1].strip()}, {report.load}; `--quick` "
-        "for the "
-        "reduced version the tests run; both need the `reports` extra). Rows inside the robust default's "
-        f"declared range ({', '.join(f'{k} {v}' for k, v in list(DECLARED_RANGE.items())[:6])}):",
-        "",
-        table(["row", "robust", "seed"], [[r.title, r.verdict("robust", limit=1), r.verdict("seed", limit=1)]
-                                          for r in report.rows]),
-        "",
-        "Property-based fuzz (`reports/fuzz.py`, hypothesis): " + "; ".join(
-            f"{result.name} {fuzz_verdict(result)}" for result in report.fuzz) + " examples.",
-    ])
+    return "\n".join(
+        [
+            f"**Stability on stiff and extreme cases** (`docs/stability.md`): `python -m reports.stability` "
+            f"({report.run_seconds / 60:.1f} min on {document.machine().split(',')[1].strip()}, {report.load}; "
+            "`--quick` "
+            "for the "
+            "reduced version the tests run; both need the `reports` extra). Rows inside the robust default's "
+            f"declared range ({', '.join(f'{k} {v}' for k, v in list(DECLARED_RANGE.items())[:6])}):",
+            "",
+            table(
+                ["row", "robust", "seed"],
+                [[r.title, r.verdict("robust", limit=1), r.verdict("seed", limit=1)] for r in report.rows],
+            ),
+            "",
+            "Property-based fuzz (`reports/fuzz.py`, hypothesis): "
+            + "; ".join(f"{result.name} {fuzz_verdict(result)}" for result in report.fuzz)
+            + " examples.",
+        ]
+    )
 
 
 def write_report(report: StabilityReport, out: Path, readme: Path | None = None) -> Path:
@@ -217,4 +289,3 @@ def write_report(report: StabilityReport, out: Path, readme: Path | None = None)
     if readme is not None:
         document.update_readme("stability", readme_block(report), readme)
     return path
-

@@ -126,7 +126,10 @@ def test_no_package_writes_a_file_in_place():
             if path == REPO / "box_toss_env" / "files.py":
                 continue
             for node in ast.walk(ast.parse(path.read_text())):
-                if (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
-                        and node.func.attr in IN_PLACE_WRITERS):
+                if (
+                    isinstance(node, ast.Call)
+                    and isinstance(node.func, ast.Attribute)
+                    and node.func.attr in IN_PLACE_WRITERS
+                ):
                     found.append(f"{path.relative_to(REPO)}:{node.lineno} {node.func.attr}")
     assert found == []

@@ -23,11 +23,14 @@ def test_help_lists_the_subcommands_and_benchmarks():
         assert word in done.stdout
 
 
-@pytest.mark.parametrize(("args", "options"), [
-    (["train", "--help"], ["--algo", "--env", "--set", "--resume"]),
-    (["evaluate", "--help"], ["--video", "--env-kwargs"]),
-    (["bench", "engine", "--help"], ["--readme"]),
-])
+@pytest.mark.parametrize(
+    ("args", "options"),
+    [
+        (["train", "--help"], ["--algo", "--env", "--set", "--resume"]),
+        (["evaluate", "--help"], ["--video", "--env-kwargs"]),
+        (["bench", "engine", "--help"], ["--readme"]),
+    ],
+)
 def test_subcommand_help_is_the_module_help(args, options):
     done = box_toss(*args)
     assert done.returncode == 0, done.stderr[-2000:]

@@ -79,8 +79,10 @@ def test_the_allow_list_holds_only_long_functions(lengths):
 def test_the_check_catches_a_long_function_and_method():
     body = "".join(f"    x{i} = {i}\n" for i in range(MAX_LINES - 1))
     method_body = body.replace("    ", "        ")
-    source = (f"def short():\n    pass\n\n\ndef long():\n{body}    return 0\n\n\n"
-              f"class C:\n    def method(self):\n{method_body}")
+    source = (
+        f"def short():\n    pass\n\n\ndef long():\n{body}    return 0\n\n\n"
+        f"class C:\n    def method(self):\n{method_body}"
+    )
     lengths = function_lengths(source)
     assert lengths["short"] == 2
     assert lengths["long"] == MAX_LINES + 1

@@ -24,7 +24,10 @@ def imported_packages(path: Path) -> set[str]:
 
 @pytest.mark.parametrize("package", PACKAGES)
 def test_packages_import_only_the_packages_below_them(package):
-    wrong = {str(path.relative_to(REPO)): sorted(other for other in imported_packages(path)
-                                                 if PACKAGES[other] > PACKAGES[package])
-             for path in (REPO / package).rglob("*.py")}
+    wrong = {
+        str(path.relative_to(REPO)): sorted(
+            other for other in imported_packages(path) if PACKAGES[other] > PACKAGES[package]
+        )
+        for path in (REPO / package).rglob("*.py")
+    }
     assert {path: others for path, others in wrong.items() if others} == {}

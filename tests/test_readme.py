@@ -20,7 +20,7 @@ def test_ci_runs_the_readme_test_command_line_for_line():
     command = readme_test_command()
     ci = (REPO / ".ci" / "run").read_text().splitlines()
     start = ci.index(command[0])
-    assert ci[start:start + len(command)] == command
+    assert ci[start : start + len(command)] == command
     # one command a line, so that under .ci/run's set -e any failing one stops CI (in an && list, only the last's
     # failure would)
     assert not any("&&" in line or line.endswith("\\") for line in command)

@@ -55,8 +55,9 @@ DEFAULT_TURN_RANGE = 0.25 * math.pi  # [rad] phi - phi_face in [-turn_range, tur
 _FACE_DOWN_ANGLES = -task.QUARTER_TURN * np.arange(4.0)  # face f points down at angle -f pi/2
 
 
-def check_command_settings(config: task.TaskConfig, flight_time_range, offset_range, turn_range) -> tuple[
-        tuple[float, float], float, float]:
+def check_command_settings(
+    config: task.TaskConfig, flight_time_range, offset_range, turn_range
+) -> tuple[tuple[float, float], float, float]:
     """Validated (flight_time_range, offset_range, turn_range); None takes the default
     (T in [0.2 s, 2 max_speed / g]: the flight of the steepest, fastest throw)."""
     if flight_time_range is None:
@@ -82,12 +83,21 @@ def observed_base_top(observations: np.ndarray) -> np.ndarray:
     """(n,) height [m] of the top of the base box in observations (n, obs) of a task with a base box:
     y_base + (L_b/2) |sin theta_b| + (H_b/2) |cos theta_b|."""
     obs = np.asarray(observations, dtype=np.float64)
-    return (obs[:, task.OBS_BASE_Y] + 0.5 * obs[:, task.OBS_BASE_LENGTH] * np.abs(obs[:, task.OBS_BASE_SIN])
-            + 0.5 * obs[:, task.OBS_BASE_HEIGHT] * np.abs(obs[:, task.OBS_BASE_COS]))
+    return (
+        obs[:, task.OBS_BASE_Y]
+        + 0.5 * obs[:, task.OBS_BASE_LENGTH] * np.abs(obs[:, task.OBS_BASE_SIN])
+        + 0.5 * obs[:, task.OBS_BASE_HEIGHT] * np.abs(obs[:, task.OBS_BASE_COS])
+    )
 
 
-def ballistic_throws(observations: np.ndarray, commands: np.ndarray, config: task.TaskConfig,
-                     flight_time_range: tuple[float, float], offset_range: float, turn_range: float) -> np.ndarray:
+def ballistic_throws(
+    observations: np.ndarray,
+    commands: np.ndarray,
+    config: task.TaskConfig,
+    flight_time_range: tuple[float, float],
+    offset_range: float,
+    turn_range: float,
+) -> np.ndarray:
     """(n, 3) speed [m/s], launch angle [rad] and spin [rad/s] that carry out ``commands`` (n, 3)
     from the release poses in ``observations`` (n, obs), by the formulas of the module docstring."""
     obs = np.asarray(observations, dtype=np.float64)
@@ -107,9 +117,14 @@ def ballistic_throws(observations: np.ndarray, commands: np.ndarray, config: tas
     return np.stack((np.hypot(vx, vy), np.arctan2(vy, vx), spin), axis=1)
 
 
-def ballistic_actions(observations: np.ndarray, commands: np.ndarray, config: task.TaskConfig,
-                      flight_time_range: tuple[float, float] | None = None, offset_range: float = DEFAULT_OFFSET_RANGE,
-                      turn_range: float = DEFAULT_TURN_RANGE) -> tuple[np.ndarray, np.ndarray]:
+def ballistic_actions(
+    observations: np.ndarray,
+    commands: np.ndarray,
+    config: task.TaskConfig,
+    flight_time_range: tuple[float, float] | None = None,
+    offset_range: float = DEFAULT_OFFSET_RANGE,
+    turn_range: float = DEFAULT_TURN_RANGE,
+) -> tuple[np.ndarray, np.ndarray]:
     """Env actions (n, 3) for ``commands`` (n, 3) in [-1, 1] thrown from the release poses in
     ``observations`` (n, obs), and (n,) bool: which were clipped to the env's limits."""
     settings = check_command_settings(config, flight_time_range, offset_range, turn_range)
@@ -132,8 +147,13 @@ class BallisticThrows(gym.Wrapper):
     Also loads in RL Baselines3 Zoo as ``env_wrapper: box_toss_env.envs.ballistic.BallisticThrows``.
     """
 
-    def __init__(self, env: gym.Env, flight_time_range: tuple[float, float] | None = None,
-                 offset_range: float = DEFAULT_OFFSET_RANGE, turn_range: float = DEFAULT_TURN_RANGE):
+    def __init__(
+        self,
+        env: gym.Env,
+        flight_time_range: tuple[float, float] | None = None,
+        offset_range: float = DEFAULT_OFFSET_RANGE,
+        turn_range: float = DEFAULT_TURN_RANGE,
+    ):
         super().__init__(env)
         self.config: task.TaskConfig = env.unwrapped.config  # type: ignore[attr-defined]  # a BoxToss env
         self.settings = check_command_settings(self.config, flight_time_range, offset_range, turn_range)

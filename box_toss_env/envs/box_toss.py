@@ -41,8 +41,9 @@ class RenderModes(list):
 
 def check_render_mode_type(render_mode) -> None:
     if render_mode is not None and not isinstance(render_mode, str):
-        raise TypeError(f"render_mode must be None or one of {RENDER_MODES}, got {type(render_mode).__name__} "
-                        f"{render_mode!r}")
+        raise TypeError(
+            f"render_mode must be None or one of {RENDER_MODES}, got {type(render_mode).__name__} {render_mode!r}"
+        )
 
 
 class BoxTossEnv(gym.Env):
@@ -234,12 +235,18 @@ class BoxTossEnv(gym.Env):
         # the throw itself, batch-first (a batch of one here): the one copy of the task and of the step
         self.core = BoxTossFunctional(**{name: args[name] for name in CORE_ARGUMENTS})
         self.config = config = self.core.config
-        self.solver, self.dt, self.max_steps, self.flags = (self.core.solver, self.core.dt, self.core.max_steps,
-                                                            self.core.flags)
+        self.solver, self.dt, self.max_steps, self.flags = (
+            self.core.solver,
+            self.core.dt,
+            self.core.max_steps,
+            self.core.flags,
+        )
         self._settings = self.core.settings
         self.render_fps = task.ENV_RANGES["render_fps"].check("render_fps", args["render_fps"])
-        self.render_size = (_check_pixels("render_width", args["render_width"]),
-                            _check_pixels("render_height", args["render_height"]))
+        self.render_size = (
+            _check_pixels("render_width", args["render_width"]),
+            _check_pixels("render_height", args["render_height"]),
+        )
         self.metadata = {**self.metadata, "render_fps": self.render_fps}
 
         self.action_space = spaces.Box(-1.0, 1.0, shape=(task.ACTION_SIZE,), dtype=np.float32)
@@ -248,8 +255,12 @@ class BoxTossEnv(gym.Env):
         # per-episode arrays, allocated once: a throw only writes its six initial numbers. The engine's
         # arrays hold the thrown box in row 0 and, with base_box, the base box in row 1
         self._batch = self.core.empty(1)
-        self._episodes, self._params, self._state, self._stats = (self._batch.episodes, self._batch.params,
-                                                                  self._batch.state, self._batch.stats)
+        self._episodes, self._params, self._state, self._stats = (
+            self._batch.episodes,
+            self._batch.params,
+            self._batch.state,
+            self._batch.stats,
+        )
         self._records = render_mode in ("human", "rgb_array_list")
         bodies = config.bodies_per_env
         self._trajectory = np.zeros((self.max_steps + 1, bodies, layout.STATE_SIZE)) if self._records else None
@@ -312,8 +323,9 @@ class BoxTossEnv(gym.Env):
         """What the throw that ended in ``observation`` (outside the bounds) did, for the solver that ran."""
         return self.core.bounds_message(observation)
 
-    def landing_reward(self, final_state: np.ndarray, at_rest: bool, base_state: np.ndarray | None = None
-                       ) -> tuple[float, dict[str, float]]:
+    def landing_reward(
+        self, final_state: np.ndarray, at_rest: bool, base_state: np.ndarray | None = None
+    ) -> tuple[float, dict[str, float]]:
         """The reward of the current episode's throw ending in ``final_state`` (x, y, angle, vx, vy,
         spin) and its named terms (see Rewards); ``step`` returns exactly this. With a base box,
         ``base_state`` is where the base ended (default: where it stands at reset)."""
@@ -332,8 +344,10 @@ class BoxTossEnv(gym.Env):
         """See the class docstring: a frame ("rgb_array"), the frames since the last call
         ("rgb_array_list"), or the window ("human", playing a throw that just happened)."""
         if self.render_mode is None:
-            gym.logger.warn("render() was called without a render_mode; make the env with "
-                            'gymnasium.make("BoxToss-v0", render_mode="rgb_array") (or "human", "rgb_array_list")')
+            gym.logger.warn(
+                "render() was called without a render_mode; make the env with "
+                'gymnasium.make("BoxToss-v0", render_mode="rgb_array") (or "human", "rgb_array_list")'
+            )
             return None
         if self.render_mode == "rgb_array":
             return self._draw_state(self._caption())
@@ -355,18 +369,24 @@ class BoxTossEnv(gym.Env):
 
     def _draw_state(self, caption: str) -> np.ndarray:
         episodes = self._episodes
-        return self._renderer_for_env().frame(self._drawn_state(), float(episodes.target_x[0]),
-                                              episodes.target_faces[0], caption, self._outcome)
+        return self._renderer_for_env().frame(
+            self._drawn_state(), float(episodes.target_x[0]), episodes.target_faces[0], caption, self._outcome
+        )
 
     def _unseen_frames(self) -> list[np.ndarray]:
-        """"rgb_array_list": the frames since the last call, drawn now. A throw is drawn whole, with one
+        """ "rgb_array_list": the frames since the last call, drawn now. A throw is drawn whole, with one
         camera fitted to it (from the hand on, unless the hand was returned already) and its result."""
         hand, throw = self._hand_unseen, self._throw_unseen
         self._hand_unseen = self._throw_unseen = False
         if throw:
             return self._renderer_for_env().throw_frames(
-                self._throw_trajectory(), self.dt, float(self._episodes.target_x[0]),
-                self._episodes.target_faces[0], self._outcome, skip_first=not hand)
+                self._throw_trajectory(),
+                self.dt,
+                float(self._episodes.target_x[0]),
+                self._episodes.target_faces[0],
+                self._outcome,
+                skip_first=not hand,
+            )
         return [self._draw_state("in the hand")] if hand else []
 
     def _renderer_for_env(self):
@@ -415,12 +435,12 @@ def _document_arguments(env_class: type) -> None:
     """Write the arguments' declaration into the class docstring (its "Arguments" table) and the
     signature of ``__init__`` (what ``help()`` and ``inspect.signature`` show)."""
     if env_class.__doc__:  # None under python -OO
-        env_class.__doc__ = env_class.__doc__.replace(
-            "    ARGUMENTS_TABLE", textwrap.indent(arguments_table(), "    "))
-    parameters = [inspect.Parameter("self", inspect.Parameter.POSITIONAL_OR_KEYWORD),
-                  inspect.Parameter("render_mode", inspect.Parameter.POSITIONAL_OR_KEYWORD, default=None)]
-    parameters += [inspect.Parameter(a.name, inspect.Parameter.KEYWORD_ONLY, default=a.default)
-                   for a in ENV_ARGUMENTS]
+        env_class.__doc__ = env_class.__doc__.replace("    ARGUMENTS_TABLE", textwrap.indent(arguments_table(), "    "))
+    parameters = [
+        inspect.Parameter("self", inspect.Parameter.POSITIONAL_OR_KEYWORD),
+        inspect.Parameter("render_mode", inspect.Parameter.POSITIONAL_OR_KEYWORD, default=None),
+    ]
+    parameters += [inspect.Parameter(a.name, inspect.Parameter.KEYWORD_ONLY, default=a.default) for a in ENV_ARGUMENTS]
     env_class.__init__.__signature__ = inspect.Signature(parameters)  # type: ignore[misc]
 
 

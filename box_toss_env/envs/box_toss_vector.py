@@ -81,8 +81,12 @@ class BoxTossVectorEnv(VectorEnv):
         self.core = self.env.core  # the throw, batch-first: the single env's, over a batch of num_envs
         # env i's bodies: consecutive rows of the batch's engine arrays, its thrown box first
         self._batch = self.core.empty(n)
-        self._episodes, self._params, self._state, self._stats = (self._batch.episodes, self._batch.params,
-                                                                  self._batch.state, self._batch.stats)
+        self._episodes, self._params, self._state, self._stats = (
+            self._batch.episodes,
+            self._batch.params,
+            self._batch.state,
+            self._batch.stats,
+        )
         self._streams = RandomStreams(n)  # env i's random stream: np_random of a single env
         self._settings = self.env.engine_settings
         self._needs_reset = True
@@ -167,10 +171,11 @@ class BoxTossVectorEnv(VectorEnv):
         frames = []
         for i in range(self.num_envs):
             if self.config.base_box:  # env i's base box is drawn too
-                renderer.other_boxes = 0.5 * self._episodes.base_size[i:i + 1]
-            state = self._state[bodies * i:bodies * (i + 1)] if self.config.base_box else self._state[i]
-            frames.append(renderer.frame(state, float(self._episodes.target_x[i]), self._episodes.target_faces[i],
-                                         f"env {i}"))
+                renderer.other_boxes = 0.5 * self._episodes.base_size[i : i + 1]
+            state = self._state[bodies * i : bodies * (i + 1)] if self.config.base_box else self._state[i]
+            frames.append(
+                renderer.frame(state, float(self._episodes.target_x[i]), self._episodes.target_faces[i], f"env {i}")
+            )
         return tuple(frames)
 
     def close_extras(self, **kwargs) -> None:
@@ -189,4 +194,3 @@ def with_masks(info: dict[str, np.ndarray], num_envs: int) -> dict[str, np.ndarr
     envs that set it (here every env sets every key)."""
     mask = np.ones(num_envs, dtype=bool)
     return {**info, **{f"_{key}": mask for key in info}}
-

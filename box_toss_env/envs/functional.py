@@ -49,13 +49,22 @@ def _columns(*pairs: tuple[str, int]) -> tuple[tuple[str, ...], np.ndarray]:
     return tuple(name for name, _ in pairs), np.array([column for _, column in pairs], dtype=np.intp)
 
 
-RESET_INFO = _columns(("target_x", task.EP_TARGET_X), ("release_x", task.EP_RELEASE_X),
-                      ("release_y", task.EP_RELEASE_Y), ("release_angle", task.EP_RELEASE_ANGLE),
-                      ("mass", task.EP_MASS), ("friction", task.EP_FRICTION), ("restitution", task.EP_RESTITUTION))
-RESET_INFO_WITH_BASE = _columns(*zip(*RESET_INFO, strict=True), ("base_length", task.EP_BASE_LENGTH),
-                                ("base_height", task.EP_BASE_HEIGHT))
-STEP_STATS = np.array([layout.FIRST_CONTACT_TIME, layout.END_TIME, layout.MAX_PENETRATION, layout.N_IMPACTS,
-                       layout.N_STEPS], dtype=np.intp)
+RESET_INFO = _columns(
+    ("target_x", task.EP_TARGET_X),
+    ("release_x", task.EP_RELEASE_X),
+    ("release_y", task.EP_RELEASE_Y),
+    ("release_angle", task.EP_RELEASE_ANGLE),
+    ("mass", task.EP_MASS),
+    ("friction", task.EP_FRICTION),
+    ("restitution", task.EP_RESTITUTION),
+)
+RESET_INFO_WITH_BASE = _columns(
+    *zip(*RESET_INFO, strict=True), ("base_length", task.EP_BASE_LENGTH), ("base_height", task.EP_BASE_HEIGHT)
+)
+STEP_STATS = np.array(
+    [layout.FIRST_CONTACT_TIME, layout.END_TIME, layout.MAX_PENETRATION, layout.N_IMPACTS, layout.N_STEPS],
+    dtype=np.intp,
+)
 STEP_EPISODE = np.array([task.EP_TARGET_X, task.EP_MASS, task.EP_FRICTION, task.EP_RESTITUTION], dtype=np.intp)
 
 
@@ -100,7 +109,7 @@ class ThrowBatch:
     @functools.cached_property
     def thrown_state(self) -> np.ndarray:
         """(n, 6) the thrown boxes' states: a view of ``state``."""
-        return self.state[::self.bodies_per_throw]
+        return self.state[:: self.bodies_per_throw]
 
     @functools.cached_property
     def base_state(self) -> np.ndarray | None:
@@ -110,7 +119,7 @@ class ThrowBatch:
     @functools.cached_property
     def thrown_stats(self) -> np.ndarray:
         """(n, layout.STATS_SIZE) what the engine recorded of the thrown boxes: a view of ``stats``."""
-        return self.stats[::self.bodies_per_throw]
+        return self.stats[:: self.bodies_per_throw]
 
     def __getstate__(self) -> dict[str, Any]:
         """Pickled without the cached views: they are views of ``state`` and ``stats`` again after unpickling."""
@@ -118,8 +127,13 @@ class ThrowBatch:
 
     def copy(self) -> ThrowBatch:
         """A deep copy (the functional way to keep a state before a method writes into it)."""
-        return ThrowBatch(task.Episodes(self.episodes.data.copy()), self.params.copy(), self.state.copy(),
-                          self.stats.copy(), self.params_written)
+        return ThrowBatch(
+            task.Episodes(self.episodes.data.copy()),
+            self.params.copy(),
+            self.state.copy(),
+            self.stats.copy(),
+            self.params_written,
+        )
 
 
 class BoxTossFunctional:
@@ -144,17 +158,34 @@ class BoxTossFunctional:
         self.config = config = task.make_task_config(**{name: args[name] for name in task_names})
         # the engine validates the solver settings (dt, solver, material) and names what is wrong
         scene = Scene(
-            boxes=(Box(length=args["box_length"], width=args["box_width"], mass=config.mass_range[1],
-                       position=(config.release_x_range[0], config.release_height_range[0])),),
-            dt=args["dt"], gravity=-config.gravity, restitution=config.restitution_range[1],
-            friction=config.friction_range[1], penalty_stiffness=config.penalty_stiffness, solver=args["solver"])
+            boxes=(
+                Box(
+                    length=args["box_length"],
+                    width=args["box_width"],
+                    mass=config.mass_range[1],
+                    position=(config.release_x_range[0], config.release_height_range[0]),
+                ),
+            ),
+            dt=args["dt"],
+            gravity=-config.gravity,
+            restitution=config.restitution_range[1],
+            friction=config.friction_range[1],
+            penalty_stiffness=config.penalty_stiffness,
+            solver=args["solver"],
+        )
         self.solver, self.dt = scene.solver, scene.dt
         self.max_steps = max(1, check_step_count("max_sim_time", config.max_sim_time, scene.dt))
         # with a base box the thrown box and the base are one scene of colliding boxes (the colliding kernel);
         # without one, the floor-only kernel, which compiles no box-box contact at all
-        self.flags = KernelFlags(solver=scene.solver, use_impulses=True, use_penalty=scene.has_penalty,
-                                 use_friction=config.friction_range[1] > 0.0, record=False, parallel=False,
-                                 boxes_collide=config.base_box)
+        self.flags = KernelFlags(
+            solver=scene.solver,
+            use_impulses=True,
+            use_penalty=scene.has_penalty,
+            use_friction=config.friction_range[1] > 0.0,
+            record=False,
+            parallel=False,
+            boxes_collide=config.base_box,
+        )
         self.settings = make_settings(scene, self.max_steps, until_rest=True)
         self.observation_low, self.observation_high = task.observation_bounds(config, self.max_steps * self.dt)
 
@@ -162,8 +193,12 @@ class BoxTossFunctional:
     def empty(self, n: int) -> ThrowBatch:
         """A batch of ``n`` throws, its arrays zero (``initial`` or ``for_episodes`` fills them)."""
         bodies = n * self.config.bodies_per_env
-        return ThrowBatch(task.Episodes.empty(n, self.config.episode_size), np.zeros((bodies, layout.PARAM_SIZE)),
-                          np.zeros((bodies, layout.STATE_SIZE)), np.zeros((bodies, layout.STATS_SIZE)))
+        return ThrowBatch(
+            task.Episodes.empty(n, self.config.episode_size),
+            np.zeros((bodies, layout.PARAM_SIZE)),
+            np.zeros((bodies, layout.STATE_SIZE)),
+            np.zeros((bodies, layout.STATS_SIZE)),
+        )
 
     def for_episodes(self, episodes: task.Episodes) -> ThrowBatch:
         """A new batch of the given episodes (n rows), the boxes in the hand: to throw from episodes
@@ -172,17 +207,28 @@ class BoxTossFunctional:
         batch.episodes.data[:] = episodes.data
         return self.place(batch)
 
-    def make_simulator(self, *, parallel: bool = False, threads: int | None = None, record: bool = False,
-                       start_interpreted: bool = False) -> Simulator | GroupedSimulator:
+    def make_simulator(
+        self,
+        *,
+        parallel: bool = False,
+        threads: int | None = None,
+        record: bool = False,
+        start_interpreted: bool = False,
+    ) -> Simulator | GroupedSimulator:
         """The engine for this task's throws. ``parallel=False``: one throw's scene per call (the single
         env; ``record`` keeps its trajectory). ``parallel=True``: any batch, on ``threads`` threads (with a
         base box each throw's two boxes stepped together, ``physics.grouped``). The compiled kernel is
         shared by every simulator of the same flags (numba's cache)."""
         if not parallel:
-            return Simulator(dataclasses.replace(self.flags, record=record), threads=threads,
-                             start_interpreted=start_interpreted)
-        return make_grouped_simulator(dataclasses.replace(self.flags, parallel=True, record=record),
-                                      self.config.bodies_per_env, threads=threads, start_interpreted=start_interpreted)
+            return Simulator(
+                dataclasses.replace(self.flags, record=record), threads=threads, start_interpreted=start_interpreted
+            )
+        return make_grouped_simulator(
+            dataclasses.replace(self.flags, parallel=True, record=record),
+            self.config.bodies_per_env,
+            threads=threads,
+            start_interpreted=start_interpreted,
+        )
 
     # -- 1. initial: episodes drawn, boxes in the hand ---------------------------------------------
     def initial(self, rng: np.random.Generator, batch: ThrowBatch) -> ThrowBatch:
@@ -230,8 +276,13 @@ class BoxTossFunctional:
         (checked actions (n, 3), ``task.actions_to_throws``); base boxes stand where they were placed."""
         return self._write_states(batch, task.actions_to_throws(actions, self.config))
 
-    def simulate(self, batch: ThrowBatch, simulator: Simulator | GroupedSimulator,
-                 trajectory: np.ndarray | None = None, events: np.ndarray | None = None) -> ThrowBatch:
+    def simulate(
+        self,
+        batch: ThrowBatch,
+        simulator: Simulator | GroupedSimulator,
+        trajectory: np.ndarray | None = None,
+        events: np.ndarray | None = None,
+    ) -> ThrowBatch:
         """Run every throw until its box rests or ``max_sim_time`` (``make_simulator``); the final states
         and the engine's stats are written into the batch."""
         simulator.run(batch.state, batch.params, self.settings, batch.stats, trajectory, events)
@@ -293,7 +344,7 @@ class BoxTossFunctional:
         at_rest = self.at_rest(batch)
         reward, terms, success, distance, orientation_error = self.landing(batch, at_rest)
         # a few grouped copies (a row per key), not one numpy call per key: the single env pays each call
-        x, y, angle = batch.thrown_state[:, layout.X:layout.ANGLE + 1].T.copy()
+        x, y, angle = batch.thrown_state[:, layout.X : layout.ANGLE + 1].T.copy()
         first_contact, end_time, penetration, impacts, steps = batch.thrown_stats.take(STEP_STATS, axis=1).T
         target_x, mass, friction, restitution = batch.episodes.data.take(STEP_EPISODE, axis=1).T
         info = {
@@ -324,29 +375,40 @@ class BoxTossFunctional:
         """What the throw that ended in ``observation`` (outside the bounds) did, for the solver that ran."""
         low, high = self.observation_low, self.observation_high
         column = int(np.argmax(np.maximum(low - observation, observation - high)))
-        where = (f"the throw ended with {task.observation_names(self.config)[column]} = {observation[column]:g}, "
-                 f"outside the observation bounds [{low[column]:g}, {high[column]:g}]")
+        where = (
+            f"the throw ended with {task.observation_names(self.config)[column]} = {observation[column]:g}, "
+            f"outside the observation bounds [{low[column]:g}, {high[column]:g}]"
+        )
         stiffness = self.config.penalty_stiffness
         if column == task.OBS_Y and observation[column] < low[column]:
-            what = (f"{where}: the box sank through the floor (its centre more than a corner radius below it) "
-                    f"with solver={self.solver!r}. ")
+            what = (
+                f"{where}: the box sank through the floor (its centre more than a corner radius below it) "
+                f"with solver={self.solver!r}. "
+            )
             if self.solver == "robust":
                 return what + "The robust solver should never let a box through: please report these arguments"
             if stiffness == 0.0:
-                return what + ("With penalty_stiffness=0 the seed scheme has nothing that pushes a corner back out "
-                               "of the floor: give penalty_stiffness > 0, or use solver='robust'")
-            return what + (f"The seed scheme's penalty spring (penalty_stiffness={stiffness:g} N/m) was too soft to "
-                           "hold it: use a stiffer one (with a dt small enough for it), or solver='robust'")
+                return what + (
+                    "With penalty_stiffness=0 the seed scheme has nothing that pushes a corner back out "
+                    "of the floor: give penalty_stiffness > 0, or use solver='robust'"
+                )
+            return what + (
+                f"The seed scheme's penalty spring (penalty_stiffness={stiffness:g} N/m) was too soft to "
+                "hold it: use a stiffer one (with a dt small enough for it), or solver='robust'"
+            )
         what = f"{where} that energy conservation guarantees: solver={self.solver!r} created energy. "
         if self.solver == "robust":
             return what + "The robust solver should never create energy: please report these arguments"
-        return what + (f"The seed scheme's explicit penalty spring gains energy when dt is too large for its "
-                       f"stiffness (dt={self.dt:g} s with penalty_stiffness={stiffness:g} N/m): use a smaller dt "
-                       "(e.g. 1/1024 s for 1e5 N/m), a softer penalty_stiffness, or solver='robust'")
+        return what + (
+            f"The seed scheme's explicit penalty spring gains energy when dt is too large for its "
+            f"stiffness (dt={self.dt:g} s with penalty_stiffness={stiffness:g} N/m): use a smaller dt "
+            "(e.g. 1/1024 s for 1e5 N/m), a softer penalty_stiffness, or solver='robust'"
+        )
 
 
-def base_landing_info(base_states: np.ndarray, states: np.ndarray, episodes: task.Episodes,
-                      config: task.TaskConfig) -> dict[str, np.ndarray]:
+def base_landing_info(
+    base_states: np.ndarray, states: np.ndarray, episodes: task.Episodes, config: task.TaskConfig
+) -> dict[str, np.ndarray]:
     """The step info of a task with a base box, (n,) arrays: where the base ended (``base_x``, ``base_y``
     [m], ``base_angle`` [rad, wrapped to [-pi, pi)]), the thrown box's lowest point above the base's top
     (``height_above_base`` [m]) and whether it rests on it (``on_base``: within ``task.SUPPORT_TOLERANCE``
@@ -354,9 +416,13 @@ def base_landing_info(base_states: np.ndarray, states: np.ndarray, episodes: tas
     _, dy = task.landing_offsets(states, episodes, config, base_states)
     top_x, _, half_top = task.base_top(base_states, episodes)
     on_base = (np.abs(dy) <= task.SUPPORT_TOLERANCE) & (np.abs(states[:, layout.X] - top_x) <= half_top)
-    return {"base_x": base_states[:, layout.X].copy(), "base_y": base_states[:, layout.Y].copy(),
-            "base_angle": task.wrap_angles(base_states[:, layout.ANGLE]), "height_above_base": dy,
-            "on_base": on_base}
+    return {
+        "base_x": base_states[:, layout.X].copy(),
+        "base_y": base_states[:, layout.Y].copy(),
+        "base_angle": task.wrap_angles(base_states[:, layout.ANGLE]),
+        "height_above_base": dy,
+        "on_base": on_base,
+    }
 
 
 def episodes_from_reset_infos(reset_infos: list[dict[str, Any]]) -> task.Episodes:

@@ -136,8 +136,10 @@ class BoxTossGoalEnv(gym.Env):
 
     def __init__(self, render_mode: str | None = None, **kwargs):
         if kwargs.get("base_box"):
-            raise ValueError("BoxToss-Goal-v0 does not take base_box=True: the goal (x, at rest, tilt, face) "
-                             "does not hold where the base box ended, which the distance depends on")
+            raise ValueError(
+                "BoxToss-Goal-v0 does not take base_box=True: the goal (x, at rest, tilt, face) "
+                "does not hold where the base box ended, which the distance depends on"
+            )
         self.throw_env = BoxTossEnv(render_mode=render_mode, **kwargs)
         self.render_mode = self.throw_env.render_mode
         self.config = self.throw_env.config
@@ -147,11 +149,13 @@ class BoxTossGoalEnv(gym.Env):
         x_high = max(inner.high[task.OBS_X], inner.high[task.OBS_TARGET_X])
         low = np.array([x_low, 0.0, -MAX_TILT, 0.0, 0.0, 0.0, 0.0], dtype=np.float32)
         high = np.array([x_high, 1.0, MAX_TILT, 1.0, 1.0, 1.0, 1.0], dtype=np.float32)
-        self.observation_space = spaces.Dict({
-            "observation": inner,
-            "achieved_goal": spaces.Box(low, high, dtype=np.float32),
-            "desired_goal": spaces.Box(low, high, dtype=np.float32),
-        })
+        self.observation_space = spaces.Dict(
+            {
+                "observation": inner,
+                "achieved_goal": spaces.Box(low, high, dtype=np.float32),
+                "desired_goal": spaces.Box(low, high, dtype=np.float32),
+            }
+        )
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         """As ``BoxTossEnv.reset``: the throw env draws from this env's ``np_random``."""
@@ -165,8 +169,9 @@ class BoxTossGoalEnv(gym.Env):
     def step(self, action):
         """Throw with ``BoxTossEnv.step``; the reward is ``compute_reward`` of the goals."""
         observation, _, _, _, info = self.throw_env.step(action)
-        achieved = achieved_goals(np.array([info["final_x"]]), np.array([info["final_angle"]]),
-                                  np.array([info["at_rest"]]))[0]
+        achieved = achieved_goals(
+            np.array([info["final_x"]]), np.array([info["final_angle"]]), np.array([info["at_rest"]])
+        )[0]
         obs = self._dict(observation, achieved)
         reward = float(self.compute_reward(achieved, obs["desired_goal"], info))
         info["is_success"] = bool(self.compute_success(achieved, obs["desired_goal"]))
@@ -175,8 +180,11 @@ class BoxTossGoalEnv(gym.Env):
         return obs, reward, terminated, truncated, info
 
     def _dict(self, observation: np.ndarray, achieved: np.ndarray) -> dict[str, np.ndarray]:
-        return {"observation": observation, "achieved_goal": achieved,
-                "desired_goal": desired_goals(self.throw_env._episodes)[0]}
+        return {
+            "observation": observation,
+            "achieved_goal": achieved,
+            "desired_goal": desired_goals(self.throw_env._episodes)[0],
+        }
 
     # -- goal functions, vectorised over leading dimensions -----------------------------------------
     def _terms(self, achieved_goal, desired_goal):
@@ -189,16 +197,22 @@ class BoxTossGoalEnv(gym.Env):
         distance = np.abs(achieved[:, GOAL_X] - desired[:, GOAL_X])
         angles = achieved[:, GOAL_TILT] - task.QUARTER_TURN * np.argmax(achieved[:, GOAL_FACES], axis=1)
         orientation_error = task.orientation_errors(angles, desired[:, GOAL_FACES])
-        success = ((achieved[:, GOAL_AT_REST] > 0.5) & (distance <= self.config.position_tolerance)
-                   & (orientation_error < MAX_TILT))
+        success = (
+            (achieved[:, GOAL_AT_REST] > 0.5)
+            & (distance <= self.config.position_tolerance)
+            & (orientation_error < MAX_TILT)
+        )
         return tuple(value.reshape(shape[:-1]) for value in (distance, orientation_error, success))
 
     def compute_reward(self, achieved_goal, desired_goal, info) -> np.ndarray:
         """The reward (see Rewards) of goals (..., 7), of the leading shape; ``info`` is not used."""
         config = self.config
         distance, orientation_error, success = self._terms(achieved_goal, desired_goal)
-        return ((0.0 - config.distance_weight * distance) + (0.0 - config.orientation_weight * orientation_error)
-                + config.success_bonus * success)
+        return (
+            (0.0 - config.distance_weight * distance)
+            + (0.0 - config.orientation_weight * orientation_error)
+            + config.success_bonus * success
+        )
 
     def compute_success(self, achieved_goal, desired_goal) -> np.ndarray:
         """Whether goals (..., 7) are a success: at rest, within ``position_tolerance`` of the desired x,

@@ -193,6 +193,7 @@ def seed_sequence_constants() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.nd
     """The (xor, multiplier) pairs of SeedSequence's hashes, in the order numpy applies them: 16 for
     mixing the pool (4 to take the entropy in, 12 to mix every word into every other), 8 to draw the 8
     32-bit output words. They do not depend on the data (numpy's ``_seed_sequence`` constants)."""
+
     def chain(init: int, mult: int, count: int) -> tuple[np.ndarray, np.ndarray]:
         xors, mults, constant = [], [], init
         for _ in range(count):
@@ -356,8 +357,10 @@ class RandomStreams:
         advance the stream)."""
         bit_generator = np.random.PCG64()
         row = [int(v) for v in self.states[index]]
-        bit_generator.state = {"bit_generator": "PCG64",
-                               "state": {"state": (row[STATE_HI] << 64) | row[STATE_LO],
-                                         "inc": (row[INC_HI] << 64) | row[INC_LO]},
-                               "has_uint32": 0, "uinteger": 0}
+        bit_generator.state = {
+            "bit_generator": "PCG64",
+            "state": {"state": (row[STATE_HI] << 64) | row[STATE_LO], "inc": (row[INC_HI] << 64) | row[INC_LO]},
+            "has_uint32": 0,
+            "uinteger": 0,
+        }
         return np.random.Generator(bit_generator)

@@ -75,9 +75,14 @@ class ThrowOutcome:
     def from_step(cls, reward: float, info: dict, target_faces: np.ndarray) -> ThrowOutcome:
         """From what ``BoxTossEnv.step`` returned and the episode's (4,) target-face mask."""
         face = int(info["face_down"])
-        return cls(success=bool(info["success"]), distance=float(info["distance"]), face_down=face,
-                   on_target_face=bool(target_faces[face] > 0.0), reward=float(reward),
-                   at_rest=bool(info["at_rest"]))
+        return cls(
+            success=bool(info["success"]),
+            distance=float(info["distance"]),
+            face_down=face,
+            on_target_face=bool(target_faces[face] > 0.0),
+            reward=float(reward),
+            at_rest=bool(info["at_rest"]),
+        )
 
     def lines(self) -> tuple[str, ...]:
         """The headline (success yes / no), then distance, face down and reward."""
@@ -113,14 +118,21 @@ class ThrowRenderer:
     raises ``gymnasium.error.DependencyNotInstalled`` naming it.
     """
 
-    def __init__(self, config: task.TaskConfig, width_px: int, height_px: int, fps: float, *,
-                 trace: bool = False, result_hold_s: float = RESULT_HOLD_S):
+    def __init__(
+        self,
+        config: task.TaskConfig,
+        width_px: int,
+        height_px: int,
+        fps: float,
+        *,
+        trace: bool = False,
+        result_hold_s: float = RESULT_HOLD_S,
+    ):
         from box_toss_env.rendering import SceneRenderer
 
         self.width_px, self.height_px = int(width_px), int(height_px)
         side = min(SIDE_PADDING_PX, self.width_px / 20)
-        self.padding_px = (side, side, min(TEXT_BAND_PX, self.height_px / 5),
-                           min(GROUND_BAND_PX, self.height_px / 6))
+        self.padding_px = (side, side, min(TEXT_BAND_PX, self.height_px / 5), min(GROUND_BAND_PX, self.height_px / 6))
         x_min = min(config.release_x_range[0], config.target_x_range[0]) - VIEW_MARGIN_M
         x_max = max(config.release_x_range[1], config.target_x_range[1]) + VIEW_MARGIN_M + VIEW_OVERSHOOT_M
         self.home_bounds = np.array([x_min, x_max, 0.0, config.release_height_range[1] + VIEW_HEADROOM_M])
@@ -143,12 +155,10 @@ class ThrowRenderer:
         from box_toss_env.rendering import Camera
 
         x_min, x_max, y_min, y_max = (float(b) for b in bounds)
-        camera = Camera.from_view(x_min, x_max, y_min, y_max, self.width_px, self.height_px,
-                                  padding_px=self.padding_px)
+        camera = Camera.from_view(x_min, x_max, y_min, y_max, self.width_px, self.height_px, padding_px=self.padding_px)
         _, _, top, bottom = self.padding_px
         y_max = max(y_max, y_min + (self.height_px - top - bottom) / camera.pixels_per_metre)
-        return Camera.from_view(x_min, x_max, y_min, y_max, self.width_px, self.height_px,
-                                padding_px=self.padding_px)
+        return Camera.from_view(x_min, x_max, y_min, y_max, self.width_px, self.height_px, padding_px=self.padding_px)
 
     def box_bounds(self, states: np.ndarray) -> np.ndarray:
         """(n, 4) bounds of the box in engine states (n, 6), widened by ``BOX_MARGIN_M`` except below (the
@@ -156,8 +166,11 @@ class ThrowRenderer:
         from box_toss_env.rendering import bounds_of_boxes, box_vertices
 
         states = np.asarray(states, dtype=np.float64).reshape(-1, layout.STATE_SIZE)
-        corners = box_vertices(states[:, layout.X:layout.Y + 1], states[:, layout.ANGLE],
-                               np.broadcast_to(self.half_extents, (len(states), 2)))
+        corners = box_vertices(
+            states[:, layout.X : layout.Y + 1],
+            states[:, layout.ANGLE],
+            np.broadcast_to(self.half_extents, (len(states), 2)),
+        )
         return bounds_of_boxes(corners) + np.array([-BOX_MARGIN_M, BOX_MARGIN_M, 0.0, BOX_MARGIN_M])
 
     def fitted_camera(self, states: np.ndarray):
@@ -167,8 +180,9 @@ class ThrowRenderer:
         bounds = self.box_bounds(states)
         return self.camera_for(union_bounds(self.home_bounds, bounds.min(axis=0), bounds.max(axis=0)))
 
-    def plan_throw(self, trajectory: np.ndarray, dt: float, *, follow: bool = False,
-                   skip_first: bool = False) -> list[PlannedFrame]:
+    def plan_throw(
+        self, trajectory: np.ndarray, dt: float, *, follow: bool = False, skip_first: bool = False
+    ) -> list[PlannedFrame]:
         """The frames of a recorded throw (T, 6) on the grid t = k dt, at ``self.fps``, then the final pose
         held ``result_hold_s``; the last frame of the throw and the held ones show the result.
 
@@ -185,14 +199,24 @@ class ThrowRenderer:
             cameras = [self.camera_for(b) for b in follow_bounds(held, round(FOLLOW_WINDOW_S * self.fps))]
         else:
             cameras = [self.fitted_camera(trajectory)] * len(rows)
-        planned = [PlannedFrame(int(row), camera, f"t = {row * dt:.2f} s", index == len(rows) - 1)
-                   for index, (row, camera) in enumerate(zip(rows, cameras, strict=True))]
+        planned = [
+            PlannedFrame(int(row), camera, f"t = {row * dt:.2f} s", index == len(rows) - 1)
+            for index, (row, camera) in enumerate(zip(rows, cameras, strict=True))
+        ]
         planned += [planned[-1]] * int(round(self.result_hold_s * self.fps))
         return planned[1:] if skip_first else planned
 
     # -- drawing --------------------------------------------------------------------------------------
-    def _scene(self, state: np.ndarray, target_x: float, target_faces: np.ndarray, caption: str, camera,
-               outcome: ThrowOutcome | None = None, trace: np.ndarray | None = None) -> dict:
+    def _scene(
+        self,
+        state: np.ndarray,
+        target_x: float,
+        target_faces: np.ndarray,
+        caption: str,
+        camera,
+        outcome: ThrowOutcome | None = None,
+        trace: np.ndarray | None = None,
+    ) -> dict:
         faces = np.flatnonzero(target_faces > 0.0)
         states = np.asarray(state, dtype=np.float64).reshape(-1, layout.STATE_SIZE)  # the thrown box first
         half_extents = self.half_extents
@@ -200,28 +224,40 @@ class ThrowRenderer:
             assert self.other_boxes is not None  # set with the other boxes' states
             half_extents = np.vstack((self.half_extents, self.other_boxes))
         return dict(
-            position=states[:, layout.X:layout.Y + 1],
+            position=states[:, layout.X : layout.Y + 1],
             angle=states[:, layout.ANGLE],
             half_extents=half_extents,
             target_x=target_x,
             target_face=int(faces[0]) if faces.size == 1 else None,
             target_tolerance_m=self.tolerance,
             target_label=f"{task.describe_target_faces(target_faces)} down",
-            text_lines=(f"target: {task.describe_target_faces(target_faces)} down at x = {target_x:.2f} m",
-                        caption),
+            text_lines=(f"target: {task.describe_target_faces(target_faces)} down at x = {target_x:.2f} m", caption),
             result_lines=outcome.lines() if outcome is not None else (),
             result_success=outcome.success if outcome is not None else None,
             trace=trace,
             camera=camera,
         )
 
-    def _planned_scene(self, trajectory: np.ndarray, planned: PlannedFrame, target_x: float,
-                       target_faces: np.ndarray, outcome: ThrowOutcome | None) -> dict:
+    def _planned_scene(
+        self,
+        trajectory: np.ndarray,
+        planned: PlannedFrame,
+        target_x: float,
+        target_faces: np.ndarray,
+        outcome: ThrowOutcome | None,
+    ) -> dict:
         shows_result = planned.shows_result and outcome is not None
         caption = planned.caption + (", at rest" if shows_result and outcome is not None and outcome.at_rest else "")
-        trace = thrown_trajectory(trajectory)[:planned.row + 1, layout.X:layout.Y + 1] if self.trace else None
-        return self._scene(trajectory[planned.row], target_x, target_faces, caption, planned.camera,
-                           outcome if shows_result else None, trace)
+        trace = thrown_trajectory(trajectory)[: planned.row + 1, layout.X : layout.Y + 1] if self.trace else None
+        return self._scene(
+            trajectory[planned.row],
+            target_x,
+            target_faces,
+            caption,
+            planned.camera,
+            outcome if shows_result else None,
+            trace,
+        )
 
     def camera_for_state(self, state: np.ndarray):
         """The home camera, or if the box of the engine state (6,) is not inside the home view, the home
@@ -229,26 +265,51 @@ class ThrowRenderer:
         bounds = self.box_bounds(state)[0]
         home = self.home_bounds
         # a box resting on the floor dips into it by up to a few millimetres: the ground band holds that
-        inside = (bounds[0] >= home[0] and bounds[1] <= home[1] and bounds[2] >= home[2] - FLOOR_DIP_M
-                  and bounds[3] <= home[3])
+        inside = (
+            bounds[0] >= home[0]
+            and bounds[1] <= home[1]
+            and bounds[2] >= home[2] - FLOOR_DIP_M
+            and bounds[3] <= home[3]
+        )
         return self.home_camera if inside else self.fitted_camera(state)
 
-    def frame(self, state: np.ndarray, target_x: float, target_faces: np.ndarray, caption: str = "",
-              outcome: ThrowOutcome | None = None) -> np.ndarray:
+    def frame(
+        self,
+        state: np.ndarray,
+        target_x: float,
+        target_faces: np.ndarray,
+        caption: str = "",
+        outcome: ThrowOutcome | None = None,
+    ) -> np.ndarray:
         """An (H, W, 3) uint8 frame of one engine state (6,), with the result if ``outcome`` is given."""
-        return self.renderer.render_rgb(**self._scene(state, target_x, target_faces, caption,
-                                                      self.camera_for_state(state), outcome))
+        return self.renderer.render_rgb(
+            **self._scene(state, target_x, target_faces, caption, self.camera_for_state(state), outcome)
+        )
 
-    def throw_frames(self, trajectory: np.ndarray, dt: float, target_x: float, target_faces: np.ndarray,
-                     outcome: ThrowOutcome | None = None, skip_first: bool = False) -> list[np.ndarray]:
+    def throw_frames(
+        self,
+        trajectory: np.ndarray,
+        dt: float,
+        target_x: float,
+        target_faces: np.ndarray,
+        outcome: ThrowOutcome | None = None,
+        skip_first: bool = False,
+    ) -> list[np.ndarray]:
         """Frames of a recorded throw (T, 6) on the grid t = k dt, at ``self.fps``, as ``plan_throw`` lays
         them out (one camera fitted to the whole throw); the last ones show ``outcome`` if given."""
-        return [self.renderer.render_rgb(**self._planned_scene(trajectory, planned, target_x, target_faces,
-                                                               outcome))
-                for planned in self.plan_throw(trajectory, dt, skip_first=skip_first)]
+        return [
+            self.renderer.render_rgb(**self._planned_scene(trajectory, planned, target_x, target_faces, outcome))
+            for planned in self.plan_throw(trajectory, dt, skip_first=skip_first)
+        ]
 
-    def play(self, trajectory: np.ndarray, dt: float, target_x: float, target_faces: np.ndarray,
-             outcome: ThrowOutcome | None = None) -> None:
+    def play(
+        self,
+        trajectory: np.ndarray,
+        dt: float,
+        target_x: float,
+        target_faces: np.ndarray,
+        outcome: ThrowOutcome | None = None,
+    ) -> None:
         """Show a recorded throw (T, 6) in the window in real time (at ``self.fps``), the camera following
         the box, then hold the result."""
         for planned in self.plan_throw(trajectory, dt, follow=True):
@@ -273,9 +334,15 @@ def thrown_trajectory(trajectory: np.ndarray) -> np.ndarray:
     return trajectory[:, 0] if trajectory.ndim == 3 else trajectory.reshape(-1, layout.STATE_SIZE)
 
 
-def record_throws(env, path: str | Path, n_throws: int = 1,
-                  policy: Callable[[np.ndarray], np.ndarray] | None = None, seed: int | None = None,
-                  fps: float | None = None, trace: bool = True) -> Path:
+def record_throws(
+    env,
+    path: str | Path,
+    n_throws: int = 1,
+    policy: Callable[[np.ndarray], np.ndarray] | None = None,
+    seed: int | None = None,
+    fps: float | None = None,
+    trace: bool = True,
+) -> Path:
     """Play ``n_throws`` episodes of ``env`` and write every frame of the throws to ``path``.
 
     Each throw is framed by a camera fitted to it, ends on its result held for a second, and with
@@ -290,8 +357,9 @@ def record_throws(env, path: str | Path, n_throws: int = 1,
     from box_toss_env.rendering import write_video
 
     if env.render_mode != "rgb_array_list":
-        raise ValueError(f'record_throws needs an env made with render_mode="rgb_array_list", '
-                         f"got render_mode={env.render_mode!r}")
+        raise ValueError(
+            f'record_throws needs an env made with render_mode="rgb_array_list", got render_mode={env.render_mode!r}'
+        )
     if policy is None:
         env.action_space.seed(seed)
         policy = lambda observation: env.action_space.sample()  # noqa: E731

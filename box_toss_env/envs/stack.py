@@ -214,32 +214,76 @@ class BoxTossStackEnv(gym.Env):
             raise ValueError(f"render_mode must be None or one of {RENDER_MODES}, got {render_mode!r}")
         self.render_mode = render_mode
         self.config = config = stack_task.make_stack_config(
-            n_boxes=n_boxes, box_length_range=box_length_range, box_width_range=box_width_range,
-            mass_range=mass_range, friction=friction, restitution=restitution, penalty_stiffness=penalty_stiffness,
-            gravity=gravity, release_x_range=release_x_range, release_height_range=release_height_range,
-            release_angle_range=release_angle_range, target_x_range=target_x_range, target_radius=target_radius,
-            max_speed=max_speed, launch_angle_range=launch_angle_range, max_spin=max_spin,
-            height_weight=height_weight, distance_weight=distance_weight, fall_penalty=fall_penalty,
-            success_bonus=success_bonus, fall_tolerance=fall_tolerance, success_fraction=success_fraction,
-            max_sim_time=max_sim_time)
-        # the engine validates its settings (dt, material) and names what is wrong
-        scene = Scene(boxes=(Box(length=config.box_length_range[1], width=config.box_width_range[1],
-                                 mass=config.mass_range[1], position=(0.0, config.release_height_range[1])),),
-                      dt=dt, gravity=-config.gravity, restitution=config.restitution, friction=config.friction,
-                      penalty_stiffness=config.penalty_stiffness, boxes_collide=True)
-        self.dt = scene.dt
-        self.max_steps = max(1, check_step_count("max_sim_time", config.max_sim_time, scene.dt))
-        self.flags = KernelFlags(solver="robust", use_impulses=True, use_penalty=scene.has_penalty,
-                                 use_friction=config.friction > 0.0, record=False, parallel=False,
-                                 boxes_collide=True)
-        self._settings = make_settings(scene, self.max_steps, until_rest=True)
-        self.render_size = (check_integer("render_width", render_width, 16, 8192),
-                            check_integer("render_height", render_height, 16, 8192))
+            n_boxes=n_boxes,
+            box_length_range=box_length_range,
+            box_width_range=box_width_range,
+            mass_range=mass_range,
+            friction=friction,
+            restitution=restitution,
+            penalty_stiffness=penalty_stiffness,
+            gravity=gravity,
+            release_x_range=release_x_range,
+            release_height_range=release_height_range,
+            release_angle_range=release_angle_range,
+            target_x_range=target_x_range,
+            target_radius=target_radius,
+            max_speed=max_speed,
+            launch_angle_range=launch_angle_range,
+            max_spin=max_spin,
+            height_weight=height_weight,
+            distance_weight=distance_weight,
+            fall_penalty=fall_penalty,
+            success_bonus=success_bonus,
+            fall_tolerance=fall_tolerance,
+            success_fraction=success_fraction,
+            max_sim_time=max_sim_time,
+        )
+        self._configure_engine(config, dt)
+        self.render_size = (
+            check_integer("render_width", render_width, 16, 8192),
+            check_integer("render_height", render_height, 16, 8192),
+        )
 
         self.action_space = spaces.Box(-1.0, 1.0, shape=(task.ACTION_SIZE,), dtype=np.float32)
         low, high = stack_task.observation_bounds(config, self.max_steps * self.dt)
         self.observation_space = spaces.Box(low, high, dtype=np.float32)
 
+        self._clear_episode(config)
+
+    def _configure_engine(self, config, dt: float) -> None:
+        """The step, the step budget, the kernel's flags and the engine settings of the colliding scene."""
+        # the engine validates its settings (dt, material) and names what is wrong
+        scene = Scene(
+            boxes=(
+                Box(
+                    length=config.box_length_range[1],
+                    width=config.box_width_range[1],
+                    mass=config.mass_range[1],
+                    position=(0.0, config.release_height_range[1]),
+                ),
+            ),
+            dt=dt,
+            gravity=-config.gravity,
+            restitution=config.restitution,
+            friction=config.friction,
+            penalty_stiffness=config.penalty_stiffness,
+            boxes_collide=True,
+        )
+        self.dt = scene.dt
+        self.max_steps = max(1, check_step_count("max_sim_time", config.max_sim_time, scene.dt))
+        self.flags = KernelFlags(
+            solver="robust",
+            use_impulses=True,
+            use_penalty=scene.has_penalty,
+            use_friction=config.friction > 0.0,
+            record=False,
+            parallel=False,
+            boxes_collide=True,
+        )
+        self._settings = make_settings(scene, self.max_steps, until_rest=True)
+
+    def _clear_episode(self, config) -> None:
+        """The per-episode arrays (the hand, every thrown box's state and stats) and counters, empty."""
         n = config.n_boxes
         self._hand = np.zeros((n, stack_task.EPISODE_COLUMNS))
         self._target_x = 0.0
@@ -286,9 +330,12 @@ class BoxTossStackEnv(gym.Env):
         self._needs_reset = False
         if self.render_mode == "human":
             self.render()
-        info = {"target_x": self._target_x, "box_lengths": self._hand[:, stack_task.E_LENGTH].copy(),
-                "box_widths": self._hand[:, stack_task.E_WIDTH].copy(),
-                "box_masses": self._hand[:, stack_task.E_MASS].copy()}
+        info = {
+            "target_x": self._target_x,
+            "box_lengths": self._hand[:, stack_task.E_LENGTH].copy(),
+            "box_widths": self._hand[:, stack_task.E_WIDTH].copy(),
+            "box_masses": self._hand[:, stack_task.E_MASS].copy(),
+        }
         return self._observe(), info
 
     def _observe(self) -> np.ndarray:
@@ -301,7 +348,7 @@ class BoxTossStackEnv(gym.Env):
         actions = task.check_actions(action, self.action_space.shape)
         k = self._thrown
         before = self._state[:k].copy()
-        self._state[k] = stack_task.thrown_states(self._hand[k, stack_task.E_RELEASE_X:], actions, self.config)[0]
+        self._state[k] = stack_task.thrown_states(self._hand[k, stack_task.E_RELEASE_X :], actions, self.config)[0]
         rows = slice(0, k + 1)
         simulator = self._simulator or self._build_simulator()
         simulator.run(self._state[rows], self._params[rows], self._settings, self._stats[rows])
@@ -309,9 +356,8 @@ class BoxTossStackEnv(gym.Env):
         if np.any(stats[:, layout.STATUS] != layout.STATUS_OK):
             check_finite_stats(stats, "robust")  # raises NonFiniteStateError
         at_rest = np.array([not np.isnan(stats[:, layout.REST_TIME]).any()])
-        half = self._params[rows, layout.HALF_LENGTH:layout.HALF_WIDTH + 1]
-        outcome = stack_task.score_throws(before, self._state[None, rows], half, at_rest, self._target_x,
-                                          self.config)
+        half = self._params[rows, layout.HALF_LENGTH : layout.HALF_WIDTH + 1]
+        outcome = stack_task.score_throws(before, self._state[None, rows], half, at_rest, self._target_x, self.config)
         self._thrown = k + 1
         self._height = float(outcome.height[0])
         reward = float(outcome.reward[0])
@@ -321,11 +367,16 @@ class BoxTossStackEnv(gym.Env):
         self._last = outcome
         observation = self._observe()
         if np.any((observation < self.observation_space.low) | (observation > self.observation_space.high)):
-            column = int(np.argmax(np.maximum(self.observation_space.low - observation,
-                                              observation - self.observation_space.high)))
-            raise EnergyGainError(f"the throw ended with {stack_task.observation_names(self.config)[column]} = "
-                                  f"{observation[column]:g}, outside the bounds energy conservation guarantees: "
-                                  "the solver created energy; please report these arguments")
+            column = int(
+                np.argmax(
+                    np.maximum(self.observation_space.low - observation, observation - self.observation_space.high)
+                )
+            )
+            raise EnergyGainError(
+                f"the throw ended with {stack_task.observation_names(self.config)[column]} = "
+                f"{observation[column]:g}, outside the bounds energy conservation guarantees: "
+                "the solver created energy; please report these arguments"
+            )
         x, y, angle = self._state[k, :3].tolist()
         info = {
             **{name: float(value[0]) for name, value in outcome.terms.items()},
@@ -362,18 +413,16 @@ class BoxTossStackEnv(gym.Env):
         m, k = len(actions), self._thrown
         states = np.empty((m, k + 1, layout.STATE_SIZE))
         states[:, :k] = self._state[:k]
-        states[:, k] = stack_task.thrown_states(self._hand[k, stack_task.E_RELEASE_X:], actions, self.config)
-        params = np.tile(self._params[:k + 1], (m, 1))
+        states[:, k] = stack_task.thrown_states(self._hand[k, stack_task.E_RELEASE_X :], actions, self.config)
+        params = np.tile(self._params[: k + 1], (m, 1))
         stats = np.zeros((m * (k + 1), layout.STATS_SIZE))
         flat = states.reshape(m * (k + 1), layout.STATE_SIZE)
-        simulator = GroupedSimulator(dataclasses.replace(self.flags, parallel=threads != 1), k + 1,
-                                     threads=threads)
+        simulator = GroupedSimulator(dataclasses.replace(self.flags, parallel=threads != 1), k + 1, threads=threads)
         simulator.run(flat, params, self._settings, stats)
         finite = (stats[:, layout.STATUS] == layout.STATUS_OK).reshape(m, k + 1).all(axis=1)
         at_rest = ~np.isnan(stats[:, layout.REST_TIME]).reshape(m, k + 1).any(axis=1)
-        half = self._params[:k + 1, layout.HALF_LENGTH:layout.HALF_WIDTH + 1]
-        outcomes = stack_task.score_throws(self._state[:k], states, half, at_rest & finite, self._target_x,
-                                           self.config)
+        half = self._params[: k + 1, layout.HALF_LENGTH : layout.HALF_WIDTH + 1]
+        outcomes = stack_task.score_throws(self._state[:k], states, half, at_rest & finite, self._target_x, self.config)
         outcomes.reward = np.where(finite, outcomes.reward, -np.inf)
         self.last_tried = states
         return outcomes
@@ -396,26 +445,47 @@ class BoxTossStackEnv(gym.Env):
         """The keyword arguments of ``SceneRenderer.render_rgb``: every box thrown and the one in the hand."""
         k, n = self._thrown, self.config.n_boxes
         states = self._state[:k]
-        half = self._params[:k, layout.HALF_LENGTH:layout.HALF_WIDTH + 1]
+        half = self._params[:k, layout.HALF_LENGTH : layout.HALF_WIDTH + 1]
         if k < n and not self._needs_reset:  # the box in the hand, at its release pose
             hand = self._hand[k]
-            states = np.vstack((states, [hand[stack_task.E_RELEASE_X], hand[stack_task.E_RELEASE_Y],
-                                         hand[stack_task.E_RELEASE_ANGLE], 0.0, 0.0, 0.0]))
-            half = np.vstack((half, self._params[k, layout.HALF_LENGTH:layout.HALF_WIDTH + 1]))
+            states = np.vstack(
+                (
+                    states,
+                    [
+                        hand[stack_task.E_RELEASE_X],
+                        hand[stack_task.E_RELEASE_Y],
+                        hand[stack_task.E_RELEASE_ANGLE],
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                )
+            )
+            half = np.vstack((half, self._params[k, layout.HALF_LENGTH : layout.HALF_WIDTH + 1]))
         radius, target_x = self.config.target_radius, self._target_x
         height_line = np.array([[target_x - radius, self._height], [target_x + radius, self._height]])
         result: tuple[str, ...] = ()
         success = None
         if self._needs_reset and self._last is not None:
             success = bool(self._last.success[0])
-            result = (f"success: {'yes' if success else 'no'}", f"stack height: {self._height:.2f} m",
-                      "the stack fell" if self._last.fell[0] else f"{int(self._last.on_target[0].sum())} boxes on it")
-        return dict(position=states[:, :2], angle=states[:, 2], half_extents=half, target_x=target_x,
-                    target_tolerance_m=radius, target_label="stack here",
-                    text_lines=(f"throw {k} of {n}, stack height {self._height:.2f} m",
-                                f"score {self._score:+.2f}"),
-                    result_lines=result, result_success=success, trace=height_line if self._height > 0 else None,
-                    camera=self._camera(states, half))
+            result = (
+                f"success: {'yes' if success else 'no'}",
+                f"stack height: {self._height:.2f} m",
+                "the stack fell" if self._last.fell[0] else f"{int(self._last.on_target[0].sum())} boxes on it",
+            )
+        return dict(
+            position=states[:, :2],
+            angle=states[:, 2],
+            half_extents=half,
+            target_x=target_x,
+            target_tolerance_m=radius,
+            target_label="stack here",
+            text_lines=(f"throw {k} of {n}, stack height {self._height:.2f} m", f"score {self._score:+.2f}"),
+            result_lines=result,
+            result_success=success,
+            trace=height_line if self._height > 0 else None,
+            camera=self._camera(states, half),
+        )
 
     def _camera(self, states: np.ndarray, half: np.ndarray):
         """The home view (hand, targets, the tallest stack the hand can make), widened to hold every box."""
@@ -430,8 +500,9 @@ class BoxTossStackEnv(gym.Env):
             x_min, x_max = min(x_min, bounds[:, 0].min() - 0.2), max(x_max, bounds[:, 1].max() + 0.2)
             y_max = max(y_max, bounds[:, 3].max() + 0.2)
         width, height = self.render_size
-        return Camera.from_view(x_min, x_max, 0.0, y_max, width, height,
-                                padding_px=(8, 8, min(40, height / 5), min(30, height / 6)))
+        return Camera.from_view(
+            x_min, x_max, 0.0, y_max, width, height, padding_px=(8, 8, min(40, height / 5), min(30, height / 6))
+        )
 
     def _renderer_for_env(self):
         if self._renderer is None:

@@ -28,11 +28,16 @@ OFFSET_RANGE = 0.3  # [m]
 TURN_RANGE = 0.25 * math.pi  # [rad]
 
 
-def command_actions(observation: np.ndarray, commands: np.ndarray, config: stack_task.StackConfig,
-                    flight_time_range: tuple[float, float] = FLIGHT_TIME_RANGE, offset_range: float = OFFSET_RANGE,
-                    turn_range: float = TURN_RANGE) -> np.ndarray:
+def command_actions(
+    observation: np.ndarray,
+    commands: np.ndarray,
+    config: stack_task.StackConfig,
+    flight_time_range: tuple[float, float] = FLIGHT_TIME_RANGE,
+    offset_range: float = OFFSET_RANGE,
+    turn_range: float = TURN_RANGE,
+) -> np.ndarray:
     """The env actions (m, 3) of ``commands`` (m, 3) in [-1, 1] from one ``observation`` (module docstring)."""
-    tail = np.asarray(observation, dtype=np.float64)[stack_task.BODY_SIZE * config.n_boxes:]
+    tail = np.asarray(observation, dtype=np.float64)[stack_task.BODY_SIZE * config.n_boxes :]
     x0, y0 = tail[stack_task.H_X], tail[stack_task.H_Y]
     theta0 = math.atan2(tail[stack_task.H_SIN], tail[stack_task.H_COS])
     half_length, half_width = 0.5 * tail[stack_task.H_LENGTH], 0.5 * tail[stack_task.H_WIDTH]
@@ -52,8 +57,13 @@ class StackCommands(gym.Wrapper):
     """``BoxToss-Stack-v0`` acting in throw commands (module docstring); observations and rewards are the env's.
     Loads in RL Baselines3 Zoo as ``env_wrapper: box_toss_env.envs.stack_commands.StackCommands``."""
 
-    def __init__(self, env: gym.Env, flight_time_range: tuple[float, float] = FLIGHT_TIME_RANGE,
-                 offset_range: float = OFFSET_RANGE, turn_range: float = TURN_RANGE):
+    def __init__(
+        self,
+        env: gym.Env,
+        flight_time_range: tuple[float, float] = FLIGHT_TIME_RANGE,
+        offset_range: float = OFFSET_RANGE,
+        turn_range: float = TURN_RANGE,
+    ):
         super().__init__(env)
         self.config: stack_task.StackConfig = env.unwrapped.config  # type: ignore[attr-defined]  # BoxToss-Stack
         self.settings = (cast(tuple[float, float], tuple(flight_time_range)), float(offset_range), float(turn_range))
@@ -74,18 +84,28 @@ class StackCommands(gym.Wrapper):
         return observation, reward, terminated, truncated, info
 
 
-def batch_command_actions(observations: np.ndarray, commands: np.ndarray, config: stack_task.StackConfig,
-                          flight_time_range: tuple[float, float] = FLIGHT_TIME_RANGE,
-                          offset_range: float = OFFSET_RANGE, turn_range: float = TURN_RANGE) -> np.ndarray:
+def batch_command_actions(
+    observations: np.ndarray,
+    commands: np.ndarray,
+    config: stack_task.StackConfig,
+    flight_time_range: tuple[float, float] = FLIGHT_TIME_RANGE,
+    offset_range: float = OFFSET_RANGE,
+    turn_range: float = TURN_RANGE,
+) -> np.ndarray:
     """The env actions (n, 3) of one command per env: ``commands`` (n, 3) from ``observations`` (n, obs), row by
     row as ``command_actions`` (a vector env's, or a policy's batch)."""
     observations, commands = np.asarray(observations), np.asarray(commands, dtype=np.float64).reshape(-1, 3)
-    return np.concatenate([command_actions(observations[i], commands[i:i + 1], config, flight_time_range,
-                                           offset_range, turn_range) for i in range(len(commands))])
+    return np.concatenate(
+        [
+            command_actions(observations[i], commands[i : i + 1], config, flight_time_range, offset_range, turn_range)
+            for i in range(len(commands))
+        ]
+    )
 
 
-def check_stack_command_settings(flight_time_range=FLIGHT_TIME_RANGE, offset_range=OFFSET_RANGE,
-                                 turn_range=TURN_RANGE) -> tuple[tuple[float, float], float, float]:
+def check_stack_command_settings(
+    flight_time_range=FLIGHT_TIME_RANGE, offset_range=OFFSET_RANGE, turn_range=TURN_RANGE
+) -> tuple[tuple[float, float], float, float]:
     """The command settings, checked: a ValueError naming the first that is out of range."""
     low, high = (float(v) for v in flight_time_range)
     if not (0.0 < low < high and math.isfinite(high)):

@@ -48,13 +48,26 @@ BODY_COLUMNS = ("x", "y", "cos(angle)", "sin(angle)", "vx", "vy", "spin", "lengt
 and 1.0 once thrown (the mask)."""
 BODY_SIZE = len(BODY_COLUMNS)
 B_X, B_Y, B_COS, B_SIN, B_VX, B_VY, B_SPIN, B_LENGTH, B_WIDTH, B_MASS, B_THROWN = range(BODY_SIZE)
-TAIL_COLUMNS = ("hand x", "hand y", "hand cos(angle)", "hand sin(angle)", "hand length", "hand width", "hand mass",
-                "in hand", "target x", "target radius", "stack height", "boxes left")
+TAIL_COLUMNS = (
+    "hand x",
+    "hand y",
+    "hand cos(angle)",
+    "hand sin(angle)",
+    "hand length",
+    "hand width",
+    "hand mass",
+    "in hand",
+    "target x",
+    "target radius",
+    "stack height",
+    "boxes left",
+)
 """After the boxes' columns: the box in the hand (its release pose, size and mass, and 1.0 while there is one;
 zeros after the last throw), the goal and the progress."""
 TAIL_SIZE = len(TAIL_COLUMNS)
-(H_X, H_Y, H_COS, H_SIN, H_LENGTH, H_WIDTH, H_MASS, H_IN_HAND, G_TARGET_X, G_TARGET_RADIUS, G_HEIGHT,
- G_LEFT) = range(TAIL_SIZE)
+(H_X, H_Y, H_COS, H_SIN, H_LENGTH, H_WIDTH, H_MASS, H_IN_HAND, G_TARGET_X, G_TARGET_RADIUS, G_HEIGHT, G_LEFT) = range(
+    TAIL_SIZE
+)
 
 REWARD_TERMS = ("reward_height", "reward_distance", "reward_fall", "reward_success")
 
@@ -105,29 +118,56 @@ def make_stack_config(**kwargs) -> StackConfig:
     ranges = {**task.ENV_RANGES, **STACK_RANGES}
     values = dict(kwargs)
     values["n_boxes"] = check_integer("n_boxes", kwargs["n_boxes"], 1, MAX_BOXES)
-    for name in ("box_length_range", "box_width_range", "mass_range", "release_x_range", "release_height_range",
-                 "release_angle_range", "target_x_range", "launch_angle_range"):
+    for name in (
+        "box_length_range",
+        "box_width_range",
+        "mass_range",
+        "release_x_range",
+        "release_height_range",
+        "release_angle_range",
+        "target_x_range",
+        "launch_angle_range",
+    ):
         values[name] = task.check_interval(name, kwargs[name], ranges[name])
-    for name in ("friction", "restitution", "penalty_stiffness", "gravity", "target_radius", "max_speed",
-                 "max_spin", "height_weight", "distance_weight", "fall_penalty", "success_bonus", "fall_tolerance",
-                 "success_fraction", "max_sim_time"):
+    for name in (
+        "friction",
+        "restitution",
+        "penalty_stiffness",
+        "gravity",
+        "target_radius",
+        "max_speed",
+        "max_spin",
+        "height_weight",
+        "distance_weight",
+        "fall_penalty",
+        "success_bonus",
+        "fall_tolerance",
+        "success_fraction",
+        "max_sim_time",
+    ):
         values[name] = ranges[name].check(name, kwargs[name])
     if values["box_width_range"][1] > values["box_length_range"][0]:
-        raise ValueError(f"box_width_range[1] must be at most box_length_range[0] (a box's length is its longer "
-                         f"side), got {values['box_width_range']!r} and {values['box_length_range']!r}")
+        raise ValueError(
+            f"box_width_range[1] must be at most box_length_range[0] (a box's length is its longer "
+            f"side), got {values['box_width_range']!r} and {values['box_length_range']!r}"
+        )
     low, high = values["launch_angle_range"]
     if low >= high:
         raise ValueError(f"launch_angle_range must have low < high, got {kwargs['launch_angle_range']!r}")
     config = StackConfig(**values)
     lowest_release = config.release_height_range[0]
     if lowest_release <= config.largest_corner_radius:
-        raise ValueError(f"release_height_range[0] must be above the largest box's corner radius "
-                         f"({config.largest_corner_radius:g} m), got {lowest_release:g} m")
+        raise ValueError(
+            f"release_height_range[0] must be above the largest box's corner radius "
+            f"({config.largest_corner_radius:g} m), got {lowest_release:g} m"
+        )
     reach = config.release_x_range[1] + 2.0 * config.largest_corner_radius
     if config.target_x_range[0] - config.target_radius < reach:
-        raise ValueError(f"target_x_range[0] - target_radius must be at least {reach:g} m (release_x_range[1] plus "
-                         f"two corner radii), so that the stack stands clear of the hand, got "
-                         f"{config.target_x_range[0] - config.target_radius:g} m")
+        raise ValueError(
+            f"target_x_range[0] - target_radius must be at least {reach:g} m (release_x_range[1] plus "
+            f"two corner radii), so that the stack stands clear of the hand, got "
+            f"{config.target_x_range[0] - config.target_radius:g} m"
+        )
     return config
 
 
@@ -137,9 +177,17 @@ def episode_from_uniforms(u: np.ndarray, config: StackConfig) -> tuple[np.ndarra
     each box, and the target x [m] ((m,) or a 0-d array), from uniform variates u ((m,) n_boxes * EPISODE_COLUMNS
     + 1) in [0, 1)."""
     n = config.n_boxes
-    boxes = u[..., :n * EPISODE_COLUMNS].reshape(u.shape[:-1] + (n, EPISODE_COLUMNS))
-    ranges = np.array([config.box_length_range, config.box_width_range, config.mass_range, config.release_x_range,
-                       config.release_height_range, config.release_angle_range])
+    boxes = u[..., : n * EPISODE_COLUMNS].reshape(u.shape[:-1] + (n, EPISODE_COLUMNS))
+    ranges = np.array(
+        [
+            config.box_length_range,
+            config.box_width_range,
+            config.mass_range,
+            config.release_x_range,
+            config.release_height_range,
+            config.release_angle_range,
+        ]
+    )
     hand = ranges[:, 0] + (ranges[:, 1] - ranges[:, 0]) * boxes
     low, high = config.target_x_range
     return hand, low + (high - low) * u[..., -1]
@@ -178,7 +226,7 @@ def thrown_states(release: np.ndarray, actions: np.ndarray, config: StackConfig)
     low, high = config.launch_angle_range
     direction = low + 0.5 * (high - low) * (actions[:, 1] + 1.0)
     states = np.empty((len(actions), layout.STATE_SIZE))
-    states[:, layout.X:layout.ANGLE + 1] = release
+    states[:, layout.X : layout.ANGLE + 1] = release
     states[:, layout.VX] = speed * np.cos(direction)
     states[:, layout.VY] = speed * np.sin(direction)
     states[:, layout.SPIN] = config.max_spin * actions[:, 2]
@@ -188,8 +236,14 @@ def thrown_states(release: np.ndarray, actions: np.ndarray, config: StackConfig)
 def actions_of_throws(speed: np.ndarray, direction: np.ndarray, spin: np.ndarray, config: StackConfig) -> np.ndarray:
     """The actions (m, 3) that ``thrown_states`` maps to these throws, clipped to [-1, 1]."""
     low, high = config.launch_angle_range
-    actions = np.stack((2.0 * speed / config.max_speed - 1.0, 2.0 * (direction - low) / (high - low) - 1.0,
-                        spin / config.max_spin if config.max_spin > 0 else np.zeros_like(spin)), axis=-1)
+    actions = np.stack(
+        (
+            2.0 * speed / config.max_speed - 1.0,
+            2.0 * (direction - low) / (high - low) - 1.0,
+            spin / config.max_spin if config.max_spin > 0 else np.zeros_like(spin),
+        ),
+        axis=-1,
+    )
     return np.clip(actions, -1.0, 1.0)
 
 
@@ -226,8 +280,9 @@ class ThrowOutcomes:
     distance: np.ndarray  # [m] of the thrown box's centre from the target x
 
 
-def score_throws(before: np.ndarray, after: np.ndarray, half: np.ndarray, at_rest: np.ndarray, target_x,
-                 config: StackConfig) -> ThrowOutcomes:
+def score_throws(
+    before: np.ndarray, after: np.ndarray, half: np.ndarray, at_rest: np.ndarray, target_x, config: StackConfig
+) -> ThrowOutcomes:
     """Score m throws of box k onto scenes of k boxes: ``before`` ((m,) k, 6) the scene before it, ``after``
     (m, k + 1, 6) the scene once the throw came to rest (the thrown box last), ``half`` ((m,) k + 1, 2),
     ``at_rest`` (m,) whether every body rests, ``target_x`` a scalar or (m,). Rewards (the env's docstring):
@@ -256,8 +311,16 @@ def score_throws(before: np.ndarray, after: np.ndarray, half: np.ndarray, at_res
         "reward_success": config.success_bonus * success,
     }
     reward = terms["reward_height"] + terms["reward_distance"] + terms["reward_fall"] + terms["reward_success"]
-    return ThrowOutcomes(reward=reward, terms=terms, height=height, on_target=members, fell=fell, at_rest=at_rest,
-                         success=success, distance=distance)
+    return ThrowOutcomes(
+        reward=reward,
+        terms=terms,
+        height=height,
+        on_target=members,
+        fell=fell,
+        at_rest=at_rest,
+        success=success,
+        distance=distance,
+    )
 
 
 # -- observation -----------------------------------------------------------------------------------------
@@ -272,11 +335,11 @@ def observe(states: np.ndarray, hand: np.ndarray, thrown, target_x, height, conf
     is_thrown = np.arange(n) < thrown[:, None]  # (m, n)
     angle = states[..., layout.ANGLE]
     bodies = np.zeros((m, n, BODY_SIZE))
-    bodies[..., B_X:B_Y + 1] = states[..., layout.X:layout.Y + 1]
+    bodies[..., B_X : B_Y + 1] = states[..., layout.X : layout.Y + 1]
     bodies[..., B_COS], bodies[..., B_SIN] = np.cos(angle), np.sin(angle)
-    bodies[..., B_VX:B_SPIN + 1] = states[..., layout.VX:]
+    bodies[..., B_VX : B_SPIN + 1] = states[..., layout.VX :]
     bodies[..., :B_LENGTH] *= is_thrown[..., None]
-    bodies[..., B_LENGTH:B_MASS + 1] = hand[..., E_LENGTH:E_MASS + 1]
+    bodies[..., B_LENGTH : B_MASS + 1] = hand[..., E_LENGTH : E_MASS + 1]
     bodies[..., B_THROWN] = is_thrown
     in_hand = thrown < n
     box = hand[np.arange(m), np.minimum(thrown, n - 1)] * in_hand[:, None]  # (m, EPISODE_COLUMNS), 0 when empty
@@ -284,7 +347,7 @@ def observe(states: np.ndarray, hand: np.ndarray, thrown, target_x, height, conf
     tail[:, H_X], tail[:, H_Y] = box[:, E_RELEASE_X], box[:, E_RELEASE_Y]
     tail[:, H_COS] = np.cos(box[:, E_RELEASE_ANGLE]) * in_hand
     tail[:, H_SIN] = np.sin(box[:, E_RELEASE_ANGLE])
-    tail[:, H_LENGTH:H_MASS + 1] = box[:, E_LENGTH:E_MASS + 1]
+    tail[:, H_LENGTH : H_MASS + 1] = box[:, E_LENGTH : E_MASS + 1]
     tail[:, H_IN_HAND] = in_hand
     tail[:, G_TARGET_X], tail[:, G_TARGET_RADIUS], tail[:, G_HEIGHT] = target_x, config.target_radius, height
     tail[:, G_LEFT] = n - thrown
@@ -307,8 +370,15 @@ def observation_bounds(config: StackConfig, horizon: float) -> tuple[np.ndarray,
     (l_lo, l_hi), (w_lo, w_hi), (m_lo, m_hi) = config.box_length_range, config.box_width_range, config.mass_range
     gyration_max = (l_hi**2 + w_hi**2) / 12.0
     inertia_min = m_lo * (l_lo**2 + w_lo**2) / 12.0
-    energy = n * m_hi * (0.5 * config.max_speed**2 + 0.5 * gyration_max * config.max_spin**2
-                         + config.gravity * config.release_height_range[1])
+    energy = (
+        n
+        * m_hi
+        * (
+            0.5 * config.max_speed**2
+            + 0.5 * gyration_max * config.max_spin**2
+            + config.gravity * config.release_height_range[1]
+        )
+    )
     margin = task.ENERGY_MARGIN
     speed = margin * math.sqrt(2.0 * energy / m_lo)
     spin = margin * math.sqrt(2.0 * energy / inertia_min)
@@ -317,11 +387,23 @@ def observation_bounds(config: StackConfig, horizon: float) -> tuple[np.ndarray,
     y_high = margin * energy / (m_lo * config.gravity) + radius
     body_low = [config.release_x_range[0] - reach, -radius, -1, -1, -speed, -speed, -spin, l_lo, w_lo, m_lo, 0]
     body_high = [config.release_x_range[1] + reach, y_high, 1, 1, speed, speed, spin, l_hi, w_hi, m_hi, 1]
-    hand_ranges = [config.release_x_range, config.release_height_range, (-1, 1), (-1, 1), config.box_length_range,
-                   config.box_width_range, config.mass_range, (0, 1)]
+    hand_ranges = [
+        config.release_x_range,
+        config.release_height_range,
+        (-1, 1),
+        (-1, 1),
+        config.box_length_range,
+        config.box_width_range,
+        config.mass_range,
+        (0, 1),
+    ]
     tail_low = [min(low, 0.0) for low, _ in hand_ranges] + [config.target_x_range[0], config.target_radius, 0.0, 0.0]
-    tail_high = [max(high, 0.0) for _, high in hand_ranges] + [config.target_x_range[1], config.target_radius,
-                                                              y_high + radius, n]
+    tail_high = [max(high, 0.0) for _, high in hand_ranges] + [
+        config.target_x_range[1],
+        config.target_radius,
+        y_high + radius,
+        n,
+    ]
     low = np.array(body_low * n + tail_low, dtype=np.float32)
     high = np.array(body_high * n + tail_high, dtype=np.float32)
     fixed = low == high

@@ -37,8 +37,21 @@ from box_toss_env.physics.grouped import GroupedSimulator
 from box_toss_env.physics.simulate import check_threads
 from box_toss_env.physics.validation import check_integer
 
-STEP_INFO_KEYS = (*stack_task.REWARD_TERMS, "stack_height", "stack_size", "fell", "at_rest", "success", "distance",
-                  "final_x", "final_y", "final_angle", "thrown", "sim_time", "n_steps")
+STEP_INFO_KEYS = (
+    *stack_task.REWARD_TERMS,
+    "stack_height",
+    "stack_size",
+    "fell",
+    "at_rest",
+    "success",
+    "distance",
+    "final_x",
+    "final_y",
+    "final_angle",
+    "thrown",
+    "sim_time",
+    "n_steps",
+)
 """The single env's step ``info`` keys, each an (num_envs,) array here."""
 
 
@@ -100,8 +113,12 @@ class BoxTossStackVectorEnv(VectorEnv):
 
     def _reset_info(self, envs: np.ndarray) -> dict[str, np.ndarray]:
         hands = self._hands
-        return {"target_x": self._targets.copy(), "box_lengths": hands[..., stack_task.E_LENGTH].copy(),
-                "box_widths": hands[..., stack_task.E_WIDTH].copy(), "box_masses": hands[..., stack_task.E_MASS].copy()}
+        return {
+            "target_x": self._targets.copy(),
+            "box_lengths": hands[..., stack_task.E_LENGTH].copy(),
+            "box_widths": hands[..., stack_task.E_WIDTH].copy(),
+            "box_masses": hands[..., stack_task.E_MASS].copy(),
+        }
 
     def _observe(self) -> np.ndarray:
         return stack_task.observe(self._state, self._hands, self._thrown, self._targets, self._height, self.config)
@@ -124,7 +141,7 @@ class BoxTossStackVectorEnv(VectorEnv):
         config, n = self.config, self.num_envs
         everyone = np.arange(n)
         k = self._thrown
-        release = self._hands[everyone, k, stack_task.E_RELEASE_X:]
+        release = self._hands[everyone, k, stack_task.E_RELEASE_X :]
         self._state[everyone, k] = stack_task.thrown_states(release, actions, config)
         info = {key: np.zeros(n) for key in STEP_INFO_KEYS}
         reward = np.zeros(n)
@@ -139,8 +156,10 @@ class BoxTossStackVectorEnv(VectorEnv):
         space = self.single_observation_space
         outside = np.any((observations < space.low) | (observations > space.high), axis=1)
         if outside.any():
-            raise EnergyGainError(f"env {int(np.argmax(outside))}: a throw ended outside the observation bounds "
-                                  "energy conservation guarantees; please report these arguments")
+            raise EnergyGainError(
+                f"env {int(np.argmax(outside))}: a throw ended outside the observation bounds "
+                "energy conservation guarantees; please report these arguments"
+            )
         for key in ("stack_size", "thrown", "n_steps"):
             info[key] = info[key].astype(np.int64)
         for key in ("fell", "at_rest", "success"):
@@ -163,7 +182,7 @@ class BoxTossStackVectorEnv(VectorEnv):
         """Simulate the scenes of ``envs`` (``size`` bodies each, the last one just thrown) in one grouped call
         and score them into ``reward`` and ``info``."""
         m = len(envs)
-        before = self._state[envs, :size - 1].copy()
+        before = self._state[envs, : size - 1].copy()
         scenes = np.ascontiguousarray(self._state[envs, :size]).reshape(m * size, layout.STATE_SIZE)
         params = np.ascontiguousarray(self._params[envs, :size]).reshape(m * size, layout.PARAM_SIZE)
         stats: np.ndarray = np.zeros((m * size, layout.STATS_SIZE))
@@ -174,7 +193,7 @@ class BoxTossStackVectorEnv(VectorEnv):
         self._state[envs, :size] = after
         stats = stats.reshape(m, size, layout.STATS_SIZE)
         at_rest: np.ndarray = ~np.isnan(stats[..., layout.REST_TIME]).any(axis=1)
-        half = self._params[envs, :size, layout.HALF_LENGTH:layout.HALF_WIDTH + 1]
+        half = self._params[envs, :size, layout.HALF_LENGTH : layout.HALF_WIDTH + 1]
         outcome = stack_task.score_throws(before, after, half, at_rest, self._targets[envs], self.config)
         reward[envs] = outcome.reward
         thrown = after[:, size - 1]

@@ -99,21 +99,94 @@ from box_toss_env.envs.task_config import (
 from box_toss_env.physics import layout
 
 __all__ = [
-    "BASE_DEFAULTS", "ENV_ARGUMENTS",  # declared in arguments, importable from here too
-    "ACTION_SIZE", "ACT_LAUNCH_ANGLE", "ACT_SPEED", "ACT_SPIN", "BASE_OBSERVATION_NAMES", "BASE_OBS_SIZE",
-    "DYNAMICS_RANGES", "ENERGY_MARGIN", "ENV_RANGES", "EPISODE_SIZE", "EPISODE_SIZE_WITH_BASE", "EP_BASE_HEIGHT",
-    "EP_BASE_LENGTH", "EP_DYNAMICS", "EP_FACE_0", "EP_FACE_1", "EP_FACE_2", "EP_FACE_3", "EP_FRICTION", "EP_MASS",
-    "EP_RELEASE", "EP_RELEASE_ANGLE", "EP_RELEASE_X", "EP_RELEASE_Y", "EP_RESTITUTION", "EP_TARGET_FACES",
-    "EP_TARGET_X", "Episodes", "FACE_SETS", "FACE_SET_NAMES", "MIXED_KINDS", "OBSERVATION_NAMES", "OBS_BASE_COS",
-    "OBS_BASE_HEIGHT", "OBS_BASE_LENGTH", "OBS_BASE_SIN", "OBS_BASE_X", "OBS_BASE_Y", "OBS_COS", "OBS_FRICTION",
-    "OBS_MASS", "OBS_RESTITUTION", "OBS_SIN", "OBS_SIZE", "OBS_SIZE_WITH_DYNAMICS", "OBS_SPIN", "OBS_TARGET_FACES",
-    "OBS_TARGET_X", "OBS_VX", "OBS_VY", "OBS_X", "OBS_Y", "QUARTER_TURN", "REWARD_TERMS", "SUPPORT_TOLERANCE",
-    "TARGET_FACE_KINDS", "TaskConfig", "U_TARGET_FACE", "U_TARGET_KIND", "actions_to_throws", "base_rows", "base_top",
-    "check_actions", "check_base_box", "check_interval", "check_scalar_or_interval", "describe_target_faces",
-    "episodes_from_uniforms", "faces_down", "half_extents_along_axes", "landing_offsets", "make_task_config",
-    "observation_bounds", "observation_names", "observe", "orientation_errors", "outside_bounds", "reward_terms",
-    "sample_episodes", "target_face_sets", "thrown_rows", "throws_to_actions", "wrap_angles", "write_base_states",
-    "write_body_params", "write_initial_states",
+    "BASE_DEFAULTS",
+    "ENV_ARGUMENTS",  # declared in arguments, importable from here too
+    "ACTION_SIZE",
+    "ACT_LAUNCH_ANGLE",
+    "ACT_SPEED",
+    "ACT_SPIN",
+    "BASE_OBSERVATION_NAMES",
+    "BASE_OBS_SIZE",
+    "DYNAMICS_RANGES",
+    "ENERGY_MARGIN",
+    "ENV_RANGES",
+    "EPISODE_SIZE",
+    "EPISODE_SIZE_WITH_BASE",
+    "EP_BASE_HEIGHT",
+    "EP_BASE_LENGTH",
+    "EP_DYNAMICS",
+    "EP_FACE_0",
+    "EP_FACE_1",
+    "EP_FACE_2",
+    "EP_FACE_3",
+    "EP_FRICTION",
+    "EP_MASS",
+    "EP_RELEASE",
+    "EP_RELEASE_ANGLE",
+    "EP_RELEASE_X",
+    "EP_RELEASE_Y",
+    "EP_RESTITUTION",
+    "EP_TARGET_FACES",
+    "EP_TARGET_X",
+    "Episodes",
+    "FACE_SETS",
+    "FACE_SET_NAMES",
+    "MIXED_KINDS",
+    "OBSERVATION_NAMES",
+    "OBS_BASE_COS",
+    "OBS_BASE_HEIGHT",
+    "OBS_BASE_LENGTH",
+    "OBS_BASE_SIN",
+    "OBS_BASE_X",
+    "OBS_BASE_Y",
+    "OBS_COS",
+    "OBS_FRICTION",
+    "OBS_MASS",
+    "OBS_RESTITUTION",
+    "OBS_SIN",
+    "OBS_SIZE",
+    "OBS_SIZE_WITH_DYNAMICS",
+    "OBS_SPIN",
+    "OBS_TARGET_FACES",
+    "OBS_TARGET_X",
+    "OBS_VX",
+    "OBS_VY",
+    "OBS_X",
+    "OBS_Y",
+    "QUARTER_TURN",
+    "REWARD_TERMS",
+    "SUPPORT_TOLERANCE",
+    "TARGET_FACE_KINDS",
+    "TaskConfig",
+    "U_TARGET_FACE",
+    "U_TARGET_KIND",
+    "actions_to_throws",
+    "base_rows",
+    "base_top",
+    "check_actions",
+    "check_base_box",
+    "check_interval",
+    "check_scalar_or_interval",
+    "describe_target_faces",
+    "episodes_from_uniforms",
+    "faces_down",
+    "half_extents_along_axes",
+    "landing_offsets",
+    "make_task_config",
+    "observation_bounds",
+    "observation_names",
+    "observe",
+    "orientation_errors",
+    "outside_bounds",
+    "reward_terms",
+    "sample_episodes",
+    "target_face_sets",
+    "thrown_rows",
+    "throws_to_actions",
+    "wrap_angles",
+    "write_base_states",
+    "write_body_params",
+    "write_initial_states",
 ]
 
 
@@ -168,12 +241,12 @@ def describe_target_faces(target_faces: np.ndarray) -> str:
 def thrown_rows(array: np.ndarray, config: TaskConfig) -> np.ndarray:
     """The thrown boxes' rows (n, ...) of an engine array (n * bodies_per_env, ...): a view (``array``
     itself without a base box)."""
-    return array[::config.bodies_per_env]
+    return array[:: config.bodies_per_env]
 
 
 def base_rows(array: np.ndarray, config: TaskConfig) -> np.ndarray:
     """The base boxes' rows (n, ...) of an engine array (n * 2, ...) of a task with ``base_box``: a view."""
-    return array[1::config.bodies_per_env]
+    return array[1 :: config.bodies_per_env]
 
 
 def write_body_params(params: np.ndarray, episodes: Episodes, config: TaskConfig) -> np.ndarray:
@@ -195,7 +268,7 @@ def write_body_params(params: np.ndarray, episodes: Episodes, config: TaskConfig
         base[:, layout.HALF_WIDTH] = half[:, 1]
         base[:, layout.MASS] = config.base_mass
         base[:, layout.INERTIA] = config.base_mass * (half[:, 0] ** 2 + half[:, 1] ** 2) / 3.0
-        base[:, layout.RESTITUTION:layout.STIFFNESS + 1] = thrown[:, layout.RESTITUTION:layout.STIFFNESS + 1]
+        base[:, layout.RESTITUTION : layout.STIFFNESS + 1] = thrown[:, layout.RESTITUTION : layout.STIFFNESS + 1]
     return params
 
 
@@ -204,7 +277,7 @@ def write_base_states(states: np.ndarray, episodes: Episodes) -> np.ndarray:
     (angle 0: the length along the floor)."""
     states[:, layout.X] = episodes.data[:, EP_TARGET_X]
     states[:, layout.Y] = 0.5 * episodes.data[:, EP_BASE_HEIGHT]
-    states[:, layout.ANGLE:] = 0.0
+    states[:, layout.ANGLE :] = 0.0
     return states
 
 
@@ -216,21 +289,26 @@ def check_actions(actions, shape: tuple[int, ...]) -> np.ndarray:
     try:
         array = np.asarray(actions)
     except (TypeError, ValueError):
-        raise ValueError(f"action must be an array of {ACTION_SIZE} finite numbers in [-1, 1] "
-                         f"(speed, launch angle, spin), got {actions!r}") from None
+        raise ValueError(
+            f"action must be an array of {ACTION_SIZE} finite numbers in [-1, 1] "
+            f"(speed, launch angle, spin), got {actions!r}"
+        ) from None
     if array.dtype.kind not in "iuf":
         raise TypeError(f"action must hold real numbers (int or float), got an array of {array.dtype}: {actions!r}")
     array = array.astype(np.float64, copy=False)
     if array.shape != shape:
-        raise ValueError(f"action must have shape {shape} (speed, launch angle, spin, each in [-1, 1]), "
-                         f"got shape {array.shape}")
+        raise ValueError(
+            f"action must have shape {shape} (speed, launch angle, spin, each in [-1, 1]), got shape {array.shape}"
+        )
     finite = np.isfinite(array)
     if not finite.all():
         if array.ndim == 1:
             raise ValueError(f"action must be finite (no NaN or inf), got {array.tolist()}")
         bad = np.flatnonzero(~finite.reshape(len(array), -1).all(axis=1))
-        raise ValueError(f"action must be finite (no NaN or inf): row {bad[0]} is {array[bad[0]].tolist()}"
-                         + (f" ({len(bad)} such rows)" if len(bad) > 1 else ""))
+        raise ValueError(
+            f"action must be finite (no NaN or inf): row {bad[0]} is {array[bad[0]].tolist()}"
+            + (f" ({len(bad)} such rows)" if len(bad) > 1 else "")
+        )
     return np.minimum(np.maximum(array.reshape(-1, ACTION_SIZE), -1.0), 1.0)
 
 
@@ -259,9 +337,9 @@ def write_initial_states(states: np.ndarray, episodes: Episodes, throws: np.ndar
     """The engine states (n, 6) of boxes in the hand at the release pose, thrown with ``throws``
     (n, 3: speed, launch angle, spin; ``actions_to_throws``), i.e. moving at
     speed (cos theta, sin theta) and spinning; at rest when ``throws`` is None (before the throw)."""
-    states[:, layout.X:layout.ANGLE + 1] = episodes.data[:, EP_RELEASE]
+    states[:, layout.X : layout.ANGLE + 1] = episodes.data[:, EP_RELEASE]
     if throws is None:
-        states[:, layout.VX:] = 0.0
+        states[:, layout.VX :] = 0.0
         return states
     speed, theta = throws[:, 0], throws[:, 1]
     np.multiply(speed, np.cos(theta), out=states[:, layout.VX])
@@ -271,20 +349,25 @@ def write_initial_states(states: np.ndarray, episodes: Episodes, throws: np.ndar
 
 
 # -- 3. observations -----------------------------------------------------------------------------
-def observe(states: np.ndarray, episodes: Episodes, config: TaskConfig, base_states: np.ndarray | None = None
-            ) -> np.ndarray:
+def observe(
+    states: np.ndarray, episodes: Episodes, config: TaskConfig, base_states: np.ndarray | None = None
+) -> np.ndarray:
     """A new float32 (n, obs_size) array: x, y, cos(angle), sin(angle), vx, vy, spin, target x,
     the four target-face flags, with ``observe_dynamics`` the mass, friction and restitution, and with
     ``base_box`` the base box's x, y, cos(angle), sin(angle) (from ``base_states`` (n, 6)), length and height."""
-    angles = states[:, layout.ANGLE:layout.ANGLE + 1]
+    angles = states[:, layout.ANGLE : layout.ANGLE + 1]
     size = config.obs_size - (BASE_OBS_SIZE if config.base_box else 0)
-    parts = [states[:, layout.X:layout.Y + 1], np.cos(angles), np.sin(angles), states[:, layout.VX:],
-             episodes.data[:, EP_TARGET_X:EP_TARGET_X + size - OBS_TARGET_X]]
+    parts = [
+        states[:, layout.X : layout.Y + 1],
+        np.cos(angles),
+        np.sin(angles),
+        states[:, layout.VX :],
+        episodes.data[:, EP_TARGET_X : EP_TARGET_X + size - OBS_TARGET_X],
+    ]
     if config.base_box:
         assert base_states is not None  # given with a base box
-        base_angles = base_states[:, layout.ANGLE:layout.ANGLE + 1]
-        parts += [base_states[:, layout.X:layout.Y + 1], np.cos(base_angles), np.sin(base_angles),
-                  episodes.base_size]
+        base_angles = base_states[:, layout.ANGLE : layout.ANGLE + 1]
+        parts += [base_states[:, layout.X : layout.Y + 1], np.cos(base_angles), np.sin(base_angles), episodes.base_size]
     return np.concatenate(parts, axis=1, dtype=np.float32)
 
 
@@ -300,15 +383,42 @@ def observation_bounds(config: TaskConfig, horizon: float) -> tuple[np.ndarray, 
     The centre cannot be lower than one corner radius below the floor (the whole box under it).
     A column whose value is fixed (low == high) gets bounds one float32 step either side of it.
     """
-    energy = (0.5 * config.max_speed**2 + 0.5 * config.gyration_radius_squared * config.max_spin**2
-              + config.gravity * config.release_height_range[1])
+    energy = (
+        0.5 * config.max_speed**2
+        + 0.5 * config.gyration_radius_squared * config.max_spin**2
+        + config.gravity * config.release_height_range[1]
+    )
     speed = ENERGY_MARGIN * math.sqrt(2.0 * energy)
     spin = speed / math.sqrt(config.gyration_radius_squared)
     reach = speed * horizon
-    low = [config.release_x_range[0] - reach, -config.corner_radius, -1.0, -1.0, -speed, -speed, -spin,
-           config.target_x_range[0], 0.0, 0.0, 0.0, 0.0]
-    high = [config.release_x_range[1] + reach, ENERGY_MARGIN * energy / config.gravity + config.corner_radius,
-            1.0, 1.0, speed, speed, spin, config.target_x_range[1], 1.0, 1.0, 1.0, 1.0]
+    low = [
+        config.release_x_range[0] - reach,
+        -config.corner_radius,
+        -1.0,
+        -1.0,
+        -speed,
+        -speed,
+        -spin,
+        config.target_x_range[0],
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+    ]
+    high = [
+        config.release_x_range[1] + reach,
+        ENERGY_MARGIN * energy / config.gravity + config.corner_radius,
+        1.0,
+        1.0,
+        speed,
+        speed,
+        spin,
+        config.target_x_range[1],
+        1.0,
+        1.0,
+        1.0,
+        1.0,
+    ]
     if config.observe_dynamics:
         low += [config.mass_range[0], config.friction_range[0], config.restitution_range[0]]
         high += [config.mass_range[1], config.friction_range[1], config.restitution_range[1]]
@@ -318,11 +428,22 @@ def observation_bounds(config: TaskConfig, horizon: float) -> tuple[np.ndarray, 
         share = config.mass_range[1] / config.base_mass
         base_speed = ENERGY_MARGIN * math.sqrt(2.0 * energy * share)
         base_radius = 0.5 * math.hypot(config.base_length_range[1], config.base_height_range[1])
-        low += [config.target_x_range[0] - base_speed * horizon, -base_radius, -1.0, -1.0,
-                config.base_length_range[0], config.base_height_range[0]]
-        high += [config.target_x_range[1] + base_speed * horizon,
-                 base_radius + ENERGY_MARGIN * energy * share / config.gravity, 1.0, 1.0,
-                 config.base_length_range[1], config.base_height_range[1]]
+        low += [
+            config.target_x_range[0] - base_speed * horizon,
+            -base_radius,
+            -1.0,
+            -1.0,
+            config.base_length_range[0],
+            config.base_height_range[0],
+        ]
+        high += [
+            config.target_x_range[1] + base_speed * horizon,
+            base_radius + ENERGY_MARGIN * energy * share / config.gravity,
+            1.0,
+            1.0,
+            config.base_length_range[1],
+            config.base_height_range[1],
+        ]
     lows, highs = np.array(low, dtype=np.float32), np.array(high, dtype=np.float32)
     # a fixed quantity (target x, mass, friction or restitution not drawn) would have equal bounds, which
     # Gymnasium's checker flags as a degenerate space: its bounds are one float32 step either side instead
@@ -332,8 +453,23 @@ def observation_bounds(config: TaskConfig, horizon: float) -> tuple[np.ndarray, 
     return lows, highs
 
 
-OBSERVATION_NAMES = ("x", "y", "cos(angle)", "sin(angle)", "vx", "vy", "spin", "target x", "target face 0",
-                     "target face 1", "target face 2", "target face 3", "mass", "friction", "restitution")
+OBSERVATION_NAMES = (
+    "x",
+    "y",
+    "cos(angle)",
+    "sin(angle)",
+    "vx",
+    "vy",
+    "spin",
+    "target x",
+    "target face 0",
+    "target face 1",
+    "target face 2",
+    "target face 3",
+    "mass",
+    "friction",
+    "restitution",
+)
 BASE_OBSERVATION_NAMES = ("base x", "base y", "base cos(angle)", "base sin(angle)", "base length", "base height")
 
 
@@ -386,13 +522,15 @@ def half_extents_along_axes(angles: np.ndarray, half_length, half_width) -> tupl
 def base_top(base_states: np.ndarray, episodes: Episodes) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(x, y, half length) [m] of the top of each base box (n,): its centre x, its highest point and half
     its horizontal extent (for a base lying on a face, the centre and half length of its top face)."""
-    half_x, half_y = half_extents_along_axes(base_states[:, layout.ANGLE], 0.5 * episodes.data[:, EP_BASE_LENGTH],
-                                             0.5 * episodes.data[:, EP_BASE_HEIGHT])
+    half_x, half_y = half_extents_along_axes(
+        base_states[:, layout.ANGLE], 0.5 * episodes.data[:, EP_BASE_LENGTH], 0.5 * episodes.data[:, EP_BASE_HEIGHT]
+    )
     return base_states[:, layout.X], base_states[:, layout.Y] + half_y, half_x
 
 
-def landing_offsets(states: np.ndarray, episodes: Episodes, config: TaskConfig,
-                    base_states: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def landing_offsets(
+    states: np.ndarray, episodes: Episodes, config: TaskConfig, base_states: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """(dx, dy) [m]: the thrown box's centre x minus the target x, and (with a base box) its lowest point
     minus the top of the base box (where ``base_states`` ended), the base's centre x being the target
     x; dy = 0 without a base box."""
@@ -404,8 +542,13 @@ def landing_offsets(states: np.ndarray, episodes: Episodes, config: TaskConfig,
     return states[:, layout.X] - top_x, states[:, layout.Y] - half_y - top_y
 
 
-def reward_terms(states: np.ndarray, at_rest: np.ndarray, episodes: Episodes, config: TaskConfig,
-                 base_states: np.ndarray | None = None):
+def reward_terms(
+    states: np.ndarray,
+    at_rest: np.ndarray,
+    episodes: Episodes,
+    config: TaskConfig,
+    base_states: np.ndarray | None = None,
+):
     """Score landings. Returns (reward (n,), terms {name: (n,)}, success (n,) bool, distance (n,) [m],
     orientation error (n,) [rad]), with
 

@@ -3,7 +3,6 @@ draws (``Episodes.data``), the observation and the action, and the observation b
 
 Faces are numbered by their outward normal in the body frame: 0 = local -y, 1 = +x, 2 = +y, 3 = -x."""
 
-
 from __future__ import annotations
 
 import math
@@ -25,8 +24,19 @@ MIXED_KINDS = ("any", "long_side", "short_end", "exact")  # drawn uniformly by t
 QUARTER_TURN = 0.5 * math.pi
 
 # -- what one episode draws: one row of ``Episodes.data`` per episode ----------------------------
-(EP_RELEASE_X, EP_RELEASE_Y, EP_RELEASE_ANGLE, EP_TARGET_X, EP_FACE_0, EP_FACE_1, EP_FACE_2, EP_FACE_3,
- EP_MASS, EP_FRICTION, EP_RESTITUTION) = range(11)
+(
+    EP_RELEASE_X,
+    EP_RELEASE_Y,
+    EP_RELEASE_ANGLE,
+    EP_TARGET_X,
+    EP_FACE_0,
+    EP_FACE_1,
+    EP_FACE_2,
+    EP_FACE_3,
+    EP_MASS,
+    EP_FRICTION,
+    EP_RESTITUTION,
+) = range(11)
 EPISODE_SIZE = 11
 # with base_box: the base box's length and height [m] (its centre x is the target x); a task without a
 # base draws EPISODE_SIZE variates per episode, as it always did
@@ -57,4 +67,3 @@ ACTION_SIZE = 3
 ENERGY_MARGIN = 2.0
 """Observation bounds on speeds and distances are this factor above what the energy of the fastest
 throw allows (an exact solver never adds energy; the margin covers the seed scheme's small gains)."""
-

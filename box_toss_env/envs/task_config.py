@@ -1,7 +1,6 @@
 """The BoxToss task's configuration, validated once (``TaskConfig``, ``make_task_config``: the env's arguments
 and their allowed ranges, ``ENV_RANGES``), and the episodes it draws (``Episodes``)."""
 
-
 from __future__ import annotations
 
 import functools
@@ -79,7 +78,8 @@ class TaskConfig:
         """Whether the engine's body parameters change from episode to episode: drawn dynamics, or the
         base box's drawn size."""
         base_drawn = self.base_length_range[0] != self.base_length_range[1] or (
-            self.base_height_range[0] != self.base_height_range[1])
+            self.base_height_range[0] != self.base_height_range[1]
+        )
         return self.randomises_dynamics or (self.base_box and base_drawn)
 
     @property
@@ -112,10 +112,15 @@ class TaskConfig:
     def episode_low_span(self) -> tuple[np.ndarray, np.ndarray]:
         """(episode_size,) low and high - low of each drawn column (0 for the face columns)."""
         low, span = np.zeros(self.episode_size), np.zeros(self.episode_size)
-        columns = [(EP_RELEASE_X, self.release_x_range), (EP_RELEASE_Y, self.release_height_range),
-                   (EP_RELEASE_ANGLE, self.release_angle_range), (EP_TARGET_X, self.target_x_range),
-                   (EP_MASS, self.mass_range), (EP_FRICTION, self.friction_range),
-                   (EP_RESTITUTION, self.restitution_range)]
+        columns = [
+            (EP_RELEASE_X, self.release_x_range),
+            (EP_RELEASE_Y, self.release_height_range),
+            (EP_RELEASE_ANGLE, self.release_angle_range),
+            (EP_TARGET_X, self.target_x_range),
+            (EP_MASS, self.mass_range),
+            (EP_FRICTION, self.friction_range),
+            (EP_RESTITUTION, self.restitution_range),
+        ]
         if self.base_box:
             columns += [(EP_BASE_LENGTH, self.base_length_range), (EP_BASE_HEIGHT, self.base_height_range)]
         for column, (a, b) in columns:
@@ -161,13 +166,16 @@ class Episodes:
 
     @property
     def base_size(self) -> np.ndarray:  # (n, 2): the base box's length and height [m] (with base_box)
-        return self.data[:, EP_BASE_LENGTH:EP_BASE_HEIGHT + 1]
+        return self.data[:, EP_BASE_LENGTH : EP_BASE_HEIGHT + 1]
 
 
 # -- configuration ------------------------------------------------------------------------------
 DYNAMICS_RANGES = ("mass_range", "friction_range", "restitution_range")
-ENV_RANGES = {argument.name: argument.allowed for argument in ENV_ARGUMENTS
-              if argument.allowed is not None and argument.name not in DYNAMICS_RANGES}
+ENV_RANGES = {
+    argument.name: argument.allowed
+    for argument in ENV_ARGUMENTS
+    if argument.allowed is not None and argument.name not in DYNAMICS_RANGES
+}
 """The env's arguments and their allowed ranges (docs/ranges.md), read from their declaration
 (``arguments.ENV_ARGUMENTS``): every observation stays finite in float32 and every throw is simulated, at
 every combination of them. ``mass_range``, ``friction_range`` and ``restitution_range`` take the ranges of
@@ -178,8 +186,9 @@ def check_interval(name: str, value, allowed: Range) -> tuple[float, float]:
     """``value`` as a (low, high) tuple of floats inside ``allowed``, with low <= high; a TypeError
     if it is not a pair of real numbers, a ValueError naming the parameter and the range otherwise."""
     if not isinstance(value, (tuple, list, np.ndarray)):  # not a dict, set, range or str: no order or not numbers
-        raise TypeError(f"{name} must be a (low, high) pair of real numbers (a tuple or list), "
-                        f"got {type(value).__name__} {value!r}")
+        raise TypeError(
+            f"{name} must be a (low, high) pair of real numbers (a tuple or list), got {type(value).__name__} {value!r}"
+        )
     try:
         first, second = value
     except (TypeError, ValueError):
@@ -199,40 +208,101 @@ def check_scalar_or_interval(name: str, value, interval, allowed: Range) -> tupl
     return check_interval(f"{name}_range", interval, allowed)
 
 
-def make_task_config(*, box_length, box_width, gravity, mass, friction, restitution, penalty_stiffness,
-                     mass_range, friction_range, restitution_range, release_x_range, release_height_range,
-                     release_angle_range, target_x_range, target_face, max_speed, launch_angle_range,
-                     max_spin, position_tolerance, distance_weight, orientation_weight, success_bonus,
-                     observe_dynamics, max_sim_time, base_box=False, base_length_range=None, base_height_range=None,
-                     base_mass=None) -> TaskConfig:
+def checked_scalars(**values: Any) -> dict[str, Any]:
+    """Each scalar argument checked against its range in ``ENV_RANGES``."""
+    return {name: ENV_RANGES[name].check(name, value) for name, value in values.items()}
+
+
+def checked_intervals(**values: Any) -> dict[str, Any]:
+    """Each (low, high) argument checked against its range in ``ENV_RANGES``."""
+    return {name: check_interval(name, value, ENV_RANGES[name]) for name, value in values.items()}
+
+
+def clear_release_height(scalar: dict[str, Any], heights: tuple[float, float], given: Any) -> float:
+    """The box's corner radius, after checking that every release height lies above it (so the box starts clear
+    of the floor at any angle)."""
+    corner_radius = math.hypot(scalar["box_length"], scalar["box_width"]) / 2
+    if heights[0] <= corner_radius:
+        raise ValueError(
+            f"release_height_range must lie above the box's corner radius {corner_radius:g} m (so the box "
+            f"starts clear of the floor at any angle), got {given!r}"
+        )
+    return corner_radius
+
+
+def make_task_config(
+    *,
+    box_length,
+    box_width,
+    gravity,
+    mass,
+    friction,
+    restitution,
+    penalty_stiffness,
+    mass_range,
+    friction_range,
+    restitution_range,
+    release_x_range,
+    release_height_range,
+    release_angle_range,
+    target_x_range,
+    target_face,
+    max_speed,
+    launch_angle_range,
+    max_spin,
+    position_tolerance,
+    distance_weight,
+    orientation_weight,
+    success_bonus,
+    observe_dynamics,
+    max_sim_time,
+    base_box=False,
+    base_length_range=None,
+    base_height_range=None,
+    base_mass=None,
+) -> TaskConfig:
     """Validate the task's keyword arguments into a TaskConfig: a TypeError names an argument of the
     wrong type, a ValueError one outside its range (``ENV_RANGES``). ``*_range=None`` fixes that
     quantity at its scalar argument. ``base_*=None`` takes ``BASE_DEFAULTS`` with ``base_box=True``
     (they must stay None without it)."""
-    scalar: dict[str, Any] = {name: ENV_RANGES[name].check(name, value) for name, value in (
-        ("box_length", box_length), ("box_width", box_width), ("gravity", gravity),
-        ("penalty_stiffness", penalty_stiffness), ("max_speed", max_speed), ("max_spin", max_spin),
-        ("position_tolerance", position_tolerance), ("distance_weight", distance_weight),
-        ("orientation_weight", orientation_weight), ("success_bonus", success_bonus),
-        ("max_sim_time", max_sim_time))}
-    pairs: dict[str, Any] = {name: check_interval(name, value, ENV_RANGES[name]) for name, value in (
-        ("release_x_range", release_x_range), ("release_height_range", release_height_range),
-        ("release_angle_range", release_angle_range), ("target_x_range", target_x_range),
-        ("launch_angle_range", launch_angle_range))}
-    corner_radius = math.hypot(scalar["box_length"], scalar["box_width"]) / 2
-    if pairs["release_height_range"][0] <= corner_radius:
-        raise ValueError(
-            f"release_height_range must lie above the box's corner radius {corner_radius:g} m (so the box "
-            f"starts clear of the floor at any angle), got {release_height_range!r}")
-    base = check_base_box(base_box, base_length_range, base_height_range, base_mass, pairs["target_x_range"],
-                          pairs["release_x_range"], corner_radius)
+    scalar = checked_scalars(
+        box_length=box_length,
+        box_width=box_width,
+        gravity=gravity,
+        penalty_stiffness=penalty_stiffness,
+        max_speed=max_speed,
+        max_spin=max_spin,
+        position_tolerance=position_tolerance,
+        distance_weight=distance_weight,
+        orientation_weight=orientation_weight,
+        success_bonus=success_bonus,
+        max_sim_time=max_sim_time,
+    )
+    pairs = checked_intervals(
+        release_x_range=release_x_range,
+        release_height_range=release_height_range,
+        release_angle_range=release_angle_range,
+        target_x_range=target_x_range,
+        launch_angle_range=launch_angle_range,
+    )
+    corner_radius = clear_release_height(scalar, pairs["release_height_range"], release_height_range)
+    base = check_base_box(
+        base_box,
+        base_length_range,
+        base_height_range,
+        base_mass,
+        pairs["target_x_range"],
+        pairs["release_x_range"],
+        corner_radius,
+    )
     return TaskConfig(
         half_length=0.5 * scalar.pop("box_length"),
         half_width=0.5 * scalar.pop("box_width"),
         mass_range=check_scalar_or_interval("mass", mass, mass_range, ENV_RANGES["mass"]),
         friction_range=check_scalar_or_interval("friction", friction, friction_range, ENV_RANGES["friction"]),
-        restitution_range=check_scalar_or_interval("restitution", restitution, restitution_range,
-                                                   ENV_RANGES["restitution"]),
+        restitution_range=check_scalar_or_interval(
+            "restitution", restitution, restitution_range, ENV_RANGES["restitution"]
+        ),
         target_face=check_choice("target_face", target_face, TARGET_FACE_KINDS),
         observe_dynamics=check_bool("observe_dynamics", observe_dynamics),
         **scalar,
@@ -241,29 +311,33 @@ def make_task_config(*, box_length, box_width, gravity, mass, friction, restitut
     )
 
 
-def check_base_box(base_box, base_length_range, base_height_range, base_mass, target_x_range, release_x_range,
-                   corner_radius) -> dict:
+def check_base_box(
+    base_box, base_length_range, base_height_range, base_mass, target_x_range, release_x_range, corner_radius
+) -> dict:
     """The TaskConfig fields of the base box, validated (``make_task_config``)."""
-    given = {"base_length_range": base_length_range, "base_height_range": base_height_range,
-             "base_mass": base_mass}
+    given = {"base_length_range": base_length_range, "base_height_range": base_height_range, "base_mass": base_mass}
     if not check_bool("base_box", base_box):
         for name, value in given.items():
             if value is not None:
-                raise ValueError(f"{name} applies only with base_box=True (a base box to land on), got {name}="
-                                 f"{value!r} with base_box=False")
+                raise ValueError(
+                    f"{name} applies only with base_box=True (a base box to land on), got {name}="
+                    f"{value!r} with base_box=False"
+                )
         return {}
     values = {name: BASE_DEFAULTS[name] if value is None else value for name, value in given.items()}
     lengths = check_interval("base_length_range", values["base_length_range"], ENV_RANGES["base_length_range"])
     heights = check_interval("base_height_range", values["base_height_range"], ENV_RANGES["base_height_range"])
     mass = ENV_RANGES["base_mass"].check("base_mass", values["base_mass"])
     if heights[1] > lengths[0]:
-        raise ValueError(f"base_height_range must not exceed base_length_range[0] = {lengths[0]:g} m (the base box "
-                         f"lies on its long side, its lowest pose), got {values['base_height_range']!r}")
+        raise ValueError(
+            f"base_height_range must not exceed base_length_range[0] = {lengths[0]:g} m (the base box "
+            f"lies on its long side, its lowest pose), got {values['base_height_range']!r}"
+        )
     clearance = release_x_range[1] + corner_radius + 0.5 * lengths[1]
     if target_x_range[0] < clearance:
-        raise ValueError(f"target_x_range must start at {clearance:g} m or beyond with base_box=True (the base box, "
-                         f"centred at the target x, must stand clear of the box in the hand: release x max + its "
-                         f"corner radius + half the longest base), got {target_x_range!r}")
+        raise ValueError(
+            f"target_x_range must start at {clearance:g} m or beyond with base_box=True (the base box, "
+            f"centred at the target x, must stand clear of the box in the hand: release x max + its "
+            f"corner radius + half the longest base), got {target_x_range!r}"
+        )
     return {"base_box": True, "base_length_range": lengths, "base_height_range": heights, "base_mass": mass}
-
-

@@ -42,12 +42,7 @@ class SceneDrawing:
 
     def _is_out_of_view(self, corners_px: np.ndarray) -> bool:
         columns, rows = corners_px[:, 0], corners_px[:, 1]
-        return bool(
-            columns.max() < 0
-            or columns.min() > self.width_px
-            or rows.max() < 0
-            or rows.min() > self.height_px
-        )
+        return bool(columns.max() < 0 or columns.min() > self.width_px or rows.max() < 0 or rows.min() > self.height_px)
 
     def _draw_sky_and_ground(self, pygame: ModuleType, surface: Any, camera: Camera) -> None:
         """Background, the ground region below y = 0, the floor line, and ticks labelled in metres."""
@@ -201,9 +196,7 @@ class SceneDrawing:
             )
             self.drawn_text["lines"].append(str(line))
 
-    def _draw_result(
-        self, pygame: ModuleType, surface: Any, result_lines: Sequence[str], success: bool | None
-    ) -> None:
+    def _draw_result(self, pygame: ModuleType, surface: Any, result_lines: Sequence[str], success: bool | None) -> None:
         """A box top-right: the first line large, in green (success) or red (not), the others below it."""
         font = self._get_font(pygame)
         if font is None:

@@ -55,4 +55,3 @@ RESULT_PADDING_PX = 6
 HEADLINE_SCALE = 1.4
 """The result's first line (its headline) is drawn this much larger than other text."""
 TRACE_WIDTH_PX = 2
-

@@ -36,10 +36,27 @@ from box_toss_env.rendering.palette import (
 )
 
 __all__ = [
-    "FACE_COLOUR_NAMES", "FACE_STRIPE_WIDTH_PX", "FLOOR_LABEL_GAP_PX", "FLOOR_LINE_WIDTH_PX", "FLOOR_TICK_LENGTH_PX",
-    "FLOOR_TICK_STEPS_M", "HEADLINE_SCALE", "MARKED_STRIPE_WIDTH_PX", "MAX_STRIPE_FRACTION", "MIN_PX_PER_FLOOR_TICK",
-    "PIXEL_LIMIT", "Palette", "RESULT_PADDING_PX", "RGB", "SceneRenderer", "TEXT_MARGIN_PX", "TRACE_WIDTH_PX",
-    "as_box_arrays", "floor_label", "floor_tick_step", "floor_ticks",
+    "FACE_COLOUR_NAMES",
+    "FACE_STRIPE_WIDTH_PX",
+    "FLOOR_LABEL_GAP_PX",
+    "FLOOR_LINE_WIDTH_PX",
+    "FLOOR_TICK_LENGTH_PX",
+    "FLOOR_TICK_STEPS_M",
+    "HEADLINE_SCALE",
+    "MARKED_STRIPE_WIDTH_PX",
+    "MAX_STRIPE_FRACTION",
+    "MIN_PX_PER_FLOOR_TICK",
+    "PIXEL_LIMIT",
+    "Palette",
+    "RESULT_PADDING_PX",
+    "RGB",
+    "SceneRenderer",
+    "TEXT_MARGIN_PX",
+    "TRACE_WIDTH_PX",
+    "as_box_arrays",
+    "floor_label",
+    "floor_tick_step",
+    "floor_ticks",
 ]
 
 
@@ -83,9 +100,7 @@ class SceneRenderer(SceneDrawing):
     ) -> None:
         self.width_px = int(width_px)
         self.height_px = int(height_px)
-        self.camera = (
-            camera if camera is not None else Camera.from_view(-1.0, 7.0, -1.0, 4.0, width_px, height_px)
-        )
+        self.camera = camera if camera is not None else Camera.from_view(-1.0, 7.0, -1.0, 4.0, width_px, height_px)
         self._check_camera_size(self.camera)
         self.palette = palette if palette is not None else Palette()
         self.font_size_px = int(font_size_px)
@@ -278,9 +293,7 @@ class SceneRenderer(SceneDrawing):
                 self._headline_font = pygame.font.Font(None, round(HEADLINE_SCALE * self.font_size_px))
                 self._headline_font.set_bold(True)
             except (ImportError, NotImplementedError, OSError, pygame.error) as error:
-                warnings.warn(
-                    f"pygame.font is unavailable ({error}); text is not drawn", RuntimeWarning, stacklevel=2
-                )
+                warnings.warn(f"pygame.font is unavailable ({error}); text is not drawn", RuntimeWarning, stacklevel=2)
                 self._font = self._headline_font = None
         return self._font
 
@@ -313,5 +326,3 @@ def as_box_arrays(
             f"{n_boxes} boxes (expected (n,) and (n, 2))"
         ) from error
     return position, angle, half_extents
-
-

@@ -89,9 +89,7 @@ def _checked_frames(frames: Iterable[np.ndarray]) -> list[np.ndarray]:
         raise ValueError(f"frames must be (H, W, 3) arrays, got {expected_shape}")
     for index, frame in enumerate(frames):
         if frame.shape != expected_shape or frame.dtype != np.uint8:
-            raise ValueError(
-                f"frame {index} is {frame.shape} {frame.dtype}; all frames must be {expected_shape} uint8"
-            )
+            raise ValueError(f"frame {index} is {frame.shape} {frame.dtype}; all frames must be {expected_shape} uint8")
     return frames
 
 
@@ -107,8 +105,7 @@ def _import_render_dependency(module_name: str, package_name: str):
         return importlib.import_module(module_name)
     except ImportError as error:
         raise DependencyNotInstalled(
-            f"Writing videos needs {package_name}, which is not installed. "
-            f"Install it with: {RENDER_INSTALL_HINT}"
+            f"Writing videos needs {package_name}, which is not installed. Install it with: {RENDER_INSTALL_HINT}"
         ) from error
 
 

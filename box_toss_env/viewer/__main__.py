@@ -15,15 +15,23 @@ from box_toss_env.physics.scenes import SCENES
 from box_toss_env.viewer.controller import STEPS_PER_FRAME, ViewerController
 from box_toss_env.viewer.kernel_loader import KernelLoader
 
-PARAMETER_FLAGS = (("dt", "dt", "time step size [s]"), ("gravity", "gravity", "gravity along y [m/s^2]"),
-                   ("stiffness", "penalty_stiffness", "penalty stiffness [N/m]"),
-                   ("restitution", "restitution", "restitution coefficient"),
-                   ("friction", "friction", "friction coefficient"))
+PARAMETER_FLAGS = (
+    ("dt", "dt", "time step size [s]"),
+    ("gravity", "gravity", "gravity along y [m/s^2]"),
+    ("stiffness", "penalty_stiffness", "penalty stiffness [N/m]"),
+    ("restitution", "restitution", "restitution coefficient"),
+    ("friction", "friction", "friction coefficient"),
+)
 
 
 # (flag, low, high) of the integer options: sizes in pixels, counts and seeds
-INTEGER_FLAGS = (("width", 100, 10_000), ("height", 100, 10_000), ("steps-per-frame", 1, 10_000),
-                 ("skip", 0, None), ("seed", 0, None))
+INTEGER_FLAGS = (
+    ("width", 100, 10_000),
+    ("height", 100, 10_000),
+    ("steps-per-frame", 1, 10_000),
+    ("skip", 0, None),
+    ("seed", 0, None),
+)
 
 
 def read_throw(text: str, config) -> list[float]:
@@ -36,9 +44,11 @@ def read_throw(text: str, config) -> list[float]:
         raise ValueError(f"--throw must be VX,VY,SPIN (three finite numbers), got {text!r}")
     speed = float(np.hypot(throw[0], throw[1]))
     if speed > config.max_speed or abs(throw[2]) > config.max_spin:
-        raise ValueError(f"--throw {text}: the env throws at speeds up to {config.max_speed:g} m/s (this one "
-                         f"{speed:.3g}) and spins up to {config.max_spin:g} rad/s in magnitude "
-                         f"(this one {throw[2]:.3g})")
+        raise ValueError(
+            f"--throw {text}: the env throws at speeds up to {config.max_speed:g} m/s (this one "
+            f"{speed:.3g}) and spins up to {config.max_spin:g} rad/s in magnitude "
+            f"(this one {throw[2]:.3g})"
+        )
     return throw
 
 
@@ -53,9 +63,10 @@ def make_parser() -> argparse.ArgumentParser:
     parser = OneLineParser(
         prog="python -m box_toss_env.viewer",
         description="The seed demo's rigid-body viewer (any named scene), or BoxToss played by hand (--play). "
-                    "Keys are listed in the window's panel.",
+        "Keys are listed in the window's panel.",
         epilog="Headless: --frames N --out PATH draws N frames to PNG without opening a window "
-               "(PATH ending in .png names the file, otherwise it is a folder of frame_0000.png ...).")
+        "(PATH ending in .png names the file, otherwise it is a folder of frame_0000.png ...).",
+    )
     parser.add_argument("--scene", default="seed_demo", choices=sorted(SCENES), help="named scene (default: seed_demo)")
     parser.add_argument("--list-scenes", action="store_true", help="list the named scenes and exit")
     parser.add_argument("--solver", choices=SOLVERS, help="solver (default: the scene's; the env's with --play)")
@@ -63,12 +74,19 @@ def make_parser() -> argparse.ArgumentParser:
         parser.add_argument(f"--{flag}", type=float, help=f"{help_text} (default: the scene's)")
     parser.add_argument("--no-impulses", action="store_true", help="switch impulses off (seed solver only)")
     parser.add_argument("--no-penalty", action="store_true", help="switch penalty forces off")
-    parser.add_argument("--boxes-collide", action="store_true",
-                        help="the boxes collide with one another too (the demo's meet only the floor); key B")
+    parser.add_argument(
+        "--boxes-collide",
+        action="store_true",
+        help="the boxes collide with one another too (the demo's meet only the floor); key B",
+    )
     parser.add_argument("--compare", action="store_true", help="start with seed | robust side by side")
     parser.add_argument("--paused", action="store_true", help="start paused")
-    parser.add_argument("--steps-per-frame", type=int, default=STEPS_PER_FRAME,
-                        help=f"simulation steps per drawn frame (default {STEPS_PER_FRAME}, as in the demo)")
+    parser.add_argument(
+        "--steps-per-frame",
+        type=int,
+        default=STEPS_PER_FRAME,
+        help=f"simulation steps per drawn frame (default {STEPS_PER_FRAME}, as in the demo)",
+    )
     parser.add_argument("--width", type=int, help="scene area width [px] (default 900; play: 720)")
     parser.add_argument("--height", type=int, help="scene area height [px] (default 560; play: 480)")
     headless = parser.add_argument_group("headless frames (no window)")
@@ -124,8 +142,13 @@ def run_viewer(parser: argparse.ArgumentParser, args) -> int:
     loader = KernelLoader() if args.frames is None else None
     try:
         scene = SCENES[args.scene]().replace(**changes)
-        controller = ViewerController(scene, width_px=args.width or 900, height_px=args.height or 560,
-                                      steps_per_frame=args.steps_per_frame, loader=loader)
+        controller = ViewerController(
+            scene,
+            width_px=args.width or 900,
+            height_px=args.height or 560,
+            steps_per_frame=args.steps_per_frame,
+            loader=loader,
+        )
     except ValueError as error:
         parser.error(str(error))
     if args.compare and not controller.toggle_compare():
@@ -165,8 +188,9 @@ def run_play(parser: argparse.ArgumentParser, args) -> int:
         parser.error(str(error))
     try:
         headless = args.frames is not None
-        window = PlayWindow(PlayController(env, seed=args.seed), headless=headless,
-                            loader=None if headless else KernelLoader())
+        window = PlayWindow(
+            PlayController(env, seed=args.seed), headless=headless, loader=None if headless else KernelLoader()
+        )
         if args.frames is None:
             window.run()
             return 0

@@ -39,6 +39,7 @@ NOTICE_TEXT = (60, 40, 0)
 NOTICE_TOP_PX = 96
 """The notice's top edge [px]: below a lane's read-outs."""
 
+
 def output_paths(out: str | Path, n_frames: int) -> list[Path]:
     """Where headless frames go: ``out`` ending in ``.png`` names the file (numbered ``_0000`` ... when
     there are several), otherwise it is a folder of ``frame_0000.png`` ... Parent folders are made."""
@@ -88,8 +89,9 @@ class Canvas:
         self.surface.fill(NOTICE_BACKGROUND, rect)
         pygame.draw.rect(self.surface, NOTICE_BORDER, rect, 2)
         for index, line in enumerate(lines):
-            self.text(line, (rect.left + pad, rect.top + pad + index * line_height),
-                      NOTICE_TEXT if index == 0 else PANEL_DIM)
+            self.text(
+                line, (rect.left + pad, rect.top + pad + index * line_height), NOTICE_TEXT if index == 0 else PANEL_DIM
+            )
         return rect
 
     def save(self, path: Path) -> None:
@@ -158,5 +160,3 @@ class Panel:
             left += width + 6
         self.top += self.line_height + 10
         return rects
-
-

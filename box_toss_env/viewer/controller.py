@@ -55,10 +55,28 @@ from box_toss_env.viewer.parameters import (
 from box_toss_env.viewer.view import MAX_PIXELS_PER_METRE, MIN_PIXELS_PER_METRE, ZOOM_STEP, View, fit_view, view_points
 
 __all__ = [
-    "COMPARE_SOLVERS", "DRAG_FOLLOW_FRAMES", "DRAG_SPIN_DAMPING", "Grab", "Lane", "MAX_DRAG_SPEED",
-    "MAX_PIXELS_PER_METRE", "MIN_PIXELS_PER_METRE", "PARAMETERS", "PARAMETER_BY_NAME", "Parameter", "ROWS",
-    "ROW_LABELS", "STEPS_PER_FRAME", "StepTimer", "TIMING_WINDOW_STEPS", "TOGGLES", "View", "ViewerController",
-    "ZOOM_STEP", "fit_view", "view_points",
+    "COMPARE_SOLVERS",
+    "DRAG_FOLLOW_FRAMES",
+    "DRAG_SPIN_DAMPING",
+    "Grab",
+    "Lane",
+    "MAX_DRAG_SPEED",
+    "MAX_PIXELS_PER_METRE",
+    "MIN_PIXELS_PER_METRE",
+    "PARAMETERS",
+    "PARAMETER_BY_NAME",
+    "Parameter",
+    "ROWS",
+    "ROW_LABELS",
+    "STEPS_PER_FRAME",
+    "StepTimer",
+    "TIMING_WINDOW_STEPS",
+    "TOGGLES",
+    "View",
+    "ViewerController",
+    "ZOOM_STEP",
+    "fit_view",
+    "view_points",
 ]
 
 
@@ -72,9 +90,16 @@ class ViewerController:
     reason in ``message``. With a ``loader`` kernels are loaded off the caller's thread (see ``loading``).
     """
 
-    def __init__(self, scene: Scene, *, width_px: int = 900, height_px: int = 560,
-                 steps_per_frame: int = STEPS_PER_FRAME, clock: Callable[[], float] = time.perf_counter,
-                 loader: KernelLoader | None = None):
+    def __init__(
+        self,
+        scene: Scene,
+        *,
+        width_px: int = 900,
+        height_px: int = 560,
+        steps_per_frame: int = STEPS_PER_FRAME,
+        clock: Callable[[], float] = time.perf_counter,
+        loader: KernelLoader | None = None,
+    ):
         if steps_per_frame < 1:
             raise ValueError(f"steps_per_frame must be >= 1, got {steps_per_frame}")
         self.scene = scene
@@ -290,8 +315,9 @@ class ViewerController:
         return self.width_px // len(self.lanes)
 
     def lane_camera(self, lane_index: int) -> Camera:
-        return Camera(self.view.center_x, self.view.center_y, self.view.pixels_per_metre,
-                      self.lane_width_px, self.height_px)
+        return Camera(
+            self.view.center_x, self.view.center_y, self.view.pixels_per_metre, self.lane_width_px, self.height_px
+        )
 
     def lane_at(self, column: float) -> int | None:
         """The lane under a window column [px] (None over the panel)."""
@@ -317,8 +343,11 @@ class ViewerController:
             local = np.array([pixel[0] - lane_index * self.lane_width_px, pixel[1]], dtype=np.float64)
         fixed = camera.pixel_to_world(local)
         scale = float(np.clip(self.view.pixels_per_metre * factor, MIN_PIXELS_PER_METRE, MAX_PIXELS_PER_METRE))
-        self.view = View(fixed[0] - (local[0] - 0.5 * camera.width_px) / scale,
-                         fixed[1] + (local[1] - 0.5 * camera.height_px) / scale, scale)
+        self.view = View(
+            fixed[0] - (local[0] - 0.5 * camera.width_px) / scale,
+            fixed[1] + (local[1] - 0.5 * camera.height_px) / scale,
+            scale,
+        )
 
     def pan(self, d_column: float, d_row: float) -> None:
         """Move the view with the mouse by (columns, rows) [px]: the world follows the cursor."""

@@ -43,9 +43,14 @@ def zero_step_args(state: np.ndarray, params: np.ndarray, settings: np.ndarray, 
     settings = np.array(settings, dtype=np.float64)
     settings[layout.MAX_STEPS] = 0.0
     n = state.shape[0]
-    return (np.array(state, dtype=np.float64), np.array(params, dtype=np.float64), settings,
-            np.array(stats, dtype=np.float64), np.zeros((1, n, layout.STATE_SIZE)),
-            np.zeros((n, layout.MAX_EVENTS, layout.EVENT_SIZE)))
+    return (
+        np.array(state, dtype=np.float64),
+        np.array(params, dtype=np.float64),
+        settings,
+        np.array(stats, dtype=np.float64),
+        np.zeros((1, n, layout.STATE_SIZE)),
+        np.zeros((n, layout.MAX_EVENTS, layout.EVENT_SIZE)),
+    )
 
 
 @dataclass(eq=False)

@@ -31,6 +31,8 @@ DRAG_SPIN_DAMPING = 0.5
 """A dragged box's spin is multiplied by this before each frame (it would swing wildly otherwise)."""
 MAX_DRAG_SPEED = 50.0
 """Cap on the speed a drag gives a box [m/s]."""
+
+
 # -- timing ----------------------------------------------------------------------------------------
 class StepTimer:
     """Mean wall time per simulation step over the latest ``window`` steps.
@@ -101,9 +103,12 @@ class Lane:
         """Take ``simulator``; with a loader, queue its kernel's first call (nothing if compiled already)."""
         self.simulator = simulator
         if self.loader is not None:
-            args = zero_step_args(scene.initial_state(), scene.body_params(),
-                                  make_settings(scene, 0, until_rest=False),
-                                  np.zeros((scene.n_bodies, layout.STATS_SIZE)))
+            args = zero_step_args(
+                scene.initial_state(),
+                scene.body_params(),
+                make_settings(scene, 0, until_rest=False),
+                np.zeros((scene.n_bodies, layout.STATS_SIZE)),
+            )
             self.job = self.loader.prepare(simulator.kernel, args, scene.solver)
 
     @property
@@ -168,8 +173,9 @@ class Lane:
         dx, dy = point[0] - x, point[1] - y
         local_x = np.cos(angle) * dx + np.sin(angle) * dy
         local_y = -np.sin(angle) * dx + np.cos(angle) * dy
-        inside = ((np.abs(local_x) <= self.params[:, layout.HALF_LENGTH])
-                  & (np.abs(local_y) <= self.params[:, layout.HALF_WIDTH]))
+        inside = (np.abs(local_x) <= self.params[:, layout.HALF_LENGTH]) & (
+            np.abs(local_y) <= self.params[:, layout.HALF_WIDTH]
+        )
         hits = np.flatnonzero(inside)
         return int(hits[-1]) if hits.size else None
 
@@ -203,7 +209,5 @@ class Lane:
         speed = float(np.hypot(*velocity))
         if speed > MAX_DRAG_SPEED:
             velocity *= MAX_DRAG_SPEED / speed
-        self.state[grab.body, layout.VX:layout.VY + 1] = velocity
+        self.state[grab.body, layout.VX : layout.VY + 1] = velocity
         self.state[grab.body, layout.SPIN] *= DRAG_SPIN_DAMPING
-
-

@@ -36,13 +36,21 @@ def _one_two_five(low_exponent: int, high_exponent: int) -> tuple[float, ...]:
 
 
 PARAMETERS = (
-    Parameter("dt", "time step size", "s",
-              (0.0002, 0.0005, 0.001, 0.002, 0.0025, 0.004, 0.005, 0.0075, 0.01, 0.015, 0.02, 0.03, 0.05)),
+    Parameter(
+        "dt",
+        "time step size",
+        "s",
+        (0.0002, 0.0005, 0.001, 0.002, 0.0025, 0.004, 0.005, 0.0075, 0.01, 0.015, 0.02, 0.03, 0.05),
+    ),
     Parameter("gravity", "gravity", "m/s^2", tuple(sorted({*range(-30, 1), -9.81}))),
     Parameter("penalty_stiffness", "penalty stiffness", "N/m", (0.0, *_one_two_five(0, 6))),
     Parameter("restitution", "restitution coefficient", "", tuple(round(0.05 * k, 2) for k in range(21))),
-    Parameter("friction", "friction coefficient", "",
-              (0.0, 0.01, 0.02, 0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.8, 1.0, 1.5, 2.0)),
+    Parameter(
+        "friction",
+        "friction coefficient",
+        "",
+        (0.0, 0.01, 0.02, 0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.8, 1.0, 1.5, 2.0),
+    ),
 )
 TOGGLES = (("use_impulses", "use impulses"), ("use_penalty", "use penalty force"), ("boxes_collide", "boxes collide"))
 PARAMETER_BY_NAME = {parameter.name: parameter for parameter in PARAMETERS}
@@ -51,4 +59,3 @@ ROWS = (*(parameter.name for parameter in PARAMETERS), *(name for name, _ in TOG
 ROW_LABELS = {**{p.name: p.label for p in PARAMETERS}, **dict(TOGGLES), "solver": "solver"}
 COMPARE_SOLVERS = ("seed", "robust")
 """The lanes of compare mode, left to right."""
-

@@ -194,6 +194,12 @@ class PlayController:
         _, reward, _, _, info = self.env.step(action.astype(np.float32))
         throw = task.actions_to_throws(action.astype(np.float32).astype(np.float64)[None, :], self.config)[0]
         self.result = ThrowResult(
-            action=action, throw=throw, clipped=clipped, reward=float(reward),
-            terms={name: float(info[name]) for name in task.REWARD_TERMS}, info=info, frames=self._frames())
+            action=action,
+            throw=throw,
+            clipped=clipped,
+            reward=float(reward),
+            terms={name: float(info[name]) for name in task.REWARD_TERMS},
+            info=info,
+            frames=self._frames(),
+        )
         return self.result

@@ -41,6 +41,7 @@ PLAY_KEYS = (
 )
 """Key bindings of play mode."""
 
+
 # -- play mode -------------------------------------------------------------------------------------------
 class PlayWindow:
     """Draws a ``PlayController``: the env's own frames (target, box, throw), the aim drawn over them,
@@ -125,11 +126,16 @@ class PlayWindow:
             end = centre + speed / THROW_GAIN * np.array([math.cos(theta), math.sin(theta)])
             _arrow(pygame, surface, self._px(centre), self._px(end), AIM_ARROW)
         if controller.spin:
-            radius = 0.45 * self.camera.pixels_per_metre * math.hypot(controller.config.half_length,
-                                                                      controller.config.half_width) + 10
+            radius = (
+                0.45
+                * self.camera.pixels_per_metre
+                * math.hypot(controller.config.half_length, controller.config.half_width)
+                + 10
+            )
             sweep = 1.5 * math.pi * controller.spin / max(controller.config.max_spin, 1e-9)
-            start, stop = (0.25 * math.pi, 0.25 * math.pi + sweep) if sweep > 0 else (0.25 * math.pi + sweep,
-                                                                                     0.25 * math.pi)
+            start, stop = (
+                (0.25 * math.pi, 0.25 * math.pi + sweep) if sweep > 0 else (0.25 * math.pi + sweep, 0.25 * math.pi)
+            )
             column, row = self._px(centre)
             rect = pygame.Rect(0, 0, 2 * radius, 2 * radius)
             rect.center = (int(column), int(row))
@@ -279,8 +285,12 @@ def throw_kernel_call(env) -> tuple[Any, tuple]:
     env = env.unwrapped
     flags = dataclasses.replace(env.flags, record=env.render_mode in ("human", "rgb_array_list"))
     n = 1
-    args = zero_step_args(np.zeros((n, layout.STATE_SIZE)), np.zeros((n, layout.PARAM_SIZE)), env.engine_settings,
-                          np.zeros((n, layout.STATS_SIZE)))
+    args = zero_step_args(
+        np.zeros((n, layout.STATE_SIZE)),
+        np.zeros((n, layout.PARAM_SIZE)),
+        env.engine_settings,
+        np.zeros((n, layout.STATS_SIZE)),
+    )
     return Simulator(flags).kernel, args
 
 

@@ -17,6 +17,7 @@ ZOOM_STEP = 1.15
 """Zoom factor of one wheel click or key press."""
 MIN_PIXELS_PER_METRE, MAX_PIXELS_PER_METRE = 0.5, 20000.0
 
+
 # -- the view ----------------------------------------------------------------------------------------
 @dataclass
 class View:
@@ -39,8 +40,9 @@ def view_points(scene: Scene) -> np.ndarray:
         if g > 0 and (vx or vy):
             apex_time = max(vy / g, 0.0)
             landing_time = (vy + math.sqrt(vy * vy + 2.0 * g * max(y, 0.0))) / g
-            points.append([[x + vx * apex_time, y + vy * apex_time - 0.5 * g * apex_time**2],
-                           [x + vx * landing_time, 0.0]])
+            points.append(
+                [[x + vx * apex_time, y + vy * apex_time - 0.5 * g * apex_time**2], [x + vx * landing_time, 0.0]]
+            )
     return np.concatenate([np.asarray(p, dtype=np.float64).reshape(-1, 2) for p in points])
 
 
@@ -49,5 +51,3 @@ def fit_view(scene: Scene, width_px: int, height_px: int) -> View:
     span = float(np.ptp(points, axis=0).max())
     camera = Camera.fit_points(points, width_px, height_px, margin_m=0.2 + 0.12 * span, min_span_m=2.0)
     return View(camera.center_x, camera.center_y, camera.pixels_per_metre)
-
-

@@ -54,11 +54,38 @@ from box_toss_env.viewer.controller import PARAMETER_BY_NAME, ROW_LABELS, ROWS, 
 from box_toss_env.viewer.play_window import PLAY_KEYS, PlayWindow, throw_kernel_call
 
 __all__ = [
-    "AIM_ARROW", "AIM_PATH", "AIM_RAW", "Canvas", "DRAG_LINE", "FONT_SIZE_PX", "FRAME_RATE", "LANE_DIVIDER",
-    "NOTICE_BACKGROUND", "NOTICE_BORDER", "NOTICE_TEXT", "NOTICE_TOP_PX", "PANEL_ALERT", "PANEL_BACKGROUND",
-    "PANEL_BUTTON", "PANEL_DIM", "PANEL_GOOD", "PANEL_MARGIN_PX", "PANEL_SELECTED", "PANEL_TEXT", "PANEL_WIDTH_PX",
-    "PLAY_KEYS", "Panel", "PlayWindow", "VIEWER_BUTTONS", "VIEWER_KEYS", "ViewerWindow", "WRAP_CHARS", "notice_lines",
-    "output_paths", "scene_subtitle", "throw_kernel_call",
+    "AIM_ARROW",
+    "AIM_PATH",
+    "AIM_RAW",
+    "Canvas",
+    "DRAG_LINE",
+    "FONT_SIZE_PX",
+    "FRAME_RATE",
+    "LANE_DIVIDER",
+    "NOTICE_BACKGROUND",
+    "NOTICE_BORDER",
+    "NOTICE_TEXT",
+    "NOTICE_TOP_PX",
+    "PANEL_ALERT",
+    "PANEL_BACKGROUND",
+    "PANEL_BUTTON",
+    "PANEL_DIM",
+    "PANEL_GOOD",
+    "PANEL_MARGIN_PX",
+    "PANEL_SELECTED",
+    "PANEL_TEXT",
+    "PANEL_WIDTH_PX",
+    "PLAY_KEYS",
+    "Panel",
+    "PlayWindow",
+    "VIEWER_BUTTONS",
+    "VIEWER_KEYS",
+    "ViewerWindow",
+    "WRAP_CHARS",
+    "notice_lines",
+    "output_paths",
+    "scene_subtitle",
+    "throw_kernel_call",
 ]
 
 
@@ -97,8 +124,11 @@ class ViewerWindow:
     def __init__(self, controller: ViewerController, scene_name: str, *, headless: bool = False):
         self.controller = controller
         self.scene_name = scene_name
-        self.canvas = Canvas((controller.width_px + PANEL_WIDTH_PX, controller.height_px), headless=headless,
-                             title=f"BoxToss viewer: {scene_name}")
+        self.canvas = Canvas(
+            (controller.width_px + PANEL_WIDTH_PX, controller.height_px),
+            headless=headless,
+            title=f"BoxToss viewer: {scene_name}",
+        )
         self.pygame = self.canvas.pygame
         self.renderers: dict[tuple[int, int], SceneRenderer] = {}
         self.row_rects: dict[str, Any] = {}
@@ -116,9 +146,12 @@ class ViewerWindow:
             if size not in self.renderers:
                 self.renderers[size] = SceneRenderer(*size, camera=camera)
             frame = self.renderers[size].render_rgb(
-                lane.state[:, layout.X:layout.Y + 1], lane.state[:, layout.ANGLE],
-                lane.params[:, layout.HALF_LENGTH:layout.HALF_WIDTH + 1],
-                text_lines=controller.readouts(index), camera=camera)
+                lane.state[:, layout.X : layout.Y + 1],
+                lane.state[:, layout.ANGLE],
+                lane.params[:, layout.HALF_LENGTH : layout.HALF_WIDTH + 1],
+                text_lines=controller.readouts(index),
+                camera=camera,
+            )
             left = index * controller.lane_width_px
             self.canvas.blit_rgb(frame, left)
             if index > 0:
@@ -130,8 +163,9 @@ class ViewerWindow:
                 self.pygame.draw.line(self.canvas.surface, DRAG_LINE, start, end, 2)
                 self.pygame.draw.circle(self.canvas.surface, DRAG_LINE, end, 4)
             if lane.notice is not None:
-                self.canvas.notice(notice_lines(lane.job, "the boxes move when it is ready"), left,
-                                   controller.lane_width_px)
+                self.canvas.notice(
+                    notice_lines(lane.job, "the boxes move when it is ready"), left, controller.lane_width_px
+                )
         self._draw_panel()
 
     def _draw_panel(self) -> None:
@@ -141,15 +175,17 @@ class ViewerWindow:
         panel.line(scene_subtitle(controller.scene.boxes_collide, controller.steps_per_frame), PANEL_DIM)
         panel.gap()
         self.button_rects = panel.buttons(
-            [(name, "Run" if name == "pause" and controller.paused else label) for name, label in VIEWER_BUTTONS])
+            [(name, "Run" if name == "pause" and controller.paused else label) for name, label in VIEWER_BUTTONS]
+        )
         self.row_rects = {}
         for index, row in enumerate(ROWS):
             selected = index == controller.selected
             value = controller.row_value(row)
             if selected and controller.entry is not None:
                 value = controller.entry + "_"
-            self.row_rects[row] = panel.line(ROW_LABELS[row], background=PANEL_SELECTED if selected else None,
-                                             value=value)
+            self.row_rects[row] = panel.line(
+                ROW_LABELS[row], background=PANEL_SELECTED if selected else None, value=value
+            )
         panel.gap()
         status = "paused" if controller.paused else "running"
         if controller.loading:
@@ -191,16 +227,19 @@ class ViewerWindow:
                 controller.pan(*event.rel)
         elif event.type == pygame.MOUSEWHEEL:
             if controller.lane_at(self.mouse[0]) is not None:
-                controller.zoom(ZOOM_STEP ** event.y, self.mouse)
+                controller.zoom(ZOOM_STEP**event.y, self.mouse)
         return True
 
     def _click_panel(self, position) -> bool:
         controller = self.controller
         for name, rect in self.button_rects.items():
             if rect.collidepoint(position):
-                {"restart": controller.restart, "pause": controller.toggle_pause,
-                 "step": lambda: controller.advance_frame(force=True),
-                 "compare": controller.toggle_compare}[name]()
+                {
+                    "restart": controller.restart,
+                    "pause": controller.toggle_pause,
+                    "step": lambda: controller.advance_frame(force=True),
+                    "compare": controller.toggle_compare,
+                }[name]()
                 return True
         for row, rect in self.row_rects.items():
             if rect.collidepoint(position):
@@ -297,5 +336,3 @@ class ViewerWindow:
             self.canvas.save(path)
             states.append(np.stack([lane.state.copy() for lane in self.controller.lanes]))
         return paths, np.stack(states)
-
-

@@ -30,8 +30,13 @@ class BallisticThrowsVector(VectorWrapper):
     """A BoxToss vector env acting in ballistic commands; ``info["command_clipped"]`` (num_envs,)
     says which commands the env's limits clipped."""
 
-    def __init__(self, env: VectorEnv, flight_time_range: tuple[float, float] | None = None,
-                 offset_range: float = DEFAULT_OFFSET_RANGE, turn_range: float = DEFAULT_TURN_RANGE):
+    def __init__(
+        self,
+        env: VectorEnv,
+        flight_time_range: tuple[float, float] | None = None,
+        offset_range: float = DEFAULT_OFFSET_RANGE,
+        turn_range: float = DEFAULT_TURN_RANGE,
+    ):
         super().__init__(env)
         config = getattr(env.unwrapped, "config", None)
         if not isinstance(config, task.TaskConfig):

@@ -40,13 +40,16 @@ class DisabledAutoreset(VectorWrapper):
             return self.env.reset(seed=seed, options=options or None)  # type: ignore[arg-type]  # a list of seeds too
         mask = check_reset_mask(mask, self.num_envs)
         if seed is not None:
-            raise ValueError("seed must be None when options['reset_mask'] is given: the next episodes were drawn "
-                             "when the last ones ended; reset every env (no reset_mask) to reseed")
+            raise ValueError(
+                "seed must be None when options['reset_mask'] is given: the next episodes were drawn "
+                "when the last ones ended; reset every env (no reset_mask) to reseed"
+            )
         if options:
             raise ValueError(f"options other than reset_mask are not taken with a reset_mask, got {sorted(options)}")
         if np.any(mask & ~self._ended):
-            raise ValueError("reset_mask selects envs whose episode has not ended: "
-                             f"{np.flatnonzero(mask & ~self._ended).tolist()}")
+            raise ValueError(
+                f"reset_mask selects envs whose episode has not ended: {np.flatnonzero(mask & ~self._ended).tolist()}"
+            )
         self._ended &= ~mask
         assert self._pending is not None  # drawn when the episodes ended
         observations, info = self._pending
@@ -54,8 +57,10 @@ class DisabledAutoreset(VectorWrapper):
 
     def step(self, actions):
         if np.any(self._ended):
-            raise RuntimeError(f"envs {np.flatnonzero(self._ended).tolist()} ended and were not reset: with "
-                               "autoreset disabled, call reset(options={'reset_mask': mask}) first")
+            raise RuntimeError(
+                f"envs {np.flatnonzero(self._ended).tolist()} ended and were not reset: with "
+                "autoreset disabled, call reset(options={'reset_mask': mask}) first"
+            )
         observations, reward, terminated, truncated, info = self.env.step(actions)
         ended = terminated | truncated
         if not np.all(ended):

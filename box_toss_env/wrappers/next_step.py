@@ -46,7 +46,10 @@ class NextStepAutoreset(VectorWrapper):
         observations, reward, terminated, truncated, info = self.env.step(actions)
         if not np.all(terminated | truncated):
             raise RuntimeError("NextStepAutoreset needs every env to end in every step (one-throw episodes)")
-        reset_info = {key: value for key, value in info.items() if key not in
-                      ("final_obs", "_final_obs", "final_info", "_final_info")}
+        reset_info = {
+            key: value
+            for key, value in info.items()
+            if key not in ("final_obs", "_final_obs", "final_info", "_final_info")
+        }
         self._next = (observations, reset_info)
         return info["final_obs"], reward, terminated, truncated, info["final_info"]

@@ -71,8 +71,7 @@ class SB3VecEnvAdapter(VecEnv):
             )
         self.vector_env = vector_env
         self._actions: np.ndarray | None = None
-        super().__init__(vector_env.num_envs, vector_env.single_observation_space,
-                         vector_env.single_action_space)
+        super().__init__(vector_env.num_envs, vector_env.single_observation_space, vector_env.single_action_space)
 
     def reset(self):
         seeds = None if all(seed is None for seed in self._seeds) else list(self._seeds)
@@ -96,8 +95,11 @@ class SB3VecEnvAdapter(VecEnv):
         infos = split_info(info, self.num_envs)
         ended = split_info(final_info, self.num_envs) if final_info is not None else infos
         for i in np.flatnonzero(final_mask):
-            infos[i] = {**ended[i], "terminal_observation": final_obs[i],
-                        "TimeLimit.truncated": bool(truncated[i] and not terminated[i])}
+            infos[i] = {
+                **ended[i],
+                "terminal_observation": final_obs[i],
+                "TimeLimit.truncated": bool(truncated[i] and not terminated[i]),
+            }
         return obs, np.asarray(rewards, dtype=np.float32), dones, infos
 
     def close(self) -> None:

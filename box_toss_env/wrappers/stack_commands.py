@@ -28,8 +28,13 @@ from box_toss_env.envs.stack_commands import (
 class StackCommandsVector(VectorWrapper):
     """A batched ``BoxToss-Stack-v0`` acting in throw commands; observations and rewards are the env's."""
 
-    def __init__(self, env: VectorEnv, flight_time_range: tuple[float, float] = FLIGHT_TIME_RANGE,
-                 offset_range: float = OFFSET_RANGE, turn_range: float = TURN_RANGE):
+    def __init__(
+        self,
+        env: VectorEnv,
+        flight_time_range: tuple[float, float] = FLIGHT_TIME_RANGE,
+        offset_range: float = OFFSET_RANGE,
+        turn_range: float = TURN_RANGE,
+    ):
         super().__init__(env)
         config = getattr(env.unwrapped, "config", None)
         if not isinstance(config, stack_task.StackConfig):

@@ -149,8 +149,10 @@ def rest_pose(raw: dict[int, np.ndarray]) -> tuple[float, float, int]:
     for table in raw.values():
         last = table[-REST_FRAMES:, :3].copy()
         last[:, 2] = np.unwrap(last[:, 2], period=QUARTER)
-        if np.abs(np.diff(last[:, :2], axis=0)).max() < REST_MOTION and \
-                np.abs(np.diff(last[:, 2])).max() * HALF < REST_MOTION:
+        if (
+            np.abs(np.diff(last[:, :2], axis=0)).max() < REST_MOTION
+            and np.abs(np.diff(last[:, 2])).max() * HALF < REST_MOTION
+        ):
             heights.append(np.median(last[:, 1]))
             angles.append(np.median(face_angle(last[:, 2])))
     if not heights:
@@ -167,7 +169,7 @@ def first_impact(pose: np.ndarray) -> int:
         touching = corner[n] < CONTACT_HEIGHT and vz[n - 1] < 0
         stopped = vz[n] - vz[n - 1] > IMPACT_DV  # gravity changes vz by -0.04 m/s a frame
         if near and (touching or stopped):
-            window = corner[n:n + 3]
+            window = corner[n : n + 3]
             return n + int(np.argmin(window))
     return -1
 
@@ -178,10 +180,10 @@ def fit_flight(pose: np.ndarray, end: int) -> tuple[np.ndarray, float, float]:
     Returns the fitted (pose, velocity) at frame ``end`` as one row (x, z, theta, vx, vz, vtheta), the
     fitted vertical acceleration [m/s^2] and the RMS residual of z [m]."""
     t = (np.arange(end + 1) - end) * FRAME  # time relative to frame `end`
-    cz = np.polyfit(t, pose[:end + 1, 1], 2)
-    cx = np.polyfit(t, pose[:end + 1, 0], 1)
-    cth = np.polyfit(t, pose[:end + 1, 2], 1)
-    residual = pose[:end + 1, 1] - np.polyval(cz, t)
+    cz = np.polyfit(t, pose[: end + 1, 1], 2)
+    cx = np.polyfit(t, pose[: end + 1, 0], 1)
+    cth = np.polyfit(t, pose[: end + 1, 2], 1)
+    residual = pose[: end + 1, 1] - np.polyval(cz, t)
     state = np.array([cx[1], cz[2], cth[1], cx[0], cz[1], cth[0]])
     return state, float(2 * cz[0]), float(np.sqrt(np.mean(residual**2)))
 
@@ -204,8 +206,9 @@ def clean(raw: dict[int, np.ndarray], cleaning: Cleaning) -> list[Drop]:
             cleaning.drop("no impact found", number)
             continue
         if drop.start < MIN_FLIGHT_FRAMES - 1:
-            cleaning.drop(f"first impact before {MIN_FLIGHT_FRAMES + START_BEFORE_IMPACT} frames of free flight",
-                          number)
+            cleaning.drop(
+                f"first impact before {MIN_FLIGHT_FRAMES + START_BEFORE_IMPACT} frames of free flight", number
+            )
             continue
         _, drop.flight_gravity, residual = fit_flight(pose, drop.start)
         if residual > MAX_FLIGHT_RESIDUAL:

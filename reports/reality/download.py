@@ -103,8 +103,11 @@ def main(argv=None) -> int:
     parser = OneLineParser(prog="python -m reports.reality.download", description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", type=Path, required=True, help="folder for the traj_N.csv files")
     parser.add_argument("--check", action="store_true", help="only check the files already in --out")
-    parser.add_argument("--ellipse", action="store_true",
-                        help="the ellipse impacts (data_ellipse.mat, v_models.mat) instead of the square drops")
+    parser.add_argument(
+        "--ellipse",
+        action="store_true",
+        help="the ellipse impacts (data_ellipse.mat, v_models.mat) instead of the square drops",
+    )
     args = parser.parse_args(argv)
     if args.out.exists() and not args.out.is_dir():
         raise SystemExit(f"{parser.prog}: error: --out: {args.out} is not a folder")
@@ -113,8 +116,10 @@ def main(argv=None) -> int:
     expected = ELLIPSE_FILES if args.ellipse else manifest()
     problems = verify(args.out, expected) if args.check else download(args.out, ellipse=args.ellipse)
     total = len(expected)
-    print(f"{args.out}: {total - len(problems)} of {total} files intact"
-          + (f"; {len(problems)} missing or wrong, e.g. {next(iter(problems))}" if problems else ""))
+    print(
+        f"{args.out}: {total - len(problems)} of {total} files intact"
+        + (f"; {len(problems)} missing or wrong, e.g. {next(iter(problems))}" if problems else "")
+    )
     return 1 if problems else 0
 
 

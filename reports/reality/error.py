@@ -76,13 +76,14 @@ def measured(drops: list[data.Drop], frames: int) -> np.ndarray:
     """(n, frames + 1, 3) the measured poses from each start frame on (nan past the end of a recording)."""
     out = np.full((len(drops), frames + 1, 3), np.nan)
     for k, d in enumerate(drops):
-        piece = d.pose[d.start:d.start + frames + 1]
-        out[k, :len(piece)] = piece
+        piece = d.pose[d.start : d.start + frames + 1]
+        out[k, : len(piece)] = piece
     return out
 
 
-def simulate(states: np.ndarray, material: Material | list[Material], model: Model,
-             frames: int = max(HORIZONS)) -> tuple[np.ndarray, float]:
+def simulate(
+    states: np.ndarray, material: Material | list[Material], model: Model, frames: int = max(HORIZONS)
+) -> tuple[np.ndarray, float]:
     """(n, frames + 1, 3) poses on the frames from ``states`` (n, 6) with ``model``, and the wall time of the
     stepping [s]; nan poses where a run diverged."""
     if model.engine == "ours":
@@ -109,25 +110,49 @@ def simulate_other(states, material, model, frames):
     out = np.full((len(states), frames + 1, 3), np.nan)
     seconds = 0.0
     for k, (s, m) in enumerate(zip(states, materials, strict=True)):
-        toss = Toss(length=data.SIDE, width=data.SIDE, mass=MASS, x=s[0], y=s[1], angle=s[2], vx=s[3], vy=s[4],
-                    omega=s[5], gravity=m.gravity, restitution=m.restitution, friction=m.friction)
+        toss = Toss(
+            length=data.SIDE,
+            width=data.SIDE,
+            mass=MASS,
+            x=s[0],
+            y=s[1],
+            angle=s[2],
+            vx=s[3],
+            vy=s[4],
+            omega=s[5],
+            gravity=m.gravity,
+            restitution=m.restitution,
+            friction=m.friction,
+        )
         result = engine.simulate_toss(toss, model.dt, frames * model.substeps, record=True)
         seconds += result.wall_seconds
-        poses = result.states[::model.substeps, :3]
+        poses = result.states[:: model.substeps, :3]
         if np.isfinite(poses).all():
             out[k] = poses
     return out, seconds
 
 
-def simulate_ours(states: np.ndarray, material: Material | list[Material], model: Model,
-                  frames: int = max(HORIZONS)) -> tuple[np.ndarray, float]:
+def simulate_ours(
+    states: np.ndarray, material: Material | list[Material], model: Model, frames: int = max(HORIZONS)
+) -> tuple[np.ndarray, float]:
     """(n, frames + 1, 3) poses on the frames from ``states`` with our engine, and the run's wall time [s]
     (nan poses where the run diverged: the seed scheme at too large a step)."""
     materials = material if isinstance(material, list) else [material] * len(states)
     gravity = materials[0].gravity
-    boxes = tuple(Box(length=data.SIDE, width=data.SIDE, mass=MASS, position=(s[0], s[1]), angle=s[2],
-                      velocity=(s[3], s[4]), spin=s[5], restitution=m.restitution, friction=m.friction)
-                  for s, m in zip(states, materials, strict=True))
+    boxes = tuple(
+        Box(
+            length=data.SIDE,
+            width=data.SIDE,
+            mass=MASS,
+            position=(s[0], s[1]),
+            angle=s[2],
+            velocity=(s[3], s[4]),
+            spin=s[5],
+            restitution=m.restitution,
+            friction=m.friction,
+        )
+        for s, m in zip(states, materials, strict=True)
+    )
     scene = Scene(boxes=boxes, dt=model.dt, gravity=gravity, penalty_stiffness=STIFFNESS, solver=model.solver)
     begin = time.perf_counter()
     try:
@@ -135,7 +160,7 @@ def simulate_ours(states: np.ndarray, material: Material | list[Material], model
     except NonFiniteStateError:
         return np.full((len(states), frames + 1, 3), np.nan), time.perf_counter() - begin
     seconds = time.perf_counter() - begin
-    return np.transpose(result.trajectory.state[::model.substeps, :, :3], (1, 0, 2)).copy(), seconds
+    return np.transpose(result.trajectory.state[:: model.substeps, :, :3], (1, 0, 2)).copy(), seconds
 
 
 def errors(predicted: np.ndarray, truth: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -149,13 +174,14 @@ def errors(predicted: np.ndarray, truth: np.ndarray) -> tuple[np.ndarray, np.nda
 def loss(predicted: np.ndarray, truth: np.ndarray, frames: int = FIT_FRAMES) -> float:
     """Mean over drops and frames 1..frames of position error + HALF * angle error [m] (a corner's error,
     roughly); inf if any prediction diverged."""
-    position, angle = errors(predicted[:, 1:frames + 1], truth[:, 1:frames + 1])
+    position, angle = errors(predicted[:, 1 : frames + 1], truth[:, 1 : frames + 1])
     value = float(np.nanmean(position + data.HALF * angle))
     return value if np.isfinite(predicted).all() else math.inf
 
 
-def fit_material(drops: list[data.Drop], model: Model, gravity: float = EARTH,
-                 grid: np.ndarray = COARSE) -> tuple[Material, float]:
+def fit_material(
+    drops: list[data.Drop], model: Model, gravity: float = EARTH, grid: np.ndarray = COARSE
+) -> tuple[Material, float]:
     """The restitution and friction on ``grid`` (then a grid of a fifth of its spacing around the best) that
     minimise ``loss`` on ``drops``; returns it with its loss."""
     states, truth = initial_states(drops), measured(drops, FIT_FRAMES)
@@ -164,9 +190,10 @@ def fit_material(drops: list[data.Drop], model: Model, gravity: float = EARTH,
         points = [Material(float(e), float(mu), gravity) for e in restitutions for mu in frictions]
         # every grid point's drops in one scene: one compiled run per grid, not one per point
         n = len(states)
-        predicted, _ = simulate(np.tile(states, (len(points), 1)), [p for p in points for _ in range(n)],
-                                     model, FIT_FRAMES)
-        losses = [loss(predicted[k * n:(k + 1) * n], truth) for k in range(len(points))]
+        predicted, _ = simulate(
+            np.tile(states, (len(points), 1)), [p for p in points for _ in range(n)], model, FIT_FRAMES
+        )
+        losses = [loss(predicted[k * n : (k + 1) * n], truth) for k in range(len(points))]
         best = int(np.argmin(losses))
         return points[best], losses[best]
 
@@ -199,19 +226,25 @@ class Evaluation:
 
     def mean_over(self, frames: int) -> tuple[float, float]:
         """Mean over drops and frames 1..frames."""
-        return float(np.nanmean(self.position[:, 1:frames + 1])), float(np.nanmean(self.angle[:, 1:frames + 1]))
+        return float(np.nanmean(self.position[:, 1 : frames + 1])), float(np.nanmean(self.angle[:, 1 : frames + 1]))
 
 
-def evaluate(drops: list[data.Drop], model: Model, material: Material, frames: int = max(HORIZONS),
-             floorless: bool = False) -> Evaluation:
+def evaluate(
+    drops: list[data.Drop], model: Model, material: Material, frames: int = max(HORIZONS), floorless: bool = False
+) -> Evaluation:
     """``model`` with ``material`` on ``drops``; ``floorless``: the free-flight parabola instead (no floor, the
     baseline that shows when the impacts start to matter)."""
     states, truth = initial_states(drops), measured(drops, frames)
     if floorless:
         t = np.arange(frames + 1) * data.FRAME
-        predicted = np.stack([states[:, [0]] + states[:, [3]] * t,
-                              states[:, [1]] + states[:, [4]] * t + 0.5 * material.gravity * t**2,
-                              states[:, [2]] + states[:, [5]] * t], axis=2)
+        predicted = np.stack(
+            [
+                states[:, [0]] + states[:, [3]] * t,
+                states[:, [1]] + states[:, [4]] * t + 0.5 * material.gravity * t**2,
+                states[:, [2]] + states[:, [5]] * t,
+            ],
+            axis=2,
+        )
         seconds = 0.0
     else:
         predicted, seconds = simulate(states, material, model, frames)
@@ -225,7 +258,7 @@ def noise_floor(drops: list[data.Drop]) -> dict[str, float]:
     flight, the RMS residual of the free-flight fits (position: x and z together)."""
     rest, flight_position, flight_angle = [], [], []
     for d in drops:
-        last = d.pose[-data.REST_FRAMES:]
+        last = d.pose[-data.REST_FRAMES :]
         if np.abs(np.diff(last[:, :2], axis=0)).max() < data.REST_MOTION:
             rest.append(np.sqrt(np.mean(np.diff(last, 2, axis=0) ** 2, axis=0) / 6))
         state, _, _ = data.fit_flight(d.pose, d.start)
@@ -233,7 +266,7 @@ def noise_floor(drops: list[data.Drop]) -> dict[str, float]:
         x = state[0] + state[3] * t
         z = state[1] + state[4] * t + 0.5 * d.flight_gravity * t**2
         th = state[2] + state[5] * t
-        flight = d.pose[:d.start + 1]
+        flight = d.pose[: d.start + 1]
         flight_position.append(np.sqrt(np.mean((flight[:, 0] - x) ** 2 + (flight[:, 1] - z) ** 2)))
         flight_angle.append(np.sqrt(np.mean((flight[:, 2] - th) ** 2)))
     rest = np.array(rest) if rest else np.full((1, 3), np.nan)

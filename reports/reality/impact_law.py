@@ -38,22 +38,23 @@ def _apply(law, velocity, rx, ry, restitution, friction, inv_mass, inv_inertia, 
         corners[RX, 0] = rx[i]
         corners[RY, 0] = ry[i]
         if law == 0:
-            vx, vy, spin, _ = impact_impulses(vx, vy, spin, corners, 1, restitution[i], friction[i], threshold,
-                                              inv_mass, inv_inertia, k)
+            vx, vy, spin, _ = impact_impulses(
+                vx, vy, spin, corners, 1, restitution[i], friction[i], threshold, inv_mass, inv_inertia, k
+            )
         else:
             u_n = vy + spin * rx[i]
             if u_n < 0.0:
                 corners[TARGET, 0] = -restitution[i] * u_n
-                vx1, vy1, spin1, solved = solve_one_corner(vx, vy, spin, corners, friction[i], inv_mass,
-                                                           inv_inertia)
+                vx1, vy1, spin1, solved = solve_one_corner(vx, vy, spin, corners, friction[i], inv_mass, inv_inertia)
                 if not solved:  # friction so high that no Coulomb impulse exists: frictionless
                     vx1, vy1, spin1, solved = solve_one_corner(vx, vy, spin, corners, 0.0, inv_mass, inv_inertia)
                 vx, vy, spin = vx1, vy1, spin1
         out[i, 0], out[i, 1], out[i, 2] = vx, vy, spin
 
 
-def apply(law: str, velocity, rx, ry, restitution, friction, mass: float, inertia: float,
-          threshold: float = THRESHOLD) -> np.ndarray:
+def apply(
+    law: str, velocity, rx, ry, restitution, friction, mass: float, inertia: float, threshold: float = THRESHOLD
+) -> np.ndarray:
     """(n, 3) post-impact velocities (vx, vy, omega) from the pre-impact ones ``velocity`` (n, 3) at contact points
     with lever arms ``rx``, ``ry`` (n,), by ``law`` ("ours" or "newton"); ``restitution`` and ``friction`` are
     scalars or (n,) arrays."""
@@ -64,8 +65,18 @@ def apply(law: str, velocity, rx, ry, restitution, friction, mass: float, inerti
         return np.ascontiguousarray(np.broadcast_to(np.asarray(value, dtype=float), (n,)))
 
     out = np.empty_like(velocity)
-    _apply(LAWS.index(law), velocity, column(rx), column(ry), column(restitution), column(friction),
-           1.0 / mass, 1.0 / inertia, float(threshold), out)
+    _apply(
+        LAWS.index(law),
+        velocity,
+        column(rx),
+        column(ry),
+        column(restitution),
+        column(friction),
+        1.0 / mass,
+        1.0 / inertia,
+        float(threshold),
+        out,
+    )
     return out
 
 
@@ -87,15 +98,18 @@ def grid_fit(loss, coarse=COARSE, friction_max: float = 2.0) -> tuple[float, flo
     best = int(np.argmin(values))
     step = (coarse[1] - coarse[0]) / 5
     fine = np.arange(-4, 5) * step
-    e2, mu2 = (a.ravel() for a in np.meshgrid(np.clip(e[best] + fine, 0, 1), np.clip(mu[best] + fine, 0, friction_max),
-                                             indexing="ij"))
+    e2, mu2 = (
+        a.ravel()
+        for a in np.meshgrid(np.clip(e[best] + fine, 0, 1), np.clip(mu[best] + fine, 0, friction_max), indexing="ij")
+    )
     values2 = loss(e2, mu2)
     best2 = int(np.argmin(values2))
     return float(e2[best2]), float(mu2[best2]), float(values2[best2])
 
 
-def tangential(velocity, rx, ry, restitution, friction, tangential_restitution, mass: float,
-               inertia: float) -> np.ndarray:
+def tangential(
+    velocity, rx, ry, restitution, friction, tangential_restitution, mass: float, inertia: float
+) -> np.ndarray:
     """The proposal measured, not in the engine: the point-contact Newton + Coulomb map with a tangential
     restitution e_t, the impulse (lam, q) that gives u_n+ = -e u_n- and u_t+ = -e_t u_t- (the contact point
     springs back along the surface) if it lies in the friction cone |q| <= mu lam, else sliding with

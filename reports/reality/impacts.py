@@ -80,17 +80,24 @@ def central(poses: np.ndarray, first: int) -> np.ndarray:
 def square_impacts(drops: list[data.Drop]) -> SquareImpacts:
     """The first impacts of ``drops`` whose recording goes on 3 frames past it."""
     drops = [d for d in drops if d.impact + 3 < data.FRAMES]
-    poses = np.stack([d.pose[d.impact - BEFORE:d.impact + 4] for d in drops])
-    return SquareImpacts(np.array([d.number for d in drops]), error.initial_states(drops), central(poses, 0),
-                         central(poses, BEFORE + 1), np.abs(data.face_angle([d.pose[d.impact, 2] for d in drops])))
+    poses = np.stack([d.pose[d.impact - BEFORE : d.impact + 4] for d in drops])
+    return SquareImpacts(
+        np.array([d.number for d in drops]),
+        error.initial_states(drops),
+        central(poses, 0),
+        central(poses, BEFORE + 1),
+        np.abs(data.face_angle([d.pose[d.impact, 2] for d in drops])),
+    )
 
 
 def flight(states: np.ndarray, t, gravity: float = error.EARTH) -> np.ndarray:
     """Poses (..., 3) of free flights from ``states`` (n, 6) after times ``t`` (n,) or (n, k)."""
     t = np.asarray(t, dtype=float)
     s = states if t.ndim == 1 else states[:, None, :]
-    return np.stack([s[..., 0] + s[..., 3] * t, s[..., 1] + s[..., 4] * t + 0.5 * gravity * t**2,
-                     s[..., 2] + s[..., 5] * t], axis=-1)
+    return np.stack(
+        [s[..., 0] + s[..., 3] * t, s[..., 1] + s[..., 4] * t + 0.5 * gravity * t**2, s[..., 2] + s[..., 5] * t],
+        axis=-1,
+    )
 
 
 def contact_instant(states: np.ndarray, horizon: float = FRAMES * data.FRAME) -> np.ndarray:
@@ -160,8 +167,12 @@ def fit_square(impacts: SquareImpacts, model: str) -> tuple[float, float]:
     n = len(impacts.states)
 
     def loss(e, mu):
-        tiled = SquareImpacts(*(np.tile(a, (len(e),) + (1,) * (a.ndim - 1)) for a in
-                                (impacts.numbers, impacts.states, impacts.before, impacts.after, impacts.tilt)))
+        tiled = SquareImpacts(
+            *(
+                np.tile(a, (len(e),) + (1,) * (a.ndim - 1))
+                for a in (impacts.numbers, impacts.states, impacts.before, impacts.after, impacts.tilt)
+            )
+        )
         predicted, _ = predict(tiled, model, np.repeat(e, n), np.repeat(mu, n))
         errors = impact_law.normalised_error(predicted, tiled.after, SQUARE_GYRATION).reshape(len(e), n)
         return np.where(np.isfinite(errors).all(axis=1), errors.mean(axis=1), np.inf)
@@ -200,11 +211,15 @@ def square_models(engines: bool) -> list[str]:
     return names
 
 
-ELLIPSE_LABELS = {"ours": "our engine's impact law (Poisson + Coulomb, robust solver)",
-                  "newton": "point contact, Newton + Coulomb"}
-MODEL_LABELS = {"ours": "ours, robust solver, dt = 4 ms (both corners of a flat landing)",
-                "map: ours": "our impact law at the lowest corner only (one impact)",
-                "map: newton": "point contact, Newton + Coulomb (the kind of map that set the target)"}
+ELLIPSE_LABELS = {
+    "ours": "our engine's impact law (Poisson + Coulomb, robust solver)",
+    "newton": "point contact, Newton + Coulomb",
+}
+MODEL_LABELS = {
+    "ours": "ours, robust solver, dt = 4 ms (both corners of a flat landing)",
+    "map: ours": "our impact law at the lowest corner only (one impact)",
+    "map: newton": "point contact, Newton + Coulomb (the kind of map that set the target)",
+}
 
 
 def run_square(folder: Path, engines: bool = True, quick: bool = False) -> dict:
@@ -222,11 +237,20 @@ def run_square(folder: Path, engines: bool = True, quick: bool = False) -> dict:
             predicted, seconds = predict(test_on, model, e, mu)
             errors = impact_law.normalised_error(predicted, test_on.after, SQUARE_GYRATION)
             results.append(Result(model, kind, e, mu, errors, seconds, predicted=predicted))
-            print(f"square, {kind}, {model}: e = {e:.2f}, mu = {mu:.2f}, mean {results[-1].mean:.3f}, "
-                  f"median {results[-1].median:.3f}", flush=True)
+            print(
+                f"square, {kind}, {model}: e = {e:.2f}, mu = {mu:.2f}, mean {results[-1].mean:.3f}, "
+                f"median {results[-1].median:.3f}",
+                flush=True,
+            )
     # the flat landings of the held-out set under each model fitted on all impacts
-    return {"impacts": impacts, "train": train, "held": held, "results": results, "cleaning": cleaning,
-            "proposal": tilt_restitution(train, held, quick)}
+    return {
+        "impacts": impacts,
+        "train": train,
+        "held": held,
+        "results": results,
+        "cleaning": cleaning,
+        "proposal": tilt_restitution(train, held, quick),
+    }
 
 
 def tilt_restitution(train: SquareImpacts, held: SquareImpacts, quick: bool) -> dict:
@@ -268,8 +292,12 @@ def read_mat(path: Path) -> dict:
         import h5py
 
         with h5py.File(path, "r") as f:
-            return {key: {k: np.asarray(v).T for k, v in f[key].items()} if isinstance(f[key], h5py.Group)
-                    else np.asarray(f[key]).T for key in f}
+            return {
+                key: {k: np.asarray(v).T for k, v in f[key].items()}
+                if isinstance(f[key], h5py.Group)
+                else np.asarray(f[key]).T
+                for key in f
+            }
 
 
 def read_ellipse(path: Path) -> EllipseImpacts:
@@ -277,8 +305,10 @@ def read_ellipse(path: Path) -> EllipseImpacts:
     ``v_models.mat`` (``v_models``, n x 18: six models' vx, vy, omega)."""
     path = Path(path)
     if not path.is_file():
-        raise ValueError(f"--ellipse: {path} is not a file (download processed_data/data_ellipse.mat of "
-                         "mcubelab/planar-impact-dataset)")
+        raise ValueError(
+            f"--ellipse: {path} is not a file (download processed_data/data_ellipse.mat of "
+            "mcubelab/planar-impact-dataset)"
+        )
     record = read_mat(path)["data"]
     field_of = (lambda name: record[name]) if isinstance(record, dict) else (lambda name: getattr(record, name))
     impacts = EllipseImpacts(*(np.asarray(field_of(name), dtype=float) for name in ("states_i", "states_f", "n", "d")))
@@ -294,8 +324,9 @@ def read_ellipse(path: Path) -> EllipseImpacts:
 
 def ellipse_predict(impacts: EllipseImpacts, rows, law: str, e, mu) -> np.ndarray:
     inertia = ELLIPSE_MASS * ELLIPSE_GYRATION**2
-    return impact_law.apply(law, impacts.before[rows, 3:], impacts.normal[rows, 2], -impacts.tangent[rows, 2], e, mu,
-                            ELLIPSE_MASS, inertia)
+    return impact_law.apply(
+        law, impacts.before[rows, 3:], impacts.normal[rows, 2], -impacts.tangent[rows, 2], e, mu, ELLIPSE_MASS, inertia
+    )
 
 
 def run_ellipse(path: Path) -> dict:
@@ -305,10 +336,16 @@ def run_ellipse(path: Path) -> dict:
     measured = impacts.after[held, 3:]
     results = []
     for law in impact_law.LAWS:
+
         def loss(e, mu, law=law):
-            return np.array([impact_law.normalised_error(ellipse_predict(impacts, train, law, a, b),
-                                                         impacts.after[train, 3:], ELLIPSE_GYRATION).mean()
-                             for a, b in zip(e, mu, strict=True)])
+            return np.array(
+                [
+                    impact_law.normalised_error(
+                        ellipse_predict(impacts, train, law, a, b), impacts.after[train, 3:], ELLIPSE_GYRATION
+                    ).mean()
+                    for a, b in zip(e, mu, strict=True)
+                ]
+            )
 
         e, mu, _ = impact_law.grid_fit(loss)
         errors = impact_law.normalised_error(ellipse_predict(impacts, held, law, e, mu), measured, ELLIPSE_GYRATION)
@@ -318,13 +355,25 @@ def run_ellipse(path: Path) -> dict:
     rx, ry = impacts.normal[:, 2], -impacts.tangent[:, 2]
 
     def loss3(e, mu, et):
-        return np.array([impact_law.normalised_error(
-            impact_law.tangential(impacts.before[train, 3:], rx[train], ry[train], a, b, c, ELLIPSE_MASS, inertia),
-            impacts.after[train, 3:], ELLIPSE_GYRATION).mean() for a, b, c in zip(e, mu, et, strict=True)])
+        return np.array(
+            [
+                impact_law.normalised_error(
+                    impact_law.tangential(
+                        impacts.before[train, 3:], rx[train], ry[train], a, b, c, ELLIPSE_MASS, inertia
+                    ),
+                    impacts.after[train, 3:],
+                    ELLIPSE_GYRATION,
+                ).mean()
+                for a, b, c in zip(e, mu, et, strict=True)
+            ]
+        )
 
     e, mu, et, _ = impact_law.grid_fit3(loss3)
-    errors = impact_law.normalised_error(impact_law.tangential(impacts.before[held, 3:], rx[held], ry[held], e, mu, et,
-                                                               ELLIPSE_MASS, inertia), measured, ELLIPSE_GYRATION)
+    errors = impact_law.normalised_error(
+        impact_law.tangential(impacts.before[held, 3:], rx[held], ry[held], e, mu, et, ELLIPSE_MASS, inertia),
+        measured,
+        ELLIPSE_GYRATION,
+    )
     tangential = Result("tangential", "ellipse", e, mu, errors, et=et)
     print(f"ellipse, tangential restitution: e = {e:.2f}, mu = {mu:.2f}, e_t = {et:.2f}, mean {tangential.mean:.3f}")
     published = []
@@ -341,18 +390,35 @@ def run_ellipse(path: Path) -> dict:
     for k, name in enumerate(("vx", "vy", "k omega")):
         components[name] = float(np.mean(np.abs((predicted[:, k] - measured[:, k]) * w[k]) / norm))
     u_t = np.sum(impacts.tangent[held] * impacts.before[held, 3:], axis=1)
-    reversed_share = {name: float(np.mean(np.sign(np.sum(impacts.tangent[held] * v, axis=1)) == -np.sign(u_t)))
-                      for name, v in (("measured", measured), ("ours", predicted))}
-    return {"n": len(rows), "train": len(train), "held": len(held), "results": results, "published": published,
-            "zero": zero, "components": components, "reversed": reversed_share, "tangential": tangential}
+    reversed_share = {
+        name: float(np.mean(np.sign(np.sum(impacts.tangent[held] * v, axis=1)) == -np.sign(u_t)))
+        for name, v in (("measured", measured), ("ours", predicted))
+    }
+    return {
+        "n": len(rows),
+        "train": len(train),
+        "held": len(held),
+        "results": results,
+        "published": published,
+        "zero": zero,
+        "components": components,
+        "reversed": reversed_share,
+        "tangential": tangential,
+    }
 
 
 # -- the section ------------------------------------------------------------------------------------------
 def row(result: Result, label: str | None = None) -> list[str]:
     e = "-" if math.isnan(result.e) else f"{result.e:.2f}"
     mu = "-" if math.isnan(result.mu) else f"{result.mu:.2f}"
-    return [label or MODEL_LABELS.get(result.model, result.model), str(len(result.errors)), f"{result.mean:.2f}",
-            f"{result.median:.2f}", e, mu]
+    return [
+        label or MODEL_LABELS.get(result.model, result.model),
+        str(len(result.errors)),
+        f"{result.mean:.2f}",
+        f"{result.median:.2f}",
+        e,
+        mu,
+    ]
 
 
 HEADER = ["model", "held-out impacts", "mean error", "median error", "e", "mu"]
@@ -361,39 +427,73 @@ HEADER = ["model", "held-out impacts", "mean error", "median error", "e", "mu"]
 def section(square: dict | None, ellipse: dict | None, ellipse_note: str) -> str:
     from ..document import table
 
-    lines = ["## The impact alone: post-impact velocity error", "",
-             "Generated by `python -m reports.reality.impacts --data DIR --ellipse FILE` (module docstring: the"
-             " method); do not edit by hand. Error of a predicted post-impact velocity v against the measured v*:"
-             " |W (v - v*)| / |W v*| with W = (1, 1, radius of gyration) (Fazeli et al. 2017); predicting zero"
-             " velocity scores 1. Restitution e and friction mu fitted per model on the training impacts, figures"
-             " on the held-out ones.", ""]
+    lines = [
+        "## The impact alone: post-impact velocity error",
+        "",
+        "Generated by `python -m reports.reality.impacts --data DIR --ellipse FILE` (module docstring: the"
+        " method); do not edit by hand. Error of a predicted post-impact velocity v against the measured v*:"
+        " |W (v - v*)| / |W v*| with W = (1, 1, radius of gyration) (Fazeli et al. 2017); predicting zero"
+        " velocity scores 1. Restitution e and friction mu fitted per model on the training impacts, figures"
+        " on the held-out ones.",
+        "",
+    ]
     if square is not None:
         results = square["results"]
         held = square["held"]
-        lines += ["### The square's first impacts", "",
-                  f"{len(square['impacts'].numbers)} first impacts of the usable drops (training: odd drop numbers,"
-                  f" {len(square['train'].numbers)}; held out: even, {len(held.numbers)}); measured and predicted"
-                  " velocity both the central difference over frames impact+1 to impact+3. Radius of gyration"
-                  f" {SQUARE_GYRATION * 1e3:.1f} mm.", ""]
-        for kind, title in (("corner", f"Corner impacts (more than {math.degrees(CORNER_TILT):.0f} deg from flat;"
-                                       f" target: below {TARGET_CORNER[0]} mean / {TARGET_CORNER[1]} median)"),
-                            ("all", "All usable first impacts (target: well below 1)")):
-            lines += [f"{title}:", "", table(HEADER + ["run time / impact"],
-                                              [row(r) + [seconds(r)] for r in results if r.kind == kind]), ""]
+        lines += [
+            "### The square's first impacts",
+            "",
+            f"{len(square['impacts'].numbers)} first impacts of the usable drops (training: odd drop numbers,"
+            f" {len(square['train'].numbers)}; held out: even, {len(held.numbers)}); measured and predicted"
+            " velocity both the central difference over frames impact+1 to impact+3. Radius of gyration"
+            f" {SQUARE_GYRATION * 1e3:.1f} mm.",
+            "",
+        ]
+        for kind, title in (
+            (
+                "corner",
+                f"Corner impacts (more than {math.degrees(CORNER_TILT):.0f} deg from flat;"
+                f" target: below {TARGET_CORNER[0]} mean / {TARGET_CORNER[1]} median)",
+            ),
+            ("all", "All usable first impacts (target: well below 1)"),
+        ):
+            lines += [
+                f"{title}:",
+                "",
+                table(HEADER + ["run time / impact"], [row(r) + [seconds(r)] for r in results if r.kind == kind]),
+                "",
+            ]
         lines += flat_landings(square)
     if ellipse is not None:
-        lines += ["### The ellipse impacts (the impact law alone)", "",
-                  f"{ellipse['n']} measured impacts of mcubelab/planar-impact-dataset `data_ellipse.mat` (training:"
-                  f" even rows, {ellipse['train']}; held out: odd, {ellipse['held']}); our impact law applied with"
-                  " the measured contact Jacobian (one point).", "",
-                  table(HEADER, [row(r, ELLIPSE_LABELS[r.model]) for r in ellipse["results"]]
-                        + [row(ellipse["tangential"], "proposal: Newton + Coulomb with a tangential restitution"
-                               f" e_t = {ellipse['tangential'].et:.2f} (fitted)")]
-                        + [row(r, f"published: {r.model} (its own parameters)") for r in ellipse["published"]]
-                        + [row(ellipse["zero"])]), "",
-                  f"Published range on this set: {PUBLISHED_RANGE}"
-                  + ("; the rows 'published' are their predictions (`v_models.mat`) scored on the same held-out"
-                     " rows." if ellipse["published"] else "."), ""]
+        lines += [
+            "### The ellipse impacts (the impact law alone)",
+            "",
+            f"{ellipse['n']} measured impacts of mcubelab/planar-impact-dataset `data_ellipse.mat` (training:"
+            f" even rows, {ellipse['train']}; held out: odd, {ellipse['held']}); our impact law applied with"
+            " the measured contact Jacobian (one point).",
+            "",
+            table(
+                HEADER,
+                [row(r, ELLIPSE_LABELS[r.model]) for r in ellipse["results"]]
+                + [
+                    row(
+                        ellipse["tangential"],
+                        "proposal: Newton + Coulomb with a tangential restitution"
+                        f" e_t = {ellipse['tangential'].et:.2f} (fitted)",
+                    )
+                ]
+                + [row(r, f"published: {r.model} (its own parameters)") for r in ellipse["published"]]
+                + [row(ellipse["zero"])],
+            ),
+            "",
+            f"Published range on this set: {PUBLISHED_RANGE}"
+            + (
+                "; the rows 'published' are their predictions (`v_models.mat`) scored on the same held-out rows."
+                if ellipse["published"]
+                else "."
+            ),
+            "",
+        ]
     elif ellipse_note:
         lines += ["### The ellipse impacts (the impact law alone)", "", ellipse_note, ""]
     lines += ["### What the impacts teach, and the contact-model proposal", "", teaching(square, ellipse)]
@@ -419,22 +519,43 @@ def flat_landings(square: dict) -> list[str]:
         if not mask.any():
             continue
         cells = [f"{math.degrees(low):.0f}-{min(45, math.degrees(high)):.0f}", str(int(mask.sum()))]
-        cells += [f"{np.nanmean(by_model[m].errors[mask]):.2f}" if m in by_model else "-"
-                  for m in ("ours", "map: ours", "map: newton")]
+        cells += [
+            f"{np.nanmean(by_model[m].errors[mask]):.2f}" if m in by_model else "-"
+            for m in ("ours", "map: ours", "map: newton")
+        ]
         cells += [f"{np.median(np.abs(held.after[mask, 2])):.1f}"]
-        cells += [f"{np.median(np.abs(by_model[m].predicted[mask, 2])):.1f}" if m in by_model else "-"
-                  for m in ("ours", "map: ours")]
+        cells += [
+            f"{np.median(np.abs(by_model[m].predicted[mask, 2])):.1f}" if m in by_model else "-"
+            for m in ("ours", "map: ours")
+        ]
         cells += [f"{np.median(held.after[mask, 1]):.2f}"]
-        cells += [f"{np.median(by_model[m].predicted[mask, 1]):.2f}" if m in by_model else "-"
-                  for m in ("ours", "map: ours")]
+        cells += [
+            f"{np.median(by_model[m].predicted[mask, 1]):.2f}" if m in by_model else "-" for m in ("ours", "map: ours")
+        ]
         rows.append(cells)
-    return ["By tilt at the impact (held out, each model fitted on all impacts): mean error, the median spin"
-            " after the impact (absolute) and the median vertical velocity of the centre after it, measured and"
-            " predicted:", "",
-            table(["tilt [deg]", "impacts", "error: ours, robust solver", "error: our law, lowest corner only",
-                   "error: Newton + Coulomb, lowest corner", "spin after, measured [rad/s]", "spin: ours",
-                   "spin: lowest corner only", "vz after, measured [m/s]", "vz: ours", "vz: lowest corner only"],
-                  rows), ""]
+    return [
+        "By tilt at the impact (held out, each model fitted on all impacts): mean error, the median spin"
+        " after the impact (absolute) and the median vertical velocity of the centre after it, measured and"
+        " predicted:",
+        "",
+        table(
+            [
+                "tilt [deg]",
+                "impacts",
+                "error: ours, robust solver",
+                "error: our law, lowest corner only",
+                "error: Newton + Coulomb, lowest corner",
+                "spin after, measured [rad/s]",
+                "spin: ours",
+                "spin: lowest corner only",
+                "vz after, measured [m/s]",
+                "vz: ours",
+                "vz: lowest corner only",
+            ],
+            rows,
+        ),
+        "",
+    ]
 
 
 def mujoco_contact_ms() -> float:
@@ -461,15 +582,23 @@ def teaching(square: dict | None, ellipse: dict | None) -> str:
             f" {ours_c.mu:.2f}), against {newton_c.mean:.2f} / {newton_c.median:.2f} for the point-contact"
             f" Newton + Coulomb map on the same impacts and the same measurement, and the target"
             f" {TARGET_CORNER[0]} / {TARGET_CORNER[1]} (such a map on its own reading of the velocities)"
-            + (": the other engines, each simulating the same frames fitted the same way, "
-               + ", ".join(f"{r.model} {r.mean:.2f} / {r.median:.2f}" for r in others) if others else "")
-            + (f" (MuJoCo's soft contact, its stiffness set by the step as in `benchmarks/other_engines.py`, lasts"
-               f" about {mujoco_contact_ms():.0f} ms at 4 ms, longer than the"
-               " 3 frames read after the impact: its figure is of an impact not yet over)"
-               if any(r.model == "mujoco" for r in others) else "")
+            + (
+                ": the other engines, each simulating the same frames fitted the same way, "
+                + ", ".join(f"{r.model} {r.mean:.2f} / {r.median:.2f}" for r in others)
+                if others
+                else ""
+            )
+            + (
+                f" (MuJoCo's soft contact, its stiffness set by the step as in `benchmarks/other_engines.py`, lasts"
+                f" about {mujoco_contact_ms():.0f} ms at 4 ms, longer than the"
+                " 3 frames read after the impact: its figure is of an impact not yet over)"
+                if any(r.model == "mujoco" for r in others)
+                else ""
+            )
             + f". Our law at the lowest corner alone (one impact, no simulation) is {one_c.mean:.2f} /"
             f" {one_c.median:.2f}: where it is worse than the solver, the square turned onto a second corner"
-            " within the frames read, which the solver simulates and a one-impact map does not.")
+            " within the frames read, which the solver simulates and a one-impact map does not."
+        )
         items.append(
             f"- **All impacts, and what the two-point contact does on flat landings.** On all"
             f" {len(held.numbers)} held-out first impacts ours is {ours_a.mean:.2f} / {ours_a.median:.2f}, the"
@@ -481,7 +610,8 @@ def teaching(square: dict | None, ellipse: dict | None) -> str:
             " (and a simultaneous pair together, Poisson on both corners), so the square comes off the floor"
             f" moving up and spinning little ({spins[1]:.1f} rad/s, median absolute spin after; measured"
             f" {spins[0]:.1f}), where a map at one corner sends it off spinning about that corner"
-            f" ({spins[2]:.1f} rad/s).")
+            f" ({spins[2]:.1f} rad/s)."
+        )
         proposal = square["proposal"]
         gain = np.mean(proposal["errors"])
         items.append(
@@ -489,7 +619,8 @@ def teaching(square: dict | None, ellipse: dict | None) -> str:
             f" {math.degrees(CORNER_TILT):.0f} deg of flat (e = {proposal['flat-ish'][0]:.2f}, mu ="
             f" {proposal['flat-ish'][1]:.2f}) and corner landings (e = {proposal['corner'][0]:.2f}, mu ="
             f" {proposal['corner'][1]:.2f}) gives {gain:.2f} mean / {np.median(proposal['errors']):.2f} median"
-            f" on all held-out impacts, against {ours_a.mean:.2f} / {ours_a.median:.2f} with one pair.")
+            f" on all held-out impacts, against {ours_a.mean:.2f} / {ours_a.median:.2f} with one pair."
+        )
     if ellipse is not None:
         ours = ellipse["results"][0]
         published = ellipse["published"]
@@ -498,15 +629,19 @@ def teaching(square: dict | None, ellipse: dict | None) -> str:
         items.append(
             f"- **Ellipse.** Our engine's impact law, fitted (e = {ours.e:.2f}, mu = {ours.mu:.2f}), is"
             f" {ours.mean:.2f} mean / {ours.median:.2f} median on the held-out impacts"
-            + (f", the best published model {best.mean:.2f} / {best.median:.2f} ({best.model}) on the same rows"
-               if best else f", the published models {PUBLISHED_RANGE}")
+            + (
+                f", the best published model {best.mean:.2f} / {best.median:.2f} ({best.model}) on the same rows"
+                if best
+                else f", the published models {PUBLISHED_RANGE}"
+            )
             + f". Its error is mostly the spin: per impact, the share of the error in vx, vy and k omega is"
             f" {comp['vx']:.2f}, {comp['vy']:.2f} and {comp['k omega']:.2f} (mean |component| / |W v*|). The"
             " contact point's tangential velocity comes out of the impact reversed in"
             f" {ellipse['reversed']['measured'] * 100:.0f}% of the held-out impacts measured and"
             f" {ellipse['reversed']['ours'] * 100:.0f}% predicted (the normal impulse, off the centre, turns the"
             " ellipse and reverses the slip; friction does not): the law gets the kind of outcome, not its size,"
-            " and the same pre-impact state ends in a spread of measured spins that no deterministic law follows.")
+            " and the same pre-impact state ends in a spread of measured spins that no deterministic law follows."
+        )
     items.append(proposal_text(square, ellipse))
     return "\n".join(items)
 
@@ -523,26 +658,34 @@ def proposal_text(square: dict | None, ellipse: dict | None) -> str:
         ours_a = by[("ours", "all")]
         gain = ours_a.mean - float(np.mean(square["proposal"]["errors"]))
         gains.append(gain)
-        parts.append(f"A restitution and friction chosen by the tilt at the impact (a second pair for face landings,"
-                     " the change the bounce table above points to) changes the held-out mean error on all square"
-                     f" impacts by {-gain:+.2f}.")
+        parts.append(
+            f"A restitution and friction chosen by the tilt at the impact (a second pair for face landings,"
+            " the change the bounce table above points to) changes the held-out mean error on all square"
+            f" impacts by {-gain:+.2f}."
+        )
     if ellipse is not None:
         gain = ellipse["results"][1].mean - ellipse["tangential"].mean
         gains.append(gain)
-        parts.append(f"A tangential restitution (the contact point springs back along the floor, a third fitted"
-                     f" parameter) is fitted to e_t = {ellipse['tangential'].et:.2f} and changes the ellipse's"
-                     f" held-out mean error by {-gain:+.2f}.")
+        parts.append(
+            f"A tangential restitution (the contact point springs back along the floor, a third fitted"
+            f" parameter) is fitted to e_t = {ellipse['tangential'].et:.2f} and changes the ellipse's"
+            f" held-out mean error by {-gain:+.2f}."
+        )
     if gains and max(gains) > WORTH:
-        parts.append("The larger gain is worth an engine option (off by default, so the exact cases and the"
-                     " seeded results do not change), measured again on the trajectories before it is adopted.")
+        parts.append(
+            "The larger gain is worth an engine option (off by default, so the exact cases and the"
+            " seeded results do not change), measured again on the trajectories before it is adopted."
+        )
     else:
-        parts.append(f"Neither gains {WORTH} of the mean error, so neither is worth a parameter: the model to keep is"
-                     " the one we have (Poisson restitution, Coulomb friction, the two-point contact of flat"
-                     " landings). What is left is the scatter of real impacts (the same pre-impact state ends in"
-                     " different post-impact spins, Fazeli et al. 2017), which a deterministic rigid law does"
-                     " not follow; a stochastic contact (e and mu drawn per impact from their fitted spread) is"
-                     " the direction for an agent that must be robust to it, a change of the env's randomisation"
-                     " rather than of the engine.")
+        parts.append(
+            f"Neither gains {WORTH} of the mean error, so neither is worth a parameter: the model to keep is"
+            " the one we have (Poisson restitution, Coulomb friction, the two-point contact of flat"
+            " landings). What is left is the scatter of real impacts (the same pre-impact state ends in"
+            " different post-impact spins, Fazeli et al. 2017), which a deterministic rigid law does"
+            " not follow; a stochastic contact (e and mu drawn per impact from their fitted spread) is"
+            " the direction for an agent that must be robust to it, a change of the env's randomisation"
+            " rather than of the engine."
+        )
     return " ".join(parts)
 
 
@@ -563,11 +706,14 @@ def main(argv=None) -> int:
         if str(problem).startswith("--"):
             raise SystemExit(f"{parser.prog}: error: {problem}") from None
         raise
-    note = ("" if ellipse is not None else
-            "Skipped: no `--ellipse FILE` given (`python -m reports.reality.download --ellipse --out DIR` downloads"
-            " `data_ellipse.mat`, and `v_models.mat` for the published models, from the GitHub repository"
-            " mcubelab/planar-impact-dataset at a pinned commit, checked by SHA-256; it has no licence and is"
-            " not in this repository).")
+    note = (
+        ""
+        if ellipse is not None
+        else "Skipped: no `--ellipse FILE` given (`python -m reports.reality.download --ellipse --out DIR` downloads"
+        " `data_ellipse.mat`, and `v_models.mat` for the published models, from the GitHub repository"
+        " mcubelab/planar-impact-dataset at a pinned commit, checked by SHA-256; it has no licence and is"
+        " not in this repository)."
+    )
     text = section(square, ellipse, note)
     from agents.doc_sections import replace_section
 

@@ -24,8 +24,13 @@ from . import data, error
 from .download import OneLineParser
 from .error import HORIZONS, Evaluation, Material, Model
 
-OUR_MODELS = (Model("ours", "robust", 1), Model("ours", "robust", 4),
-              Model("ours", "seed", 1), Model("ours", "seed", 4), Model("ours", "seed", 16))
+OUR_MODELS = (
+    Model("ours", "robust", 1),
+    Model("ours", "robust", 4),
+    Model("ours", "seed", 1),
+    Model("ours", "seed", 4),
+    Model("ours", "seed", 16),
+)
 OTHER_SUBSTEPS = (1, 4, 16)
 OTHER_ENGINES = ("pymunk", "box2d", "box2d-v3", "mujoco")
 DEFAULT = Model("ours", "robust", 1)
@@ -59,8 +64,9 @@ def models(quick: bool) -> tuple[list[Model], list[str]]:
         return [DEFAULT, Model("ours", "seed", 4)], []
     engines = error.other_engines()
     others = [Model(name, substeps=k) for name in OTHER_ENGINES if engines[name].available() for k in OTHER_SUBSTEPS]
-    skipped = [f"{name} (`pip install {engines[name].package}`)" for name in OTHER_ENGINES
-               if not engines[name].available()]
+    skipped = [
+        f"{name} (`pip install {engines[name].package}`)" for name in OTHER_ENGINES if not engines[name].available()
+    ]
     return list(OUR_MODELS) + others, skipped
 
 
@@ -71,15 +77,27 @@ def run(folder: Path, quick: bool = False) -> Report:
         raise ValueError(f"--data: only {len(drops)} usable drops in {folder}, at least 4 are needed")
     train, held = error.split(drops)
     if quick:
-        train, held = train[:QUICK_DROPS // 2], held[:QUICK_DROPS // 2]
-    fit_set = train[:error.FIT_DROPS]
+        train, held = train[: QUICK_DROPS // 2], held[: QUICK_DROPS // 2]
+    fit_set = train[: error.FIT_DROPS]
     flights = np.array([d.flight_gravity for d in train])
     tilts = np.abs(data.face_angle([d.pose[d.impact, 2] for d in held]))
-    report = Report(cleaning, len(drops), len(train), len(fit_set), len(held),
-                    {"median": float(np.median(flights)), "p10": float(np.percentile(flights, 10)),
-                     "p90": float(np.percentile(flights, 90))},
-                    float(np.mean(tilts < FLAT_TILT)), error.noise_floor(drops),
-                    landing={"corner": tilts > CORNER_TILT, "flat": tilts < FLAT_TILT}, tilts=tilts, held=held)
+    report = Report(
+        cleaning,
+        len(drops),
+        len(train),
+        len(fit_set),
+        len(held),
+        {
+            "median": float(np.median(flights)),
+            "p10": float(np.percentile(flights, 10)),
+            "p90": float(np.percentile(flights, 90)),
+        },
+        float(np.mean(tilts < FLAT_TILT)),
+        error.noise_floor(drops),
+        landing={"corner": tilts > CORNER_TILT, "flat": tilts < FLAT_TILT},
+        tilts=tilts,
+        held=held,
+    )
     chosen, report.skipped = models(quick)
     for model in chosen:
         material, _ = error.fit_material(fit_set, model)
@@ -118,39 +136,59 @@ def error_row(label: str, ev: Evaluation, with_time: bool = True) -> list[str]:
     position, angle = ev.mean_over(error.FIT_FRAMES)
     cells += [mm(position), deg(angle)]
     if with_time:
-        cells += [f"{ev.material.restitution:.2f}", f"{ev.material.friction:.2f}",
-                  document.seconds(ev.seconds / ev.position.shape[0]) if ev.seconds else "-"]
+        cells += [
+            f"{ev.material.restitution:.2f}",
+            f"{ev.material.friction:.2f}",
+            document.seconds(ev.seconds / ev.position.shape[0]) if ev.seconds else "-",
+        ]
     return cells
 
 
-ERROR_HEADER = (["model"] + [f"position {h} [mm]" for h in HORIZONS] + [f"angle {h} [deg]" for h in HORIZONS]
-                + [f"mean position 1-{error.FIT_FRAMES} [mm]", f"mean angle 1-{error.FIT_FRAMES} [deg]"])
+ERROR_HEADER = (
+    ["model"]
+    + [f"position {h} [mm]" for h in HORIZONS]
+    + [f"angle {h} [deg]" for h in HORIZONS]
+    + [f"mean position 1-{error.FIT_FRAMES} [mm]", f"mean angle 1-{error.FIT_FRAMES} [deg]"]
+)
 
 
 def cleaning_section(report: Report) -> str:
     c = report.cleaning
     rows = [["files read", str(c.files)]]
-    rows += [[f"dropped: {reason}", f"{len(numbers)} ({', '.join(map(str, numbers[:12]))}"
-              f"{', ...' if len(numbers) > 12 else ''})"] for reason, numbers in c.dropped.items()]
-    rows += [["used", str(report.n_used)],
-             ["training / fitted on / held out", f"{report.n_train} / {report.n_fit} / {report.n_held}"],
-             ["drops at rest at their end (for the offsets)", str(c.rest_drops)],
-             ["rest height read (half side 30 mm)",
-              f"{mm(c.rest_height)} mm, subtracted: {mm(c.rest_height - data.HALF)} mm"],
-             ["rest angle read", f"{deg(c.rest_angle)} deg, subtracted"],
-             ["quarter turns removed by unwrapping", str(c.angle_jumps)],
-             [f"raw frames with abs(vth) > {data.RAW_VTH_OUTLIER:g} rad/s (velocities recomputed)",
-              str(c.raw_vth_outliers)],
-             ["free-flight vertical acceleration, training drops (median, 10-90%)",
-              f"{report.gravity['median']:.2f} m/s^2 ({report.gravity['p10']:.2f} to {report.gravity['p90']:.2f})"],
-             [f"held-out first impacts within {math.degrees(FLAT_TILT):.0f} deg of flat",
-              f"{document.percent(report.flat_share)}"]]
+    rows += [
+        [
+            f"dropped: {reason}",
+            f"{len(numbers)} ({', '.join(map(str, numbers[:12]))}{', ...' if len(numbers) > 12 else ''})",
+        ]
+        for reason, numbers in c.dropped.items()
+    ]
+    rows += [
+        ["used", str(report.n_used)],
+        ["training / fitted on / held out", f"{report.n_train} / {report.n_fit} / {report.n_held}"],
+        ["drops at rest at their end (for the offsets)", str(c.rest_drops)],
+        [
+            "rest height read (half side 30 mm)",
+            f"{mm(c.rest_height)} mm, subtracted: {mm(c.rest_height - data.HALF)} mm",
+        ],
+        ["rest angle read", f"{deg(c.rest_angle)} deg, subtracted"],
+        ["quarter turns removed by unwrapping", str(c.angle_jumps)],
+        [f"raw frames with abs(vth) > {data.RAW_VTH_OUTLIER:g} rad/s (velocities recomputed)", str(c.raw_vth_outliers)],
+        [
+            "free-flight vertical acceleration, training drops (median, 10-90%)",
+            f"{report.gravity['median']:.2f} m/s^2 ({report.gravity['p10']:.2f} to {report.gravity['p90']:.2f})",
+        ],
+        [
+            f"held-out first impacts within {math.degrees(FLAT_TILT):.0f} deg of flat",
+            f"{document.percent(report.flat_share)}",
+        ],
+    ]
     return table(["", ""], rows)
 
 
 IMPACTS_START, IMPACTS_END = "<!-- reality-impacts:start -->", "<!-- reality-impacts:end -->"
-IMPACTS_PLACEHOLDER = ("The impact-alone section is written here by `python -m reports.reality.impacts --data DIR"
-                       " --ellipse FILE`.")
+IMPACTS_PLACEHOLDER = (
+    "The impact-alone section is written here by `python -m reports.reality.impacts --data DIR --ellipse FILE`."
+)
 
 
 def impacts_section_of(page: Path) -> str:
@@ -195,9 +233,32 @@ def header_lines(report: Report, quick: bool) -> list[str]:
     ]
 
 
+def noise_lines(noise: dict) -> list[str]:
+    """The noise floor's heading and table: how far the data are from themselves."""
+    return [
+        "## Noise floor: the data against itself",
+        "",
+        table(
+            ["", "position [mm]", "angle [deg]"],
+            [
+                [
+                    "frame-to-frame noise at rest (sigma from second differences)",
+                    fine_mm(noise["rest position"]),
+                    fine_deg(noise["rest angle"]),
+                ],
+                [
+                    "RMS residual of the free-flight fits",
+                    fine_mm(noise["flight position"]),
+                    fine_deg(noise["flight angle"]),
+                ],
+            ],
+        ),
+        "",
+    ]
+
+
 def markdown(report: Report, figures: dict[str, str], quick: bool, impacts_section: str = IMPACTS_PLACEHOLDER) -> str:
     default = report.evaluations[0]
-    noise = report.noise
     held = report.n_held
     lines = [
         *header_lines(report, quick),
@@ -205,21 +266,14 @@ def markdown(report: Report, figures: dict[str, str], quick: bool, impacts_secti
         "",
         cleaning_section(report),
         "",
-        "## Noise floor: the data against itself",
-        "",
-        table(["", "position [mm]", "angle [deg]"], [
-            ["frame-to-frame noise at rest (sigma from second differences)", fine_mm(noise["rest position"]),
-             fine_deg(noise["rest angle"])],
-            ["RMS residual of the free-flight fits", fine_mm(noise["flight position"]),
-             fine_deg(noise["flight angle"])],
-        ]),
-        "",
+        *noise_lines(report.noise),
         "No model can be judged below these: they are how far the data are from themselves.",
         "",
         f"## Held-out error (median over {held} drops at {', '.join(map(str, HORIZONS))} frames after the start)",
         "",
-        table(ERROR_HEADER + ["e", "mu", "run time / drop"],
-              [error_row(ev.model.name, ev) for ev in report.evaluations]),
+        table(
+            ERROR_HEADER + ["e", "mu", "run time / drop"], [error_row(ev.model.name, ev) for ev in report.evaluations]
+        ),
         "",
         "Baselines and variants (our robust solver at dt = 4 ms):",
         "",
@@ -236,11 +290,18 @@ def markdown(report: Report, figures: dict[str, str], quick: bool, impacts_secti
         "",
         "## By landing: corner against flat first impacts",
         "",
-        table(["first impact", "drops"] + ERROR_HEADER[1:], [
-            [f"{name} ({'more than' if name == 'corner' else 'less than'} "
-             f"{math.degrees(CORNER_TILT if name == 'corner' else FLAT_TILT):.0f} deg from flat)", str(int(mask.sum()))]
-            + error_row("", subset(default, mask), with_time=False)[1:]
-            for name, mask in report.landing.items()]),
+        table(
+            ["first impact", "drops"] + ERROR_HEADER[1:],
+            [
+                [
+                    f"{name} ({'more than' if name == 'corner' else 'less than'} "
+                    f"{math.degrees(CORNER_TILT if name == 'corner' else FLAT_TILT):.0f} deg from flat)",
+                    str(int(mask.sum())),
+                ]
+                + error_row("", subset(default, mask), with_time=False)[1:]
+                for name, mask in report.landing.items()
+            ],
+        ),
         "",
         f"({default.model.name}, e = {default.material.restitution:.2f}, mu = {default.material.friction:.2f}.)",
         "",
@@ -292,16 +353,31 @@ def bounce_medians(report: Report) -> list[tuple[float, float, int, np.ndarray, 
 
 def bounces(report: Report) -> list[list[str]]:
     """The rows of the bounce table."""
+
     def spread(values):
         return f"{np.median(values):.2f} ({np.percentile(values, 25):.2f} to {np.percentile(values, 75):.2f})"
 
-    return [[f"{low:g}-{high:g}", str(n), spread(measured[:, 0]), spread(simulated[:, 0]),
-             f"{np.median(measured[:, 1]):.1f}", f"{np.median(simulated[:, 1]):.1f}"]
-            for low, high, n, measured, simulated in bounce_medians(report)]
+    return [
+        [
+            f"{low:g}-{high:g}",
+            str(n),
+            spread(measured[:, 0]),
+            spread(simulated[:, 0]),
+            f"{np.median(measured[:, 1]):.1f}",
+            f"{np.median(simulated[:, 1]):.1f}",
+        ]
+        for low, high, n, measured, simulated in bounce_medians(report)
+    ]
 
 
-BOUNCE_HEADER = ["tilt at first impact [deg]", "drops", "centre bounce -vz+/vz-, measured (25-75%)",
-                 "simulated (25-75%)", "spin after, measured [rad/s] (median abs)", "simulated"]
+BOUNCE_HEADER = [
+    "tilt at first impact [deg]",
+    "drops",
+    "centre bounce -vz+/vz-, measured (25-75%)",
+    "simulated (25-75%)",
+    "spin after, measured [rad/s] (median abs)",
+    "simulated",
+]
 
 
 def bounce_lesson(report: Report) -> str:
@@ -311,13 +387,17 @@ def bounce_lesson(report: Report) -> str:
     flat, steep = rows[0], rows[-1]
     words = []
     for low, high, n, measured, simulated in (flat, steep):
-        words.append(f"{np.median(measured[:, 0]):.2f} measured against {np.median(simulated[:, 0]):.2f} simulated "
-                     f"at {low:g}-{high:g} deg ({n} drops)")
-    return ("- **One restitution does not fit every landing.** The centre bounces back (-vz after / vz before) "
-            f"{words[0]}, and {words[1]}: the fitted e is a compromise between landings whose real bounce differs"
-            " with the angle of impact. An impact law whose restitution depends on the tilt at impact (or a"
-            " compliant contact for the two-corner case) is the change this data asks for; it belongs in the"
-            " engine's contact model, measured here before it is adopted.")
+        words.append(
+            f"{np.median(measured[:, 0]):.2f} measured against {np.median(simulated[:, 0]):.2f} simulated "
+            f"at {low:g}-{high:g} deg ({n} drops)"
+        )
+    return (
+        "- **One restitution does not fit every landing.** The centre bounces back (-vz after / vz before) "
+        f"{words[0]}, and {words[1]}: the fitted e is a compromise between landings whose real bounce differs"
+        " with the angle of impact. An impact law whose restitution depends on the tilt at impact (or a"
+        " compliant contact for the two-corner case) is the change this data asks for; it belongs in the"
+        " engine's contact model, measured here before it is adopted."
+    )
 
 
 def lessons(report: Report) -> str:
@@ -361,21 +441,30 @@ def lessons(report: Report) -> str:
         f"- **Gravity.** The free flight fits {report.gravity['median']:.2f} m/s^2 (not -9.81); with that gravity"
         f" (restitution and friction fitted again) the error at 50 frames is {mm(fitted.at(50)[0])} mm against"
         f" {mm(default.at(50)[0])} mm with -9.81, "
-        + ("so it is not worth the change: the difference is more likely a timing or scale error of the tracking"
-           " than gravity, and fitting it would hide that."
-           if fitted.mean_over(50)[0] >= 0.95 * default.mean_over(50)[0]
-           else "a gain: the tracking's time or length scale is off, and the fitted value absorbs it."),
+        + (
+            "so it is not worth the change: the difference is more likely a timing or scale error of the tracking"
+            " than gravity, and fitting it would hide that."
+            if fitted.mean_over(50)[0] >= 0.95 * default.mean_over(50)[0]
+            else "a gain: the tracking's time or length scale is off, and the fitted value absorbs it."
+        ),
     ]
     if seed is not None:
-        items.append(f"- **The seed scheme** at 1 ms is {mm(seed.at(20)[0])} mm off at 20 frames against "
-                     f"{mm(p20)} mm for the robust solver: its time-stepped impacts land at the wrong instant.")
+        items.append(
+            f"- **The seed scheme** at 1 ms is {mm(seed.at(20)[0])} mm off at 20 frames against "
+            f"{mm(p20)} mm for the robust solver: its time-stepped impacts land at the wrong instant."
+        )
     if best_other is not None:
         at_4ms = sorted([default] + others, key=lambda ev: ev.mean_over(error.FIT_FRAMES)[0])
-        ranking = ", ".join(f"{ev.model.name.split(', dt')[0]} {mm(ev.mean_over(error.FIT_FRAMES)[0])} mm in "
-                            f"{document.seconds(ev.seconds / ev.position.shape[0])}" for ev in at_4ms)
-        items.append(f"- **Against the other engines**, fitted the same way, at 4 ms (mean position error over frames "
-                     f"1-{error.FIT_FRAMES}, run time a drop): {ranking}. Smaller steps change the others by a few mm"
-                     " (see the table) and ours by nothing; every engine's error is the model's, of the same size.")
+        ranking = ", ".join(
+            f"{ev.model.name.split(', dt')[0]} {mm(ev.mean_over(error.FIT_FRAMES)[0])} mm in "
+            f"{document.seconds(ev.seconds / ev.position.shape[0])}"
+            for ev in at_4ms
+        )
+        items.append(
+            f"- **Against the other engines**, fitted the same way, at 4 ms (mean position error over frames "
+            f"1-{error.FIT_FRAMES}, run time a drop): {ranking}. Smaller steps change the others by a few mm"
+            " (see the table) and ours by nothing; every engine's error is the model's, of the same size."
+        )
     return "\n".join(items)
 
 
@@ -390,14 +479,17 @@ def plot_time(report: Report, path: Path) -> None:
     for ev in shown:
         for axis, values, scale in ((axes[0], ev.position, 1e3), (axes[1], ev.angle, 180 / math.pi)):
             median = np.nanmedian(values, axis=0) * scale
-            line, = axis.plot(t, median, label=ev.model.name, lw=2 if ev.model == DEFAULT else 1)
+            (line,) = axis.plot(t, median, label=ev.model.name, lw=2 if ev.model == DEFAULT else 1)
             if ev.model == DEFAULT:
                 low, high = (np.nanpercentile(values, q, axis=0) * scale for q in (25, 75))
                 axis.fill_between(t, low, high, color=line.get_color(), alpha=0.2, label="ours robust: 25-75%")
     axes[0].axhline(report.noise["flight position"] * 1e3, color="k", ls=":", label="noise floor (free flight)")
     axes[1].axhline(math.degrees(report.noise["flight angle"]), color="k", ls=":", label="noise floor (free flight)")
-    axes[0].set(xlabel="time after the start [ms]", ylabel="position error [mm] (median)",
-                title=f"held-out drops ({report.n_held})")
+    axes[0].set(
+        xlabel="time after the start [ms]",
+        ylabel="position error [mm] (median)",
+        title=f"held-out drops ({report.n_held})",
+    )
     axes[1].set(xlabel="time after the start [ms]", ylabel="angle error [deg] (median)")
     for axis in axes:
         axis.axvline(data.START_BEFORE_IMPACT * data.FRAME * 1e3, color="grey", lw=0.8)
@@ -420,9 +512,12 @@ def plot_work(report: Report, path: Path) -> None:
         for ev, xi, yi in zip(evs, x, y, strict=True):
             axis.annotate(f"/{ev.model.substeps}", (xi, yi), fontsize=7, textcoords="offset points", xytext=(3, 3))
     axis.axhline(report.noise["flight position"] * 1e3, color="k", ls=":", label="noise floor")
-    axis.set(xscale="log", xlabel=f"run time per drop ({max(HORIZONS)} frames) [s]",
-             ylabel=f"mean position error, frames 1-{error.FIT_FRAMES} [mm]",
-             title="error against reality against run time (held out; /k: dt = 4 ms / k)")
+    axis.set(
+        xscale="log",
+        xlabel=f"run time per drop ({max(HORIZONS)} frames) [s]",
+        ylabel=f"mean position error, frames 1-{error.FIT_FRAMES} [mm]",
+        title="error against reality against run time (held out; /k: dt = 4 ms / k)",
+    )
     axis.grid(alpha=0.3, which="both")
     axis.legend(fontsize=8)
     document.save_figure(figure, path)
@@ -442,8 +537,12 @@ def main(argv=None) -> int:
     parser = OneLineParser(prog="python -m reports.reality", description=__doc__.split("\n\n")[0])
     parser.add_argument("--data", type=Path, required=True, help="folder of the measured traj_N.csv files")
     parser.add_argument("--quick", action="store_true", help=f"{QUICK_DROPS} drops, our engine only (the tests)")
-    parser.add_argument("--out", type=Path, default=None,
-                        help=f"output folder (default: docs/, or {QUICK_OUT.relative_to(REPO)} with --quick)")
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        help=f"output folder (default: docs/, or {QUICK_OUT.relative_to(REPO)} with --quick)",
+    )
     args = parser.parse_args(argv)
     out = args.out or (QUICK_OUT if args.quick else DOCS)
     if out.exists() and not out.is_dir():

@@ -25,16 +25,26 @@ MASS = 0.05  # [kg]
 STIFFNESS = 1e3  # [N/m]
 
 
-def simulated_drops(n: int, seed: int = 0, e: float = 0.4, mu: float = 0.3, g: float = -9.81,
-                    substeps: int = 4) -> np.ndarray:
+def simulated_drops(
+    n: int, seed: int = 0, e: float = 0.4, mu: float = 0.3, g: float = -9.81, substeps: int = 4
+) -> np.ndarray:
     """(n, 200, 3) poses x, z, theta at 250 Hz of drops like the rig's: released 0.10-0.16 m high, falling,
     moving sideways and spinning a little, at any angle; no offsets, no noise."""
     rng = np.random.default_rng(seed)
-    boxes = tuple(Box(length=data.SIDE, width=data.SIDE, mass=MASS,
-                      position=(float(rng.uniform(-0.4, -0.2)), float(rng.uniform(0.10, 0.16))),
-                      angle=float(rng.uniform(-math.pi, math.pi)),
-                      velocity=(float(rng.uniform(-0.6, 0.6)), float(rng.uniform(-2.3, -1.5))),
-                      spin=float(rng.uniform(-5.0, 5.0)), restitution=e, friction=mu) for _ in range(n))
+    boxes = tuple(
+        Box(
+            length=data.SIDE,
+            width=data.SIDE,
+            mass=MASS,
+            position=(float(rng.uniform(-0.4, -0.2)), float(rng.uniform(0.10, 0.16))),
+            angle=float(rng.uniform(-math.pi, math.pi)),
+            velocity=(float(rng.uniform(-0.6, 0.6)), float(rng.uniform(-2.3, -1.5))),
+            spin=float(rng.uniform(-5.0, 5.0)),
+            restitution=e,
+            friction=mu,
+        )
+        for _ in range(n)
+    )
     scene = Scene(boxes=boxes, dt=data.FRAME / substeps, gravity=g, penalty_stiffness=STIFFNESS)
     result = simulate(scene, steps=(data.FRAMES - 1) * substeps, record=True)
     return np.transpose(result.trajectory.state[::substeps, :, :3], (1, 0, 2)).copy()

@@ -27,12 +27,22 @@ def tiny(monkeypatch):
 
     def small(agent):
         algo, config = real(agent)
-        return algo, {**config, "n_timesteps": 64, "n_envs": 2, "learning_starts": 16, "batch_size": 16,
-                      "buffer_size": 1000, "policy_kwargs": {"net_arch": [16]}}
+        return algo, {
+            **config,
+            "n_timesteps": 64,
+            "n_envs": 2,
+            "learning_starts": 16,
+            "batch_size": 16,
+            "buffer_size": 1000,
+            "policy_kwargs": {"net_arch": [16]},
+        }
 
     monkeypatch.setattr(benchmark, "goal_hyperparams", small)
-    monkeypatch.setattr(benchmark, "evaluate_run", lambda path, quiet: evaluation.evaluate_run(
-        path, quiet=quiet, n_targets=16, tag="default"))
+    monkeypatch.setattr(
+        benchmark,
+        "evaluate_run",
+        lambda path, quiet: evaluation.evaluate_run(path, quiet=quiet, n_targets=16, tag="default"),
+    )
 
 
 def test_goal_runs_are_trained_scored_and_written_in_their_section(tiny, tmp_path, monkeypatch):
@@ -49,6 +59,12 @@ def test_goal_runs_are_trained_scored_and_written_in_their_section(tiny, tmp_pat
     assert not isinstance(policy.model.replay_buffer, HerReplayBuffer)  # loaded to act, without HER's env
     text = page.read_text()
     assert text.startswith("# page\n\nkept\n") and "old" not in text
-    for label in ("random actions", "SAC + HER (1 seed)", "TD3 + HER (1 seed)", "SAC without HER (1 seed)",
-                  "SAC + HER, env actions (1 seed)", "SAC without HER, env actions (1 seed)"):
+    for label in (
+        "random actions",
+        "SAC + HER (1 seed)",
+        "TD3 + HER (1 seed)",
+        "SAC without HER (1 seed)",
+        "SAC + HER, env actions (1 seed)",
+        "SAC without HER, env actions (1 seed)",
+    ):
         assert f"| {label} |" in text

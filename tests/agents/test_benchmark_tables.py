@@ -6,9 +6,13 @@ from agents import benchmark
 
 
 def stack_row(algo: str, success: float, seed: int) -> dict:
-    return {"agent": f"{algo.upper()} (1 seed)", "algo": algo, "seeds": [seed],
-            "results": [{"success_rate": success, "mean_height": 0.5, "fall_rate": 0.1, "mean_reward": 2.0}],
-            "timing": [{"timesteps": 16384, "wall_seconds": 120.0}]}
+    return {
+        "agent": f"{algo.upper()} (1 seed)",
+        "algo": algo,
+        "seeds": [seed],
+        "results": [{"success_rate": success, "mean_height": 0.5, "fall_rate": 0.1, "mean_reward": 2.0}],
+        "timing": [{"timesteps": 16384, "wall_seconds": 120.0}],
+    }
 
 
 def test_stored_rows_make_the_tables_and_old_sections_stay(tmp_path):
@@ -16,11 +20,13 @@ def test_stored_rows_make_the_tables_and_old_sections_stay(tmp_path):
     docs.mkdir()
     (docs / "benchmark.md").write_text("# BoxToss benchmark\n\nintro\n\n### BoxToss-v0\n\n| kept as it was |\n")
     readme = tmp_path / "README.md"
-    readme.write_text("<!-- benchmark:start -->\n| variant | random |\n|---|\n| BoxToss-v0 | 9.9% |\n"
-                      "<!-- benchmark:end -->\n")
+    readme.write_text(
+        "<!-- benchmark:start -->\n| variant | random |\n|---|\n| BoxToss-v0 | 9.9% |\n<!-- benchmark:end -->\n"
+    )
     stored = {"BoxToss-Stack-v0": [stack_row("ppo", 0.25, 0), stack_row("sac", 0.5, 0)]}
-    stored["BoxToss-Stack-v0"][0]["results"].append({**stored["BoxToss-Stack-v0"][0]["results"][0],
-                                                     "success_rate": 0.75})
+    stored["BoxToss-Stack-v0"][0]["results"].append(
+        {**stored["BoxToss-Stack-v0"][0]["results"][0], "success_rate": 0.75}
+    )
     stored["BoxToss-Stack-v0"][0]["timing"].append(stored["BoxToss-Stack-v0"][0]["timing"][0])
     envs = ["BoxToss-v0", "BoxToss-Stack-v0"]
     text = benchmark.document(tmp_path / "runs", envs, ["ppo", "sac", "td3"], [0, 1, 2], docs=docs, stored=stored)

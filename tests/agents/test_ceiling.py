@@ -10,8 +10,10 @@ from agents.oracle import OracleSettings
 
 ENV_ID = "BoxToss-ThisSideUp-v0"
 TARGETS = 6
-BUDGETS = (OracleSettings(initial=8, population=8, elite=2, iterations=1),
-           OracleSettings(initial=16, population=8, elite=2, iterations=2))
+BUDGETS = (
+    OracleSettings(initial=8, population=8, elite=2, iterations=1),
+    OracleSettings(initial=16, population=8, elite=2, iterations=2),
+)
 real_sweep = ceiling.sweep  # the tests below stand in for ceiling.sweep to kill it
 
 
@@ -33,7 +35,8 @@ def test_a_row_per_budget_with_more_throws_for_the_bigger_search(uninterrupted):
     assert all(row["n"] == TARGETS and 0.0 <= row["success_rate"] <= 1.0 for row in uninterrupted)
     assert uninterrupted[1]["throws_per_target"] > uninterrupted[0]["throws_per_target"]
     assert ceiling.ceiling_of(uninterrupted)["last_rise"] == pytest.approx(
-        uninterrupted[1]["success_rate"] - uninterrupted[0]["success_rate"])
+        uninterrupted[1]["success_rate"] - uninterrupted[0]["success_rate"]
+    )
 
 
 def test_a_killed_sweep_resumes_at_the_budget_it_was_searching(tmp_path, monkeypatch, uninterrupted):
@@ -41,6 +44,7 @@ def test_a_killed_sweep_resumes_at_the_budget_it_was_searching(tmp_path, monkeyp
         def save_then_die(rows):
             on_row(rows)
             raise KeyboardInterrupt
+
         return small_sweep(env_id, done, save_then_die)
 
     monkeypatch.setattr(ceiling, "sweep", killed_after_first_budget)

@@ -6,8 +6,14 @@ import yaml
 
 from agents import algorithms, config
 
-VARIANTS = ("BoxToss-v0", "BoxToss-LongSide-v0", "BoxToss-ShortEnd-v0", "BoxToss-ThisSideUp-v0", "BoxToss-Mixed-v0",
-            "BoxToss-OnBox-v0")
+VARIANTS = (
+    "BoxToss-v0",
+    "BoxToss-LongSide-v0",
+    "BoxToss-ShortEnd-v0",
+    "BoxToss-ThisSideUp-v0",
+    "BoxToss-Mixed-v0",
+    "BoxToss-OnBox-v0",
+)
 
 
 @pytest.mark.parametrize("algo", sorted(algorithms.ALGORITHMS))
@@ -30,7 +36,8 @@ def test_zoo_expressions_are_read_and_written_back():
     entry = config.zoo_entry(hyperparams)
     assert "torch_threads" not in entry and entry["policy_kwargs"].startswith("dict(")
     assert config.read_zoo_entry(yaml.safe_load(yaml.safe_dump(entry)), "round trip") == {
-        key: value for key, value in hyperparams.items() if key not in config.PROJECT_KEYS}
+        key: value for key, value in hyperparams.items() if key not in config.PROJECT_KEYS
+    }
     kwargs = config.algorithm_kwargs(hyperparams, "ppo")
     assert kwargs["policy_kwargs"]["activation_fn"] is torch.nn.Tanh
 
@@ -43,8 +50,16 @@ def test_expressions_are_never_evaluated():
 
 def test_overrides_reach_into_dicts_and_read_values_as_yaml():
     base = config.load_hyperparams("ppo", "BoxToss-v0")
-    changed = config.apply_overrides(base, ["n_timesteps=1e3", "learning_rate=1e-3", "policy_kwargs.net_arch=[8, 8]",
-                                            "env_kwargs.target_face=exact", "normalize=false"])
+    changed = config.apply_overrides(
+        base,
+        [
+            "n_timesteps=1e3",
+            "learning_rate=1e-3",
+            "policy_kwargs.net_arch=[8, 8]",
+            "env_kwargs.target_face=exact",
+            "normalize=false",
+        ],
+    )
     assert changed["n_timesteps"] == 1000 and isinstance(changed["n_timesteps"], int)
     assert changed["learning_rate"] == pytest.approx(1e-3)
     assert changed["policy_kwargs"]["net_arch"] == [8, 8]
@@ -54,12 +69,15 @@ def test_overrides_reach_into_dicts_and_read_values_as_yaml():
     assert base["policy_kwargs"]["net_arch"] != [8, 8]  # the original is untouched
 
 
-@pytest.mark.parametrize("algo, override, message", [
-    ("ppo", "n_timestep=5", "unknown hyperparameter 'n_timestep'"),
-    ("ppo", "buffer_size=5", "unknown hyperparameter 'buffer_size'"),  # SAC's, not PPO's
-    ("ppo", "n_timesteps", "key=value"),
-    ("sac", "=5", "key=value"),
-])
+@pytest.mark.parametrize(
+    "algo, override, message",
+    [
+        ("ppo", "n_timestep=5", "unknown hyperparameter 'n_timestep'"),
+        ("ppo", "buffer_size=5", "unknown hyperparameter 'buffer_size'"),  # SAC's, not PPO's
+        ("ppo", "n_timesteps", "key=value"),
+        ("sac", "=5", "key=value"),
+    ],
+)
 def test_bad_overrides_name_the_problem(algo, override, message):
     with pytest.raises(config.ConfigError, match=message):
         config.apply_overrides({}, [override], algo)
@@ -67,8 +85,9 @@ def test_bad_overrides_name_the_problem(algo, override, message):
 
 
 def test_linear_schedule():
-    kwargs = config.algorithm_kwargs({**config.load_hyperparams("ppo", "BoxToss-v0"), "learning_rate": "lin_0.001"},
-                                     "ppo")
+    kwargs = config.algorithm_kwargs(
+        {**config.load_hyperparams("ppo", "BoxToss-v0"), "learning_rate": "lin_0.001"}, "ppo"
+    )
     assert kwargs["learning_rate"](1.0) == pytest.approx(1e-3)
     assert kwargs["learning_rate"](0.25) == pytest.approx(2.5e-4)
     assert kwargs["learning_rate"](-0.01) == 0.0  # the last rollout may overshoot the budget
@@ -76,15 +95,18 @@ def test_linear_schedule():
         config.check_config({**config.load_hyperparams("ppo", "BoxToss-v0"), "learning_rate": "cosine_1e-3"})
 
 
-@pytest.mark.parametrize("change, message", [
-    ({"n_envs": 0}, "n_envs"),
-    ({"n_timesteps": True}, "n_timesteps"),
-    ({"policy": None}, "policy must be given"),
-    ({"policy_kwargs": {"activation_fn": "sigmoid"}}, "activation_fn"),
-    ({"policy_kwargs": {"activation_fn": "nn.NotAThing"}}, "activation_fn"),
-    ({"env_wrapper": "gymnasium.wrappers.ClipAction"}, "env_wrapper must be one of"),
-    ({"env_wrapper": {"box_toss_env.envs.ballistic.BallisticThrows": [1]}}, "env_wrapper must be one of"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        ({"n_envs": 0}, "n_envs"),
+        ({"n_timesteps": True}, "n_timesteps"),
+        ({"policy": None}, "policy must be given"),
+        ({"policy_kwargs": {"activation_fn": "sigmoid"}}, "activation_fn"),
+        ({"policy_kwargs": {"activation_fn": "nn.NotAThing"}}, "activation_fn"),
+        ({"env_wrapper": "gymnasium.wrappers.ClipAction"}, "env_wrapper must be one of"),
+        ({"env_wrapper": {"box_toss_env.envs.ballistic.BallisticThrows": [1]}}, "env_wrapper must be one of"),
+    ],
+)
 def test_check_config_names_the_bad_key(change, message):
     good = config.load_hyperparams("ppo", "BoxToss-v0")
     with pytest.raises(config.ConfigError, match=message):

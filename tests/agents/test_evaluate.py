@@ -45,11 +45,18 @@ def test_a_dropped_box_lands_below_the_hand_and_misses_every_default_target():
 
 
 def test_scores_on_hand_made_throws():
-    throws = Throws(seeds=np.arange(4), target_x=np.array([1.0, 2.0, 3.0, 4.0]),
-                    target_faces=np.array([[1, 0, 1, 0]] * 4, dtype=np.int8), actions=np.zeros((4, 3)),
-                    final_x=np.array([1.05, 2.5, np.nan, 3.0]), face_down=np.array([0, 1, -1, 2]),
-                    at_rest=np.array([True, True, False, True]), success=np.array([True, False, False, False]),
-                    reward=np.array([0.95, -0.5, np.nan, -1.0]), failure=["", "", "energy gain", ""])
+    throws = Throws(
+        seeds=np.arange(4),
+        target_x=np.array([1.0, 2.0, 3.0, 4.0]),
+        target_faces=np.array([[1, 0, 1, 0]] * 4, dtype=np.int8),
+        actions=np.zeros((4, 3)),
+        final_x=np.array([1.05, 2.5, np.nan, 3.0]),
+        face_down=np.array([0, 1, -1, 2]),
+        at_rest=np.array([True, True, False, True]),
+        success=np.array([True, False, False, False]),
+        reward=np.array([0.95, -0.5, np.nan, -1.0]),
+        failure=["", "", "energy gain", ""],
+    )
     result = scores(throws)
     assert result["success_rate"] == 0.25
     assert result["mean_distance"] == pytest.approx((0.05 + 0.5 + 1.0) / 3)  # the failed throw is left out

@@ -67,40 +67,51 @@ def exits_with_one_line(capsys, main, argv, message):
     assert message in err and len(err.splitlines()) == 1 and "Traceback" not in err, err
 
 
-@pytest.mark.parametrize("override, message", [
-    ("batch_size=0", "batch_size must be an integer >= 2, got 0"),
-    ("n_steps=0", "n_steps must be an integer >= 1, got 0"),
-    ("policy_kwargs.net_arch=abc", "policy_kwargs.net_arch must be a list of layer sizes"),
-    ("checkpoint_freq=abc", "checkpoint_freq must be an integer >= 0, got 'abc'"),
-    ("torch_threads=0", "torch_threads must be an integer >= 1, got 0"),
-    ("vec_env_kwargs.threads=9", "vec_env_kwargs.threads must be an integer >= 1 and <= "),
-    ("eval_targets=0", "eval_targets must be an integer >= 1, got 0"),
-    ("eval_freq=-5", "eval_freq must be an integer >= 0, got -5"),
-    ("normalize=maybe", "normalize must be true, false or a mapping"),
-    ("env_wrapper={box_toss_env.envs.ballistic.BallisticThrows: {turn_range: -1}}", "env_wrapper: "),
-    ("env_wrapper={box_toss_env.envs.ballistic.BallisticThrows: {spin: 1}}", "env_wrapper: "),
-])
+@pytest.mark.parametrize(
+    "override, message",
+    [
+        ("batch_size=0", "batch_size must be an integer >= 2, got 0"),
+        ("n_steps=0", "n_steps must be an integer >= 1, got 0"),
+        ("policy_kwargs.net_arch=abc", "policy_kwargs.net_arch must be a list of layer sizes"),
+        ("checkpoint_freq=abc", "checkpoint_freq must be an integer >= 0, got 'abc'"),
+        ("torch_threads=0", "torch_threads must be an integer >= 1, got 0"),
+        ("vec_env_kwargs.threads=9", "vec_env_kwargs.threads must be an integer >= 1 and <= "),
+        ("eval_targets=0", "eval_targets must be an integer >= 1, got 0"),
+        ("eval_freq=-5", "eval_freq must be an integer >= 0, got -5"),
+        ("normalize=maybe", "normalize must be true, false or a mapping"),
+        ("env_wrapper={box_toss_env.envs.ballistic.BallisticThrows: {turn_range: -1}}", "env_wrapper: "),
+        ("env_wrapper={box_toss_env.envs.ballistic.BallisticThrows: {spin: 1}}", "env_wrapper: "),
+    ],
+)
 def test_the_audits_bad_training_options_are_one_line_and_make_nothing(tmp_path, capsys, override, message):
-    exits_with_one_line(capsys, train.main, ["--runs-dir", str(tmp_path / "runs"), "--no-progress", "--set", override],
-                        message)
+    exits_with_one_line(
+        capsys, train.main, ["--runs-dir", str(tmp_path / "runs"), "--no-progress", "--set", override], message
+    )
     assert not (tmp_path / "runs").exists()
 
 
 def test_a_negative_seed_is_refused(tmp_path, capsys):
-    exits_with_one_line(capsys, train.main, ["--runs-dir", str(tmp_path / "runs"), "--seed", "-1"],
-                        "--seed must be an integer >= 0, got -1")
+    exits_with_one_line(
+        capsys,
+        train.main,
+        ["--runs-dir", str(tmp_path / "runs"), "--seed", "-1"],
+        "--seed must be an integer >= 0, got -1",
+    )
     assert not (tmp_path / "runs").exists()
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["--targets", "0"], "--targets must be an integer >= 1, got 0"),
-    (["--first-seed", "-3"], "--first-seed must be an integer >= 0, got -3"),
-    (["--video", "-1"], "--video must be an integer >= 0, got -1"),
-    (["--env-kwargs", "mass=-1"], "--env-kwargs: mass"),
-    (["--env-kwargs", "nonsense=1"], "--env-kwargs: "),
-    (["--env-kwargs", "nonsense"], "key=value"),
-    (["--tag", "../../x"], "--tag must be a single folder name"),
-])
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--targets", "0"], "--targets must be an integer >= 1, got 0"),
+        (["--first-seed", "-3"], "--first-seed must be an integer >= 0, got -3"),
+        (["--video", "-1"], "--video must be an integer >= 0, got -1"),
+        (["--env-kwargs", "mass=-1"], "--env-kwargs: mass"),
+        (["--env-kwargs", "nonsense=1"], "--env-kwargs: "),
+        (["--env-kwargs", "nonsense"], "key=value"),
+        (["--tag", "../../x"], "--tag must be a single folder name"),
+    ],
+)
 def test_bad_evaluation_options_are_one_line_and_make_nothing(tmp_path, capsys, argv, message):
     run_dir = make_baseline_run("random", tmp_path / "random")
     before = sorted(os.listdir(run_dir))
@@ -108,16 +119,20 @@ def test_bad_evaluation_options_are_one_line_and_make_nothing(tmp_path, capsys, 
     assert sorted(os.listdir(run_dir)) == before and sorted(os.listdir(tmp_path)) == ["random"]
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["--throw", "1e308,1e308,0"], "the env throws at speeds up to 8 m/s"),
-    (["--throw", "0,0,1e308"], "spins up to"),
-    (["--throw", "nan,1,0"], "three finite numbers"),
-    (["--throw", "1,2"], "three finite numbers"),
-    (["--width", "0"], "--width must be an integer in [100, 10000], got 0"),
-    (["--height", "-5"], "--height must be an integer in [100, 10000], got -5"),
-    (["--seed", "-1"], "--seed must be an integer in [0, inf], got -1"),
-])
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--throw", "1e308,1e308,0"], "the env throws at speeds up to 8 m/s"),
+        (["--throw", "0,0,1e308"], "spins up to"),
+        (["--throw", "nan,1,0"], "three finite numbers"),
+        (["--throw", "1,2"], "three finite numbers"),
+        (["--width", "0"], "--width must be an integer in [100, 10000], got 0"),
+        (["--height", "-5"], "--height must be an integer in [100, 10000], got -5"),
+        (["--seed", "-1"], "--seed must be an integer in [0, inf], got -1"),
+    ],
+)
 def test_bad_viewer_options_are_one_line(tmp_path, capsys, argv, message):
-    exits_with_one_line(capsys, viewer.main, ["--play", "--frames", "1", "--out", str(tmp_path / "f.png"), *argv],
-                        message)
+    exits_with_one_line(
+        capsys, viewer.main, ["--play", "--frames", "1", "--out", str(tmp_path / "f.png"), *argv], message
+    )
     assert not (tmp_path / "f.png").exists()

@@ -39,10 +39,24 @@ def test_the_env_creator_honours_env_config():
 
 def test_the_settings_are_sb3s_recipe():
     position, pose = recipe("BoxToss-v0"), recipe("BoxToss-ShortEnd-v0")
-    assert position == {"n_throws": 300_000, "train_batch_size": 2048, "minibatch_size": 128, "num_epochs": 10,
-                        "lr": 5e-4, "lr_decays": True, "gamma": 0.0, "lambda_": 1.0, "clip_param": 0.2,
-                        "entropy_coeff": 0.0, "vf_loss_coeff": 0.5, "grad_clip": 0.5, "hiddens": [128, 128],
-                        "activation": "tanh", "log_std_init": -2.5, "ballistic": False}
+    assert position == {
+        "n_throws": 300_000,
+        "train_batch_size": 2048,
+        "minibatch_size": 128,
+        "num_epochs": 10,
+        "lr": 5e-4,
+        "lr_decays": True,
+        "gamma": 0.0,
+        "lambda_": 1.0,
+        "clip_param": 0.2,
+        "entropy_coeff": 0.0,
+        "vf_loss_coeff": 0.5,
+        "grad_clip": 0.5,
+        "hiddens": [128, 128],
+        "activation": "tanh",
+        "log_std_init": -2.5,
+        "ballistic": False,
+    }
     assert pose["ballistic"] and pose["log_std_init"] == -1.0 and pose["n_throws"] == 600_000
     config = make_config("BoxToss-v0")
     assert config.lr == [[0, 5e-4], [300_000, 0.0]] and not config.use_kl_loss and config.grad_clip == 0.5
@@ -56,8 +70,15 @@ def test_the_settings_are_sb3s_recipe():
 
 @pytest.mark.parametrize("vectorize", ["native", "sync"])
 def test_rllib_ppo_trains_an_iteration(local_ray, vectorize):
-    config = make_config("BoxToss-LongSide-v0", {"max_spin": 10.0}, num_envs=16, vectorize=vectorize,
-                         train_batch_size=256, minibatch_size=64, num_epochs=1)
+    config = make_config(
+        "BoxToss-LongSide-v0",
+        {"max_spin": 10.0},
+        num_envs=16,
+        vectorize=vectorize,
+        train_batch_size=256,
+        minibatch_size=64,
+        num_epochs=1,
+    )
     algo = config.build_algo()
     try:
         env = algo.env_runner.env.unwrapped
@@ -98,8 +119,10 @@ def test_the_learner_standardises_the_advantages_over_the_real_timesteps(monkeyp
 
     seen = {}
     monkeypatch.setattr(PPOTorchLearner, "compute_loss_for_module", lambda self, **kwargs: seen.update(kwargs))
-    batch = {Postprocessing.ADVANTAGES: torch.tensor([1.0, 3.0, 100.0, -50.0]),
-             Columns.LOSS_MASK: torch.tensor([True, True, False, False])}
+    batch = {
+        Postprocessing.ADVANTAGES: torch.tensor([1.0, 3.0, 100.0, -50.0]),
+        Columns.LOSS_MASK: torch.tensor([True, True, False, False]),
+    }
     learner = object.__new__(MaskedAdvantagePPOLearner)  # no setup: only the loss is called
     learner.compute_loss_for_module(module_id="p", config=None, batch=batch, fwd_out={})
-    torch.testing.assert_close(seen["batch"][Postprocessing.ADVANTAGES][:2], torch.tensor([-0.5, 0.5]) * 2 ** 0.5)
+    torch.testing.assert_close(seen["batch"][Postprocessing.ADVANTAGES][:2], torch.tensor([-0.5, 0.5]) * 2**0.5)

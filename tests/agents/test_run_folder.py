@@ -32,8 +32,16 @@ from agents.training import latest_checkpoint, model_timesteps, new_run_dir, res
 
 REPO = Path(__file__).resolve().parents[2]
 # a rollout (n_envs x n_steps), a checkpoint and a validation every 64 throws: rows at 0, 64, 128, ...
-TINY = ["n_envs=4", "n_steps=16", "batch_size=64", "n_epochs=1", "eval_freq=64", "eval_targets=4",
-        "checkpoint_freq=64", "policy_kwargs.net_arch=[8]"]
+TINY = [
+    "n_envs=4",
+    "n_steps=16",
+    "batch_size=64",
+    "n_epochs=1",
+    "eval_freq=64",
+    "eval_targets=4",
+    "checkpoint_freq=64",
+    "policy_kwargs.net_arch=[8]",
+]
 
 
 def run(*args: str, ok: bool = True) -> subprocess.CompletedProcess:
@@ -44,8 +52,19 @@ def run(*args: str, ok: bool = True) -> subprocess.CompletedProcess:
 
 
 def train_tiny(runs: Path, name: str, steps: int, *extra: str) -> list[str]:
-    return ["agents.train", "--runs-dir", str(runs), "--name", name, "--no-progress", "--no-eval",
-            "--set", f"n_timesteps={steps}", *TINY, *extra]
+    return [
+        "agents.train",
+        "--runs-dir",
+        str(runs),
+        "--name",
+        name,
+        "--no-progress",
+        "--no-eval",
+        "--set",
+        f"n_timesteps={steps}",
+        *TINY,
+        *extra,
+    ]
 
 
 def one_line_error(done: subprocess.CompletedProcess, message: str, code: int = 2) -> None:
@@ -114,9 +133,17 @@ def test_a_named_folder_is_cleared_only_if_its_run_died_before_a_checkpoint(tiny
         new_run_dir(tiny_run.parent, "tiny", "BoxToss-v0", "ppo")
     unlock_run(dead)
     (dead / "config.yml").write_text("algo: ppo\n")
-    live = subprocess.Popen([sys.executable, "-c", "import sys, time; from agents.run_folder import lock_run; "
-                             f"lock_run({str(dead)!r}); print('locked', flush=True); time.sleep(60)"],
-                            cwd=REPO, stdout=subprocess.PIPE, text=True)
+    live = subprocess.Popen(
+        [
+            sys.executable,
+            "-c",
+            "import sys, time; from agents.run_folder import lock_run; "
+            f"lock_run({str(dead)!r}); print('locked', flush=True); time.sleep(60)",
+        ],
+        cwd=REPO,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
     try:
         assert live.stdout.readline().strip() == "locked"
         one_line_error(run(*train_tiny(tmp_path, "dead", 64), ok=False), "is in use by another training")
@@ -132,10 +159,13 @@ def test_a_run_records_what_it_trains(tiny_run):
 
 
 def test_a_resume_that_disagrees_with_the_run_refuses(tiny_run):
-    one_line_error(run("agents.train", "--resume", str(tiny_run), "--algo", "sac", ok=False),
-                   "trained with --algo ppo, not sac")
-    one_line_error(run("agents.train", "--resume", str(tiny_run), "--env", "BoxToss-OnBox-v0", ok=False),
-                   "trained with --env BoxToss-v0")
+    one_line_error(
+        run("agents.train", "--resume", str(tiny_run), "--algo", "sac", ok=False), "trained with --algo ppo, not sac"
+    )
+    one_line_error(
+        run("agents.train", "--resume", str(tiny_run), "--env", "BoxToss-OnBox-v0", ok=False),
+        "trained with --env BoxToss-v0",
+    )
 
 
 def test_a_resume_without_checkpoint_or_statistics_refuses_naming_the_file(tiny_run, tmp_path):
@@ -153,8 +183,9 @@ def test_a_resume_without_checkpoint_or_statistics_refuses_naming_the_file(tiny_
 
 def test_paths_never_escape_the_runs_folder(tiny_run, tmp_path):
     one_line_error(run(*train_tiny(tmp_path, "../x", 64), ok=False), "--name must be a single folder name")
-    one_line_error(run("agents.evaluate", str(tiny_run), "--tag", "../../x", ok=False),
-                   "--tag must be a single folder name")
+    one_line_error(
+        run("agents.evaluate", str(tiny_run), "--tag", "../../x", ok=False), "--tag must be a single folder name"
+    )
     (tmp_path / "file").write_text("")
     one_line_error(run(*train_tiny(tmp_path / "file", "x", 64), ok=False), "is a file, not a folder")
     assert sorted(os.listdir(tmp_path)) == ["file"]
@@ -165,8 +196,11 @@ def test_evaluations_with_other_settings_never_overwrite_each_other(tiny_run):
     run("agents.evaluate", str(tiny_run), "--targets", "4", "--no-plots", "--tag", "mine")
     assert json.loads((tiny_run / "eval" / "targets=8" / "results.json").read_text())["n"] == 8
     assert not (tiny_run / "eval" / "default").exists()
-    one_line_error(run("agents.evaluate", str(tiny_run), "--targets", "8", "--tag", "mine", ok=False),
-                   "holds an evaluation with other settings", 1)
+    one_line_error(
+        run("agents.evaluate", str(tiny_run), "--targets", "8", "--tag", "mine", ok=False),
+        "holds an evaluation with other settings",
+        1,
+    )
     assert json.loads((tiny_run / "eval" / "mine" / "results.json").read_text())["n"] == 4
 
 
@@ -194,8 +228,12 @@ def test_kill_9_at_random_points_then_resume_loses_and_duplicates_nothing(tmp_pa
         process.wait()
         timing = json.loads((run_dir / "timing.json").read_text())
         walls.append(timing["wall_seconds"])
-        process = subprocess.Popen([sys.executable, "-m", "agents.train", "--resume", str(run_dir), "--no-progress",
-                                    "--no-eval"], cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+        process = subprocess.Popen(
+            [sys.executable, "-m", "agents.train", "--resume", str(run_dir), "--no-progress", "--no-eval"],
+            cwd=REPO,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
+        )
     assert process.wait(timeout=300) == 0, process.stderr.read()
     assert steps_column(run_dir / "logs" / "progress.csv", "time/total_timesteps") == list(range(64, steps + 1, 64))
     assert steps_column(run_dir / "evaluations.csv", "timesteps") == list(range(0, steps + 1, 64))
@@ -209,10 +247,21 @@ def test_kill_9_at_random_points_then_resume_loses_and_duplicates_nothing(tmp_pa
 
 
 def test_two_runs_started_together_without_a_name_get_two_folders(tmp_path):
-    command = [sys.executable, "-m", "agents.train", "--runs-dir", str(tmp_path), "--no-progress", "--no-eval",
-               "--set", "n_timesteps=64", *TINY]
-    processes = [subprocess.Popen(command, cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-                 for _ in range(2)]
+    command = [
+        sys.executable,
+        "-m",
+        "agents.train",
+        "--runs-dir",
+        str(tmp_path),
+        "--no-progress",
+        "--no-eval",
+        "--set",
+        "n_timesteps=64",
+        *TINY,
+    ]
+    processes = [
+        subprocess.Popen(command, cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE) for _ in range(2)
+    ]
     for process in processes:
         assert process.wait(timeout=300) == 0, process.stderr.read()
     folders = sorted(os.listdir(tmp_path))
@@ -270,8 +319,14 @@ def train_until_killed(args: list[str], point: str, steps: int, marker: Path) ->
     Returns what it printed."""
     env = {**os.environ, "KILL_POINT": point, "KILL_STEPS": str(steps), "KILL_MARKER": str(marker)}
     marker.unlink(missing_ok=True)
-    process = subprocess.Popen([sys.executable, "-c", PAUSING_TRAIN, *args], cwd=REPO, env=env,
-                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    process = subprocess.Popen(
+        [sys.executable, "-c", PAUSING_TRAIN, *args],
+        cwd=REPO,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
     deadline = time.monotonic() + 240
     while not marker.exists():
         assert process.poll() is None, process.stdout.read()
@@ -338,6 +393,7 @@ def test_a_resume_puts_back_the_best_model_of_its_checkpoint(tiny_run, tmp_path)
     assert best_model_row(run_dir)[0] == best_model_row(run_dir)[1] <= 64
     # a checkpoint from before these snapshots: a best model saved after it is removed, not kept
     shutil.copyfile(run_dir / "model.zip", run_dir / "best_model.zip")  # 128 steps; no snapshot at 96
-    assert restore_best(run_dir, "ppo", 96) == ("; removed best_model.zip and best_vecnormalize.pkl "
-                                                "(saved after 96 steps)")
+    assert restore_best(run_dir, "ppo", 96) == (
+        "; removed best_model.zip and best_vecnormalize.pkl (saved after 96 steps)"
+    )
     assert not (run_dir / "best_model.zip").exists() and not (run_dir / "best_vecnormalize.pkl").exists()

@@ -60,22 +60,26 @@ def test_a_value_outside_the_space_is_no_start_point():
 
 
 def test_floats_are_written_with_three_significant_digits():
-    dimension = read_space({"learning_rate": {"low": 1e-4, "high": 1e-2, "log": True, "write": "lin_{}"}},
-                           "ppo", "test")["learning_rate"]
+    dimension = read_space(
+        {"learning_rate": {"low": 1e-4, "high": 1e-2, "log": True, "write": "lin_{}"}}, "ppo", "test"
+    )["learning_rate"]
     assert dimension.override("learning_rate", 0.000646642271) == "learning_rate=lin_0.000647"
     assert isinstance(dimension.distribution, optuna.distributions.FloatDistribution) and dimension.distribution.log
 
 
-@pytest.mark.parametrize("entry, message", [
-    ({"no_such_key": {"low": 0, "high": 1}}, "'no_such_key' is not a hyperparameter"),
-    ({"clip_range": {"low": 0.4, "high": 0.1}}, "low must be < high"),
-    ({"learning_rate": {"low": 0.0, "high": 1.0, "log": True}}, "a log scale needs low > 0"),
-    ({"n_steps": {"choices": []}}, "choices must be a non-empty list"),
-    ({"n_steps": {"choices": [16], "low": 1}}, "choices takes no other key"),
-    ({"clip_range": {"low": 0.1}}, "must have low and high"),
-    ({"clip_range": {"low": 0.1, "high": 0.2, "write": "lin"}}, "write must be a string holding one {}"),
-    ({"clip_range": [0.1, 0.2]}, "must be a mapping"),
-])
+@pytest.mark.parametrize(
+    "entry, message",
+    [
+        ({"no_such_key": {"low": 0, "high": 1}}, "'no_such_key' is not a hyperparameter"),
+        ({"clip_range": {"low": 0.4, "high": 0.1}}, "low must be < high"),
+        ({"learning_rate": {"low": 0.0, "high": 1.0, "log": True}}, "a log scale needs low > 0"),
+        ({"n_steps": {"choices": []}}, "choices must be a non-empty list"),
+        ({"n_steps": {"choices": [16], "low": 1}}, "choices takes no other key"),
+        ({"clip_range": {"low": 0.1}}, "must have low and high"),
+        ({"clip_range": {"low": 0.1, "high": 0.2, "write": "lin"}}, "write must be a string holding one {}"),
+        ({"clip_range": [0.1, 0.2]}, "must be a mapping"),
+    ],
+)
 def test_bad_declarations_name_the_entry(entry, message):
     with pytest.raises(ConfigError, match=message.replace("{", r"\{").replace("}", r"\}")):
         read_space(entry, "ppo", "space.yml: ppo")

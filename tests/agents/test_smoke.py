@@ -11,11 +11,19 @@ import yaml
 from agents.evaluation import load_policy
 
 REPO = Path(__file__).resolve().parents[2]
-COMMON = ["n_timesteps=256", "n_envs=4", "eval_freq=128", "eval_targets=16", "checkpoint_freq=128",
-          "policy_kwargs.net_arch=[16,16]"]
-TINY = {"ppo": ["n_steps=64", "batch_size=64", "n_epochs=2"],
-        "sac": ["learning_starts=64", "batch_size=32", "buffer_size=1000"],
-        "td3": ["learning_starts=64", "batch_size=32", "buffer_size=1000"]}
+COMMON = [
+    "n_timesteps=256",
+    "n_envs=4",
+    "eval_freq=128",
+    "eval_targets=16",
+    "checkpoint_freq=128",
+    "policy_kwargs.net_arch=[16,16]",
+]
+TINY = {
+    "ppo": ["n_steps=64", "batch_size=64", "n_epochs=2"],
+    "sac": ["learning_starts=64", "batch_size=32", "buffer_size=1000"],
+    "td3": ["learning_starts=64", "batch_size=32", "buffer_size=1000"],
+}
 
 
 def run(*args: str, ok: bool = True) -> subprocess.CompletedProcess:
@@ -27,11 +35,34 @@ def run(*args: str, ok: bool = True) -> subprocess.CompletedProcess:
 
 @pytest.mark.parametrize("algo", ["ppo", "sac", "td3"])
 def test_train_resume_and_evaluate_a_tiny_run(tmp_path, algo):
-    run("agents.train", "--algo", algo, "--env", "BoxToss-ShortEnd-v0", "--runs-dir", str(tmp_path), "--name", "tiny",
-        "--seed", "3", "--no-progress", "--no-eval", "--set", *COMMON, *TINY[algo])
+    run(
+        "agents.train",
+        "--algo",
+        algo,
+        "--env",
+        "BoxToss-ShortEnd-v0",
+        "--runs-dir",
+        str(tmp_path),
+        "--name",
+        "tiny",
+        "--seed",
+        "3",
+        "--no-progress",
+        "--no-eval",
+        "--set",
+        *COMMON,
+        *TINY[algo],
+    )
     run_dir = tmp_path / "tiny"
-    for name in ("config.yml", "command.txt", "model.zip", "vecnormalize.pkl", "best_model.zip", "evaluations.csv",
-                 "timing.json"):
+    for name in (
+        "config.yml",
+        "command.txt",
+        "model.zip",
+        "vecnormalize.pkl",
+        "best_model.zip",
+        "evaluations.csv",
+        "timing.json",
+    ):
         assert (run_dir / name).exists(), name
     assert list((run_dir / "checkpoints").glob(f"{algo}_*_steps.zip"))
     assert list((run_dir / "logs").glob("events.out.tfevents.*"))
@@ -58,12 +89,15 @@ def test_train_resume_and_evaluate_a_tiny_run(tmp_path, algo):
     assert "success" in out
 
 
-@pytest.mark.parametrize("args, message", [
-    (["--set", "n_timestep=5"], "unknown hyperparameter 'n_timestep'"),
-    (["--set", "env_kwargs.mass=-1"], "env_kwargs: mass"),
-    (["--env", "BoxToss-v9"], "no entry for 'BoxToss-v9'"),
-    (["--resume", "nowhere"], "not a run folder"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--set", "n_timestep=5"], "unknown hyperparameter 'n_timestep'"),
+        (["--set", "env_kwargs.mass=-1"], "env_kwargs: mass"),
+        (["--env", "BoxToss-v9"], "no entry for 'BoxToss-v9'"),
+        (["--resume", "nowhere"], "not a run folder"),
+    ],
+)
 def test_a_bad_configuration_is_one_line_and_creates_nothing(tmp_path, args, message):
     done = run("agents.train", "--runs-dir", str(tmp_path), "--name", "bad", "--no-progress", *args, ok=False)
     assert done.returncode != 0 and message in done.stderr
@@ -80,8 +114,18 @@ def test_main_trains_evaluates_and_prints_the_table(tmp_path):
 
 
 def test_a_truncated_model_is_one_line(tmp_path):
-    run("agents.train", "--runs-dir", str(tmp_path), "--name", "tiny", "--no-progress", "--no-eval", "--set", *COMMON,
-        *TINY["ppo"])
+    run(
+        "agents.train",
+        "--runs-dir",
+        str(tmp_path),
+        "--name",
+        "tiny",
+        "--no-progress",
+        "--no-eval",
+        "--set",
+        *COMMON,
+        *TINY["ppo"],
+    )
     model = tmp_path / "tiny" / "model.zip"
     model.write_bytes(model.read_bytes()[:200])
     done = run("agents.evaluate", str(tmp_path / "tiny"), "--targets", "8", ok=False)

@@ -80,12 +80,26 @@ def test_saved_rows_make_one_table_ordered_by_budget(tmp_path):
     from agents.stack_planner import save_row, saved_rows
 
     path = tmp_path / "rows.json"
-    row = {"episodes": 3, "first_seed": 5, "success_rate": 0.5, "mean_height": 0.4, "fall_rate": 0.0,
-           "simulated_per_throw": 10.0, "seconds": 1.0}
+    row = {
+        "episodes": 3,
+        "first_seed": 5,
+        "success_rate": 0.5,
+        "mean_height": 0.4,
+        "fall_rate": 0.0,
+        "simulated_per_throw": 10.0,
+        "seconds": 1.0,
+    }
     save_row({**row, "name": "large", "budget": {"initial": 1, "population": 2, "elite": 3, "iterations": 4}}, path)
     save_row({**row, "name": "small", "budget": {"initial": 5, "population": 6, "elite": 7, "iterations": 8}}, path)
-    rows = save_row({**row, "name": "small", "success_rate": 1.0,
-                     "budget": {"initial": 5, "population": 6, "elite": 7, "iterations": 8}}, path)
+    rows = save_row(
+        {
+            **row,
+            "name": "small",
+            "success_rate": 1.0,
+            "budget": {"initial": 5, "population": 6, "elite": 7, "iterations": 8},
+        },
+        path,
+    )
     assert [r["name"] for r in rows] == ["small", "large"] and saved_rows(path) == rows
     table = budget_table(rows).splitlines()
     assert table[-2].startswith("| small (5, 6, 7, 8) | 3 (5...) | 100.0% |") and table[-1].startswith("| large")

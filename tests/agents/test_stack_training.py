@@ -18,11 +18,19 @@ from box_toss_env.envs.stack_commands import StackCommands
 from box_toss_env.wrappers.stack_commands import StackCommandsVector
 
 REPO = Path(__file__).resolve().parents[2]
-COMMON = ["n_timesteps=128", "n_envs=4", "eval_freq=64", "eval_targets=4", "checkpoint_freq=64",
-          "policy_kwargs.net_arch=[16,16]"]
-TINY = {"ppo": ["n_steps=16", "batch_size=32", "n_epochs=2"],
-        "sac": ["learning_starts=32", "batch_size=16", "buffer_size=500", "gradient_steps=1"],
-        "td3": ["learning_starts=32", "batch_size=16", "buffer_size=500", "gradient_steps=1"]}
+COMMON = [
+    "n_timesteps=128",
+    "n_envs=4",
+    "eval_freq=64",
+    "eval_targets=4",
+    "checkpoint_freq=64",
+    "policy_kwargs.net_arch=[16,16]",
+]
+TINY = {
+    "ppo": ["n_steps=16", "batch_size=32", "n_epochs=2"],
+    "sac": ["learning_starts=32", "batch_size=16", "buffer_size=500", "gradient_steps=1"],
+    "td3": ["learning_starts=32", "batch_size=16", "buffer_size=500", "gradient_steps=1"],
+}
 
 
 def run(*args: str, ok: bool = True) -> subprocess.CompletedProcess:
@@ -34,8 +42,22 @@ def run(*args: str, ok: bool = True) -> subprocess.CompletedProcess:
 
 @pytest.mark.parametrize("algo", ["ppo", "sac", "td3"])
 def test_train_and_evaluate_a_tiny_run_on_the_stack(tmp_path, algo):
-    out = run("agents.train", "--algo", algo, "--env", "BoxToss-Stack-v0", "--runs-dir", str(tmp_path), "--name",
-              "tiny", "--no-progress", "--no-eval", "--set", *COMMON, *TINY[algo]).stdout
+    out = run(
+        "agents.train",
+        "--algo",
+        algo,
+        "--env",
+        "BoxToss-Stack-v0",
+        "--runs-dir",
+        str(tmp_path),
+        "--name",
+        "tiny",
+        "--no-progress",
+        "--no-eval",
+        "--set",
+        *COMMON,
+        *TINY[algo],
+    ).stdout
     run_dir = tmp_path / "tiny"
     for name in ("model.zip", "vecnormalize.pkl", "best_model.zip", "evaluations.csv", "timing.json"):
         assert (run_dir / name).exists(), name
@@ -51,21 +73,48 @@ def test_train_and_evaluate_a_tiny_run_on_the_stack(tmp_path, algo):
 
 
 def test_the_raw_tier_trains_in_the_env_actions(tmp_path):
-    run("agents.train", "--env", "BoxToss-Stack-v0", "--runs-dir", str(tmp_path), "--name", "raw", "--no-progress",
-        "--no-eval", "--set", *COMMON, *TINY["ppo"], "env_wrapper=null")
+    run(
+        "agents.train",
+        "--env",
+        "BoxToss-Stack-v0",
+        "--runs-dir",
+        str(tmp_path),
+        "--name",
+        "raw",
+        "--no-progress",
+        "--no-eval",
+        "--set",
+        *COMMON,
+        *TINY["ppo"],
+        "env_wrapper=null",
+    )
     saved = yaml.safe_load((tmp_path / "raw" / "config.yml").read_text())
     assert saved["hyperparams"]["env_wrapper"] is None
     assert load_policy(tmp_path / "raw")[0].commands_to_actions is None
 
 
-@pytest.mark.parametrize("args, message", [
-    (["--env", "BoxToss-Stack-v0", "--set", "env_wrapper=box_toss_env.envs.ballistic.BallisticThrows"],
-     "does not act on BoxToss-Stack-v0"),
-    (["--env", "BoxToss-v0", "--set", "env_wrapper=box_toss_env.envs.stack_commands.StackCommands"],
-     "for BoxToss-Stack envs only"),
-    (["--env", "BoxToss-Stack-v0", "--set", "env_wrapper={box_toss_env.envs.stack_commands.StackCommands: "
-      "{offset_range: -1}}"], "offset_range"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (
+            ["--env", "BoxToss-Stack-v0", "--set", "env_wrapper=box_toss_env.envs.ballistic.BallisticThrows"],
+            "does not act on BoxToss-Stack-v0",
+        ),
+        (
+            ["--env", "BoxToss-v0", "--set", "env_wrapper=box_toss_env.envs.stack_commands.StackCommands"],
+            "for BoxToss-Stack envs only",
+        ),
+        (
+            [
+                "--env",
+                "BoxToss-Stack-v0",
+                "--set",
+                "env_wrapper={box_toss_env.envs.stack_commands.StackCommands: {offset_range: -1}}",
+            ],
+            "offset_range",
+        ),
+    ],
+)
 def test_a_wrapper_that_does_not_fit_is_one_line_and_creates_nothing(tmp_path, args, message):
     done = run("agents.train", "--runs-dir", str(tmp_path), "--name", "bad", "--no-progress", *args, ok=False)
     assert done.returncode != 0 and message in done.stderr
@@ -73,8 +122,16 @@ def test_a_wrapper_that_does_not_fit_is_one_line_and_creates_nothing(tmp_path, a
 
 
 def test_the_benchmark_checks_its_options_before_anything(tmp_path):
-    done = run("agents.benchmark", "--envs", "BoxToss-Stack-v0", "--root", str(tmp_path / "b"), "--set",
-               "n_timestep=5", ok=False)
+    done = run(
+        "agents.benchmark",
+        "--envs",
+        "BoxToss-Stack-v0",
+        "--root",
+        str(tmp_path / "b"),
+        "--set",
+        "n_timestep=5",
+        ok=False,
+    )
     assert done.returncode == 2 and "unknown hyperparameter 'n_timestep'" in done.stderr
     assert not (tmp_path / "b").exists()
 
@@ -82,8 +139,9 @@ def test_the_benchmark_checks_its_options_before_anything(tmp_path):
 def test_batched_commands_are_the_single_wrappers_throws():
     n, seeds = 3, [5, 6, 7]
     commands = np.random.default_rng(0).uniform(-1, 1, (4, n, 3)).astype(np.float32)
-    vector = StackCommandsVector(gym.make_vec("BoxToss-Stack-v0", num_envs=n, vectorization_mode="vector_entry_point",
-                                              threads=1))
+    vector = StackCommandsVector(
+        gym.make_vec("BoxToss-Stack-v0", num_envs=n, vectorization_mode="vector_entry_point", threads=1)
+    )
     observations, _ = vector.reset(seed=seeds)
     singles = [StackCommands(gym.make("BoxToss-Stack-v0")) for _ in range(n)]
     single_obs = [env.reset(seed=seed)[0] for env, seed in zip(singles, seeds, strict=True)]

@@ -19,13 +19,34 @@ pytest.importorskip("optuna")
 from agents import config as configuration  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[2]
-SWEEP = ["--env", "BoxToss-v0", "--trials", "2", "--timesteps", "4096", "--max-concurrent", "1", "--num-cpus", "2",
-         "--set", "n_envs=16", "eval_freq=1024", "eval_targets=16", "checkpoint_freq=1024"]
+SWEEP = [
+    "--env",
+    "BoxToss-v0",
+    "--trials",
+    "2",
+    "--timesteps",
+    "4096",
+    "--max-concurrent",
+    "1",
+    "--num-cpus",
+    "2",
+    "--set",
+    "n_envs=16",
+    "eval_freq=1024",
+    "eval_targets=16",
+    "checkpoint_freq=1024",
+]
 
 
 def agents_tune(*args, **kwargs):
-    return subprocess.Popen([sys.executable, "-m", "agents.tune", *args], cwd=REPO, stdout=subprocess.PIPE,
-                            stderr=subprocess.STDOUT, text=True, **kwargs)
+    return subprocess.Popen(
+        [sys.executable, "-m", "agents.tune", *args],
+        cwd=REPO,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        **kwargs,
+    )
 
 
 def rows(path: Path) -> list[dict[str, str]]:
@@ -96,14 +117,17 @@ def test_a_killed_two_trial_sweep_resumes_from_its_checkpoints_and_writes_its_ta
     assert best["n_timesteps"] == 4096 and best["n_envs"] == 16
 
 
-@pytest.mark.parametrize("args, message", [
-    (["--env", "BoxToss-Nope-v0"], "has no entry for 'BoxToss-Nope-v0'"),
-    (["--trials", "0"], "trials must be >= 1"),
-    (["--cpus-per-trial", "0"], "cpus_per_trial must be >= 1"),
-    (["--timesteps", "5000"], "eval_freq must be in \\[1, n_timesteps\\)"),
-    (["--set", "policy_kwargs.activation_fn=nn.Nope"], "activation_fn must name a torch.nn activation"),
-    (["--space", "missing.yml"], "no hyperparameter file missing.yml"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--env", "BoxToss-Nope-v0"], "has no entry for 'BoxToss-Nope-v0'"),
+        (["--trials", "0"], "trials must be >= 1"),
+        (["--cpus-per-trial", "0"], "cpus_per_trial must be >= 1"),
+        (["--timesteps", "5000"], "eval_freq must be in \\[1, n_timesteps\\)"),
+        (["--set", "policy_kwargs.activation_fn=nn.Nope"], "activation_fn must name a torch.nn activation"),
+        (["--space", "missing.yml"], "no hyperparameter file missing.yml"),
+    ],
+)
 def test_a_sweep_that_cannot_run_is_one_line_before_ray_starts(tmp_path, args, message):
     from agents import tune
 

@@ -48,7 +48,8 @@ def test_docs_show_every_registered_one_throw_variant_with_a_small_gif():
     linked = re.findall(r"\]\(figures/variant_(.+?)\.gif\)", section)
     assert linked == variant_gifs.variant_ids()
     assert set(variant_gifs.variant_ids()) | set(variant_gifs.SEQUENTIAL) == {
-        env_id for env_id in gym.registry if env_id.startswith("BoxToss-")}
+        env_id for env_id in gym.registry if env_id.startswith("BoxToss-")
+    }
     for env_id in linked:
         path = DOCS / "figures" / f"variant_{env_id}.gif"
         assert path.stat().st_size < variant_gifs.MAX_BYTES

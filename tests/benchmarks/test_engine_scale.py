@@ -11,8 +11,12 @@ from box_toss_env.physics import Box, Scene
 
 
 def lone_box(y: float, angle: float = 0.0) -> Scene:
-    return Scene(boxes=(Box(length=0.4, width=0.2, mass=2.0, position=(0.0, y), angle=angle),), dt=BOX2D3_DT,
-                 restitution=0.3, friction=0.5)
+    return Scene(
+        boxes=(Box(length=0.4, width=0.2, mass=2.0, position=(0.0, y), angle=angle),),
+        dt=BOX2D3_DT,
+        restitution=0.3,
+        friction=0.5,
+    )
 
 
 def test_box2d3_keeps_a_resting_box_where_its_surface_meets_the_floor():
@@ -52,8 +56,9 @@ def test_box2d23_needs_sleeping_allowed_false_to_keep_a_body_awake(allowed):
 def test_the_scale_rows_cover_every_engine_with_finite_positive_figures():
     engines = [engine_scale.OURS, *available_scene_engines()]
     rows, settlers = engine_scale.scale_rows(sizes=(1, 3), engines=engines, window=0.1, budget=0.5, pyramid=False)
-    assert {(r.engine, r.case, r.mode) for r in rows} == {(e, c, m) for e in engines for c in ("pile 1", "pile 3")
-                                                          for m in ("awake", "settled")}
+    assert {(r.engine, r.case, r.mode) for r in rows} == {
+        (e, c, m) for e in engines for c in ("pile 1", "pile 3") for m in ("awake", "settled")
+    }
     assert set(settlers) == {"pile 1", "pile 3"}
     for row in rows:
         assert row.steps >= engine_scale.MIN_STEPS, row

@@ -28,8 +28,9 @@ def test_a_one_box_scene_is_the_toss_of_other_engines(engine):
     """Built the same way as the single-box adapter: the same states, bit for bit."""
     if engine not in ENGINES:
         pytest.skip(f"{engine} has no single-box adapter in benchmarks.other_engines")
-    scene = Scene(boxes=(box(0.1, 1.2, angle=0.3, velocity=(3.0, 2.0), spin=5.0),), dt=1 / 240, restitution=0.3,
-                  friction=0.5)
+    scene = Scene(
+        boxes=(box(0.1, 1.2, angle=0.3, velocity=(3.0, 2.0), spin=5.0),), dt=1 / 240, restitution=0.3, friction=0.5
+    )
     run = simulate_scene(engine, scene, 240)
     toss = ENGINES[engine].simulate_toss(toss_of(scene), scene.dt, 240, record=True)
     assert run.states.shape == (241, 1, 6)
@@ -55,8 +56,15 @@ def test_a_stack_of_two_rests_and_records_every_box(engine):
 @pytest.mark.parametrize("restitution", [0.0, 0.5, 1.0])
 def test_a_head_on_collision_in_flight_has_the_scene_restitution_and_keeps_momentum(engine, restitution):
     """Two boxes face to face in zero gravity, 3 m/s each way: they part at e times their approach speed."""
-    scene = colliding(Scene(boxes=(box(-0.3, 5.0, velocity=(3.0, 0.0), mass=1.0), box(0.3, 5.0, velocity=(-3.0, 0.0))),
-                            dt=1 / 240, gravity=0.0, restitution=restitution, friction=0.5))
+    scene = colliding(
+        Scene(
+            boxes=(box(-0.3, 5.0, velocity=(3.0, 0.0), mass=1.0), box(0.3, 5.0, velocity=(-3.0, 0.0))),
+            dt=1 / 240,
+            gravity=0.0,
+            restitution=restitution,
+            friction=0.5,
+        )
+    )
     final = simulate_scene(engine, scene, 48, record=False).final_state
     # Box2D v3 applies restitution once per step and then its soft contacts push the remaining overlap apart:
     # measured 0.07, 3.26 and 6.55 m/s of parting speed for e = 0, 0.5 and 1 (up to 9% fast)
@@ -81,8 +89,14 @@ def test_box2d_refuses_boxes_thinner_than_its_skin():
 def test_a_box_sliding_on_a_box_stops_after_v0_squared_over_2_mu_g(engine):
     """The box-box pair gets the scene's friction (pymunk: sqrt(mu) on each shape multiplies back to mu)."""
     v0, mu = 1.0, 0.6
-    scene = colliding(Scene(boxes=(Box(length=2.0, width=0.2, mass=20.0, position=(0.0, 0.1)),
-                                   box(-0.5, 0.3, velocity=(v0, 0.0))), dt=1 / 240, restitution=0.0, friction=mu))
+    scene = colliding(
+        Scene(
+            boxes=(Box(length=2.0, width=0.2, mass=20.0, position=(0.0, 0.1)), box(-0.5, 0.3, velocity=(v0, 0.0))),
+            dt=1 / 240,
+            restitution=0.0,
+            friction=mu,
+        )
+    )
     final = simulate_scene(engine, scene, 240, record=False).final_state
     assert final[1, 0] + 0.5 == pytest.approx(v0**2 / (2 * mu * -scene.gravity), rel=0.03)
     assert abs(final[0, 0]) < 1e-3  # the bottom box holds on the floor

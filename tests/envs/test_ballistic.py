@@ -41,8 +41,15 @@ def test_free_flight_reaches_the_commanded_touchdown_pose(command):
     flight_time = t_low + (t_high - t_low) * (command[0] + 1) / 2
     x0, y0, theta0 = float(obs[0]), float(obs[1]), math.atan2(float(obs[3]), float(obs[2]))
     phi = face_angles(np.array([theta0]), obs[None, task.OBS_TARGET_FACES])[0] + turn_range * command[2]
-    box = Box(length=2 * config.half_length, width=2 * config.half_width, mass=2.0, position=(x0, y0), angle=theta0,
-              velocity=(speed * math.cos(angle), speed * math.sin(angle)), spin=spin)
+    box = Box(
+        length=2 * config.half_length,
+        width=2 * config.half_width,
+        mass=2.0,
+        position=(x0, y0),
+        angle=theta0,
+        velocity=(speed * math.cos(angle), speed * math.sin(angle)),
+        spin=spin,
+    )
     scene = Scene(boxes=(box,), dt=flight_time / 64, gravity=-config.gravity, restitution=0.3, friction=0.5)
     result = simulate(scene, steps=64, record=True)
     x, y, final_angle = result.final_state[0, :3]
@@ -76,8 +83,15 @@ def test_face_angles_are_the_nearest_angle_with_a_target_face_down():
     angles = face_angles(theta0, faces)
     assert faces[np.arange(500), task.faces_down(angles)].all()
     # brute force over faces and whole turns
-    brute = [min((abs(-f * math.pi / 2 + 2 * math.pi * k - t), -f * math.pi / 2 + 2 * math.pi * k)
-                 for f in range(4) if row[f] for k in range(-3, 4))[1] for t, row in zip(theta0, faces, strict=True)]
+    brute = [
+        min(
+            (abs(-f * math.pi / 2 + 2 * math.pi * k - t), -f * math.pi / 2 + 2 * math.pi * k)
+            for f in range(4)
+            if row[f]
+            for k in range(-3, 4)
+        )[1]
+        for t, row in zip(theta0, faces, strict=True)
+    ]
     np.testing.assert_allclose(angles, brute, atol=1e-12)
     assert face_angles(np.array([0.2]), np.array([[1.0, 1.0, 1.0, 1.0]]))[0] == 0.0  # "any": land flat as released
 
@@ -146,13 +160,16 @@ def test_env_checkers_pass_on_the_wrapped_env():
         sb3_check_env(BallisticThrows(gym.make(ENV_ID)))
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    ({"flight_time_range": (1.0, 0.5)}, "flight_time_range must have low <= high"),
-    ({"flight_time_range": (0.5, 0.5)}, "flight_time_range must have low < high"),
-    ({"flight_time_range": (0.0, 1.0)}, "flight_time_range"),
-    ({"offset_range": -0.1}, "offset_range"),
-    ({"turn_range": 20.0}, "turn_range"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"flight_time_range": (1.0, 0.5)}, "flight_time_range must have low <= high"),
+        ({"flight_time_range": (0.5, 0.5)}, "flight_time_range must have low < high"),
+        ({"flight_time_range": (0.0, 1.0)}, "flight_time_range"),
+        ({"offset_range": -0.1}, "offset_range"),
+        ({"turn_range": 20.0}, "turn_range"),
+    ],
+)
 def test_bad_settings_name_the_argument(kwargs, message):
     with pytest.raises(ValueError, match=message):
         BallisticThrows(gym.make(ENV_ID), **kwargs)

@@ -24,14 +24,34 @@ os.environ["SDL_VIDEODRIVER"] = "dummy"  # headless window, read when pygame.dis
 os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
 
 ENV_ID = "BoxToss-v0"
-RANDOMISED = dict(target_face="mixed", mass_range=(0.5, 5.0), friction_range=(0.0, 1.5),
-                  restitution_range=(0.0, 1.0), observe_dynamics=True)
+RANDOMISED = dict(
+    target_face="mixed",
+    mass_range=(0.5, 5.0),
+    friction_range=(0.0, 1.5),
+    restitution_range=(0.0, 1.0),
+    observe_dynamics=True,
+)
 STEP_INFO_KEYS = {
-    "final_x": float, "final_y": float, "final_angle": float, "face_down": int, "at_rest": bool,
-    "success": bool, "distance": float, "orientation_error": float, "flight_time": float, "n_impacts": int,
-    "n_steps": int, "max_penetration": float, "sim_time": float, "reward_distance": float,
-    "reward_orientation": float, "reward_success": float, "target_x": float, "mass": float,
-    "friction": float, "restitution": float,
+    "final_x": float,
+    "final_y": float,
+    "final_angle": float,
+    "face_down": int,
+    "at_rest": bool,
+    "success": bool,
+    "distance": float,
+    "orientation_error": float,
+    "flight_time": float,
+    "n_impacts": int,
+    "n_steps": int,
+    "max_penetration": float,
+    "sim_time": float,
+    "reward_distance": float,
+    "reward_orientation": float,
+    "reward_success": float,
+    "target_x": float,
+    "mass": float,
+    "friction": float,
+    "restitution": float,
 }
 
 
@@ -87,7 +107,7 @@ def test_spaces_and_return_types():
     assert np.all(np.isfinite(env.observation_space.low)) and np.all(np.isfinite(env.observation_space.high))
     obs, info = env.reset(seed=0)
     assert obs.dtype == np.float32 and env.observation_space.contains(obs)
-    assert obs[task.OBS_VX:task.OBS_SPIN + 1].tolist() == [0.0, 0.0, 0.0]  # at rest in the hand
+    assert obs[task.OBS_VX : task.OBS_SPIN + 1].tolist() == [0.0, 0.0, 0.0]  # at rest in the hand
     obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
     assert type(reward) is float and terminated is True and truncated is False
     assert {key: type(info[key]) for key in STEP_INFO_KEYS} == STEP_INFO_KEYS
@@ -116,8 +136,12 @@ def test_pickled_env_continues_identically():
 
 
 def test_async_vector_env_from_the_string_id():
-    envs = gym.make_vec("box_toss_env:BoxToss-v0", num_envs=2, vectorization_mode="async",
-                        vector_kwargs={"autoreset_mode": gym.vector.AutoresetMode.SAME_STEP})
+    envs = gym.make_vec(
+        "box_toss_env:BoxToss-v0",
+        num_envs=2,
+        vectorization_mode="async",
+        vector_kwargs={"autoreset_mode": gym.vector.AutoresetMode.SAME_STEP},
+    )
     try:
         obs, _ = envs.reset(seed=0)
         assert obs.shape == (2, 12)
@@ -138,13 +162,16 @@ def test_vector_entry_point_placeholder():
 
 
 # -- bad input ------------------------------------------------------------------------------------
-@pytest.mark.parametrize(("action", "message"), [
-    ([np.nan, 0.0, 0.0], "finite"),
-    ([0.0, np.inf, 0.0], "finite"),
-    ([0.0, 0.0, -np.inf], "finite"),
-    ([0.0, 0.0], r"shape \(3,\)"),
-    ([[0.0, 0.0, 0.0]], r"shape \(3,\)"),
-])
+@pytest.mark.parametrize(
+    ("action", "message"),
+    [
+        ([np.nan, 0.0, 0.0], "finite"),
+        ([0.0, np.inf, 0.0], "finite"),
+        ([0.0, 0.0, -np.inf], "finite"),
+        ([0.0, 0.0], r"shape \(3,\)"),
+        ([[0.0, 0.0, 0.0]], r"shape \(3,\)"),
+    ],
+)
 def test_bad_actions_raise_clear_value_errors(action, message):
     env = BoxTossEnv()
     env.reset(seed=0)
@@ -152,8 +179,9 @@ def test_bad_actions_raise_clear_value_errors(action, message):
         env.step(action)
 
 
-@pytest.mark.parametrize("action", ["fast", "000", ["0", "0", "0"], np.array([1j, 0.0, 0.0]), [True, False, True],
-                                    [0.0, None, 0.0]])
+@pytest.mark.parametrize(
+    "action", ["fast", "000", ["0", "0", "0"], np.array([1j, 0.0, 0.0]), [True, False, True], [0.0, None, 0.0]]
+)
 def test_actions_that_are_not_real_numbers_are_type_errors(action):
     env = BoxTossEnv()
     env.reset(seed=0)
@@ -179,69 +207,75 @@ def test_step_needs_a_reset():
         env.step(np.zeros(3))
 
 
-@pytest.mark.parametrize(("kwargs", "name"), [
-    ({"box_length": 0.0}, "box_length"),
-    ({"box_width": -1.0}, "box_width"),
-    ({"mass": np.nan}, "mass"),
-    ({"friction": -0.1}, "friction"),
-    ({"restitution": 1.5}, "restitution"),
-    ({"penalty_stiffness": -1.0}, "penalty_stiffness"),
-    ({"gravity": 0.0}, "gravity"),
-    ({"release_height_range": (0.1, 1.0)}, "release_height_range"),
-    ({"release_x_range": (1.0, 0.0)}, "release_x_range"),
-    ({"release_angle_range": (0.0, 4.0)}, "release_angle_range"),
-    ({"target_face": "top"}, "target_face"),
-    ({"max_speed": 0.0}, "max_speed"),
-    ({"launch_angle_range": (0.0, np.inf)}, "launch_angle_range"),
-    ({"max_spin": -2.0}, "max_spin"),
-    ({"position_tolerance": 0.0}, "position_tolerance"),
-    ({"distance_weight": -1.0}, "distance_weight"),
-    ({"success_bonus": -1.0}, "success_bonus"),
-    ({"mass_range": (0.0, 1.0)}, "mass_range"),
-    ({"friction_range": (-1.0, 1.0)}, "friction_range"),
-    ({"restitution_range": (0.5, 1.2)}, "restitution_range"),
-    ({"solver": "rk4"}, "solver"),
-    ({"dt": 0.0}, "dt"),
-    ({"max_sim_time": 0.0}, "max_sim_time"),
-    ({"render_fps": 0}, "render_fps"),
-    ({"render_width": 5}, "render_width"),
-    # what the engine and the env cannot honour (docs/ranges.md)
-    ({"mass": 1e300}, r"mass must be in \[1e-6, 1e6\] kg"),
-    ({"mass": 1e-300}, r"mass must be in \[1e-6, 1e6\] kg"),
-    ({"dt": 1e-300}, r"dt must be in \[1e-7, 1\] s"),
-    ({"dt": 1e-12}, r"dt must be in \[1e-7, 1\] s"),
-    ({"dt": 1e-7, "max_sim_time": 20.0}, r"max_sim_time / dt must be at most 1e8 steps"),
-    ({"box_width": 1e-300}, r"box_width must be in \[0.0001, 1000\] m"),
-    ({"box_length": 1e-160}, r"box_length must be in \[0.0001, 1000\] m"),
-    ({"release_height_range": (1e39, 1e39)}, r"release_height_range\[0\] must be in \(0, 10000\] m"),
-    ({"mass_range": (1.0, 1e39)}, r"mass_range\[1\] must be in \[1e-6, 1e6\] kg"),
-    ({"friction_range": (0.0, 1e39)}, r"friction_range\[1\] must be in \[0, 10\]"),
-    ({"friction": 1e39}, r"friction must be in \[0, 10\]"),
-    ({"gravity": 1e-300}, r"gravity must be in \[0.001, 10000\] m/s\^2"),
-    ({"distance_weight": 1e308}, r"distance_weight must be in \[0, 1e6\] 1/m"),
-])
+@pytest.mark.parametrize(
+    ("kwargs", "name"),
+    [
+        ({"box_length": 0.0}, "box_length"),
+        ({"box_width": -1.0}, "box_width"),
+        ({"mass": np.nan}, "mass"),
+        ({"friction": -0.1}, "friction"),
+        ({"restitution": 1.5}, "restitution"),
+        ({"penalty_stiffness": -1.0}, "penalty_stiffness"),
+        ({"gravity": 0.0}, "gravity"),
+        ({"release_height_range": (0.1, 1.0)}, "release_height_range"),
+        ({"release_x_range": (1.0, 0.0)}, "release_x_range"),
+        ({"release_angle_range": (0.0, 4.0)}, "release_angle_range"),
+        ({"target_face": "top"}, "target_face"),
+        ({"max_speed": 0.0}, "max_speed"),
+        ({"launch_angle_range": (0.0, np.inf)}, "launch_angle_range"),
+        ({"max_spin": -2.0}, "max_spin"),
+        ({"position_tolerance": 0.0}, "position_tolerance"),
+        ({"distance_weight": -1.0}, "distance_weight"),
+        ({"success_bonus": -1.0}, "success_bonus"),
+        ({"mass_range": (0.0, 1.0)}, "mass_range"),
+        ({"friction_range": (-1.0, 1.0)}, "friction_range"),
+        ({"restitution_range": (0.5, 1.2)}, "restitution_range"),
+        ({"solver": "rk4"}, "solver"),
+        ({"dt": 0.0}, "dt"),
+        ({"max_sim_time": 0.0}, "max_sim_time"),
+        ({"render_fps": 0}, "render_fps"),
+        ({"render_width": 5}, "render_width"),
+        # what the engine and the env cannot honour (docs/ranges.md)
+        ({"mass": 1e300}, r"mass must be in \[1e-6, 1e6\] kg"),
+        ({"mass": 1e-300}, r"mass must be in \[1e-6, 1e6\] kg"),
+        ({"dt": 1e-300}, r"dt must be in \[1e-7, 1\] s"),
+        ({"dt": 1e-12}, r"dt must be in \[1e-7, 1\] s"),
+        ({"dt": 1e-7, "max_sim_time": 20.0}, r"max_sim_time / dt must be at most 1e8 steps"),
+        ({"box_width": 1e-300}, r"box_width must be in \[0.0001, 1000\] m"),
+        ({"box_length": 1e-160}, r"box_length must be in \[0.0001, 1000\] m"),
+        ({"release_height_range": (1e39, 1e39)}, r"release_height_range\[0\] must be in \(0, 10000\] m"),
+        ({"mass_range": (1.0, 1e39)}, r"mass_range\[1\] must be in \[1e-6, 1e6\] kg"),
+        ({"friction_range": (0.0, 1e39)}, r"friction_range\[1\] must be in \[0, 10\]"),
+        ({"friction": 1e39}, r"friction must be in \[0, 10\]"),
+        ({"gravity": 1e-300}, r"gravity must be in \[0.001, 10000\] m/s\^2"),
+        ({"distance_weight": 1e308}, r"distance_weight must be in \[0, 1e6\] 1/m"),
+    ],
+)
 def test_bad_kwargs_raise_value_errors_naming_them(kwargs, name):
     with pytest.raises(ValueError, match=name):
         gym.make(ENV_ID, **kwargs)
 
 
-@pytest.mark.parametrize(("kwargs", "name"), [
-    ({"mass": "2"}, "mass"),
-    ({"restitution": True}, "restitution"),
-    ({"release_x_range": "01"}, "release_x_range"),
-    ({"release_x_range": ("0", "1")}, r"release_x_range\[0\]"),
-    ({"target_x_range": 3.0}, "target_x_range"),
-    ({"orientation_weight": "x"}, "orientation_weight"),
-    ({"max_speed": 8 + 0j}, "max_speed"),
-    ({"mass_range": (1, True)}, r"mass_range\[1\]"),
-    ({"observe_dynamics": "yes"}, "observe_dynamics"),
-    ({"target_face": 1}, "target_face"),
-    ({"solver": None}, "solver"),
-    ({"dt": "0.01"}, "dt"),
-    ({"render_fps": "30"}, "render_fps"),
-    ({"render_width": 600.0}, "render_width"),
-    ({"render_mode": 1}, "render_mode"),
-])
+@pytest.mark.parametrize(
+    ("kwargs", "name"),
+    [
+        ({"mass": "2"}, "mass"),
+        ({"restitution": True}, "restitution"),
+        ({"release_x_range": "01"}, "release_x_range"),
+        ({"release_x_range": ("0", "1")}, r"release_x_range\[0\]"),
+        ({"target_x_range": 3.0}, "target_x_range"),
+        ({"orientation_weight": "x"}, "orientation_weight"),
+        ({"max_speed": 8 + 0j}, "max_speed"),
+        ({"mass_range": (1, True)}, r"mass_range\[1\]"),
+        ({"observe_dynamics": "yes"}, "observe_dynamics"),
+        ({"target_face": 1}, "target_face"),
+        ({"solver": None}, "solver"),
+        ({"dt": "0.01"}, "dt"),
+        ({"render_fps": "30"}, "render_fps"),
+        ({"render_width": 600.0}, "render_width"),
+        ({"render_mode": 1}, "render_mode"),
+    ],
+)
 def test_kwargs_of_the_wrong_type_raise_type_errors_naming_them(kwargs, name):
     with pytest.raises(TypeError, match=rf"^{name} must be"):
         BoxTossEnv(**kwargs)
@@ -256,10 +290,21 @@ def test_numpy_numbers_are_accepted():
 
 def test_observation_bounds_are_finite_at_the_ends_of_every_range():
     """The widest corners of the declared ranges still give finite float32 bounds (no inf in observations)."""
-    extreme = dict(box_length=1e3, box_width=1e-4, gravity=1e-3, release_height_range=(600.0, 1e4),
-                   release_x_range=(-1e3, 1e3), target_x_range=(-1e3, 1e3), max_speed=1e3, max_spin=1e4,
-                   max_sim_time=1e4, dt=0.1, mass_range=(1e-6, 1e6), friction_range=(0.0, 10.0),
-                   observe_dynamics=True)
+    extreme = dict(
+        box_length=1e3,
+        box_width=1e-4,
+        gravity=1e-3,
+        release_height_range=(600.0, 1e4),
+        release_x_range=(-1e3, 1e3),
+        target_x_range=(-1e3, 1e3),
+        max_speed=1e3,
+        max_spin=1e4,
+        max_sim_time=1e4,
+        dt=0.1,
+        mass_range=(1e-6, 1e6),
+        friction_range=(0.0, 10.0),
+        observe_dynamics=True,
+    )
     space = gym.make(ENV_ID, **extreme).observation_space
     assert np.isfinite(space.low).all() and np.isfinite(space.high).all() and (space.low < space.high).all()
 
@@ -291,8 +336,11 @@ def test_random_throws_stay_inside_the_observation_space_and_the_ranges():
     successes = 0
     for reset_obs, reset_info, (obs, reward, _, _, info) in rollout(env, 0, random_actions(200)):
         assert space.contains(reset_obs) and space.contains(obs) and math.isfinite(reward)
-        for name, column in (("mass", task.OBS_MASS), ("friction", task.OBS_FRICTION),
-                             ("restitution", task.OBS_RESTITUTION)):
+        for name, column in (
+            ("mass", task.OBS_MASS),
+            ("friction", task.OBS_FRICTION),
+            ("restitution", task.OBS_RESTITUTION),
+        ):
             low, high = getattr(config, f"{name}_range")
             assert low <= reset_info[name] <= high and info[name] == reset_info[name]
             assert reset_obs[column] == obs[column] == np.float32(reset_info[name])  # observed
@@ -316,8 +364,15 @@ def test_a_gentle_throw_lands_where_the_parabola_meets_the_floor():
     """Released level at height h with speed v and no spin, restitution 0 and high friction: the
     box lands flat after t = sqrt(2 (h - W/2) / g) at x = v t and stays there."""
     height, speed, g, half_width = 1.0, 1.2, 9.81, 0.1
-    env = gym.make(ENV_ID, release_x_range=(0.0, 0.0), release_height_range=(height, height),
-                   release_angle_range=(0.0, 0.0), restitution=0.0, friction=1.0, gravity=g)
+    env = gym.make(
+        ENV_ID,
+        release_x_range=(0.0, 0.0),
+        release_height_range=(height, height),
+        release_angle_range=(0.0, 0.0),
+        restitution=0.0,
+        friction=1.0,
+        gravity=g,
+    )
     config = env.unwrapped.config
     low, high = config.launch_angle_range
     action = np.array([2 * speed / config.max_speed - 1, 2 * (0.0 - low) / (high - low) - 1, 0.0])
@@ -420,8 +475,7 @@ def test_record_throws_writes_a_gif(tmp_path):
 
 
 def test_human_mode_plays_headless():
-    env = gym.make(ENV_ID, render_mode="human", render_fps=50, max_sim_time=0.4, render_width=160,
-                   render_height=120)
+    env = gym.make(ENV_ID, render_mode="human", render_fps=50, max_sim_time=0.4, render_width=160, render_height=120)
     env.reset(seed=0)
     env.step(np.array([-0.5, 0.0, 0.0]))
     assert env.render() is None

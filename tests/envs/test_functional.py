@@ -50,8 +50,11 @@ def test_every_argument_is_declared_once_and_read_from_the_declaration():
     assert list(signature.parameters) == ["render_mode", *ENV_DEFAULTS]
     assert all(signature.parameters[a.name].default == a.default for a in ENV_ARGUMENTS)
     assert arguments_table() in inspect.cleandoc(BoxTossEnv.__doc__)
-    assert all(task.ENV_RANGES[name] is a.allowed for name, a in ((a.name, a) for a in ENV_ARGUMENTS)
-               if name in task.ENV_RANGES)
+    assert all(
+        task.ENV_RANGES[name] is a.allowed
+        for name, a in ((a.name, a) for a in ENV_ARGUMENTS)
+        if name in task.ENV_RANGES
+    )
     with pytest.raises(TypeError, match="unexpected keyword argument 'box_lenght'"):
         BoxTossEnv(box_lenght=0.3)
     with pytest.raises(TypeError, match="unexpected keyword argument 'render_fps'"):

@@ -72,8 +72,9 @@ def test_step_reward_is_compute_reward_and_box_toss_reward(target_face):
     assert 20 <= sum(successes) <= 140  # both outcomes are exercised
     achieved, desired = np.array(achieved), np.array(desired)
     np.testing.assert_array_equal(env.unwrapped.compute_reward(achieved, desired, [{}] * len(rewards)), rewards)
-    np.testing.assert_array_equal(env.unwrapped.compute_reward(achieved.reshape(15, 10, 7),
-                                                               desired.reshape(15, 10, 7), None).ravel(), rewards)
+    np.testing.assert_array_equal(
+        env.unwrapped.compute_reward(achieved.reshape(15, 10, 7), desired.reshape(15, 10, 7), None).ravel(), rewards
+    )
     # relabelled as HER does: each landing is a success for its own achieved goal when it came to rest
     relabelled = env.unwrapped.compute_success(achieved, achieved)
     np.testing.assert_array_equal(relabelled, achieved[:, goal.GOAL_AT_REST] > 0.5)
@@ -82,8 +83,9 @@ def test_step_reward_is_compute_reward_and_box_toss_reward(target_face):
 
 
 def test_goal_columns():
-    goals = goal.achieved_goals(np.array([1.0, 2.0, 3.0]), np.array([0.1, -np.pi / 2 - 0.2, 3.0]),
-                                np.array([1.0, 0.0, 1.0]))
+    goals = goal.achieved_goals(
+        np.array([1.0, 2.0, 3.0]), np.array([0.1, -np.pi / 2 - 0.2, 3.0]), np.array([1.0, 0.0, 1.0])
+    )
     np.testing.assert_allclose(goals[:, goal.GOAL_TILT], [0.1, -0.2, 3.0 - np.pi], rtol=1e-6)
     np.testing.assert_array_equal(np.argmax(goals[:, goal.GOAL_FACES], axis=1), [0, 1, 2])
     np.testing.assert_array_equal(goals[:, goal.GOAL_AT_REST], [1.0, 0.0, 1.0])
@@ -158,18 +160,25 @@ def test_her_trains_a_few_hundred_steps(algo):
     import stable_baselines3
     from stable_baselines3 import HerReplayBuffer
 
-    model = getattr(stable_baselines3, algo)("MultiInputPolicy", make(), replay_buffer_class=HerReplayBuffer,
-                                             replay_buffer_kwargs={"n_sampled_goal": 4,
-                                                                   "goal_selection_strategy": "future"},
-                                             learning_starts=50, batch_size=32, policy_kwargs={"net_arch": [32]},
-                                             seed=0, device="cpu")
+    model = getattr(stable_baselines3, algo)(
+        "MultiInputPolicy",
+        make(),
+        replay_buffer_class=HerReplayBuffer,
+        replay_buffer_kwargs={"n_sampled_goal": 4, "goal_selection_strategy": "future"},
+        learning_starts=50,
+        batch_size=32,
+        policy_kwargs={"net_arch": [32]},
+        seed=0,
+        device="cpu",
+    )
     model.learn(200)
     buffer = model.replay_buffer
     assert isinstance(buffer, HerReplayBuffer) and buffer.size() == 200
     # relabelled samples get compute_reward's rewards: with goals that are achieved ones, at-rest landings succeed
     samples = buffer.sample(256)
-    rewards = make().unwrapped.compute_reward(samples.next_observations["achieved_goal"].numpy(),
-                                              samples.observations["desired_goal"].numpy(), None)
+    rewards = make().unwrapped.compute_reward(
+        samples.next_observations["achieved_goal"].numpy(), samples.observations["desired_goal"].numpy(), None
+    )
     np.testing.assert_allclose(samples.rewards.numpy().ravel(), rewards, rtol=1e-5, atol=1e-5)
 
 
@@ -188,10 +197,30 @@ def test_sac_recipe_passes_her_through():
 
 def test_zoo_trains_the_goal_recipe(tmp_path):
     pytest.importorskip("rl_zoo3")
-    train = [sys.executable, "-m", "rl_zoo3.train", "--algo", "sac", "--env", "BoxToss-Goal-v0", "--gym-packages",
-             "box_toss_env", "--conf-file", str(REPO / "agents" / "hyperparams" / "sac.yml"), "-n", "300",
-             "-f", str(tmp_path), "--eval-freq", "-1", "--seed", "1", "-params", "learning_starts:64",
-             "buffer_size:1000"]
+    train = [
+        sys.executable,
+        "-m",
+        "rl_zoo3.train",
+        "--algo",
+        "sac",
+        "--env",
+        "BoxToss-Goal-v0",
+        "--gym-packages",
+        "box_toss_env",
+        "--conf-file",
+        str(REPO / "agents" / "hyperparams" / "sac.yml"),
+        "-n",
+        "300",
+        "-f",
+        str(tmp_path),
+        "--eval-freq",
+        "-1",
+        "--seed",
+        "1",
+        "-params",
+        "learning_starts:64",
+        "buffer_size:1000",
+    ]
     done = subprocess.run(train, cwd=tmp_path, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
     assert (tmp_path / "sac" / "BoxToss-Goal-v0_1" / "BoxToss-Goal-v0.zip").exists()

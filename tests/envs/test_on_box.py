@@ -21,8 +21,7 @@ from box_toss_env.physics.grouped import GroupedSimulator
 
 ENV_ID = "BoxToss-OnBox-v0"
 N = 6
-BASE_INFO_KEYS = {"base_x": float, "base_y": float, "base_angle": float, "height_above_base": float,
-                  "on_base": bool}
+BASE_INFO_KEYS = {"base_x": float, "base_y": float, "base_angle": float, "height_above_base": float, "on_base": bool}
 ON_TOP = np.array([0.6, 0.0, 0.0])
 """A ballistic command by hand: a long flight (0.6 of the flight-time range up), touching down flat on the
 top's centre; it comes to rest on the base for most targets (test_a_throw_onto_the_base_succeeds)."""
@@ -43,11 +42,18 @@ def test_registered_with_a_base_box_and_box_box_contact():
     assert env.observation_space.shape == (task.OBS_SIZE + task.BASE_OBS_SIZE,)
     assert np.all(np.isfinite(env.observation_space.low)) and np.all(np.isfinite(env.observation_space.high))
     assert gym.make(ENV_ID, observe_dynamics=True).observation_space.shape == (
-        task.OBS_SIZE_WITH_DYNAMICS + task.BASE_OBS_SIZE,)
+        task.OBS_SIZE_WITH_DYNAMICS + task.BASE_OBS_SIZE,
+    )
 
 
-@pytest.mark.parametrize("kwargs", [{}, {"observe_dynamics": True, "target_face": "mixed"},
-                                    {"base_length_range": (0.8, 0.8), "base_height_range": (0.3, 0.3)}])
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {},
+        {"observe_dynamics": True, "target_face": "mixed"},
+        {"base_length_range": (0.8, 0.8), "base_height_range": (0.3, 0.3)},
+    ],
+)
 def test_gymnasium_check_env_without_warnings(kwargs):
     from gymnasium.utils.env_checker import check_env
 
@@ -104,8 +110,9 @@ def test_the_engine_gets_each_episodes_base_box():
         assert params[layout.HALF_LENGTH] == 0.5 * info["base_length"]
         assert params[layout.HALF_WIDTH] == 0.5 * info["base_height"]
         assert params[layout.MASS] == task.BASE_DEFAULTS["base_mass"]
-        np.testing.assert_allclose(params[layout.INERTIA],
-                                   params[layout.MASS] * (info["base_length"] ** 2 + info["base_height"] ** 2) / 12)
+        np.testing.assert_allclose(
+            params[layout.INERTIA], params[layout.MASS] * (info["base_length"] ** 2 + info["base_height"] ** 2) / 12
+        )
 
 
 def test_a_base_box_left_alone_stays_where_it_stands():
@@ -146,8 +153,9 @@ def test_a_throw_that_lands_beside_the_base_fails():
         assert info["at_rest"] and not info["success"] and not info["on_base"]
         assert info["final_x"] > info["base_x"] + 0.5 * env.unwrapped._episodes.data[0, task.EP_BASE_LENGTH]
         assert info["height_above_base"] == pytest.approx(-info_base_height(env), abs=2e-3)  # on the floor
-        assert info["distance"] == pytest.approx(math.hypot(info["final_x"] - info["base_x"],
-                                                            info["height_above_base"]))
+        assert info["distance"] == pytest.approx(
+            math.hypot(info["final_x"] - info["base_x"], info["height_above_base"])
+        )
         assert reward < 0.0
 
 
@@ -205,8 +213,9 @@ def test_pickled_env_continues_identically():
     env = gym.make(ENV_ID)
     env.reset(seed=3)
     actions = list(random_actions(2, 2))
-    assert_identical(rollout(pickle.loads(pickle.dumps(env)), None, actions),
-                     rollout(pickle.loads(pickle.dumps(env)), None, actions))
+    assert_identical(
+        rollout(pickle.loads(pickle.dumps(env)), None, actions), rollout(pickle.loads(pickle.dumps(env)), None, actions)
+    )
 
 
 def test_env_i_of_the_batch_is_the_single_env_seeded_the_same_way():
@@ -244,8 +253,9 @@ def test_ballistic_commands_on_the_batch_and_the_sb3_adapter():
     from box_toss_env.wrappers.ballistic import BallisticThrowsVector
     from box_toss_env.wrappers.sb3_adapter import SB3VecEnvAdapter
 
-    venv = SB3VecEnvAdapter(BallisticThrowsVector(gym.make_vec(ENV_ID, num_envs=4,
-                                                               vectorization_mode="vector_entry_point")))
+    venv = SB3VecEnvAdapter(
+        BallisticThrowsVector(gym.make_vec(ENV_ID, num_envs=4, vectorization_mode="vector_entry_point"))
+    )
     venv.seed(0)
     obs = venv.reset()
     assert obs.shape == (4, task.OBS_SIZE + task.BASE_OBS_SIZE)
@@ -281,36 +291,47 @@ def test_ballistic_commands_touch_down_on_the_bases_top():
 
 
 # -- bad settings ------------------------------------------------------------------------------------
-@pytest.mark.parametrize("kwargs, message", [
-    ({"base_height_range": (0.2, 0.7)}, r"base_height_range must not exceed base_length_range\[0\] = 0.6 m"),
-    ({"base_length_range": (-0.1, 1.0)}, r"base_length_range\[0\] must be in \[0.0001, 1000\] m"),
-    ({"base_length_range": (1.0, 0.6)}, "base_length_range must have low <= high"),
-    ({"base_height_range": (0.0, 0.3)}, r"base_height_range\[0\] must be in \[0.0001, 1000\] m"),
-    ({"base_mass": 0.0}, r"base_mass must be in \[1e-6, 1e6\] kg"),
-    ({"target_x_range": (0.5, 3.0)}, "target_x_range must start at 0.823607 m or beyond with base_box=True"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"base_height_range": (0.2, 0.7)}, r"base_height_range must not exceed base_length_range\[0\] = 0.6 m"),
+        ({"base_length_range": (-0.1, 1.0)}, r"base_length_range\[0\] must be in \[0.0001, 1000\] m"),
+        ({"base_length_range": (1.0, 0.6)}, "base_length_range must have low <= high"),
+        ({"base_height_range": (0.0, 0.3)}, r"base_height_range\[0\] must be in \[0.0001, 1000\] m"),
+        ({"base_mass": 0.0}, r"base_mass must be in \[1e-6, 1e6\] kg"),
+        ({"target_x_range": (0.5, 3.0)}, "target_x_range must start at 0.823607 m or beyond with base_box=True"),
+    ],
+)
 def test_bad_base_settings_raise_value_errors_naming_them(kwargs, message):
     with pytest.raises(ValueError, match=message):
         gym.make(ENV_ID, **kwargs)
 
 
-@pytest.mark.parametrize("name, value", [("base_length_range", (0.6, 1.0)), ("base_height_range", (0.2, 0.4)),
-                                         ("base_mass", 5.0)])
+@pytest.mark.parametrize(
+    "name, value", [("base_length_range", (0.6, 1.0)), ("base_height_range", (0.2, 0.4)), ("base_mass", 5.0)]
+)
 def test_base_settings_without_a_base_box_are_refused(name, value):
     with pytest.raises(ValueError, match=f"{name} applies only with base_box=True"):
         gym.make("BoxToss-v0", **{name: value})
 
 
-@pytest.mark.parametrize("kwargs, name", [({"base_box": "yes"}, "base_box"), ({"base_mass": "5"}, "base_mass"),
-                                          ({"base_length_range": "01"}, "base_length_range")])
+@pytest.mark.parametrize(
+    "kwargs, name",
+    [
+        ({"base_box": "yes"}, "base_box"),
+        ({"base_mass": "5"}, "base_mass"),
+        ({"base_length_range": "01"}, "base_length_range"),
+    ],
+)
 def test_base_settings_of_the_wrong_type_raise_type_errors_naming_them(kwargs, name):
     with pytest.raises(TypeError, match=name):
         gym.make(ENV_ID, **kwargs)
 
 
 # -- the other variants are left as they were -----------------------------------------------------------
-@pytest.mark.parametrize("env_id", ["BoxToss-v0", "BoxToss-LongSide-v0", "BoxToss-ShortEnd-v0",
-                                    "BoxToss-ThisSideUp-v0", "BoxToss-Mixed-v0"])
+@pytest.mark.parametrize(
+    "env_id", ["BoxToss-v0", "BoxToss-LongSide-v0", "BoxToss-ShortEnd-v0", "BoxToss-ThisSideUp-v0", "BoxToss-Mixed-v0"]
+)
 def test_other_variants_run_the_floor_only_kernel_with_no_base(env_id):
     env = gym.make(env_id).unwrapped
     assert not env.config.base_box and env.config.bodies_per_env == 1
@@ -338,8 +359,15 @@ def test_a_flat_landing_slides_the_same_whatever_the_phase_of_the_impact_in_the_
     for k in range(12):
         thrown = Box(length=0.4, width=0.2, mass=2.0, position=(0.0, 2.9 + 0.004 * k), velocity=(2.0, 0.0))
         base = Box(length=4.0, width=0.3, mass=10.0, position=(0.0, 0.15))
-        scene = Scene(boxes=(thrown, base), dt=1 / 128, gravity=-9.81, restitution=0.3, friction=0.5,
-                      penalty_stiffness=1e5, boxes_collide=True)
+        scene = Scene(
+            boxes=(thrown, base),
+            dt=1 / 128,
+            gravity=-9.81,
+            restitution=0.3,
+            friction=0.5,
+            penalty_stiffness=1e5,
+            boxes_collide=True,
+        )
         finals.append(simulate(scene, duration=10.0, until_rest=True).final_state[0, layout.X])
     assert max(finals) - min(finals) < 0.02
 

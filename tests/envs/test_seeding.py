@@ -49,8 +49,10 @@ def test_any_integer_type_seeds_the_single_and_the_vector_env_alike(seed):
     np.testing.assert_array_equal(vector[0], reference)
 
 
-@pytest.mark.parametrize("seed, error", [(True, TypeError), (np.bool_(False), TypeError), (-1, ValueError),
-                                         (1.0, TypeError), ("3", TypeError)])
+@pytest.mark.parametrize(
+    "seed, error",
+    [(True, TypeError), (np.bool_(False), TypeError), (-1, ValueError), (1.0, TypeError), ("3", TypeError)],
+)
 def test_bools_negatives_and_non_integers_are_refused_by_both(seed, error):
     with pytest.raises(error, match="seed"):
         BoxTossEnv().reset(seed=seed)
@@ -58,8 +60,9 @@ def test_bools_negatives_and_non_integers_are_refused_by_both(seed, error):
         BoxTossVectorEnv(2).reset(seed=seed)
 
 
-@pytest.mark.parametrize("bad, index", [([10, 11, -1], 2), ([10, True, 12], 1), (np.array([10, -11, 12]), 1),
-                                        ([10, 11, 2.5], 2)])
+@pytest.mark.parametrize(
+    "bad, index", [([10, 11, -1], 2), ([10, True, 12], 1), (np.array([10, -11, 12]), 1), ([10, 11, 2.5], 2)]
+)
 def test_a_bad_seed_list_names_its_index_and_reseeds_nothing(bad, index):
     envs = BoxTossVectorEnv(3)
     envs.reset(seed=[1, 2, 3])
@@ -85,8 +88,13 @@ def test_the_compiled_seeding_of_large_batches_is_numpys_bit_for_bit():
     numpy's own (checked seed by seed on a sample, and whole against the vectorised numpy code), for
     seeds of one and two 32-bit words, for fresh entropy of four words, and written in place."""
     n = random_streams.COMPILED_SEEDING_MIN
-    seeds = np.concatenate([np.arange(n, dtype=np.uint64), np.arange(2**32 - n, 2**32 + n, dtype=np.uint64),
-                            np.array([2**63, 2**64 - 1, 12345678901234567], dtype=np.uint64)])
+    seeds = np.concatenate(
+        [
+            np.arange(n, dtype=np.uint64),
+            np.arange(2**32 - n, 2**32 + n, dtype=np.uint64),
+            np.array([2**63, 2**64 - 1, 12345678901234567], dtype=np.uint64),
+        ]
+    )
     states = seeded_states(seeds)
     np.testing.assert_array_equal(states, pcg64_states(seed_sequence_words(seed_words(seeds))))
     for i in [0, 1, n - 1, n, 2 * n - 1, 2 * n, 3 * n - 1, 3 * n, 3 * n + 1, 3 * n + 2]:
@@ -98,8 +106,12 @@ def test_the_compiled_seeding_of_large_batches_is_numpys_bit_for_bit():
         words = [int(w) for w in entropy[i]]
         bit_generator = np.random.PCG64(np.random.SeedSequence(sum(w << (32 * k) for k, w in enumerate(words))))
         state = bit_generator.state["state"]
-        assert tuple(int(v) for v in compiled[i]) == (state["state"] >> 64, state["state"] & MASK_64,
-                                                      state["inc"] >> 64, state["inc"] & MASK_64)
+        assert tuple(int(v) for v in compiled[i]) == (
+            state["state"] >> 64,
+            state["state"] & MASK_64,
+            state["inc"] >> 64,
+            state["inc"] & MASK_64,
+        )
     streams = RandomStreams(n)
     streams.seed_all(check_seeds(7, n))
     np.testing.assert_array_equal(streams.states, seeded_states(np.arange(7, 7 + n, dtype=np.uint64)))

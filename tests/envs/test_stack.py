@@ -91,8 +91,8 @@ def test_reward_is_the_sum_of_its_terms_and_the_episode_ends_after_the_hand():
         if terminated:
             break
     assert terminated and k == 3 and not info["fell"]
-    tail = observation[stack_task.BODY_SIZE * 4:]
-    assert tail[stack_task.H_IN_HAND] == 0.0 and np.all(tail[:stack_task.H_IN_HAND] == 0.0)
+    tail = observation[stack_task.BODY_SIZE * 4 :]
+    assert tail[stack_task.H_IN_HAND] == 0.0 and np.all(tail[: stack_task.H_IN_HAND] == 0.0)
     with pytest.raises(ResetNeeded):
         env.step(env.action_space.sample())
 
@@ -100,13 +100,13 @@ def test_reward_is_the_sum_of_its_terms_and_the_episode_ends_after_the_hand():
 def test_the_mask_hides_boxes_not_thrown_yet():
     env = gym.make(ENV_ID)
     observation, info = env.reset(seed=2)
-    bodies = observation[:stack_task.BODY_SIZE * 4].reshape(4, stack_task.BODY_SIZE)
-    assert np.all(bodies[:, :stack_task.B_LENGTH] == 0.0) and np.all(bodies[:, stack_task.B_THROWN] == 0.0)
+    bodies = observation[: stack_task.BODY_SIZE * 4].reshape(4, stack_task.BODY_SIZE)
+    assert np.all(bodies[:, : stack_task.B_LENGTH] == 0.0) and np.all(bodies[:, stack_task.B_THROWN] == 0.0)
     np.testing.assert_array_equal(bodies[:, stack_task.B_LENGTH], info["box_lengths"].astype(np.float32))
     observation, *_ = env.step(lob(env, observation))
-    bodies = observation[:stack_task.BODY_SIZE * 4].reshape(4, stack_task.BODY_SIZE)
+    bodies = observation[: stack_task.BODY_SIZE * 4].reshape(4, stack_task.BODY_SIZE)
     assert bodies[0, stack_task.B_THROWN] == 1.0 and bodies[0, stack_task.B_Y] > 0.0
-    assert np.all(bodies[1:, :stack_task.B_LENGTH] == 0.0) and np.all(bodies[1:, stack_task.B_THROWN] == 0.0)
+    assert np.all(bodies[1:, : stack_task.B_LENGTH] == 0.0) and np.all(bodies[1:, stack_task.B_THROWN] == 0.0)
 
 
 @pytest.mark.parametrize("seed", [0, 5, 9])  # (the lob stands the first box on its end for seeds 1 and 3)
@@ -139,8 +139,7 @@ def test_a_box_that_knocks_the_stack_over_ends_the_episode():
     hand = unwrapped._hand[2]
     dx = unwrapped._target_x - hand[stack_task.E_RELEASE_X]
     direction = math.atan2(height - 0.1 - hand[stack_task.E_RELEASE_Y], dx)
-    action = stack_task.actions_of_throws(np.array([8.0]), np.array([direction]), np.array([0.0]),
-                                          unwrapped.config)[0]
+    action = stack_task.actions_of_throws(np.array([8.0]), np.array([direction]), np.array([0.0]), unwrapped.config)[0]
     observation, reward, terminated, truncated, info = env.step(action)
     assert info["fell"] and terminated and not truncated
     assert info["reward_fall"] == -1.0 and info["stack_height"] < height - 0.05
@@ -180,13 +179,21 @@ def test_render_draws_every_box_the_height_and_the_score():
     assert len(env.unwrapped._drawn_scene()["position"]) == 2  # the box thrown and the one in the hand
 
 
-@pytest.mark.parametrize("kwargs, error", [
-    ({"n_boxes": 0}, ValueError), ({"n_boxes": 17}, ValueError), ({"n_boxes": 2.5}, TypeError),
-    ({"box_width_range": (0.2, 0.4), "box_length_range": (0.3, 0.5)}, ValueError),
-    ({"target_x_range": (0.2, 1.0)}, ValueError), ({"target_radius": 0.0}, ValueError),
-    ({"release_height_range": (0.1, 0.2)}, ValueError), ({"render_mode": "video"}, ValueError),
-    ({"success_fraction": 1.5}, ValueError), ({"dt": 0.0}, ValueError),
-])
+@pytest.mark.parametrize(
+    "kwargs, error",
+    [
+        ({"n_boxes": 0}, ValueError),
+        ({"n_boxes": 17}, ValueError),
+        ({"n_boxes": 2.5}, TypeError),
+        ({"box_width_range": (0.2, 0.4), "box_length_range": (0.3, 0.5)}, ValueError),
+        ({"target_x_range": (0.2, 1.0)}, ValueError),
+        ({"target_radius": 0.0}, ValueError),
+        ({"release_height_range": (0.1, 0.2)}, ValueError),
+        ({"render_mode": "video"}, ValueError),
+        ({"success_fraction": 1.5}, ValueError),
+        ({"dt": 0.0}, ValueError),
+    ],
+)
 def test_bad_arguments_are_named(kwargs, error):
     with pytest.raises(error):
         gym.make(ENV_ID, **kwargs)
@@ -251,8 +258,9 @@ def test_the_native_batch_is_the_single_envs_bit_for_bit(threads):
     singles = [single_episodes(30 + i, policy(i), n_steps) for i in range(n)]
     ended = 0
     for step in range(n_steps):
-        actions = np.stack([lob(envs.env, observations[i]) if lobbing[step, i] else random_actions[step, i]
-                            for i in range(n)])
+        actions = np.stack(
+            [lob(envs.env, observations[i]) if lobbing[step, i] else random_actions[step, i] for i in range(n)]
+        )
         observations, rewards, terminated, truncated, info = envs.step(actions)
         assert not truncated.any()
         for i in range(n):

@@ -10,8 +10,13 @@ from box_toss_env.envs import task
 from box_toss_env.envs.box_toss import BoxTossEnv
 from box_toss_env.physics import face_down, layout
 
-CONFIG = BoxTossEnv(target_face="mixed", mass_range=(1.0, 3.0), friction_range=(0.2, 0.9),
-                    restitution_range=(0.0, 0.6), observe_dynamics=True).config
+CONFIG = BoxTossEnv(
+    target_face="mixed",
+    mass_range=(1.0, 3.0),
+    friction_range=(0.2, 0.9),
+    restitution_range=(0.0, 0.6),
+    observe_dynamics=True,
+).config
 
 
 def sample(n, seed=0, config=CONFIG):
@@ -28,12 +33,12 @@ def test_a_batch_is_the_rows_computed_one_by_one():
     obs = task.observe(states, episodes, CONFIG)
     reward, terms, success, distance, error = task.reward_terms(states, at_rest, episodes, CONFIG)
     for i in range(n):
-        one = task.Episodes(episodes.data[i:i + 1].copy())
-        state = task.write_initial_states(np.zeros((1, 6)), one, task.actions_to_throws(actions[i:i + 1], CONFIG))
+        one = task.Episodes(episodes.data[i : i + 1].copy())
+        state = task.write_initial_states(np.zeros((1, 6)), one, task.actions_to_throws(actions[i : i + 1], CONFIG))
         state[:, layout.ANGLE] = states[i, layout.ANGLE]
         np.testing.assert_array_equal(state[0], states[i])
         np.testing.assert_array_equal(task.observe(state, one, CONFIG)[0], obs[i])
-        r, t, s, d, e = task.reward_terms(state, at_rest[i:i + 1], one, CONFIG)
+        r, t, s, d, e = task.reward_terms(state, at_rest[i : i + 1], one, CONFIG)
         assert (r[0], s[0], d[0], e[0]) == (reward[i], success[i], distance[i], error[i])
         assert {k: v[0] for k, v in t.items()} == {k: v[i] for k, v in terms.items()}
 
@@ -41,24 +46,30 @@ def test_a_batch_is_the_rows_computed_one_by_one():
 def test_sampling_stays_in_the_ranges_and_covers_them():
     episodes = sample(4000)
     data = episodes.data
-    for column, (low, high) in ((task.EP_RELEASE_X, CONFIG.release_x_range),
-                                (task.EP_RELEASE_Y, CONFIG.release_height_range),
-                                (task.EP_RELEASE_ANGLE, CONFIG.release_angle_range),
-                                (task.EP_TARGET_X, CONFIG.target_x_range), (task.EP_MASS, CONFIG.mass_range),
-                                (task.EP_FRICTION, CONFIG.friction_range),
-                                (task.EP_RESTITUTION, CONFIG.restitution_range)):
+    for column, (low, high) in (
+        (task.EP_RELEASE_X, CONFIG.release_x_range),
+        (task.EP_RELEASE_Y, CONFIG.release_height_range),
+        (task.EP_RELEASE_ANGLE, CONFIG.release_angle_range),
+        (task.EP_TARGET_X, CONFIG.target_x_range),
+        (task.EP_MASS, CONFIG.mass_range),
+        (task.EP_FRICTION, CONFIG.friction_range),
+        (task.EP_RESTITUTION, CONFIG.restitution_range),
+    ):
         assert low <= data[:, column].min() < low + 0.01 * (high - low)
         assert high - 0.01 * (high - low) < data[:, column].max() <= high
     kinds = {task.describe_target_faces(mask) for mask in episodes.target_faces}
     assert kinds == {"any face", "a long side", "a short end", "face 0", "face 1", "face 2", "face 3"}
 
 
-@pytest.mark.parametrize(("kind", "masks"), [
-    ("any", {(1, 1, 1, 1)}),
-    ("long_side", {(1, 0, 1, 0)}),
-    ("short_end", {(0, 1, 0, 1)}),
-    ("exact", {(1, 0, 0, 0), (0, 1, 0, 0), (0, 0, 1, 0), (0, 0, 0, 1)}),
-])
+@pytest.mark.parametrize(
+    ("kind", "masks"),
+    [
+        ("any", {(1, 1, 1, 1)}),
+        ("long_side", {(1, 0, 1, 0)}),
+        ("short_end", {(0, 1, 0, 1)}),
+        ("exact", {(1, 0, 0, 0), (0, 1, 0, 0), (0, 0, 1, 0), (0, 0, 0, 1)}),
+    ],
+)
 def test_target_kinds(kind, masks):
     config = BoxTossEnv(target_face=kind).config
     drawn = {tuple(int(v) for v in mask) for mask in sample(200, config=config).target_faces}
@@ -82,16 +93,19 @@ def test_faces_down_agree_with_the_engine():
     assert task.faces_down(angles).tolist() == [face_down(a) for a in angles]
 
 
-@pytest.mark.parametrize(("angle", "faces", "error"), [
-    (0.0, (1, 0, 0, 0), 0.0),  # face 0 flat down
-    (-0.5 * math.pi, (0, 1, 0, 0), 0.0),  # turned clockwise a quarter: face 1 (+x) down
-    (math.pi, (0, 0, 1, 0), 0.0),  # upside down: face 2 down
-    (0.5 * math.pi, (0, 0, 0, 1), 0.0),
-    (0.1, (1, 0, 0, 0), 0.1),
-    (0.0, (0, 0, 1, 0), math.pi),  # the target face is up
-    (0.0, (0, 1, 0, 1), 0.5 * math.pi),  # on a long side, a short end wanted
-    (0.3 + 4 * math.pi, (0, 1, 0, 1), 0.5 * math.pi - 0.3),
-])
+@pytest.mark.parametrize(
+    ("angle", "faces", "error"),
+    [
+        (0.0, (1, 0, 0, 0), 0.0),  # face 0 flat down
+        (-0.5 * math.pi, (0, 1, 0, 0), 0.0),  # turned clockwise a quarter: face 1 (+x) down
+        (math.pi, (0, 0, 1, 0), 0.0),  # upside down: face 2 down
+        (0.5 * math.pi, (0, 0, 0, 1), 0.0),
+        (0.1, (1, 0, 0, 0), 0.1),
+        (0.0, (0, 0, 1, 0), math.pi),  # the target face is up
+        (0.0, (0, 1, 0, 1), 0.5 * math.pi),  # on a long side, a short end wanted
+        (0.3 + 4 * math.pi, (0, 1, 0, 1), 0.5 * math.pi - 0.3),
+    ],
+)
 def test_orientation_error(angle, faces, error):
     value = task.orientation_errors(np.array([angle]), np.array([faces], dtype=float))[0]
     assert value == pytest.approx(error, abs=1e-12)
@@ -126,8 +140,9 @@ def test_check_actions():
 def test_throws_to_actions_inverts_actions_to_throws():
     config = BoxTossEnv().config
     actions = np.random.default_rng(4).uniform(-1, 1, (50, 3))
-    np.testing.assert_allclose(task.throws_to_actions(task.actions_to_throws(actions, config), config), actions,
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        task.throws_to_actions(task.actions_to_throws(actions, config), config), actions, atol=1e-12
+    )
 
 
 def test_the_ranges_page_lists_the_env_ranges():

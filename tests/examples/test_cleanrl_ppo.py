@@ -34,9 +34,24 @@ def test_cleanrl_ppo_on_a_tiny_budget_beats_random_and_the_initial_policy():
     """8,192 throws with small updates (256 throws each, constant learning rate 1e-3): 88-96% success
     and 0.03-0.05 m mean distance over seeds 0-3 (about 6 s). The untrained policy throws the mean
     action 0 (7.5% success, 0.77 m on these targets); uniform random actions 2-3% and 2.2 m."""
-    command = [sys.executable, str(ROOT / "examples" / "cleanrl_ppo.py"), "--total-timesteps", "8192",
-               "--num-steps", "8", "--num-minibatches", "4", "--learning-rate", "1e-3", "--anneal-lr", "false",
-               "--seed", "0", "--log-every", "0"]
+    command = [
+        sys.executable,
+        str(ROOT / "examples" / "cleanrl_ppo.py"),
+        "--total-timesteps",
+        "8192",
+        "--num-steps",
+        "8",
+        "--num-minibatches",
+        "4",
+        "--learning-rate",
+        "1e-3",
+        "--anneal-lr",
+        "false",
+        "--seed",
+        "0",
+        "--log-every",
+        "0",
+    ]
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))}
     result = subprocess.run(command, capture_output=True, text=True, timeout=120, env=env, cwd=ROOT)
     assert result.returncode == 0, result.stderr[-3000:]
@@ -79,8 +94,9 @@ def test_final_obs_is_normalised_with_the_same_stats_and_does_not_update_them():
     raw_obs, _, _, _, raw_info = raw_envs.step(actions)
     assert envs.obs_rms.count == pytest.approx(count + N)  # obs only, not final_obs
     scale = np.sqrt(envs.obs_rms.var + envs.epsilon)
-    np.testing.assert_allclose(info["final_obs"], (raw_info["final_obs"] - envs.obs_rms.mean) / scale,
-                               rtol=1e-5, atol=1e-5)
+    np.testing.assert_allclose(
+        info["final_obs"], (raw_info["final_obs"] - envs.obs_rms.mean) / scale, rtol=1e-5, atol=1e-5
+    )
     np.testing.assert_allclose(obs, (raw_obs - envs.obs_rms.mean) / scale, rtol=1e-5, atol=1e-5)
     assert info["_final_obs"].all() and info["final_info"]["success"].shape == (N,)
 
@@ -115,8 +131,9 @@ def test_clip_and_gymnasium_sync_env_final_obs():
     envs.reset(seed=0)
     obs, _, _, _, info = envs.step(random_actions(np.random.default_rng(3)))
     assert np.abs(obs).max() <= 0.5 and np.abs(info["final_obs"]).max() <= 0.5
-    sync = gym.make_vec("BoxToss-v0", num_envs=3, vectorization_mode="sync",
-                        vector_kwargs={"autoreset_mode": AutoresetMode.SAME_STEP})
+    sync = gym.make_vec(
+        "BoxToss-v0", num_envs=3, vectorization_mode="sync", vector_kwargs={"autoreset_mode": AutoresetMode.SAME_STEP}
+    )
     wrapped = NormalizeObservation(sync)
     wrapped.reset(seed=0)
     _, _, _, _, info = wrapped.step(random_actions(np.random.default_rng(4), 3))
@@ -166,8 +183,13 @@ def test_gymnasium_observation_wrappers_refuse_same_step(name):
 def test_make_vec_wrappers_argument_needs_sync_or_async():
     with pytest.raises(gym.error.Error, match="wrappers"):
         gym.make_vec("BoxToss-v0", num_envs=2, wrappers=[gym.wrappers.ClipAction])
-    envs = gym.make_vec("BoxToss-v0", num_envs=2, vectorization_mode="sync", wrappers=[gym.wrappers.ClipAction],
-                        vector_kwargs={"autoreset_mode": AutoresetMode.SAME_STEP})
+    envs = gym.make_vec(
+        "BoxToss-v0",
+        num_envs=2,
+        vectorization_mode="sync",
+        wrappers=[gym.wrappers.ClipAction],
+        vector_kwargs={"autoreset_mode": AutoresetMode.SAME_STEP},
+    )
     envs.reset(seed=0)
     _, _, terminated, _, info = envs.step(np.full((2, 3), 5.0, dtype=np.float32))  # clipped to 1
     assert terminated.all() and info["_final_obs"].all()

@@ -9,8 +9,11 @@ def energy(scene: Scene, trajectory: Trajectory, body: int = 0) -> np.ndarray:
     """Kinetic plus potential energy of one body at every recorded step [J]."""
     box = scene.boxes[body]
     v = trajectory.velocity[:, body]
-    return (0.5 * box.mass * (v**2).sum(axis=1) + 0.5 * box.inertia * trajectory.spin[:, body] ** 2
-            - box.mass * scene.gravity * trajectory.position[:, body, 1])
+    return (
+        0.5 * box.mass * (v**2).sum(axis=1)
+        + 0.5 * box.inertia * trajectory.spin[:, body] ** 2
+        - box.mass * scene.gravity * trajectory.position[:, body, 1]
+    )
 
 
 def lowest_corner_height(scene: Scene, trajectory: Trajectory, body: int = 0) -> np.ndarray:

@@ -45,12 +45,16 @@ def compiled_and_interpreted(env_id: str, throws: int, **env_kwargs):
     return results
 
 
-@pytest.mark.parametrize("env_id, throws, env_kwargs", [
-    ("BoxToss-v0", 200, {}),
-    ("BoxToss-ThisSideUp-v0", 100, {"friction": 0.0}),
-    ("BoxToss-v0", 20, {"solver": "seed", "dt": 1 / 1024}),
-    ("BoxToss-OnBox-v0", 6, {}),
-], ids=["robust", "robust-frictionless", "seed", "boxes-collide"])
+@pytest.mark.parametrize(
+    "env_id, throws, env_kwargs",
+    [
+        ("BoxToss-v0", 200, {}),
+        ("BoxToss-ThisSideUp-v0", 100, {"friction": 0.0}),
+        ("BoxToss-v0", 20, {"solver": "seed", "dt": 1 / 1024}),
+        ("BoxToss-OnBox-v0", 6, {}),
+    ],
+    ids=["robust", "robust-frictionless", "seed", "boxes-collide"],
+)
 def test_the_interpreted_copy_gives_the_compiled_results_bit_for_bit(env_id, throws, env_kwargs):
     (state_c, stats_c), (state_i, stats_i) = compiled_and_interpreted(env_id, throws, **env_kwargs)
     assert np.array_equal(state_c, state_i)
@@ -113,16 +117,20 @@ def test_interpreted_only_while_a_worker_compiles_and_for_small_batches(monkeypa
 def test_a_batch_onto_boxes_runs_interpreted_only_up_to_its_own_smaller_size(monkeypatch):
     monkeypatch.setenv(background_compile.SWITCH, "1")
     started = []
-    monkeypatch.setattr(background_compile, "start", lambda kernel, recipe, args: started.append(recipe)
-                        or RunningWorker())
+    monkeypatch.setattr(
+        background_compile, "start", lambda kernel, recipe, args: started.append(recipe) or RunningWorker()
+    )
     monkeypatch.setattr(background_compile, "interpreted_copy", lambda kernel: lambda *args: None)
     envs = grouped.MAX_INTERPRETED_GROUPED_BODIES // 2
     small = gym.make_vec("BoxToss-OnBox-v0", num_envs=envs)
     small.reset(seed=0)
     small.step(np.zeros((envs, 3), np.float32))
     assert small.unwrapped.simulator.interpreted
-    assert ("box_toss_env.physics.grouped", "make_grouped_kernel",  # how the worker rebuilds it
-            {"solver": "robust", "use_impulses": True, "use_penalty": True, "use_friction": True}) in started
+    assert (
+        "box_toss_env.physics.grouped",
+        "make_grouped_kernel",  # how the worker rebuilds it
+        {"solver": "robust", "use_impulses": True, "use_penalty": True, "use_friction": True},
+    ) in started
     module, factory, kwargs = started[-1]
     assert getattr(importlib.import_module(module), factory)(**kwargs) is small.unwrapped.simulator.kernel
     simulator = grouped.GroupedSimulator(small.unwrapped.simulator.flags, 2, start_interpreted=True)
@@ -173,10 +181,12 @@ PROBE = textwrap.dedent("""
 
 def test_a_cold_env_throws_at_once_and_then_runs_the_kernel_a_worker_compiled(tmp_path):
     env = {key: value for key, value in os.environ.items() if key not in ("NUMBA_DISABLE_JIT", "PYTHONPATH")}
-    env.update(NUMBA_CACHE_DIR=str(tmp_path / "cache"), PYTHONPATH=str(PACKAGE.parent),
-               **{background_compile.SWITCH: "1"})
-    done = subprocess.run([sys.executable, "-c", PROBE], env=env, cwd=tmp_path, capture_output=True, text=True,
-                          timeout=900)
+    env.update(
+        NUMBA_CACHE_DIR=str(tmp_path / "cache"), PYTHONPATH=str(PACKAGE.parent), **{background_compile.SWITCH: "1"}
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", PROBE], env=env, cwd=tmp_path, capture_output=True, text=True, timeout=900
+    )
     assert done.returncode == 0, done.stderr
     result = json.loads(done.stdout.strip().splitlines()[-1])
     assert result["interpreted"] and result["batch_interpreted"] and result["compiled_here"] == 0

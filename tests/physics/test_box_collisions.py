@@ -26,8 +26,11 @@ def masses(scene):
 def energy(scene, states):
     """Kinetic + potential energy of the scene in each row of ``states`` (T, n, 6) [J]."""
     m, inertia = masses(scene)
-    return (0.5 * m * (states[..., 3] ** 2 + states[..., 4] ** 2) + 0.5 * inertia * states[..., 5] ** 2
-            - scene.gravity * m * states[..., 1]).sum(-1)
+    return (
+        0.5 * m * (states[..., 3] ** 2 + states[..., 4] ** 2)
+        + 0.5 * inertia * states[..., 5] ** 2
+        - scene.gravity * m * states[..., 1]
+    ).sum(-1)
 
 
 def drift(scene, states):
@@ -113,16 +116,30 @@ def cross(r, v):
 def test_a_frictionless_corner_on_face_impact_matches_the_two_body_formula(solver, restitution):
     scene = scenes.flight_collision(gap=1e-3, restitution=restitution, solver=solver, use_penalty=False)
     a, b = scene.boxes
-    corners = [(math.cos(a.angle) * sx * 0.5 - math.sin(a.angle) * sy * 0.25,
-                math.sin(a.angle) * sx * 0.5 + math.cos(a.angle) * sy * 0.25) for sx in (-1, 1) for sy in (-1, 1)]
+    corners = [
+        (
+            math.cos(a.angle) * sx * 0.5 - math.sin(a.angle) * sy * 0.25,
+            math.sin(a.angle) * sx * 0.5 + math.cos(a.angle) * sy * 0.25,
+        )
+        for sx in (-1, 1)
+        for sy in (-1, 1)
+    ]
     r1 = np.array(max(corners))  # the right-most corner hits B's left face, normal n = (-1, 0) onto A
     r2 = np.array(a.position) + r1 - np.array(b.position)
     n = np.array([-1.0, 0.0])
     u_rel = np.array(a.velocity) - np.array(b.velocity)
-    j = -(1 + restitution) * u_rel @ n / (1 / a.mass + 1 / b.mass + cross(r1, n) ** 2 / a.inertia
-                                          + cross(r2, n) ** 2 / b.inertia)
-    expected = np.array([[*(np.array(a.velocity) + j * n / a.mass), j * cross(r1, n) / a.inertia],
-                         [*(-j * n / b.mass), -j * cross(r2, n) / b.inertia]])
+    j = (
+        -(1 + restitution)
+        * u_rel
+        @ n
+        / (1 / a.mass + 1 / b.mass + cross(r1, n) ** 2 / a.inertia + cross(r2, n) ** 2 / b.inertia)
+    )
+    expected = np.array(
+        [
+            [*(np.array(a.velocity) + j * n / a.mass), j * cross(r1, n) / a.inertia],
+            [*(-j * n / b.mass), -j * cross(r2, n) / b.inertia],
+        ]
+    )
     result = simulate(scene, steps=3)
     np.testing.assert_allclose(result.final_state[:, 3:], expected, rtol=0, atol=1e-12)  # measured: 7e-15
 
@@ -152,7 +169,7 @@ def test_a_touching_row_struck_with_e_1_moves_as_one_body():
     momentum = states[..., 3] @ m
     np.testing.assert_allclose(momentum, m[0] * 1.0, rtol=1e-9, atol=0)  # measured: 0 (exactly 2.0 kg m/s)
     e = energy(scene, states)
-    kinetic = 0.5 * m[0] * 1.0 ** 2  # [J] all the scene's kinetic energy, the striker's
+    kinetic = 0.5 * m[0] * 1.0**2  # [J] all the scene's kinetic energy, the striker's
     assert e.max() <= e[0] * (1 + 1e-12)  # measured: no rise
     assert e[-1] >= e[0] - 1e-9 * kinetic  # measured: 6.9e-12 of the kinetic energy lost
     assert result.max_penetration.max() < 1e-9  # measured: 1.3e-13 m
@@ -186,8 +203,9 @@ def test_no_tunnelling_in_a_fast_body_body_impact(speed):
 def test_a_fast_box_dropped_on_a_resting_one_stays_above_it():
     scene = scenes.drop_on_box(offset=0.0, angle=0.0)
     lower, upper = scene.boxes
-    scene = scene.replace(boxes=(lower, Box(length=0.4, width=0.2, mass=2.0, position=(0.0, 2.0),
-                                            velocity=(0.0, -300.0))))
+    scene = scene.replace(
+        boxes=(lower, Box(length=0.4, width=0.2, mass=2.0, position=(0.0, 2.0), velocity=(0.0, -300.0)))
+    )
     result = simulate(scene, duration=2.0)
     assert result.final_state[1, 1] > result.final_state[0, 1] + 0.19
     assert result.final_state[0, 1] > 0.09
@@ -200,8 +218,10 @@ def test_a_box_struck_from_above_is_not_pushed_into_the_floor(speed):
     # went 6 mm (50 m/s) and 1.3 cm (200 m/s) into the floor at dt 2^-11
     angle = 0.3
     reach_y = 0.2 * math.sin(angle) + 0.1 * math.cos(angle)
-    boxes = (Box(length=0.4, width=0.2, mass=2.0, position=(0.0, 0.1)),
-             Box(length=0.4, width=0.2, mass=2.0, position=(0.05, 0.7 + reach_y), angle=angle, velocity=(0.0, -speed)))
+    boxes = (
+        Box(length=0.4, width=0.2, mass=2.0, position=(0.0, 0.1)),
+        Box(length=0.4, width=0.2, mass=2.0, position=(0.05, 0.7 + reach_y), angle=angle, velocity=(0.0, -speed)),
+    )
     scene = Scene(boxes=boxes, boxes_collide=True, restitution=0.0, friction=0.5, penalty_stiffness=1e5, dt=2.0**-11)
     states = simulate(scene, duration=0.25, record=True).trajectory.state
     lower = states[:, 0]
@@ -240,8 +260,9 @@ def test_friction_never_reverses_sliding_on_a_box():
     # a box sliding on a long resting box: its slip relative to the lower box stops, never turns round
     lower = Box(length=4.0, width=0.2, mass=20.0, position=(0.0, 0.1))
     upper = Box(length=0.4, width=0.2, mass=2.0, position=(-1.0, 0.3), velocity=(2.0, 0.0))
-    scene = Scene(boxes=(lower, upper), boxes_collide=True, friction=0.3, restitution=0.0, penalty_stiffness=1e5,
-                  dt=1 / 256)
+    scene = Scene(
+        boxes=(lower, upper), boxes_collide=True, friction=0.3, restitution=0.0, penalty_stiffness=1e5, dt=1 / 256
+    )
     states = simulate(scene, duration=2.0, record=True).trajectory.state
     slip = states[:, 1, 3] - states[:, 0, 3]
     assert slip[0] > 0 and np.all(slip >= -1e-10) and abs(slip[-1]) < 1e-9  # measured: -1.3e-11 at worst
@@ -270,8 +291,9 @@ def test_a_colliding_scene_runs_its_boxes_together_whatever_parallel_says():
     scene = scenes.pile(n=10)
     one = Simulator.for_scene(scene, parallel=True)
     assert one.shares == 1
-    assert np.array_equal(simulate(scene, duration=0.5).final_state,
-                          simulate(scene, duration=0.5, threads=2).final_state)
+    assert np.array_equal(
+        simulate(scene, duration=0.5).final_state, simulate(scene, duration=0.5, threads=2).final_state
+    )
 
 
 def test_sleeping_a_resting_stack():
@@ -344,8 +366,9 @@ def test_non_colliding_scenes_compile_no_pair_finding(tmp_path):
     # an empty numba cache: every stage a kernel calls is compiled (a kernel loaded from the cache would
     # leave its stages' dispatchers empty whatever it calls)
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
-    out = subprocess.run([sys.executable, "-c", NOT_COMPILED_PROBE], capture_output=True, text=True, check=True,
-                         env=env)
+    out = subprocess.run(
+        [sys.executable, "-c", NOT_COMPILED_PROBE], capture_output=True, text=True, check=True, env=env
+    )
     compiled, after = json.loads(out.stdout.strip().splitlines()[-1])
     assert compiled == []
     assert "find_contacts" in after  # the probe sees the compilations when they happen

@@ -32,8 +32,10 @@ def all_pairs(pose, bound, reach, include, moving):
             if not (include[i] and include[j] and (moving[i] or moving[j])):
                 continue
             margin = reach[i] + reach[j]
-            if (abs(pose[j, 0] - pose[i, 0]) <= bound[i, 0] + bound[j, 0] + margin
-                    and abs(pose[j, 1] - pose[i, 1]) <= bound[i, 1] + bound[j, 1] + margin):
+            if (
+                abs(pose[j, 0] - pose[i, 0]) <= bound[i, 0] + bound[j, 0] + margin
+                and abs(pose[j, 1] - pose[i, 1]) <= bound[i, 1] + bound[j, 1] + margin
+            ):
                 keys.append(i * n + j)
     return keys
 
@@ -74,8 +76,9 @@ def test_a_pile_gives_the_same_states_whichever_order_the_sweep_starts_from():
 def test_a_resting_box_falls_asleep_and_wakes_when_struck():
     lower = Box(length=0.4, width=0.2, mass=2.0, position=(0.0, 0.1))
     upper = Box(length=0.4, width=0.2, mass=2.0, position=(0.0, 1.3))  # 1 m above it: lands after 0.45 s
-    scene = Scene(boxes=(lower, upper), boxes_collide=True, restitution=0.0, friction=0.5, penalty_stiffness=1e5,
-                  dt=1 / 256)
+    scene = Scene(
+        boxes=(lower, upper), boxes_collide=True, restitution=0.0, friction=0.5, penalty_stiffness=1e5, dt=1 / 256
+    )
     result = simulate(scene, duration=3.0, until_rest=True, record=True)
     states = result.trajectory.state
     landing = math.sqrt(2 * 1.0 / 9.81)
@@ -89,7 +92,7 @@ def test_a_resting_box_falls_asleep_and_wakes_when_struck():
     # the lower box lay still until the upper one arrived, and once asleep did not move at all
     before = states[: int(0.9 * landing * 256), 0]
     assert np.abs(before[:, :3] - states[0, 0, :3]).max() < 1e-12
-    asleep = before[int(0.15 * 256):]
+    asleep = before[int(0.15 * 256) :]
     assert np.all(asleep == asleep[0]) and np.all(asleep[:, 3:] == 0.0)
 
 
@@ -108,8 +111,9 @@ def test_sleeping_is_per_island():
 def test_free_flight_beside_a_sleeping_box_is_the_exact_parabola():
     lower = Box(length=0.4, width=0.2, mass=2.0, position=(0.0, 0.1))
     thrown = Box(length=0.4, width=0.2, mass=2.0, position=(-3.0, 1.5), angle=0.3, velocity=(2.0, 3.0), spin=4.0)
-    scene = Scene(boxes=(lower, thrown), boxes_collide=True, restitution=0.3, friction=0.5, penalty_stiffness=1e5,
-                  dt=1 / 128)
+    scene = Scene(
+        boxes=(lower, thrown), boxes_collide=True, restitution=0.3, friction=0.5, penalty_stiffness=1e5, dt=1 / 128
+    )
     states = simulate(scene, duration=0.5, until_rest=True, record=True).trajectory.state
     t = np.arange(len(states)) / 128
     expected_y = 1.5 + 3.0 * t - 0.5 * 9.81 * t**2
@@ -133,8 +137,9 @@ def test_a_box_no_other_can_reach_moves_as_it_does_on_the_floor_alone():
     assert beside.first_contact_time[0] == pytest.approx(alone.first_contact_time[0], abs=1e-12)
     steps = len(alone.trajectory.state)
     np.testing.assert_allclose(beside.trajectory.state[:steps, 0], alone.trajectory.state[:, 0], atol=1e-9)
-    np.testing.assert_array_equal(beside.trajectory.state[:, 1, :3], np.broadcast_to([10.0, 0.1, 0.0], (len(
-        beside.trajectory.state), 3)))
+    np.testing.assert_array_equal(
+        beside.trajectory.state[:, 1, :3], np.broadcast_to([10.0, 0.1, 0.0], (len(beside.trajectory.state), 3))
+    )
 
 
 def test_bodies_placed_at_rest_sleep_from_the_start_and_others_do_not():
@@ -148,8 +153,9 @@ def test_bodies_placed_at_rest_sleep_from_the_start_and_others_do_not():
     assert result.rest_time[2] == 0.0 and result.n_steps[2] == 0
     assert np.all(result.rest_time[[0, 1, 3, 4]] >= scene.sleep_time)
     assert np.array_equal(result.final_state[2], lone_state := np.array([3.0, 0.1, 0.0, 0.0, 0.0, 0.0]))
-    assert np.array_equal(simulate(scene.replace(boxes=(lone,)), duration=1.0, until_rest=True).final_state[0],
-                          lone_state)
+    assert np.array_equal(
+        simulate(scene.replace(boxes=(lone,)), duration=1.0, until_rest=True).final_state[0], lone_state
+    )
     # without until_rest nothing sleeps: the same box is stepped
     assert simulate(scene, duration=0.2).n_steps[2] > 0
 
@@ -160,8 +166,9 @@ def test_boxes_sliding_at_one_another_are_handed_to_the_substeps_before_they_mee
     # them apart; they must meet in the colliding substeps: no overlap, the left box stays left, momentum turned
     left = Box(length=0.4, width=0.2, mass=2.0, position=(-1.0, 0.1), velocity=(speed, 0.0))
     right = Box(length=0.4, width=0.2, mass=1.0, position=(1.0, 0.1), velocity=(-speed, 0.0))
-    scene = Scene(boxes=(left, right), boxes_collide=True, restitution=0.5, friction=0.02, penalty_stiffness=1e5,
-                  dt=1 / 128)
+    scene = Scene(
+        boxes=(left, right), boxes_collide=True, restitution=0.5, friction=0.02, penalty_stiffness=1e5, dt=1 / 128
+    )
     result = simulate(scene, duration=3.0, until_rest=True, record=True)
     states = result.trajectory.state
     gap = states[:, 1, 0] - states[:, 0, 0] - 0.4
@@ -169,7 +176,7 @@ def test_boxes_sliding_at_one_another_are_handed_to_the_substeps_before_they_mee
     assert result.n_impacts[0] == result.n_impacts[1] == 1  # they met once (starting on the floor, no other impact)
     met = int(result.impacts[1][0, 0] * 128)
     assert gap[met] < 2 * speed / 128 + 1e-3  # within a step's travel of one another then
-    assert np.all(states[met + 1:, 1, 3] >= 0.0) and states[met + 1, 1, 3] > 0.0  # the heavier box drove it back
+    assert np.all(states[met + 1 :, 1, 3] >= 0.0) and states[met + 1, 1, 3] > 0.0  # the heavier box drove it back
 
 
 @pytest.mark.parametrize("name", ["flat_drop", "corner_impact", "toss", "bouncing", "slide"])

@@ -87,20 +87,30 @@ STAGE_COUNT_PROBE = textwrap.dedent("""
 def test_every_stage_is_compiled_once_for_plain_argument_types(tmp_path):
     """With an empty cache, every solver and recording variant: each stage compiles once, whatever
     the constants its callers pass (a corner index, True) and whichever kernel calls it."""
-    done = subprocess.run([sys.executable, "-c", STAGE_COUNT_PROBE], capture_output=True, text=True, timeout=600,
-                          env=probe_env(PYTHONPATH=PACKAGE.parent, NUMBA_CACHE_DIR=tmp_path), cwd=tmp_path)
+    done = subprocess.run(
+        [sys.executable, "-c", STAGE_COUNT_PROBE],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        env=probe_env(PYTHONPATH=PACKAGE.parent, NUMBA_CACHE_DIR=tmp_path),
+        cwd=tmp_path,
+    )
     assert done.returncode == 0, done.stderr
     counts = json.loads(done.stdout.strip().splitlines()[-1])
-    stages = {f"{value.py_func.__module__}.{value.py_func.__qualname__}" for module in STAGE_MODULES
-              for value in vars(module).values()
-              if isinstance(value, EngineDispatcher) and value.targetoptions["inline"] != "always"}
+    stages = {
+        f"{value.py_func.__module__}.{value.py_func.__qualname__}"
+        for module in STAGE_MODULES
+        for value in vars(module).values()
+        if isinstance(value, EngineDispatcher) and value.targetoptions["inline"] != "always"
+    }
     assert len(stages) > 20 and stages <= set(counts)
     assert {name: counts[name] for name in stages if counts[name] != 1} == {}
     variants = {name: count for name, count in counts.items() if "_kernel.<locals>.run_v" in name}
     assert set(variants.values()) == {1}  # each variant compiled once, under a name of its own
     assert collections.Counter(name.rsplit("_v", 1)[0] for name in variants) == {
         "box_toss_env.physics.robust_solver.make_robust_kernel.<locals>.run": 4,
-        "box_toss_env.physics.reference_solver.make_reference_kernel.<locals>.run": 4}
+        "box_toss_env.physics.reference_solver.make_reference_kernel.<locals>.run": 4,
+    }
 
 
 def test_stages_have_no_python_wrapper_and_kernels_release_the_gil():
@@ -108,9 +118,15 @@ def test_stages_have_no_python_wrapper_and_kernels_release_the_gil():
     # and no reference counting: a stage allocates nothing, so the counts of its caller's arrays need no upkeep
     # (only the broadphase's pair search, which sorts, keeps it)
     from box_toss_env.physics import broadphase, colliding_solver, colliding_step
-    stages = [value for module in (*STAGE_MODULES, broadphase, colliding_solver, colliding_step)
-              for value in vars(module).values() if isinstance(value, EngineDispatcher)
-              and value.py_func.__module__ == module.__name__ and value.targetoptions.get("no_cpython_wrapper")]
+
+    stages = [
+        value
+        for module in (*STAGE_MODULES, broadphase, colliding_solver, colliding_step)
+        for value in vars(module).values()
+        if isinstance(value, EngineDispatcher)
+        and value.py_func.__module__ == module.__name__
+        and value.targetoptions.get("no_cpython_wrapper")
+    ]
     counted = sorted(stage.py_func.__name__ for stage in stages if stage.targetoptions["_nrt"])
     assert len(stages) > 40 and counted == ["candidate_pairs"]
     assert make_kernel(KernelFlags()).targetoptions["nogil"]
@@ -148,10 +164,16 @@ def test_a_kernel_calls_its_own_variant_whatever_other_variants_the_process_load
     from numba; a process that loaded one and then a grouped kernel calling the other ran the first's
     body (numba issue #10486; here the grouped kernel moved the boxes as if without penalty). Each
     variant has a name of its own now (``compilation.name_variant``)."""
+
     def run(step: str, cache: Path) -> str:
-        done = subprocess.run([sys.executable, "-c", VARIANT_PROBE, step], capture_output=True, text=True,
-                              timeout=600, env=probe_env(PYTHONPATH=PACKAGE.parent, NUMBA_CACHE_DIR=cache,
-                                                         BOX_TOSS_ENV_START_INTERPRETED=0), cwd=tmp_path)
+        done = subprocess.run(
+            [sys.executable, "-c", VARIANT_PROBE, step],
+            capture_output=True,
+            text=True,
+            timeout=600,
+            env=probe_env(PYTHONPATH=PACKAGE.parent, NUMBA_CACHE_DIR=cache, BOX_TOSS_ENV_START_INTERPRETED=0),
+            cwd=tmp_path,
+        )
         assert done.returncode == 0, done.stderr
         return done.stdout.strip()
 
@@ -159,9 +181,15 @@ def test_a_kernel_calls_its_own_variant_whatever_other_variants_the_process_load
         run(step, tmp_path)
     alone = run("grouped", tmp_path)  # compiles the grouped kernel into the cache
     assert run("both", tmp_path) == alone  # loads it from there after the other variant
-    kernels = {flags: make_kernel(flags).py_func.__qualname__ for flags in (
-        KernelFlags(), KernelFlags(use_friction=False), KernelFlags(solver="seed", boxes_collide=True),
-        KernelFlags(solver="seed", boxes_collide=True, use_penalty=False))}
+    kernels = {
+        flags: make_kernel(flags).py_func.__qualname__
+        for flags in (
+            KernelFlags(),
+            KernelFlags(use_friction=False),
+            KernelFlags(solver="seed", boxes_collide=True),
+            KernelFlags(solver="seed", boxes_collide=True, use_penalty=False),
+        )
+    }
     assert len(set(kernels.values())) == len(kernels)
 
 
@@ -193,8 +221,11 @@ def run_probe(env: dict, cwd: Path) -> tuple[dict, str]:
 
 
 def probe_env(**overrides) -> dict:
-    env = {key: value for key, value in os.environ.items()
-           if key not in ("NUMBA_CACHE_DIR", "XDG_CACHE_HOME", "PYTHONPATH", "NUMBA_DISABLE_JIT")}
+    env = {
+        key: value
+        for key, value in os.environ.items()
+        if key not in ("NUMBA_CACHE_DIR", "XDG_CACHE_HOME", "PYTHONPATH", "NUMBA_DISABLE_JIT")
+    }
     env["PYTHONDONTWRITEBYTECODE"] = "1"
     env.update({key: str(value) for key, value in overrides.items()})
     return env
@@ -248,10 +279,22 @@ def test_processes_throwing_at_once_compile_the_kernel_once(tmp_path):
     go = tmp_path / "go"
     probes = []
     for k in range(3):
-        env = probe_env(PYTHONPATH=PACKAGE.parent, NUMBA_CACHE_DIR=tmp_path / "cache",
-                        PROBE_READY=tmp_path / f"ready{k}", PROBE_GO=go)
-        probes.append(subprocess.Popen([sys.executable, "-c", PROBE], env=env, cwd=tmp_path, stdout=subprocess.PIPE,
-                                       stderr=subprocess.PIPE, text=True))
+        env = probe_env(
+            PYTHONPATH=PACKAGE.parent,
+            NUMBA_CACHE_DIR=tmp_path / "cache",
+            PROBE_READY=tmp_path / f"ready{k}",
+            PROBE_GO=go,
+        )
+        probes.append(
+            subprocess.Popen(
+                [sys.executable, "-c", PROBE],
+                env=env,
+                cwd=tmp_path,
+                stdout=subprocess.PIPE,
+                stderr=subprocess.PIPE,
+                text=True,
+            )
+        )
     deadline = time.monotonic() + 300
     while not all((tmp_path / f"ready{k}").exists() for k in range(3)):
         assert time.monotonic() < deadline and all(p.poll() is None for p in probes), [p.communicate() for p in probes]
@@ -264,4 +307,3 @@ def test_processes_throwing_at_once_compile_the_kernel_once(tmp_path):
         results.append(json.loads(out.strip().splitlines()[-1]))
     assert sorted(r["compiled"] for r in results) == [0, 0, 1]
     assert sorted(r["loaded"] for r in results) == [0, 1, 1]
-

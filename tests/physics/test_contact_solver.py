@@ -19,8 +19,13 @@ compiled = pytest.mark.skipif(not numba.config.DISABLE_JIT, reason="run in plain
 
 @pytest.mark.skipif(bool(numba.config.DISABLE_JIT), reason="already plain Python")
 def test_the_stages_pass_their_checks_in_plain_python():
-    done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", __file__],
-                          env={**os.environ, "NUMBA_DISABLE_JIT": "1"}, capture_output=True, text=True, timeout=600)
+    done = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", __file__],
+        env={**os.environ, "NUMBA_DISABLE_JIT": "1"},
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert done.returncode == 0, done.stdout + done.stderr
     assert "4 passed" in done.stdout, done.stdout  # every check below ran
 

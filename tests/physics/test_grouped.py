@@ -16,10 +16,25 @@ def toss_scenes(n, seed=0):
     for _ in range(n):
         length, height = rng.uniform(0.6, 1.0), rng.uniform(0.2, 0.5)
         base = Box(length=length, width=height, mass=10.0, position=(rng.uniform(1.5, 3.0), 0.5 * height))
-        thrown = Box(length=0.4, width=0.2, mass=2.0, position=(0.0, 1.4), velocity=(rng.uniform(0.5, 4.0),
-                     rng.uniform(-1.0, 5.0)), spin=rng.uniform(-10.0, 10.0))
-        scenes.append(Scene(boxes=(thrown, base), dt=1 / 128, gravity=-9.81, restitution=0.3, friction=0.5,
-                            penalty_stiffness=1e5, boxes_collide=True))
+        thrown = Box(
+            length=0.4,
+            width=0.2,
+            mass=2.0,
+            position=(0.0, 1.4),
+            velocity=(rng.uniform(0.5, 4.0), rng.uniform(-1.0, 5.0)),
+            spin=rng.uniform(-10.0, 10.0),
+        )
+        scenes.append(
+            Scene(
+                boxes=(thrown, base),
+                dt=1 / 128,
+                gravity=-9.81,
+                restitution=0.3,
+                friction=0.5,
+                penalty_stiffness=1e5,
+                boxes_collide=True,
+            )
+        )
     return scenes
 
 
@@ -41,8 +56,8 @@ def test_each_group_ends_bit_for_bit_as_its_scene_alone(threads):
     moved = 0
     for i, scene in enumerate(scenes):
         alone_state, alone_stats = run_alone(scene, settings)
-        assert state[2 * i:2 * i + 2].tobytes() == alone_state.tobytes()
-        np.testing.assert_array_equal(stats[2 * i:2 * i + 2], alone_stats)
+        assert state[2 * i : 2 * i + 2].tobytes() == alone_state.tobytes()
+        np.testing.assert_array_equal(stats[2 * i : 2 * i + 2], alone_stats)
         moved += not np.array_equal(alone_state[0, :2], scene.initial_state()[0, :2])
     assert moved == len(scenes)
 

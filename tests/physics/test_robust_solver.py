@@ -15,8 +15,9 @@ def test_free_flight_is_the_closed_form_parabola():
     trajectory = simulate(scene, duration=1.0, record=True).trajectory
     t = trajectory.time
     np.testing.assert_allclose(trajectory.position[:, 0, 0], box.position[0] + box.velocity[0] * t, atol=1e-9)
-    np.testing.assert_allclose(trajectory.position[:, 0, 1],
-                               box.position[1] + box.velocity[1] * t + 0.5 * scene.gravity * t**2, atol=1e-9)
+    np.testing.assert_allclose(
+        trajectory.position[:, 0, 1], box.position[1] + box.velocity[1] * t + 0.5 * scene.gravity * t**2, atol=1e-9
+    )
     np.testing.assert_allclose(trajectory.angle[:, 0], box.angle + box.spin * t, atol=1e-9)
     np.testing.assert_allclose(trajectory.velocity[:, 0, 1], box.velocity[1] + scene.gravity * t, atol=1e-9)
 
@@ -31,8 +32,9 @@ def test_single_frictionless_corner_impact_follows_newtons_impact_law(angle, spi
     t_contact = result.first_contact_time[0]
     theta = box.angle + box.spin * t_contact
     corners = [(sx * box.length / 2, sy * box.width / 2) for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
-    offsets = [(math.cos(theta) * bx - math.sin(theta) * by, math.sin(theta) * bx + math.cos(theta) * by)
-               for bx, by in corners]
+    offsets = [
+        (math.cos(theta) * bx - math.sin(theta) * by, math.sin(theta) * bx + math.cos(theta) * by) for bx, by in corners
+    ]
     rx, ry = min(offsets, key=lambda r: r[1])
     assert box.position[1] + box.velocity[1] * t_contact + ry == pytest.approx(0.0, abs=1e-9)
     u_n = box.velocity[1] + box.spin * rx
@@ -86,9 +88,18 @@ def test_elastic_bouncing_keeps_its_energy_for_20_seconds():
 
 
 def mirrored(scene: Scene) -> Scene:
-    boxes = tuple(Box(length=b.length, width=b.width, mass=b.mass, position=(-b.position[0], b.position[1]),
-                      angle=-b.angle, velocity=(-b.velocity[0], b.velocity[1]), spin=-b.spin)
-                  for b in scene.boxes)
+    boxes = tuple(
+        Box(
+            length=b.length,
+            width=b.width,
+            mass=b.mass,
+            position=(-b.position[0], b.position[1]),
+            angle=-b.angle,
+            velocity=(-b.velocity[0], b.velocity[1]),
+            spin=-b.spin,
+        )
+        for b in scene.boxes
+    )
     return scene.replace(boxes=boxes)
 
 

@@ -21,31 +21,44 @@ from box_toss_env.physics import (
 from box_toss_env.physics.ranges import ENGINE_RANGES
 
 
-@pytest.mark.parametrize("field, value, message", [
-    ("length", 0.0, r"length must be in \[0.0001, 1000\] m, got 0"),
-    ("length", 1e-300, r"length must be in \[0.0001, 1000\] m, got 1e-300"),
-    ("width", 1e-160, r"width must be in \[0.0001, 1000\] m"),
-    ("width", 1e4, r"width must be in \[0.0001, 1000\] m"),
-    ("mass", -2.0, r"mass must be in \[1e-6, 1e6\] kg, got -2"),
-    ("mass", 1e300, r"mass must be in \[1e-6, 1e6\] kg, got 1e\+300"),
-    ("mass", 1e-300, r"mass must be in \[1e-6, 1e6\] kg"),
-    ("mass", math.nan, r"mass must be a finite real number, got nan"),
-    ("angle", math.inf, r"angle must be a finite real number"),
-    ("position", (0.0, math.nan), r"position\[1\] must be a finite real number"),
-    ("velocity", (1.0, 2.0, 3.0), r"velocity must be a sequence of 2 finite numbers"),
-    ("restitution", 1.5, r"restitution must be in \[0, 1\], got 1.5"),
-    ("friction", -0.1, r"friction must be in \[0, 10\]"),
-    ("friction", 1e39, r"friction must be in \[0, 10\]"),
-])
+@pytest.mark.parametrize(
+    "field, value, message",
+    [
+        ("length", 0.0, r"length must be in \[0.0001, 1000\] m, got 0"),
+        ("length", 1e-300, r"length must be in \[0.0001, 1000\] m, got 1e-300"),
+        ("width", 1e-160, r"width must be in \[0.0001, 1000\] m"),
+        ("width", 1e4, r"width must be in \[0.0001, 1000\] m"),
+        ("mass", -2.0, r"mass must be in \[1e-6, 1e6\] kg, got -2"),
+        ("mass", 1e300, r"mass must be in \[1e-6, 1e6\] kg, got 1e\+300"),
+        ("mass", 1e-300, r"mass must be in \[1e-6, 1e6\] kg"),
+        ("mass", math.nan, r"mass must be a finite real number, got nan"),
+        ("angle", math.inf, r"angle must be a finite real number"),
+        ("position", (0.0, math.nan), r"position\[1\] must be a finite real number"),
+        ("velocity", (1.0, 2.0, 3.0), r"velocity must be a sequence of 2 finite numbers"),
+        ("restitution", 1.5, r"restitution must be in \[0, 1\], got 1.5"),
+        ("friction", -0.1, r"friction must be in \[0, 10\]"),
+        ("friction", 1e39, r"friction must be in \[0, 10\]"),
+    ],
+)
 def test_bad_box_values_name_the_parameter_and_range(field, value, message):
     with pytest.raises(ValueError, match=message):
         Box(**{field: value})
 
 
-@pytest.mark.parametrize("field, value", [
-    ("mass", "2"), ("mass", True), ("length", np.bool_(True)), ("spin", "fast"), ("angle", 1j),
-    ("position", "01"), ("velocity", (1.0, "2")), ("restitution", True), ("friction", "0.5"),
-])
+@pytest.mark.parametrize(
+    "field, value",
+    [
+        ("mass", "2"),
+        ("mass", True),
+        ("length", np.bool_(True)),
+        ("spin", "fast"),
+        ("angle", 1j),
+        ("position", "01"),
+        ("velocity", (1.0, "2")),
+        ("restitution", True),
+        ("friction", "0.5"),
+    ],
+)
 def test_values_of_the_wrong_type_are_type_errors_naming_the_parameter(field, value):
     with pytest.raises(TypeError, match=rf"^{field}(\[\d\])? must be"):
         Box(**{field: value})
@@ -56,31 +69,44 @@ def test_python_and_numpy_numbers_are_numbers(value):
     assert Box(mass=value).mass == 2.0 and Scene(gravity=value).gravity == 2.0
 
 
-@pytest.mark.parametrize("field, value, message", [
-    ("dt", 0.0, r"dt must be in \[1e-7, 1\] s, got 0"),
-    ("dt", -0.01, r"dt must be in \[1e-7, 1\] s"),
-    ("dt", 1e-300, r"dt must be in \[1e-7, 1\] s, got 1e-300"),
-    ("dt", 1e-12, r"dt must be in \[1e-7, 1\] s"),
-    ("dt", 2.0, r"dt must be in \[1e-7, 1\] s"),
-    ("dt", math.nan, r"dt must be a finite real number"),
-    ("gravity", math.inf, r"gravity must be a finite real number"),
-    ("restitution", -0.1, r"restitution must be in \[0, 1\], got -0.1"),
-    ("restitution", 1.01, r"restitution must be in \[0, 1\]"),
-    ("friction", -1.0, r"friction must be in \[0, 10\]"),
-    ("penalty_stiffness", -5.0, r"penalty_stiffness must be in \[0, inf\) N/m"),
-    ("solver", "verlet", r"solver must be one of \('robust', 'seed'\)"),
-    ("sleep_time", -1.0, r"sleep_time must be in \[0, inf\) s"),
-    ("boxes", (), r"boxes must hold at least one Box"),
-])
+@pytest.mark.parametrize(
+    "field, value, message",
+    [
+        ("dt", 0.0, r"dt must be in \[1e-7, 1\] s, got 0"),
+        ("dt", -0.01, r"dt must be in \[1e-7, 1\] s"),
+        ("dt", 1e-300, r"dt must be in \[1e-7, 1\] s, got 1e-300"),
+        ("dt", 1e-12, r"dt must be in \[1e-7, 1\] s"),
+        ("dt", 2.0, r"dt must be in \[1e-7, 1\] s"),
+        ("dt", math.nan, r"dt must be a finite real number"),
+        ("gravity", math.inf, r"gravity must be a finite real number"),
+        ("restitution", -0.1, r"restitution must be in \[0, 1\], got -0.1"),
+        ("restitution", 1.01, r"restitution must be in \[0, 1\]"),
+        ("friction", -1.0, r"friction must be in \[0, 10\]"),
+        ("penalty_stiffness", -5.0, r"penalty_stiffness must be in \[0, inf\) N/m"),
+        ("solver", "verlet", r"solver must be one of \('robust', 'seed'\)"),
+        ("sleep_time", -1.0, r"sleep_time must be in \[0, inf\) s"),
+        ("boxes", (), r"boxes must hold at least one Box"),
+    ],
+)
 def test_bad_scene_values_name_the_parameter_and_range(field, value, message):
     with pytest.raises(ValueError, match=message):
         Scene(**{field: value})
 
 
-@pytest.mark.parametrize("field, value", [
-    ("dt", True), ("dt", "0.01"), ("gravity", "-9.81"), ("restitution", True), ("penalty_stiffness", 1e5 + 0j),
-    ("use_impulses", "yes"), ("use_penalty", 1), ("solver", 1), ("boxes", ("box",)),
-])
+@pytest.mark.parametrize(
+    "field, value",
+    [
+        ("dt", True),
+        ("dt", "0.01"),
+        ("gravity", "-9.81"),
+        ("restitution", True),
+        ("penalty_stiffness", 1e5 + 0j),
+        ("use_impulses", "yes"),
+        ("use_penalty", 1),
+        ("solver", 1),
+        ("boxes", ("box",)),
+    ],
+)
 def test_scene_values_of_the_wrong_type_are_type_errors(field, value):
     with pytest.raises(TypeError, match=field):
         Scene(**{field: value})
@@ -91,14 +117,17 @@ def test_robust_solver_needs_impulses():
         Scene(use_impulses=False)
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    (dict(), "exactly one of steps"),
-    (dict(steps=10, duration=1.0), "exactly one of steps"),
-    (dict(steps=-1), r"steps must be an integer in \[0, 100000000\]"),
-    (dict(steps=10**9), r"steps must be an integer in \[0, 100000000\]"),
-    (dict(duration=math.nan), r"duration must be a finite real number"),
-    (dict(duration=1e6), r"duration / dt must be at most 1e8 steps"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(), "exactly one of steps"),
+        (dict(steps=10, duration=1.0), "exactly one of steps"),
+        (dict(steps=-1), r"steps must be an integer in \[0, 100000000\]"),
+        (dict(steps=10**9), r"steps must be an integer in \[0, 100000000\]"),
+        (dict(duration=math.nan), r"duration must be a finite real number"),
+        (dict(duration=1e6), r"duration / dt must be at most 1e8 steps"),
+    ],
+)
 def test_bad_run_lengths_are_refused(kwargs, message):
     with pytest.raises(ValueError, match=message):
         simulate(Scene(), **kwargs)
@@ -137,8 +166,9 @@ def test_the_kernel_is_built_for_exactly_what_the_scene_has():
     """A scene without friction, or without penalty, or with one box, gets a kernel compiled
     without that stage; kernels are cached per combination."""
     no_friction = Simulator.for_scene(scenes.flat_drop(friction=0.0))
-    assert no_friction.flags == KernelFlags(solver="robust", use_impulses=True, use_penalty=True,
-                                            use_friction=False, record=False, parallel=False)
+    assert no_friction.flags == KernelFlags(
+        solver="robust", use_impulses=True, use_penalty=True, use_friction=False, record=False, parallel=False
+    )
     no_penalty = Simulator.for_scene(scenes.toss(penalty_stiffness=0.0), record=True)
     assert not no_penalty.flags.use_penalty and no_penalty.flags.use_friction and no_penalty.flags.record
     many = Simulator.for_scene(scenes.seed_demo())

@@ -9,14 +9,21 @@ from box_toss_env.physics import Box, NonFiniteStateError, Scene, layout, scenes
 
 
 def run_reference(scene: Scene, steps: int) -> np.ndarray:
-    bodies = [ReferenceBody(b.length, b.width, b.mass, *b.position, b.angle, *b.velocity, b.spin)
-              for b in scene.boxes]
+    bodies = [ReferenceBody(b.length, b.width, b.mass, *b.position, b.angle, *b.velocity, b.spin) for b in scene.boxes]
     states = np.empty((steps + 1, len(bodies), 6))
     states[0] = [body.state() for body in bodies]
     for n in range(1, steps + 1):
         for body in bodies:
-            reference_step(body, scene.dt, scene.gravity, scene.penalty_stiffness, scene.restitution,
-                           scene.friction, scene.use_impulses, scene.use_penalty)
+            reference_step(
+                body,
+                scene.dt,
+                scene.gravity,
+                scene.penalty_stiffness,
+                scene.restitution,
+                scene.friction,
+                scene.use_impulses,
+                scene.use_penalty,
+            )
         states[n] = [body.state() for body in bodies]
     return states
 
@@ -24,12 +31,18 @@ def run_reference(scene: Scene, steps: int) -> np.ndarray:
 TOSSED = Box(length=2.0, width=1.0, mass=1.0, position=(0.0, 3.0), angle=0.7, velocity=(2.0, 1.0), spin=3.0)
 
 
-@pytest.mark.parametrize("use_impulses, use_penalty, friction", [
-    (True, True, 0.02), (True, True, 0.0), (True, False, 0.3), (False, True, 0.3), (False, True, 0.0),
-])
+@pytest.mark.parametrize(
+    "use_impulses, use_penalty, friction",
+    [
+        (True, True, 0.02),
+        (True, True, 0.0),
+        (True, False, 0.3),
+        (False, True, 0.3),
+        (False, True, 0.0),
+    ],
+)
 def test_one_box_agrees_with_the_text_over_thousands_of_steps(use_impulses, use_penalty, friction):
-    scene = Scene(boxes=(TOSSED,), solver="seed", use_impulses=use_impulses, use_penalty=use_penalty,
-                  friction=friction)
+    scene = Scene(boxes=(TOSSED,), solver="seed", use_impulses=use_impulses, use_penalty=use_penalty, friction=friction)
     steps = 3000
     kernel = simulate(scene, steps=steps, record=True).trajectory.state
     reference = run_reference(scene, steps)
@@ -66,6 +79,7 @@ def test_corners_are_visited_in_the_demos_order(monkeypatch):
 def test_a_resting_box_creeps_with_friction_not_restitution():
     """The seed scheme's creep of a resting box (10 s at dt 0.005 s) is driven by friction: none with mu = 0
     (whatever e), centimetres with mu = 0.5 (with e = 0 too)."""
+
     def creep(restitution, friction):
         scene = scenes.resting(solver="seed", restitution=restitution, friction=friction)
         return abs(simulate(scene, duration=10.0).final_state[0, layout.X])
@@ -78,7 +92,12 @@ def test_seed_demo_has_the_panel_defaults():
     scene = scenes.seed_demo()
     assert scene.solver == "seed" and scene.n_bodies == 5
     assert (scene.dt, scene.gravity, scene.penalty_stiffness, scene.restitution, scene.friction) == (
-        0.005, -9.81, 100.0, 0.5, 0.02)
+        0.005,
+        -9.81,
+        100.0,
+        0.5,
+        0.02,
+    )
     assert scene.use_impulses and scene.use_penalty
     xs = [box.position[0] for box in scene.boxes]
     assert xs == [-5.0, -2.0, 1.0, 4.0, 7.0]
@@ -92,8 +111,9 @@ def test_free_flight_height_error_is_exactly_g_t_dt_over_2():
     trajectory = simulate(scene, steps=100, record=True).trajectory
     t = trajectory.time
     exact = box.position[1] + box.velocity[1] * t + 0.5 * scene.gravity * t**2
-    np.testing.assert_allclose(trajectory.position[:, 0, 1] - exact, scene.gravity * t * scene.dt / 2,
-                               rtol=0, atol=1e-12)
+    np.testing.assert_allclose(
+        trajectory.position[:, 0, 1] - exact, scene.gravity * t * scene.dt / 2, rtol=0, atol=1e-12
+    )
     np.testing.assert_allclose(trajectory.angle[:, 0], box.angle + box.spin * t, rtol=0, atol=1e-12)
 
 

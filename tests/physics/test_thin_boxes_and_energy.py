@@ -85,8 +85,15 @@ def test_random_throws_of_a_thin_bouncy_box_gain_no_energy_in_any_step(dt):
     gains = []
     for _ in range(30):
         speed, direction = rng.uniform(0.0, 8.0), rng.uniform(-0.25 * math.pi, 0.5 * math.pi)
-        box = Box(length=0.2, width=0.02, mass=2.0, position=(0.0, rng.uniform(1.2, 1.6)), angle=rng.uniform(-0.3, 0.3),
-                  velocity=(speed * math.cos(direction), speed * math.sin(direction)), spin=rng.uniform(-20.0, 20.0))
+        box = Box(
+            length=0.2,
+            width=0.02,
+            mass=2.0,
+            position=(0.0, rng.uniform(1.2, 1.6)),
+            angle=rng.uniform(-0.3, 0.3),
+            velocity=(speed * math.cos(direction), speed * math.sin(direction)),
+            spin=rng.uniform(-20.0, 20.0),
+        )
         scene = Scene(boxes=(box,), dt=dt, restitution=0.9, friction=0.5, penalty_stiffness=1e5)
         result = simulate(scene, duration=5.0, record=True)
         gains.append(largest_step_gain(scene, result))

@@ -82,8 +82,10 @@ def test_from_view_with_padding_fits_the_rectangle_into_the_padded_region():
 def test_bounds_and_their_union():
     corners = np.array([[[0.0, 1.0], [2.0, 1.0], [2.0, 3.0], [0.0, 3.0]]])
     np.testing.assert_array_equal(bounds_of_boxes(corners), [[0.0, 2.0, 1.0, 3.0]])
-    np.testing.assert_array_equal(union_bounds([[0.0, 2.0, 1.0, 3.0], [5.0, 6.0, -1.0, 0.0]], [1.0, 1.5, 0.0, 4.0]),
-                                  [[0.0, 2.0, 0.0, 4.0], [1.0, 6.0, -1.0, 4.0]])
+    np.testing.assert_array_equal(
+        union_bounds([[0.0, 2.0, 1.0, 3.0], [5.0, 6.0, -1.0, 0.0]], [1.0, 1.5, 0.0, 4.0]),
+        [[0.0, 2.0, 0.0, 4.0], [1.0, 6.0, -1.0, 4.0]],
+    )
 
 
 @pytest.mark.parametrize("radius", [0, 1, 7, 15])

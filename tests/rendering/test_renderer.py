@@ -133,9 +133,7 @@ def test_target_marker_is_drawn_near_target_x(renderer):
 
 def test_target_tolerance_sets_bracket_width(renderer):
     tolerance_m = 1.0
-    frame = renderer.render_rgb(
-        np.zeros((0, 2)), [], np.zeros((0, 2)), target_x=2.0, target_tolerance_m=tolerance_m
-    )
+    frame = renderer.render_rgb(np.zeros((0, 2)), [], np.zeros((0, 2)), target_x=2.0, target_tolerance_m=tolerance_m)
     target_column, floor_row = CAMERA.world_to_pixel([2.0, 0.0])
     rows, columns = np.nonzero(has_colour(frame, PALETTE.target))
     bracket_columns = columns[np.abs(rows - floor_row) <= 2]
@@ -147,17 +145,13 @@ def test_target_tolerance_sets_bracket_width(renderer):
 @pytest.mark.parametrize("target_face", [0, 1, 2, 3])
 def test_target_face_icon_shows_that_face_colour_near_the_flag(renderer, target_face):
     target_x = 1.0
-    frame = renderer.render_rgb(
-        np.zeros((0, 2)), [], np.zeros((0, 2)), target_x=target_x, target_face=target_face
-    )
+    frame = renderer.render_rgb(np.zeros((0, 2)), [], np.zeros((0, 2)), target_x=target_x, target_face=target_face)
     target_column, floor_row = CAMERA.world_to_pixel([target_x, 0.0])
     near_flag = frame[: int(floor_row), int(target_column) : int(target_column) + 80]
     for face in range(4):
         assert np.any(has_colour(near_flag, PALETTE.face_colours[face]))  # the icon is a whole striped box
     # the target face's stripe is the thick one, at the bottom of the icon
-    rows_of_face = {
-        face: np.nonzero(has_colour(near_flag, PALETTE.face_colours[face]))[0] for face in range(4)
-    }
+    rows_of_face = {face: np.nonzero(has_colour(near_flag, PALETTE.face_colours[face]))[0] for face in range(4)}
     assert rows_of_face[target_face].max() == max(rows.max() for rows in rows_of_face.values())
     counts = {face: len(rows) for face, rows in rows_of_face.items()}
     assert counts[target_face] == max(counts.values())

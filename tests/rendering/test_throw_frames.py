@@ -143,8 +143,9 @@ def test_the_last_frames_write_the_result_and_earlier_ones_do_not():
     # the result's pixels: the same scene without the result differs only in a box top-right
     plan = planned[-1]
     target_x, target_faces = float(env._episodes.target_x[0]), env._episodes.target_faces[0]
-    scene = dict(state=trajectory[plan.row], target_x=target_x, target_faces=target_faces, caption="at rest",
-                 camera=plan.camera)
+    scene = dict(
+        state=trajectory[plan.row], target_x=target_x, target_faces=target_faces, caption="at rest", camera=plan.camera
+    )
     with_result = renderer.renderer.render_rgb(**renderer._scene(**scene, outcome=outcome))
     without = renderer.renderer.render_rgb(**renderer._scene(**scene, outcome=None))
     assert renderer.renderer.drawn_text["result"] == []
@@ -153,8 +154,9 @@ def test_the_last_frames_write_the_result_and_earlier_ones_do_not():
     assert rows.max() < HEIGHT_PX // 3 and columns.min() > WIDTH_PX // 2
     # earlier frames carry no result
     middle = planned[n_rows // 2]
-    renderer.renderer.render_rgb(**renderer._planned_scene(trajectory, middle, 1.0, env._episodes.target_faces[0],
-                                                           outcome))
+    renderer.renderer.render_rgb(
+        **renderer._planned_scene(trajectory, middle, 1.0, env._episodes.target_faces[0], outcome)
+    )
     assert renderer.renderer.drawn_text["result"] == []
     env.close()
 
@@ -162,10 +164,9 @@ def test_the_last_frames_write_the_result_and_earlier_ones_do_not():
 @pytest.mark.parametrize("success", [True, False])
 def test_the_result_headline_is_green_on_success_and_red_otherwise(success):
     renderer = ThrowRenderer(BoxTossEnv().config, WIDTH_PX, HEIGHT_PX, 30)
-    outcome = ThrowOutcome(success=success, distance=0.05, face_down=2, on_target_face=True, reward=0.9,
-                           at_rest=True)
+    outcome = ThrowOutcome(success=success, distance=0.05, face_down=2, on_target_face=True, reward=0.9, at_rest=True)
     frame = renderer.frame(np.array([2.0, 0.1, 0.0, 0.0, 0.0, 0.0]), 2.0, np.ones(4), "at rest", outcome)
-    top_right = frame[: HEIGHT_PX // 3, WIDTH_PX // 2:]
+    top_right = frame[: HEIGHT_PX // 3, WIDTH_PX // 2 :]
     colour = PALETTE.success if success else PALETTE.failure
     other = PALETTE.failure if success else PALETTE.success
     assert np.all(top_right == colour, axis=-1).sum() > 100
@@ -174,10 +175,14 @@ def test_the_result_headline_is_green_on_success_and_red_otherwise(success):
 
 
 def test_outcome_lines_name_face_by_colour_and_flag_a_throw_not_at_rest():
-    outcome = ThrowOutcome(success=False, distance=1.234, face_down=1, on_target_face=False, reward=-1.5,
-                           at_rest=False)
-    assert outcome.lines() == ("success: no", "distance to target: 1.23 m", "face down: 1 (blue), not a target face",
-                               "reward: -1.50", "still moving at max_sim_time")
+    outcome = ThrowOutcome(success=False, distance=1.234, face_down=1, on_target_face=False, reward=-1.5, at_rest=False)
+    assert outcome.lines() == (
+        "success: no",
+        "distance to target: 1.23 m",
+        "face down: 1 (blue), not a target face",
+        "reward: -1.50",
+        "still moving at max_sim_time",
+    )
 
 
 def test_rgb_array_after_a_throw_shows_the_result():
@@ -244,7 +249,7 @@ def test_the_floor_ticks_carry_metre_labels():
     floor_row = camera.world_to_pixel(np.zeros(2))[1]
     for x in (0.0, 3.0):
         column = int(camera.world_to_pixel(np.array([x, 0.0]))[0])
-        below_tick = frame[int(floor_row) + 4: int(floor_row) + 24, column - 12: column + 12].astype(np.int64)
+        below_tick = frame[int(floor_row) + 4 : int(floor_row) + 24, column - 12 : column + 12].astype(np.int64)
         assert (np.abs(below_tick - np.array(PALETTE.floor_label)).max(axis=-1) < 40).sum() > 5
     # zoomed out, the labels thin out to every 2 or 5 m instead of crowding
     far = np.array([30.0, 0.2, 0.0, 0.0, 0.0, 0.0])

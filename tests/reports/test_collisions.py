@@ -20,8 +20,13 @@ def outcome(report, scene, method):
 
 
 def test_every_method_runs_every_scene_or_says_why(report):
-    assert [r.spec.name for r in report.results] == ["stack", "pyramid", "drop_on_box", "flight_collision",
-                                                     "newton_row"]
+    assert [r.spec.name for r in report.results] == [
+        "stack",
+        "pyramid",
+        "drop_on_box",
+        "flight_collision",
+        "newton_row",
+    ]
     assert set(report.methods) | set(report.missing) == {"robust", "seed", "pymunk", "box2d"}
     for result in report.results:
         for method in report.methods:

@@ -7,8 +7,13 @@ from hypothesis import HealthCheck, given, settings
 
 from reports import fuzz
 
-REDUCED = settings(max_examples=fuzz.REDUCED.examples, derandomize=True, database=None, deadline=None,
-                   suppress_health_check=list(HealthCheck))
+REDUCED = settings(
+    max_examples=fuzz.REDUCED.examples,
+    derandomize=True,
+    database=None,
+    deadline=None,
+    suppress_health_check=list(HealthCheck),
+)
 
 
 @REDUCED
@@ -32,9 +37,21 @@ def test_env_over_its_accepted_ranges_raises_only_documented_errors(example):
 def test_the_engine_check_catches_what_the_seed_scheme_does_wrong():
     """The same properties flag the seed scheme where it is known to fail (a stiff penalty at a coarse step),
     so a passing fuzz means something."""
-    example = {"length": 0.4, "aspect": 2.0, "mass": 2.0, "height": 1.0, "x": 0.0, "angle": 0.3, "speed": 5.0,
-               "direction": -0.5 * math.pi, "spin": 0.0, "restitution": 0.3, "friction": 0.5,
-               "penalty_stiffness": 1e5, "dt": 2.0**-5}
+    example = {
+        "length": 0.4,
+        "aspect": 2.0,
+        "mass": 2.0,
+        "height": 1.0,
+        "x": 0.0,
+        "angle": 0.3,
+        "speed": 5.0,
+        "direction": -0.5 * math.pi,
+        "spin": 0.0,
+        "restitution": 0.3,
+        "friction": 0.5,
+        "penalty_stiffness": 1e5,
+        "dt": 2.0**-5,
+    }
     assert fuzz.check_engine(example, 2.0, solver="robust") == []
     problems = fuzz.check_engine(example, 2.0, solver="seed")
     assert problems and any("energy" in p or "non-finite" in p or "penetration" in p for p in problems)

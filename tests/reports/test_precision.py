@@ -61,11 +61,22 @@ def test_throws_are_compared_with_a_reference_16_times_finer(report):
 def test_acceptance_keeps_a_throw_only_if_the_reference_resolves_its_errors():
     n = 3
     reference_states = np.zeros((n, 6))
-    setting = precision.Setting("robust", 8, 1e-4, reference_states + [[1e-3, 0, 0, 0, 0, 0]], np.zeros(n, bool),
-                                np.ones(n, bool))
-    reference = precision.Reference("robust", 12, reference_states, reference_states,
-                                    np.array([1e-5, 1e-4, 1e-3]), np.zeros(n), np.ones(n, bool), np.ones(n, bool),
-                                    {}, np.ones(n, bool), 0.0)
+    setting = precision.Setting(
+        "robust", 8, 1e-4, reference_states + [[1e-3, 0, 0, 0, 0, 0]], np.zeros(n, bool), np.ones(n, bool)
+    )
+    reference = precision.Reference(
+        "robust",
+        12,
+        reference_states,
+        reference_states,
+        np.array([1e-5, 1e-4, 1e-3]),
+        np.zeros(n),
+        np.ones(n, bool),
+        np.ones(n, bool),
+        {},
+        np.ones(n, bool),
+        0.0,
+    )
     precision.compare([setting], reference)
     np.testing.assert_array_equal(reference.accepted, [True, False, False])  # < a tenth of the 1 mm error
     assert setting.face_agreement == 1.0 and setting.position_errors == pytest.approx([1e-3])
@@ -80,8 +91,13 @@ def test_recommendation_is_the_cheapest_setting_meeting_the_criterion():
         s.judged_share = judged_share
         return s
 
-    candidates = [setting(6, 1e-5, 0.05, 1.0), setting(8, 3e-5, 0.005, 1.0), setting(10, 9e-5, 0.001, 1.0),
-                  setting(7, 2e-5, 0.001, 0.9), setting(5, 1e-6, 0.001, 1.0, judged_share=0.5)]
+    candidates = [
+        setting(6, 1e-5, 0.05, 1.0),
+        setting(8, 3e-5, 0.005, 1.0),
+        setting(10, 9e-5, 0.001, 1.0),
+        setting(7, 2e-5, 0.001, 0.9),
+        setting(5, 1e-6, 0.001, 1.0, judged_share=0.5),
+    ]
     assert precision.recommend({"robust": (candidates, None)}) is candidates[1]
     assert precision.recommend({"robust": (candidates[:1], None)}) is None
     assert candidates[4].verdict() == "undecided" and candidates[0].verdict() == "no"
@@ -90,11 +106,22 @@ def test_recommendation_is_the_cheapest_setting_meeting_the_criterion():
 def test_the_criterion_is_judged_where_the_reference_resolves_it():
     n = 3
     reference_states = np.zeros((n, 6))
-    setting = precision.Setting("robust", 8, 1e-4, reference_states + [[5e-3, 0, 0, 0, 0, 0]], np.zeros(n, bool),
-                                np.ones(n, bool))
-    reference = precision.Reference("robust", 12, reference_states, reference_states,
-                                    np.array([1e-4, 5e-4, 2e-3]), np.zeros(n), np.ones(n, bool), np.ones(n, bool),
-                                    {}, np.ones(n, bool), 0.0)
+    setting = precision.Setting(
+        "robust", 8, 1e-4, reference_states + [[5e-3, 0, 0, 0, 0, 0]], np.zeros(n, bool), np.ones(n, bool)
+    )
+    reference = precision.Reference(
+        "robust",
+        12,
+        reference_states,
+        reference_states,
+        np.array([1e-4, 5e-4, 2e-3]),
+        np.zeros(n),
+        np.ones(n, bool),
+        np.ones(n, bool),
+        {},
+        np.ones(n, bool),
+        0.0,
+    )
     precision.compare([setting], reference)
     np.testing.assert_array_equal(reference.judged, [True, True, False])  # < 1 mm, a tenth of the 1 cm threshold
     assert setting.judged_share == pytest.approx(2 / 3) and not setting.decidable
@@ -120,8 +147,19 @@ def test_per_throw_order_of_landing_x_is_the_slope_over_resolved_errors():
     reference_states = np.zeros((4, 6))
     check = reference_states.copy()
     check[2, 0] = 1e-3  # the reference of throw 2 moves 1 mm when its step is halved
-    reference = precision.Reference("robust", 12, reference_states, check, np.zeros(4), np.zeros(4),
-                                    np.ones(4, bool), np.ones(4, bool), {}, np.ones(4, bool), 0.0)
+    reference = precision.Reference(
+        "robust",
+        12,
+        reference_states,
+        check,
+        np.zeros(4),
+        np.zeros(4),
+        np.ones(4, bool),
+        np.ones(4, bool),
+        {},
+        np.ones(4, bool),
+        0.0,
+    )
     settings = []
     for k in exponents:
         dt = 2.0**-k

@@ -164,8 +164,19 @@ def test_box2d_v3_builds_the_square_as_the_other_engines_do():
     from benchmarks.other_engines import Toss
     from reports.reality.box2d_v3 import Box2DV3Engine
 
-    toss = Toss(length=data.SIDE, width=data.SIDE, mass=0.05, x=0.0, y=0.2, angle=0.3, vx=0.5, vy=-1.0, omega=2.0,
-                restitution=0.4, friction=0.2)
+    toss = Toss(
+        length=data.SIDE,
+        width=data.SIDE,
+        mass=0.05,
+        x=0.0,
+        y=0.2,
+        angle=0.3,
+        vx=0.5,
+        vy=-1.0,
+        omega=2.0,
+        restitution=0.4,
+        friction=0.2,
+    )
     engine = Box2DV3Engine()
     mass, moment = engine.mass_properties(toss)
     assert mass == pytest.approx(toss.mass, rel=1e-6) and moment == pytest.approx(toss.moment, rel=1e-6)

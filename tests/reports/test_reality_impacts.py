@@ -29,8 +29,9 @@ def test_the_laws_are_newton_without_friction():
         np.testing.assert_allclose(after[:, 1] + after[:, 2] * rx, -0.6 * u_n, rtol=1e-12)
         np.testing.assert_allclose(after[:, 0], velocity[:, 0])  # no friction: no tangential impulse
     proposal = impact_law.tangential(velocity, rx, ry, 0.6, 0.3, 0.0, MASS, INERTIA)
-    np.testing.assert_allclose(proposal, impact_law.apply("newton", velocity, rx, ry, 0.6, 0.3, MASS, INERTIA),
-                               atol=1e-12)  # e_t = 0 is Newton + Coulomb, with the engine's sliding direction
+    np.testing.assert_allclose(
+        proposal, impact_law.apply("newton", velocity, rx, ry, 0.6, 0.3, MASS, INERTIA), atol=1e-12
+    )  # e_t = 0 is Newton + Coulomb, with the engine's sliding direction
 
 
 def test_the_laws_never_create_energy_and_friction_stays_in_the_cone():
@@ -56,8 +57,12 @@ def write_ellipse(path, n=200, e=E, mu=MU, with_models=True):
     velocity, rx, ry = ellipse_like(n, seed=2)
     after = impact_law.apply("ours", velocity, rx, ry, e, mu, MASS, INERTIA)
     pose = np.column_stack([np.full(n, 0.3), np.full(n, 0.07), np.zeros(n)])
-    struct = {"states_i": np.hstack([pose, velocity]), "states_f": np.hstack([pose, after]),
-              "n": np.column_stack([np.zeros(n), np.ones(n), rx]), "d": np.column_stack([np.ones(n), np.zeros(n), -ry])}
+    struct = {
+        "states_i": np.hstack([pose, velocity]),
+        "states_f": np.hstack([pose, after]),
+        "n": np.column_stack([np.zeros(n), np.ones(n), rx]),
+        "d": np.column_stack([np.ones(n), np.zeros(n), -ry]),
+    }
     scipy.io.savemat(path, {"data": struct})
     if with_models:
         scipy.io.savemat(path.with_name("v_models.mat"), {"v_models": np.tile(after * 0.9, (1, 6))})
@@ -99,8 +104,9 @@ def test_square_impacts_the_point_map_made_come_back_exactly():
     e = 0.44  # on the square fit's grid (0.2, refined by 0.04)
     states = square_states(40)
     poses = impacts.point_map_poses(states, "ours", e, MU)
-    measured = impacts.SquareImpacts(np.arange(40), states, impacts.central(poses, 0),
-                                     impacts.central(poses, impacts.BEFORE + 1), np.full(40, 0.5))
+    measured = impacts.SquareImpacts(
+        np.arange(40), states, impacts.central(poses, 0), impacts.central(poses, impacts.BEFORE + 1), np.full(40, 0.5)
+    )
     predicted, _ = impacts.predict(measured, "map: ours", e, MU)
     assert impact_law.normalised_error(predicted, measured.after, impacts.SQUARE_GYRATION).max() < 1e-9
     assert impacts.fit_square(measured, "map: ours") == (pytest.approx(e), pytest.approx(MU))
@@ -131,13 +137,31 @@ def test_the_command_writes_its_section_and_the_trajectory_report_keeps_it(drops
     write_ellipse(tmp_path / "data_ellipse.mat")
     page = tmp_path / "reality.md"
     page.write_text(f"# page\n\n{report.IMPACTS_START}\nold\n{report.IMPACTS_END}\n\ntail\n")
-    assert impacts.main(["--data", str(drops), "--ellipse", str(tmp_path / "data_ellipse.mat"), "--page", str(page),
-                         "--quick", "--no-engines"]) == 0
+    assert (
+        impacts.main(
+            [
+                "--data",
+                str(drops),
+                "--ellipse",
+                str(tmp_path / "data_ellipse.mat"),
+                "--page",
+                str(page),
+                "--quick",
+                "--no-engines",
+            ]
+        )
+        == 0
+    )
     text = page.read_text()
     assert "old" not in text and text.endswith("tail\n")
     section = report.impacts_section_of(page)
-    for words in ("### The square's first impacts", "| ours, robust solver", "### The ellipse impacts",
-                  "published: AP Poisson", "**Proposal.**"):
+    for words in (
+        "### The square's first impacts",
+        "| ours, robust solver",
+        "### The ellipse impacts",
+        "published: AP Poisson",
+        "**Proposal.**",
+    ):
         assert words in section
     assert report.impacts_section_of(tmp_path / "none.md") == report.IMPACTS_PLACEHOLDER
 
@@ -151,6 +175,8 @@ def test_the_committed_page_has_the_impacts_section():
 def test_the_ellipse_download_is_pinned_and_checked(tmp_path):
     assert set(download.ELLIPSE_FILES) == {"data_ellipse.mat", "v_models.mat"} and len(download.ELLIPSE_COMMIT) == 40
     (tmp_path / "data_ellipse.mat").write_bytes(b"not the file")
-    assert download.verify(tmp_path, download.ELLIPSE_FILES) == {"data_ellipse.mat": "checksum",
-                                                                 "v_models.mat": "missing"}
+    assert download.verify(tmp_path, download.ELLIPSE_FILES) == {
+        "data_ellipse.mat": "checksum",
+        "v_models.mat": "missing",
+    }
     assert download.main(["--ellipse", "--check", "--out", str(tmp_path)]) == 1

@@ -60,8 +60,13 @@ def test_energy_is_kinetic_plus_potential():
 def test_other_engines_get_the_same_toss(exact):
     toss = exact["corner_impact"].toss
     box = exact["corner_impact"].box
-    assert (toss.length, toss.width, toss.mass, toss.angle, toss.omega) == (box.length, box.width, box.mass,
-                                                                            box.angle, box.spin)
+    assert (toss.length, toss.width, toss.mass, toss.angle, toss.omega) == (
+        box.length,
+        box.width,
+        box.mass,
+        box.angle,
+        box.spin,
+    )
     assert toss.gravity == 0.0 and toss.friction == 0.0 and toss.restitution == 0.5
 
 
@@ -70,8 +75,10 @@ def test_seeded_throws_are_the_envs_throws_and_reproducible():
     np.testing.assert_array_equal(first.initial, second.initial)
     assert first.initial.shape == (8, 6) and first.params.shape == (8, 7)
     config = first.config
-    assert np.all((first.initial[:, 1] >= config.release_height_range[0])
-                  & (first.initial[:, 1] <= config.release_height_range[1]))
+    assert np.all(
+        (first.initial[:, 1] >= config.release_height_range[0])
+        & (first.initial[:, 1] <= config.release_height_range[1])
+    )
     assert np.all(np.hypot(first.initial[:, 3], first.initial[:, 4]) <= config.max_speed + 1e-12)
     assert not np.array_equal(cases.seeded_throws(8, seed=4).initial, first.initial)
     states, stats = first.run("robust", 1 / 256)

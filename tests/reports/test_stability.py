@@ -17,10 +17,23 @@ def report():
 
 
 def test_every_row_runs_both_solvers_on_the_same_points(report):
-    assert [row.name for row in report.rows] == ["stiffness_map", "elastic_bouncing", "long_rest", "sliding",
-                                                 "fast_impacts", "fast_spin", "thin_boxes", "masses", "embedded",
-                                                 "far_from_origin", "corner_friction", "stacks", "body_impacts",
-                                                 "mass_ratio_stacks", "random_scenes"]
+    assert [row.name for row in report.rows] == [
+        "stiffness_map",
+        "elastic_bouncing",
+        "long_rest",
+        "sliding",
+        "fast_impacts",
+        "fast_spin",
+        "thin_boxes",
+        "masses",
+        "embedded",
+        "far_from_origin",
+        "corner_friction",
+        "stacks",
+        "body_impacts",
+        "mass_ratio_stacks",
+        "random_scenes",
+    ]
     for row in report.rows:
         assert row.criterion and row.declared
         robust, seed = row.of("robust"), row.of("seed")
@@ -30,9 +43,24 @@ def test_every_row_runs_both_solvers_on_the_same_points(report):
 BOX_CONTACT_ROWS = ("stacks", "body_impacts", "mass_ratio_stacks")
 
 
-@pytest.mark.parametrize("name", ["stiffness_map", "elastic_bouncing", "long_rest", "sliding", "fast_impacts",
-                                  "fast_spin", "thin_boxes", "masses", "embedded", "far_from_origin",
-                                  "corner_friction", *BOX_CONTACT_ROWS, "random_scenes"])
+@pytest.mark.parametrize(
+    "name",
+    [
+        "stiffness_map",
+        "elastic_bouncing",
+        "long_rest",
+        "sliding",
+        "fast_impacts",
+        "fast_spin",
+        "thin_boxes",
+        "masses",
+        "embedded",
+        "far_from_origin",
+        "corner_friction",
+        *BOX_CONTACT_ROWS,
+        "random_scenes",
+    ],
+)
 def test_the_robust_default_passes_every_row_in_its_declared_range(report, name, request):
     if name in KNOWN_ENGINE_FAILURES:
         request.applymarker(pytest.mark.xfail(reason=KNOWN_ENGINE_FAILURES[name], strict=True))

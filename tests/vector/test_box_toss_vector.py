@@ -70,8 +70,12 @@ def test_results_do_not_depend_on_the_thread_count():
 
 def test_gymnasiums_own_vector_envs_still_work():
     for mode in ("sync", "async"):
-        envs = gym.make_vec("box_toss_env:BoxToss-v0", num_envs=2, vectorization_mode=mode,
-                            vector_kwargs={"autoreset_mode": AutoresetMode.SAME_STEP})
+        envs = gym.make_vec(
+            "box_toss_env:BoxToss-v0",
+            num_envs=2,
+            vectorization_mode=mode,
+            vector_kwargs={"autoreset_mode": AutoresetMode.SAME_STEP},
+        )
         envs.reset(seed=0)
         obs, reward, terminated, *_ = envs.step(random_actions(0, 2))
         assert obs.shape == (2, 12) and terminated.all()
@@ -81,14 +85,17 @@ def test_gymnasiums_own_vector_envs_still_work():
 THREADS = numba.config.NUMBA_NUM_THREADS
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    (dict(num_envs=0), r"num_envs must be an integer in \[1, 1048576\]"),
-    (dict(num_envs=10**8), r"num_envs must be an integer in \[1, 1048576\]"),  # refused before allocating
-    (dict(num_envs=2, threads=0), rf"threads must be an integer in \[1, {THREADS}\]"),
-    (dict(num_envs=2, threads=THREADS + 1), rf"threads must be an integer in \[1, {THREADS}\]"),
-    (dict(num_envs=2, render_mode="human"), "render_mode must be None or 'rgb_array'"),
-    (dict(num_envs=2, dt=-1.0), r"dt must be in \[1e-7, 1\] s"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(num_envs=0), r"num_envs must be an integer in \[1, 1048576\]"),
+        (dict(num_envs=10**8), r"num_envs must be an integer in \[1, 1048576\]"),  # refused before allocating
+        (dict(num_envs=2, threads=0), rf"threads must be an integer in \[1, {THREADS}\]"),
+        (dict(num_envs=2, threads=THREADS + 1), rf"threads must be an integer in \[1, {THREADS}\]"),
+        (dict(num_envs=2, render_mode="human"), "render_mode must be None or 'rgb_array'"),
+        (dict(num_envs=2, dt=-1.0), r"dt must be in \[1e-7, 1\] s"),
+    ],
+)
 def test_bad_arguments_are_refused(kwargs, message):
     with pytest.raises(ValueError, match=message):
         BoxTossVectorEnv(**kwargs)
@@ -96,19 +103,32 @@ def test_bad_arguments_are_refused(kwargs, message):
         gym.make_vec("BoxToss-v0", **kwargs)
 
 
-@pytest.mark.parametrize("kwargs, name", [
-    (dict(num_envs=2.0), "num_envs"), (dict(num_envs=True), "num_envs"), (dict(num_envs=2, threads="1"), "threads"),
-    (dict(num_envs=2, render_mode=1), "render_mode"), (dict(num_envs=2, mass="2"), "mass"),
-])
+@pytest.mark.parametrize(
+    "kwargs, name",
+    [
+        (dict(num_envs=2.0), "num_envs"),
+        (dict(num_envs=True), "num_envs"),
+        (dict(num_envs=2, threads="1"), "threads"),
+        (dict(num_envs=2, render_mode=1), "render_mode"),
+        (dict(num_envs=2, mass="2"), "mass"),
+    ],
+)
 def test_arguments_of_the_wrong_type_are_type_errors(kwargs, name):
     with pytest.raises(TypeError, match=rf"^{name} must be"):
         BoxTossVectorEnv(**kwargs)
 
 
-@pytest.mark.parametrize("seed, error", [
-    (1.5, TypeError), ("1", TypeError), (True, TypeError), ([0, 1.5], TypeError), ([0, True], TypeError),
-    ([0, 1, 2], ValueError),
-])
+@pytest.mark.parametrize(
+    "seed, error",
+    [
+        (1.5, TypeError),
+        ("1", TypeError),
+        (True, TypeError),
+        ([0, 1.5], TypeError),
+        ([0, True], TypeError),
+        ([0, 1, 2], ValueError),
+    ],
+)
 def test_bad_seeds_are_refused_naming_seed(seed, error):
     with pytest.raises(error, match="seed must be None, an int or a list of 2 ints or Nones"):
         BoxTossVectorEnv(2).reset(seed=seed)

@@ -14,8 +14,9 @@ KWARGS = {"target_face": "mixed", "friction_range": (0.2, 0.8)}
 
 
 def test_matches_a_sync_vector_env_of_single_envs_step_for_step():
-    native = NextStepAutoreset(gym.make_vec("BoxToss-v0", num_envs=N, vectorization_mode="vector_entry_point",
-                                            **KWARGS))
+    native = NextStepAutoreset(
+        gym.make_vec("BoxToss-v0", num_envs=N, vectorization_mode="vector_entry_point", **KWARGS)
+    )
     sync = gym.make_vec("BoxToss-v0", num_envs=N, vectorization_mode="sync", **KWARGS)
     assert native.metadata["autoreset_mode"] == sync.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP
     obs_native, _ = native.reset(seed=3)

@@ -20,8 +20,9 @@ def native(**kwargs):
 
 
 def sync(mode):
-    return gym.make_vec("BoxToss-v0", num_envs=N, vectorization_mode="sync", vector_kwargs={"autoreset_mode": mode},
-                        **KWARGS)
+    return gym.make_vec(
+        "BoxToss-v0", num_envs=N, vectorization_mode="sync", vector_kwargs={"autoreset_mode": mode}, **KWARGS
+    )
 
 
 def test_same_step_matches_a_sync_vector_env_in_same_step_mode():
@@ -52,13 +53,15 @@ def test_disabled_matches_a_sync_vector_env_in_disabled_mode():
         mask = np.ones(N, dtype=bool)
         if step == 1:  # two envs reset now, the other two after a pause: the same episodes come out
             mask[2:] = False
-            np.testing.assert_array_equal(a.reset(options={"reset_mask": mask})[0][:2],
-                                          b.reset(options={"reset_mask": mask})[0][:2])
+            np.testing.assert_array_equal(
+                a.reset(options={"reset_mask": mask})[0][:2], b.reset(options={"reset_mask": mask})[0][:2]
+            )
             with pytest.raises(RuntimeError, match=r"envs \[2, 3\] ended and were not reset"):
                 a.step(actions)
             mask = ~mask
-        np.testing.assert_array_equal(a.reset(options={"reset_mask": mask})[0][mask],
-                                      b.reset(options={"reset_mask": mask})[0][mask])
+        np.testing.assert_array_equal(
+            a.reset(options={"reset_mask": mask})[0][mask], b.reset(options={"reset_mask": mask})[0][mask]
+        )
 
 
 def test_disabled_refuses_what_it_cannot_do_with_a_clear_error():
@@ -84,7 +87,7 @@ def test_render_returns_one_frame_per_env_showing_that_env():
     assert frames[0].shape[2] == 3 and not np.array_equal(frames[0], frames[1])  # other targets, other pictures
     single = gym.make("BoxToss-v0", render_mode="rgb_array", **KWARGS)
     single.reset(seed=2)
-    picture = np.r_[0:18, 33:frames[1].shape[0]]  # all but the label's second line ("env 1" / "in the hand")
+    picture = np.r_[0:18, 33 : frames[1].shape[0]]  # all but the label's second line ("env 1" / "in the hand")
     np.testing.assert_array_equal(single.render()[picture], frames[1][picture])
 
 
@@ -92,8 +95,9 @@ def test_record_video_on_the_vector_env_records_each_landing(tmp_path):
     pytest.importorskip("moviepy")  # Gymnasium's RecordVideo writes with moviepy
     import imageio.v3 as iio
 
-    envs = gym.wrappers.vector.RecordVideo(NextStepAutoreset(native(render_mode="rgb_array")), str(tmp_path),
-                                           episode_trigger=lambda episode: True)
+    envs = gym.wrappers.vector.RecordVideo(
+        NextStepAutoreset(native(render_mode="rgb_array")), str(tmp_path), episode_trigger=lambda episode: True
+    )
     envs.reset(seed=0)
     for _ in range(4):  # two throws, each with its reset step
         envs.step(envs.action_space.sample())

@@ -24,7 +24,16 @@ def run_frames(controller: ViewerController, n: int) -> None:
 def test_opens_the_seed_demo_with_its_panel_and_read_outs(demo):
     assert len(demo.lanes) == 1 and demo.lanes[0].solver == "seed"
     assert [demo.row_value(row) for row in ROWS] == [
-        "0.005 s", "-9.81 m/s^2", "100 N/m", "0.5", "0.02", "on", "on", "off", "seed"]
+        "0.005 s",
+        "-9.81 m/s^2",
+        "100 N/m",
+        "0.5",
+        "0.02",
+        "on",
+        "on",
+        "off",
+        "seed",
+    ]
     assert demo.readouts(0) == ["seed solver", "0.00 s", "-- ms / step", "5 bodies"]
     np.testing.assert_array_equal(demo.lanes[0].state, scenes.seed_demo().initial_state())
 
@@ -78,23 +87,29 @@ def test_parameter_changes_reach_the_kernel_arrays_and_keep_the_simulator(demo):
     assert lane.sim_time == pytest.approx(STEPS_PER_FRAME * 0.002)
 
 
-@pytest.mark.parametrize(("change", "flag", "value"), [
-    ({"friction": 0.0}, "use_friction", False),
-    ({"penalty_stiffness": 0.0}, "use_penalty", False),
-])
+@pytest.mark.parametrize(
+    ("change", "flag", "value"),
+    [
+        ({"friction": 0.0}, "use_friction", False),
+        ({"penalty_stiffness": 0.0}, "use_penalty", False),
+    ],
+)
 def test_a_change_of_compile_time_flags_rebuilds_the_simulator(demo, change, flag, value):
     before = demo.lanes[0].simulator
-    (name, number), = change.items()
+    ((name, number),) = change.items()
     assert demo.set_parameter(name, number)
     assert demo.lanes[0].simulator is not before
     assert getattr(demo.lanes[0].simulator.flags, flag) is value
 
 
-@pytest.mark.parametrize(("name", "value", "reason"), [
-    ("restitution", 1.5, "restitution must be in [0, 1], got 1.5"),
-    ("dt", 0.0, "dt must be in [1e-7, 1] s, got 0.0"),
-    ("friction", "abc", "friction must be a number, got 'abc'"),
-])
+@pytest.mark.parametrize(
+    ("name", "value", "reason"),
+    [
+        ("restitution", 1.5, "restitution must be in [0, 1], got 1.5"),
+        ("dt", 0.0, "dt must be in [1e-7, 1] s, got 0.0"),
+        ("friction", "abc", "friction must be a number, got 'abc'"),
+    ],
+)
 def test_an_invalid_value_is_shown_and_changes_nothing(demo, name, value, reason):
     scene = demo.scene
     assert not demo.set_parameter(name, value)
@@ -105,8 +120,13 @@ def test_an_invalid_value_is_shown_and_changes_nothing(demo, name, value, reason
 
 
 def test_arrow_keys_walk_each_parameter_along_its_ladder(demo):
-    steps = {"dt": (0.004, 0.0075), "gravity": (-10.0, -9.0), "penalty_stiffness": (50.0, 200.0),
-             "restitution": (0.45, 0.55), "friction": (0.01, 0.05)}
+    steps = {
+        "dt": (0.004, 0.0075),
+        "gravity": (-10.0, -9.0),
+        "penalty_stiffness": (50.0, 200.0),
+        "restitution": (0.45, 0.55),
+        "friction": (0.01, 0.05),
+    }
     for name, (down, up) in steps.items():
         start = getattr(demo.scene, name)
         assert demo.step_parameter(name, -1) and getattr(demo.scene, name) == pytest.approx(down)
@@ -175,9 +195,12 @@ def test_switching_solver_goes_on_from_the_same_state(demo):
     assert demo.readouts(0)[0] == "robust solver"
     run_frames(demo, 1)
     robust = scenes.seed_demo(solver="robust")
-    Simulator.for_scene(robust, parallel=False).run(state, robust.body_params(),
-                                                    make_settings(robust, STEPS_PER_FRAME, until_rest=False),
-                                                    np.zeros((5, layout.STATS_SIZE)))
+    Simulator.for_scene(robust, parallel=False).run(
+        state,
+        robust.body_params(),
+        make_settings(robust, STEPS_PER_FRAME, until_rest=False),
+        np.zeros((5, layout.STATS_SIZE)),
+    )
     np.testing.assert_array_equal(lane.state, state)
     assert demo.switch_solver() and demo.scene.solver == "seed"
 
@@ -193,8 +216,10 @@ def test_compare_runs_both_solvers_side_by_side_from_the_start(demo):
     assert seed.steps == robust.steps == 0
     run_frames(demo, 150)
     # the seed scheme sinks into the floor under its weight (k = 100), the robust solver does not
-    lowest = {lane.solver: box_vertices(lane.state[:, :2], lane.state[:, 2], lane.params[:, :2])[..., 1].min()
-              for lane in demo.lanes}
+    lowest = {
+        lane.solver: box_vertices(lane.state[:, :2], lane.state[:, 2], lane.params[:, :2])[..., 1].min()
+        for lane in demo.lanes
+    }
     assert lowest["seed"] < -0.02 and lowest["robust"] > -0.005
     assert demo.set_parameter("restitution", 0.1)
     assert seed.params[0, layout.RESTITUTION] == robust.params[0, layout.RESTITUTION] == 0.1

@@ -119,8 +119,10 @@ def test_compare_mode_waits_for_both_kernels_and_names_each(monkeypatch):
     viewer = ViewerWindow(controller, "seed_demo", headless=True)
     viewer.draw()
     recorder.frame_shown()
-    assert recorder.frames()[-1][1] == ("compiling the seed kernel... (first use only)",
-                                        "compiling the robust kernel... (first use only)")
+    assert recorder.frames()[-1][1] == (
+        "compiling the seed kernel... (first use only)",
+        "compiling the robust kernel... (first use only)",
+    )
     assert controller.loading and controller.notices() == [lane.job.notice for lane in controller.lanes]
     controller.advance_frame()
     controller.advance_frame(force=True)  # not even the step key steps without a kernel

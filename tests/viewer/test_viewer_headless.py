@@ -23,10 +23,21 @@ BACKGROUND = Palette().background
 
 
 def run_viewer(*args: str, check: bool = True) -> subprocess.CompletedProcess:
-    environment = {**os.environ, "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy",
-                   "PYTHONPATH": os.pathsep.join([str(REPO_ROOT), os.environ.get("PYTHONPATH", "")])}
-    return subprocess.run([sys.executable, "-m", "box_toss_env.viewer", *args], env=environment, cwd=REPO_ROOT,
-                          capture_output=True, text=True, check=check, timeout=300)
+    environment = {
+        **os.environ,
+        "SDL_VIDEODRIVER": "dummy",
+        "SDL_AUDIODRIVER": "dummy",
+        "PYTHONPATH": os.pathsep.join([str(REPO_ROOT), os.environ.get("PYTHONPATH", "")]),
+    }
+    return subprocess.run(
+        [sys.executable, "-m", "box_toss_env.viewer", *args],
+        env=environment,
+        cwd=REPO_ROOT,
+        capture_output=True,
+        text=True,
+        check=check,
+        timeout=300,
+    )
 
 
 def read_png(path: Path) -> np.ndarray:
@@ -40,8 +51,9 @@ def pixel(frame: np.ndarray, camera, point, left: int = 0) -> tuple[int, int, in
 
 
 def test_frames_show_the_boxes_where_the_state_says(tmp_path):
-    run_viewer("--frames", "3", "--skip", "100", "--out", str(tmp_path / "frames"),
-               "--states", str(tmp_path / "states.npy"))
+    run_viewer(
+        "--frames", "3", "--skip", "100", "--out", str(tmp_path / "frames"), "--states", str(tmp_path / "states.npy")
+    )
     paths = sorted((tmp_path / "frames").glob("*.png"))
     assert [p.name for p in paths] == ["frame_0000.png", "frame_0001.png", "frame_0002.png"]
     states = np.load(tmp_path / "states.npy")
@@ -61,8 +73,17 @@ def test_frames_show_the_boxes_where_the_state_says(tmp_path):
 
 
 def test_compare_frames_show_each_solver_in_its_half(tmp_path):
-    run_viewer("--compare", "--frames", "1", "--skip", "40", "--out", str(tmp_path / "compare.png"),
-               "--states", str(tmp_path / "states.npy"))
+    run_viewer(
+        "--compare",
+        "--frames",
+        "1",
+        "--skip",
+        "40",
+        "--out",
+        str(tmp_path / "compare.png"),
+        "--states",
+        str(tmp_path / "states.npy"),
+    )
     frame = read_png(tmp_path / "compare.png")
     seed_state, robust_state = np.load(tmp_path / "states.npy")[0]
     controller = ViewerController(scenes.seed_demo())
@@ -101,10 +122,13 @@ def test_bad_arguments_and_a_missing_render_extra_are_reported(tmp_path):
     result = run_viewer("--restitution", "2", "--frames", "1", "--out", str(tmp_path), check=False)
     assert result.returncode == 2 and "restitution must be in [0, 1], got 2.0" in result.stderr
     environment = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO_ROOT), os.environ.get("PYTHONPATH", "")])}
-    code = ("import sys; sys.modules['pygame'] = None; from box_toss_env.viewer.__main__ import main; "
-            f"sys.exit(main(['--frames', '1', '--out', {str(tmp_path / 'x.png')!r}]))")
-    result = subprocess.run([sys.executable, "-c", code], env=environment, cwd=REPO_ROOT, capture_output=True,
-                            text=True, timeout=300)
+    code = (
+        "import sys; sys.modules['pygame'] = None; from box_toss_env.viewer.__main__ import main; "
+        f"sys.exit(main(['--frames', '1', '--out', {str(tmp_path / 'x.png')!r}]))"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", code], env=environment, cwd=REPO_ROOT, capture_output=True, text=True, timeout=300
+    )
     assert result.returncode == 1 and 'pip install "box_toss_env[render]"' in result.stderr
 
 

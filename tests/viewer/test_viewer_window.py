@@ -146,9 +146,12 @@ def test_key_b_switches_boxes_collide(window):
 
 def test_the_panel_says_how_many_steps_a_frame_draws(monkeypatch):
     drawn = []
-    monkeypatch.setattr("box_toss_env.viewer.window.Panel.line",
-                        lambda self, text="", *args, **kwargs: drawn.append(text) or pygame.Rect(0, 0, 1, 1))
-    ViewerWindow(ViewerController(scenes.seed_demo(boxes_collide=True), steps_per_frame=3), "seed_demo",
-                 headless=True).draw()
+    monkeypatch.setattr(
+        "box_toss_env.viewer.window.Panel.line",
+        lambda self, text="", *args, **kwargs: drawn.append(text) or pygame.Rect(0, 0, 1, 1),
+    )
+    ViewerWindow(
+        ViewerController(scenes.seed_demo(boxes_collide=True), steps_per_frame=3), "seed_demo", headless=True
+    ).draw()
     assert "boxes against the floor and one another, 3 steps a frame" in drawn
     assert scene_subtitle(False, 1) == "boxes against the floor, 1 step a frame"
