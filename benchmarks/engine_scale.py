@@ -12,7 +12,7 @@ Cases: piles of 1, 10 and 100 boxes (``scenes.pile(n)``), of 1,000 and 5,000 box
 Method. A pile is first settled for ``SETTLE`` s (untimed), by our engine up to ``OUR_SETTLE_MAX`` boxes
 (it leaves no overlap, which every engine accepts; starting ours from another engine's pile, with its
 millimetre overlaps, makes ours work harder) and above that by the first available of Box2D v3, pymunk,
-Box2D 2.3 (ours would take minutes); every engine then starts from that same state (the pyramid from its
+Box2D 2.3; every engine then starts from that same state (the pyramid from its
 exact initial state) and is timed over ``WINDOW`` s of simulated time, its stepping loop alone, best of
 ``REPEATS`` runs as far as the budget allows:
 
