@@ -656,6 +656,13 @@ def previous_share(readme: Path, env_id: str) -> str | None:
     return next((part for part in line.split(", ") if part.startswith(env_id + " ")), None)
 
 
+def shown_variants(trained: list[str]) -> list[str]:
+    """The variants the page and the README show: every one, not only those trained in this call (a variant without
+    runs in ``--root`` shows its stored rows or its section as written), so that ``--envs X --readme`` rewrites X's
+    rows and loses no other."""
+    return list(dict.fromkeys([*VARIANTS, *trained]))
+
+
 def check_options(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     """Every env id registered, every training's hyperparameters (with the tier's and ``--set`` overrides) valid:
     a one-line error before anything is created or trained."""
@@ -730,8 +737,9 @@ def main(argv: list[str] | None = None) -> None:
             replace_section(GOAL_SECTION, goal_text)
         return
     stored = stored_rows()
-    text = document(args.root, variants, args.algos, args.seeds, stored=stored)
-    summary = headline(args.root, variants, args.algos, args.seeds, stored)
+    shown = shown_variants(variants)
+    text = document(args.root, shown, args.algos, args.seeds, stored=stored)
+    summary = headline(args.root, shown, args.algos, args.seeds, stored)
     print(summary)
     if args.readme:
         DOCS.mkdir(parents=True, exist_ok=True)
@@ -755,7 +763,7 @@ def main(argv: list[str] | None = None) -> None:
             "[docs/agents/benchmark.md](docs/agents/benchmark.md)):\n\n"
             + summary
             + "\n\n"
-            + ratios(args.root, variants, args.algos, args.seeds, stored),
+            + ratios(args.root, shown, args.algos, args.seeds, stored),
             "benchmark",
         )
 

@@ -50,3 +50,9 @@ def test_random_actions_alone_do_not_replace_a_table(tmp_path):
     stored = {"BoxToss-v0": [stack_row("ppo", 1.0, 0)]}
     assert benchmark.table_rows(root, "BoxToss-v0", "commands", ["ppo"], [0], stored) == stored["BoxToss-v0"]
     assert benchmark.table_rows(root, "BoxToss-v0", "raw", ["ppo"], [0], stored) == []
+
+
+def test_a_run_of_some_variants_shows_every_variant():
+    """``--envs BoxToss-Stack-v0 --readme`` rewrote the page and the README with the stack's rows alone."""
+    assert benchmark.shown_variants(["BoxToss-Stack-v0"]) == list(benchmark.VARIANTS)
+    assert benchmark.shown_variants([]) == list(benchmark.VARIANTS)
