@@ -685,6 +685,25 @@ def check_options(parser: argparse.ArgumentParser, args: argparse.Namespace) -> 
                     parser.error(f"{algo} on {env_id} ({tier}): {error}")
 
 
+def train_missing(args: argparse.Namespace, variants: list[str], goal: bool) -> None:
+    """Every run the command's options ask for that is not finished yet: random actions, the oracle's sweep, each
+    algorithm, seed and tier on each variant, and the goal env's agents."""
+    for env_id in variants:
+        ensure_random(args.root, env_id)
+        if not args.no_ceiling and not is_stack(env_id):  # the stack's ceiling: agents.stack_planner
+            ensure_ceiling(args.root, env_id)
+        for seed in args.seeds:
+            for tier in args.tiers:
+                for algo in args.algos:
+                    ensure_trained(args.root, env_id, algo, seed, tier, args.overrides)
+    if goal:
+        ensure_random(args.root, GOAL_ENV)
+        for seed in args.seeds:
+            for agent, (algo, *_) in GOAL_AGENTS.items():
+                if algo in args.algos:
+                    ensure_goal_trained(args.root, agent, seed)
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--envs", nargs="+", default=[*VARIANTS, GOAL_ENV])
@@ -715,20 +734,7 @@ def main(argv: list[str] | None = None) -> None:
     goal = GOAL_ENV in args.envs
     check_options(parser, args)
     if not args.report_only:
-        for env_id in variants:
-            ensure_random(args.root, env_id)
-            if not args.no_ceiling and not is_stack(env_id):  # the stack's ceiling: agents.stack_planner
-                ensure_ceiling(args.root, env_id)
-            for seed in args.seeds:
-                for tier in args.tiers:
-                    for algo in args.algos:
-                        ensure_trained(args.root, env_id, algo, seed, tier, args.overrides)
-        if goal:
-            ensure_random(args.root, GOAL_ENV)
-            for seed in args.seeds:
-                for agent, (algo, *_) in GOAL_AGENTS.items():
-                    if algo in args.algos:
-                        ensure_goal_trained(args.root, agent, seed)
+        train_missing(args, variants, goal)
     goal_text = goal_document(args.root, args.algos, args.seeds) if goal else None
     if goal_text:
         print(goal_text)
