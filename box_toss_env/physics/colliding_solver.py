@@ -51,6 +51,7 @@ from .broadphase import box_bound, time_apart
 from .compilation import jit_stage
 from .contact_solver import penalty_correction_share
 from .flight import time_to_contact
+from .joint_contact_solve import JOINT_LIMIT, full_delassus, joint_impulses
 from .kernel_support import store_state
 from .robust_solver import (
     FIRST_CONTACT,
@@ -259,12 +260,16 @@ def normal_lcp(w, free, x, active, count, factor, index, y):
 
 @jit_stage
 def solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, w, factor, free, x, active,
-                     index, y):
-    """Stage 4: the contact impulses. Up to DIRECT_LIMIT contacts, the normal impulses are solved exactly
-    together (``normal_lcp``: a stack's load passes through every box at once, whatever the mass ratio),
-    alternating with a friction sweep until the impulses settle; beyond that, or if the exact solve fails,
-    projected Gauss-Seidel (``gauss_seidel``)."""
+                     index, y, state):
+    """Stage 4: the contact impulses. Up to JOINT_LIMIT contacts with friction, normal and friction impulses
+    are solved together, exactly (``joint_contact_solve``); up to DIRECT_LIMIT contacts (or if that does not
+    settle), the normal impulses are solved exactly together (``normal_lcp``: a stack's load passes through
+    every box at once, whatever the mass ratio), alternating with a friction sweep until the impulses settle;
+    beyond that, or if the exact solve fails, projected Gauss-Seidel (``gauss_seidel``)."""
     if count == 0:
+        return
+    if use_friction and count <= JOINT_LIMIT and solve_jointly(contacts, ids, count, vel, inv_mass, inv_inertia, w,
+                                                               factor, free, x, y, index, state):
         return
     if count <= DIRECT_LIMIT:
         delassus_matrix(contacts, ids, count, inv_mass, inv_inertia, w)
@@ -300,6 +305,29 @@ def solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, use_frict
         if solved:
             return
     gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, IMPULSE, GAUSS_SEIDEL_ITERATIONS)
+
+
+@jit_stage
+def solve_jointly(contacts, ids, count, vel, inv_mass, inv_inertia, w, a, u, x, impulse, index, state):
+    """The normal and friction impulses of the contacts solved together (``joint_impulses``), applied to the
+    velocities and kept in the contacts; returns False (nothing changed) if that solve did not settle."""
+    full_delassus(contacts, ids, count, inv_mass, inv_inertia, w)
+    for c in range(count):
+        ux, uy = relative_velocity(c, contacts, ids, vel)
+        nx, ny = contacts[c, NX], contacts[c, NY]
+        u[2 * c] = ux * nx + uy * ny - contacts[c, TARGET]
+        u[2 * c + 1] = -ux * ny + uy * nx  # u_rel . t, t = (-ny, nx)
+    if not joint_impulses(contacts, count, w, u, state, a, index, x, impulse):
+        return False
+    for c in range(count):
+        dp = impulse[2 * c] - contacts[c, IMPULSE]
+        dq = impulse[2 * c + 1] - contacts[c, FRICTION_IMPULSE]
+        contacts[c, IMPULSE] = impulse[2 * c]
+        contacts[c, FRICTION_IMPULSE] = impulse[2 * c + 1]
+        if dp != 0.0 or dq != 0.0:
+            nx, ny = contacts[c, NX], contacts[c, NY]
+            apply_impulse(c, dp * nx - dq * ny, dp * ny + dq * nx, contacts, ids, vel, inv_mass, inv_inertia)
+    return True
 
 
 @jit_stage
@@ -533,7 +561,7 @@ def steps_alone(pose, vel, half, radius, awake, params, gravity, tolerance, dt, 
     for b in range(pose.shape[0]):
         if awake[b]:
             tau, _ = time_to_contact(pose[b, 1], pose[b, 2], vel[b, 1], vel[b, 2], half[b, 0], half[b, 1], gravity,
-                                     flight, tolerance)
+                                     flight, tolerance, 0.25 * dt)
             flight = min(flight, tau)
             if flight < dt:
                 break

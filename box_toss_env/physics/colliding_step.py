@@ -345,10 +345,11 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
         capacity = max(8 * nb, MIN_CAPACITY)
         contacts, ids = np.zeros((capacity, CONTACT_COLUMNS)), np.zeros((capacity, ID_COLUMNS), np.int64)
         previous_keys, previous_impulses = np.zeros(capacity, np.int64), np.zeros((capacity, 2))
-        # the exact normal solve's work arrays
+        # the exact solves' work arrays (normal_lcp, joint_contact_solve)
         w, factor = np.zeros((DIRECT_LIMIT, DIRECT_LIMIT)), np.zeros((DIRECT_LIMIT, DIRECT_LIMIT))
         free, x, lcp_y = np.zeros(DIRECT_LIMIT), np.zeros(DIRECT_LIMIT), np.zeros(DIRECT_LIMIT)
         active, index = np.zeros(DIRECT_LIMIT, np.bool_), np.zeros(DIRECT_LIMIT, np.int64)
+        contact_state = np.zeros(DIRECT_LIMIT, np.int64)
         # broadphase (sort and sweep) and islands (sleeping)
         everyone, awake = np.ones(nb, np.bool_), np.ones(nb, np.bool_)
         island = np.full(nb, -1, np.int64)  # a sleeping body's island (its root body); -1 while awake
@@ -366,8 +367,7 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
         corners = np.zeros((CORNER_ROWS, MAX_CORNERS))
         corner_delassus = np.zeros((MAX_CORNERS, MAX_CORNERS))
         corner_ids = np.zeros(MAX_CORNERS, np.int64)
-        n_previous, h_previous, count, n, n_awake = 0, dt, 0, 0, nb
-        status, fail_step = layout.STATUS_OK, -1
+        n_previous, h_previous, count, n, n_awake, status, fail_step = 0, dt, 0, 0, nb, layout.STATUS_OK, -1
         if RECORD:
             record_states(trajectory, 0, pose, vel)
         if until_rest:  # bodies placed at rest sleep from the start
@@ -441,14 +441,14 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
                 warm_start(contacts, ids, count, previous_keys, previous_impulses, n_previous, h / h_previous, vel,
                            inv_mass, inv_inertia)
                 solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, FRICTION_ON, w, factor, free, x,
-                                 active, index, lcp_y)
+                                 active, index, lcp_y, contact_state)
                 n_previous = store_impulses(contacts, ids, count, previous_keys, previous_impulses)
                 h_previous = h
                 # 5. restitution for impacts only: solved with every contact and friction, then polished
                 impacts = restitution_targets(contacts, count, threshold)
                 if impacts > 0:
                     solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, FRICTION_ON, w, factor, free, x,
-                                     active, index, lcp_y)
+                                     active, index, lcp_y, contact_state)
                     apply_restitution(contacts, ids, count, vel, inv_mass, inv_inertia, threshold)
                 # 6. no energy gained by the bodies that took an impulse
                 mark_touched(contacts, ids, count, impacts, threshold, touched, impacted)

@@ -37,7 +37,7 @@ def safe_flight_time(height, speed, bound):
 
 
 @jit_stage
-def time_to_contact(y, angle, vy, spin, half_length, half_width, gravity, horizon, tolerance):
+def time_to_contact(y, angle, vy, spin, half_length, half_width, gravity, horizon, tolerance, resolution):
     """First time tau in [0, horizon] at which a corner touches the floor, by conservative
     advancement on the lowest corners. Returns (tau, touched).
 
@@ -47,7 +47,10 @@ def time_to_contact(y, angle, vy, spin, half_length, half_width, gravity, horizo
     least ``safe_flight_time(y_k, u_k, A)``; stepping by the smallest of these never skips a
     contact, and the steps shrink quadratically as a corner closes in (the bound is exact to
     first order). Stops when a corner is within ``tolerance`` of y = 0 and not separating, or
-    below the floor by more than ``tolerance`` (a box started inside it).
+    below the floor by more than ``tolerance`` (a box started inside it). With ``resolution`` > 0 it
+    also stops, not touched, once a step is shorter than that: the contact is no earlier than the tau
+    returned. A caller that needs only a lower bound passes one, since a box lying on the floor with a
+    separating speed of 1e-200 m/s would otherwise take MAX_ADVANCE_ITERATIONS steps of 1e-200 s.
     """
     radius = math.sqrt(half_length * half_length + half_width * half_width)
     bound = max(-gravity, 0.0) + spin * spin * radius
@@ -67,6 +70,8 @@ def time_to_contact(y, angle, vy, spin, half_length, half_width, gravity, horizo
             step = min(step, safe_flight_time(max(height, 0.0), speed, bound))
         if tau + step >= horizon:
             return horizon, False
+        if step < resolution:
+            return tau, False
         tau += step
     return tau, True
 

@@ -312,7 +312,7 @@ def fly(i, x, y, angle, vx, vy, spin, hx, hy, gravity, t, n, n_end, dt, toleranc
     ``n_end``, whichever comes first, the grid rows passed recorded. Returns the state there, the time flown,
     whether a corner touched, and the last grid row the flight passed."""
     end_time = n_end * dt
-    tau, touched = time_to_contact(y, angle, vy, spin, hx, hy, gravity, end_time - t, tolerance)
+    tau, touched = time_to_contact(y, angle, vy, spin, hx, hy, gravity, end_time - t, tolerance, 0.0)
     # grid rows passed in this flight: up to the end, or to the last one before the contact
     last = n_end if not touched else min(np.int64(math.floor((t + tau) / dt)), n_end)
     if record:
