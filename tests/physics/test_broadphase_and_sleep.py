@@ -10,6 +10,7 @@ import pytest
 
 from box_toss_env.physics import Box, Scene, scenes, simulate
 from box_toss_env.physics.broadphase import candidate_pairs, sweep_axis
+from box_toss_env.physics.flight import time_to_contact
 
 
 @numba.njit
@@ -187,3 +188,17 @@ def test_one_box_in_a_colliding_scene_is_the_floor_only_solver_bit_for_bit(name)
     assert np.array_equal(colliding.final_state, alone.final_state)
     assert np.array_equal(colliding.rest_time, alone.rest_time, equal_nan=True)
     assert np.array_equal(colliding.n_impacts, alone.n_impacts)
+
+
+@numba.njit
+def floor_contact_time(y, vy, resolution):
+    return time_to_contact(y, 0.0, vy, 0.0, 0.4, 0.2, -9.81, 1.0, 1e-12, resolution)
+
+
+def test_the_search_for_whole_steps_alone_stops_at_its_resolution():
+    """A box lying on the floor whose centre separates at 1e-200 m/s: advancement steps of about 1e-200 s never
+    reach the floor; with a resolution the search stops at once, reporting no contact before the time reached."""
+    tau, touched = floor_contact_time(0.2, 1e-200, 0.25 / 128)
+    assert not touched and tau < 0.25 / 128
+    tau, touched = floor_contact_time(0.7, 0.0, 0.25 / 128)  # half a metre up: the fall takes sqrt(2 h / g)
+    assert touched and tau == pytest.approx(math.sqrt(2 * 0.5 / 9.81), abs=1e-9)
