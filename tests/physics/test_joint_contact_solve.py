@@ -2,7 +2,6 @@
 and the floor, the impulses it returns meet every condition of the 2D Coulomb contact LCP, and they are the
 impulses the alternation of exact normal solves and friction sweeps converges to."""
 
-
 import numba
 import numpy as np
 import pytest
