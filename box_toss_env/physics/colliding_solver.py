@@ -70,9 +70,8 @@ from .robust_solver import (
 TUNNEL_FRACTION = 0.5  # [-] of the smallest half extent: the most any point moves in one substep
 MAX_SUBSTEPS = 256
 VELOCITY_ITERATIONS = 64  # rounds of exact normal solve and friction sweep at most per substep
-GAUSS_SEIDEL_ITERATIONS = 16  # sweeps at most of the Gauss-Seidel fallback (more than DIRECT_LIMIT contacts)
 RESTITUTION_ITERATIONS = 16
-PENALTY_ITERATIONS = 16
+PENALTY_ITERATIONS = 16  # the penalty's Gauss-Seidel sweeps at most (fewer if the scene's solver_iterations is)
 CONVERGED = 1e-9  # sweeps stop when the impulses change by less than this share of their sum
 CONTACT_TOLERANCE = 1e-12  # [m per m of size + 1 m] penetration below this is not corrected
 MIN_CAPACITY = 16
@@ -259,13 +258,20 @@ def normal_lcp(w, free, x, active, count, factor, index, y):
 
 
 @jit_stage
+def solver_settings(settings):
+    """(solver_tolerance, solver_iterations) of the scene: where the Gauss-Seidel sweeps stop."""
+    return settings[layout.SOLVER_TOLERANCE], np.int64(settings[layout.SOLVER_ITERATIONS])
+
+
+@jit_stage
 def solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, w, factor, free, x, active,
-                     index, y, state):
+                     index, y, state, settings):
     """Stage 4: the contact impulses. Up to JOINT_LIMIT contacts with friction, normal and friction impulses
     are solved together, exactly (``joint_contact_solve``); up to DIRECT_LIMIT contacts (or if that does not
     settle), the normal impulses are solved exactly together (``normal_lcp``: a stack's load passes through
     every box at once, whatever the mass ratio), alternating with a friction sweep until the impulses settle;
-    beyond that, or if the exact solve fails, projected Gauss-Seidel (``gauss_seidel``)."""
+    beyond that, or if the exact solve fails, projected Gauss-Seidel (``gauss_seidel``, with the scene's
+    ``solver_tolerance`` and ``solver_iterations`` from ``settings``)."""
     if count == 0:
         return
     if use_friction and count <= JOINT_LIMIT and solve_jointly(contacts, ids, count, vel, inv_mass, inv_inertia, w,
@@ -304,7 +310,8 @@ def solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, use_frict
                 break
         if solved:
             return
-    gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, IMPULSE, GAUSS_SEIDEL_ITERATIONS)
+    sweep_tolerance, sweeps = solver_settings(settings)
+    gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, IMPULSE, sweeps, sweep_tolerance)
 
 
 @jit_stage
@@ -353,8 +360,9 @@ def friction_sweep(contacts, ids, count, vel, inv_mass, inv_inertia):
 
 
 @jit_stage
-def gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, column, iterations):
-    """Projected Gauss-Seidel over the contacts (Box2D's sequential impulses), at most ``iterations`` sweeps:
+def gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, column, iterations, tolerance):
+    """Projected Gauss-Seidel over the contacts (Box2D's sequential impulses), at most ``iterations`` sweeps,
+    stopping once a sweep changes the impulses by less than ``tolerance`` of their sum:
     friction clamped to mu times the normal impulse, then the normal impulse >= 0 with u_rel . n >= target
     (column TARGET), the normal impulses accumulated in ``contacts[:, column]`` and applied to ``vel``. Stage 4
     runs it on the velocities (IMPULSE, with friction), stage 2 on the penalty's pseudo-velocities
@@ -384,7 +392,7 @@ def gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction,
                 apply_impulse(c, dp * nx, dp * ny, contacts, ids, vel, inv_mass, inv_inertia)
             change += abs(dp)
             total += after
-        if change <= CONVERGED * total:
+        if change <= tolerance * total:
             break
 
 
@@ -429,14 +437,17 @@ def apply_restitution(contacts, ids, count, vel, inv_mass, inv_inertia, threshol
 
 
 @jit_stage
-def correct_penetrations(contacts, ids, count, pose, vel, pseudo, inv_mass, inv_inertia, h, slop, tolerance,
+def correct_penetrations(contacts, ids, count, pose, vel, pseudo, inv_mass, inv_inertia, h, settings, tolerance,
                          gravity, params, w, factor, free, x, active, index, y):
     """Stage 2: pseudo-velocities that remove the penalty's share of each penetration deeper than the slop
     (normal impulses >= 0 with targets ERP depth / h; the other contacts may close their gap but not pass
     it), moved into the positions; the gaps of every contact follow to first order, and the potential
     energy gained is taken from the kinetic energy of the moved bodies. Up to DIRECT_LIMIT contacts the
     impulses are solved exactly (``normal_lcp``, as the velocities: Gauss-Seidel leaves a light box
-    between heavy ones turning), beyond that by Gauss-Seidel. Returns the deepest penetration (0 if none)."""
+    between heavy ones turning), beyond that by Gauss-Seidel (the scene's ``solver_tolerance``, at most
+    PENALTY_ITERATIONS or ``solver_iterations`` sweeps). ``settings`` gives the slop and the sweeps.
+    Returns the deepest penetration (0 if none)."""
+    slop = settings[layout.PENETRATION_SLOP]
     deepest = 0.0
     for c in range(count):
         deepest = max(deepest, -contacts[c, GAP])
@@ -469,7 +480,9 @@ def correct_penetrations(contacts, ids, count, pose, vel, pseudo, inv_mass, inv_
                     apply_impulse(c, x[c] * contacts[c, NX], x[c] * contacts[c, NY], contacts, ids, pseudo, inv_mass,
                                   inv_inertia)
     if not solved:
-        gauss_seidel(contacts, ids, count, pseudo, inv_mass, inv_inertia, False, PSEUDO_IMPULSE, PENALTY_ITERATIONS)
+        sweep_tolerance, sweeps = solver_settings(settings)
+        gauss_seidel(contacts, ids, count, pseudo, inv_mass, inv_inertia, False, PSEUDO_IMPULSE,
+                     min(sweeps, PENALTY_ITERATIONS), sweep_tolerance)
     for c in range(count):
         ux, uy = relative_velocity(c, contacts, ids, pseudo)
         contacts[c, GAP] += h * (ux * contacts[c, NX] + uy * contacts[c, NY])

@@ -23,7 +23,8 @@ The stage script of one substep of length h:
      Delassus matrix, ``normal_lcp``: a stack's load passes through every box at once, whatever the mass
      ratio), alternating with friction sweeps until the impulses change by less than CONVERGED of their
      sum (at most VELOCITY_ITERATIONS rounds); beyond that, projected Gauss-Seidel over the contacts
-     (Box2D's sequential impulses, friction then normal at each, at most GAUSS_SEIDEL_ITERATIONS sweeps);
+     (Box2D's sequential impulses, friction then normal at each, until a sweep changes the impulses by less
+     than the scene's ``solver_tolerance`` of their sum, at most ``solver_iterations`` sweeps);
   5. restitution, only for impacts: a contact that approached faster than the restitution threshold
      before this substep (u0 = u_rel . n < -threshold) and took an impulse gets the target
      u_rel . n >= -e u0 (Newton's law with the approach speed before the solve, as Box2D v3), so a
@@ -431,7 +432,7 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
                 note_penetration(contacts, ids, count, max_penetration)
                 # 2. relax: split-impulse correction of penetrations deeper than the slop
                 if PENALTY and count > 0:
-                    correct_penetrations(contacts, ids, count, pose, vel, pseudo, inv_mass, inv_inertia, h, slop,
+                    correct_penetrations(contacts, ids, count, pose, vel, pseudo, inv_mass, inv_inertia, h, settings,
                                          tolerance, gravity, params, w, factor, free, x, active, index, lcp_y)
                 approach_speeds(contacts, ids, count, vel, params, kinetic_before)
                 # 3. integrate velocities
@@ -441,14 +442,14 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
                 warm_start(contacts, ids, count, previous_keys, previous_impulses, n_previous, h / h_previous, vel,
                            inv_mass, inv_inertia)
                 solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, FRICTION_ON, w, factor, free, x,
-                                 active, index, lcp_y, contact_state)
+                                 active, index, lcp_y, contact_state, settings)
                 n_previous = store_impulses(contacts, ids, count, previous_keys, previous_impulses)
                 h_previous = h
                 # 5. restitution for impacts only: solved with every contact and friction, then polished
                 impacts = restitution_targets(contacts, count, threshold)
                 if impacts > 0:
                     solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, FRICTION_ON, w, factor, free, x,
-                                     active, index, lcp_y, contact_state)
+                                     active, index, lcp_y, contact_state, settings)
                     apply_restitution(contacts, ids, count, vel, inv_mass, inv_inertia, threshold)
                 # 6. no energy gained by the bodies that took an impulse
                 mark_touched(contacts, ids, count, impacts, threshold, touched, impacted)

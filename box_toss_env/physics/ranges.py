@@ -58,6 +58,8 @@ ENGINE_RANGES = {
     "sleep_speed": Range(0.0, math.inf, "m/s"),
     "sleep_time": Range(0.0, math.inf, "s"),
     "penetration_slop": Range(0.0, math.inf, "m"),
+    "solver_tolerance": Range(0.0, 1.0),
+    "solver_iterations": Range(1, 10_000),
 }
 """Scene and Box arguments. ``inf`` means any finite value: a stiffness too high for the seed scheme's
 explicit spring is its documented fault (reported as ``NonFiniteStateError``), not a bad input."""

@@ -199,6 +199,8 @@ def make_settings(scene: Scene, max_steps: int, until_rest: bool) -> np.ndarray:
     settings[layout.SLEEP_SPEED] = scene.sleep_speed
     settings[layout.SLEEP_TIME] = scene.sleep_time
     settings[layout.PENETRATION_SLOP] = scene.penetration_slop
+    settings[layout.SOLVER_TOLERANCE] = scene.solver_tolerance
+    settings[layout.SOLVER_ITERATIONS] = scene.solver_iterations
     return settings
 
 

@@ -71,6 +71,17 @@ def test_a_pile_of_100_settles():
     assert settled[:, 1].min() > 0.099  # lying on the floor, not in it
 
 
+def test_the_pile_sweeps_stop_at_the_scene_tolerance_or_its_iterations():
+    # 200 contacts, the Gauss-Seidel path: with a tolerance of 1e-9 every substep takes the 16 sweeps (more
+    # change the pile); with 0.1 no substep reaches 32 (so a cap of 64 changes nothing)
+    def pile(tolerance, iterations):
+        scene = scenes.pile(n=100, solver_tolerance=tolerance, solver_iterations=iterations)
+        return simulate(scene, duration=0.5).final_state
+
+    assert not np.array_equal(pile(1e-9, 16), pile(1e-9, 32))
+    assert np.array_equal(pile(0.1, 32), pile(0.1, 64))
+
+
 def test_a_box_dropped_on_another_comes_to_rest_on_it():
     scene = scenes.drop_on_box()
     result = simulate(scene, duration=5.0, until_rest=True)

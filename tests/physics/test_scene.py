@@ -85,6 +85,9 @@ def test_python_and_numpy_numbers_are_numbers(value):
         ("penalty_stiffness", -5.0, r"penalty_stiffness must be in \[0, inf\) N/m"),
         ("solver", "verlet", r"solver must be one of \('robust', 'seed'\)"),
         ("sleep_time", -1.0, r"sleep_time must be in \[0, inf\) s"),
+        ("solver_tolerance", 1.5, r"solver_tolerance must be in \[0, 1\], got 1.5"),
+        ("solver_tolerance", -1e-9, r"solver_tolerance must be in \[0, 1\]"),
+        ("solver_iterations", 0, r"solver_iterations must be an integer in \[1, 10000\], got 0"),
         ("boxes", (), r"boxes must hold at least one Box"),
     ],
 )
@@ -104,6 +107,8 @@ def test_bad_scene_values_name_the_parameter_and_range(field, value, message):
         ("use_impulses", "yes"),
         ("use_penalty", 1),
         ("solver", 1),
+        ("solver_iterations", 16.0),
+        ("solver_iterations", True),
         ("boxes", ("box",)),
     ],
 )
