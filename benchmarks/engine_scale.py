@@ -25,7 +25,8 @@ exact initial state) and is timed over ``WINDOW`` s of simulated time, its stepp
 
 Figures: ns per body-step = wall / (steps n); us per body per simulated second = wall / (n T), T the
 simulated time covered, which puts engines with different steps on one scale. Each engine runs at its
-own default step (``DEFAULT_DT``: 60 Hz for the others, Box2D v3 with 4 substeps), ours at ``OUR_DT``.
+own default step (``DEFAULT_DT``: 60 Hz for the others, Box2D v3 with 4 substeps), ours at ``OUR_DT`` with
+the Gauss-Seidel stop ``OUR_SOLVER``.
 Per-case budget: an engine whose window would take longer than ``--budget`` s is timed over fewer steps
 (at least ``MIN_STEPS``; the table's ``steps`` column says how many, and the text which runs were cut).
 Quality, at the end of the awake run: max penetration (deepest box corner below the floor or inside another
@@ -58,6 +59,13 @@ OUR_DT: dict[str, float] = {"pile": 1 / 120, "wide pile": 1 / 120, "pyramid": 1 
 of 1/60, 1/120, 1/256 at which the awake scene's deepest penetration stays in the micrometres (piles of 100
 and 1,000 boxes at 1/60 end 2 s at 0.5-0.8 mm, at 1/120 at 0.3 um and 1 nm; the pyramid at 1/60 at 0.7 nm;
 Box2D v3 at its default, 5-11 mm)."""
+OUR_SOLVER = {"solver_tolerance": 1e-4, "solver_iterations": 32}
+"""Our Gauss-Seidel stop for these scenes (``Scene.solver_tolerance``, ``solver_iterations``; more than 64
+contacts): sweeps stop once they change the impulses by less than 1e-4 of their sum, after 32 at most. Against
+the scene default (1e-9, 16: the 16 sweeps nearly always run) it cost 0.6x on the awake pile of 100 with 4 um
+of penetration instead of 0.3 um, and 0.64x on the pyramid with its top box drifting 0.08 mm instead of 0.64
+(``benchmarks.pile_pareto`` shows both); a settled pile kept awake creeps more at 1e-4 (4.7 mm in 10 s, the
+default 0.1 um), which the settled runs' sleeping ends."""
 
 OURS = "ours"
 ENGINE_ORDER = (OURS, "box2d3", "box2d", "pymunk")
@@ -108,11 +116,11 @@ def pile_case(n: int) -> tuple[str, Scene]:
     """(kind, scene) of the pile of ``n`` boxes, at our step for that kind."""
     kind = "wide pile" if n >= WIDE_FROM else "pile"
     scene = wide_pile(n) if kind == "wide pile" else scenes.pile(n)
-    return kind, scene.replace(dt=OUR_DT[kind])
+    return kind, scene.replace(dt=OUR_DT[kind], **OUR_SOLVER)
 
 
 def pyramid_case() -> Scene:
-    return scenes.pyramid(rows=PYRAMID_ROWS).replace(dt=OUR_DT["pyramid"])
+    return scenes.pyramid(rows=PYRAMID_ROWS).replace(dt=OUR_DT["pyramid"], **OUR_SOLVER)
 
 
 # -- quality -------------------------------------------------------------------------------------

@@ -1,5 +1,6 @@
 """Error against run time for piles: penetration and drift against cost as each engine's accuracy knob
-turns (our dt, Box2D v3's substeps, pymunk's iterations), on the 210-box pyramid and a 100-box pile.
+turns (our dt at the scene's default Gauss-Seidel stop, and our ``solver_tolerance`` at a fixed dt; Box2D v3's
+substeps; pymunk's iterations), on the 210-box pyramid and a 100-box pile.
 Prints one table and writes one Pareto plot; asserts nothing.
 
     python -m benchmarks.pile_pareto [--quick] [--write-docs]
@@ -25,7 +26,10 @@ from benchmarks.other_scenes import BOX2D3_DT, available_scene_engines, build_bo
 from box_toss_env.files import save_figure
 from box_toss_env.physics import Scene, scenes
 
-OUR_DTS = (1 / 64, 1 / 128, 1 / 256, 1 / 512)  # [s]
+OUR_DTS = (1 / 64, 1 / 128, 1 / 256, 1 / 512)  # [s], at the scene's default solver_tolerance (1e-9, 16 sweeps)
+OUR_TOLERANCES = (1e-3, 1e-4, 1e-5, 1e-6)  # solver_tolerance with 32 sweeps at most, at OUR_TOLERANCE_DT
+OUR_TOLERANCE_DT = 1 / 120  # [s]
+OURS_BY_TOLERANCE = "ours, solver_tolerance"
 BOX2D3_SUBSTEPS = (1, 2, 4, 8)  # at its default 60 Hz
 PYMUNK_ITERATIONS = (5, 10, 20, 40)  # at 60 Hz
 PYMUNK_DT = 1 / 60
@@ -48,12 +52,27 @@ def time_loop(step, read_states, steps: int, n: int) -> tuple[float, np.ndarray]
 
 def variants(engines: list[str]):
     """(engine, knob text, dt, run(scene, start, steps) -> (wall, final state))."""
+    defaults = {"solver_tolerance": 1e-9, "solver_iterations": 16}
     for dt in OUR_DTS:
         yield (
             engine_scale.OURS,
             f"dt 1/{round(1 / dt)}",
             dt,
-            lambda scene, start, steps, dt=dt: engine_scale.run_ours(scene.replace(dt=dt), start, steps, False)[:2],
+            lambda scene, start, steps, dt=dt: engine_scale.run_ours(
+                scene.replace(dt=dt, **defaults), start, steps, False
+            )[:2],
+        )
+    for tolerance in OUR_TOLERANCES:
+        yield (
+            OURS_BY_TOLERANCE,
+            f"{tolerance:g}",
+            OUR_TOLERANCE_DT,
+            lambda scene, start, steps, tolerance=tolerance: engine_scale.run_ours(
+                scene.replace(dt=OUR_TOLERANCE_DT, solver_tolerance=tolerance, solver_iterations=32),
+                start,
+                steps,
+                False,
+            )[:2],
         )
     if "box2d3" in engines:
         for sub in BOX2D3_SUBSTEPS:
@@ -112,6 +131,7 @@ def table(rows) -> list[str]:
 def plot(rows, path: Path = FIGURE) -> None:
     """Two panels per case, error (log) against cost (log), a line per engine through its knob values."""
     import matplotlib
+    import matplotlib.ticker
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -130,6 +150,7 @@ def plot(rows, path: Path = FIGURE) -> None:
             ax.set_xlabel("wall time per body per simulated second [us]")
             ax.set_ylabel(label)
             ax.grid(True, which="both", alpha=0.3)
+            ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
             ax.legend(fontsize=8)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
