@@ -26,6 +26,7 @@ from .simulate import (
     check_finite_stats,
     make_settings,
     simulate,
+    warm_start_memory,
 )
 
 __all__ = [
@@ -44,4 +45,5 @@ __all__ = [
     "make_settings",
     "scenes",
     "simulate",
+    "warm_start_memory",
 ]

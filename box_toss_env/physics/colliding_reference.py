@@ -137,12 +137,12 @@ def corners_inside(b1, b2, vel, force, params, restitution, friction, stiffness,
 
 def make_colliding_reference_kernel(use_impulses: bool, use_penalty: bool, use_friction: bool, record: bool,
                                source_digest: int):
-    """Build the seed kernel for scenes whose boxes collide (flags compile-time, as
-    ``reference_solver.make_reference_kernel``'s)."""
+    """Build the seed kernel for scenes whose boxes collide (flags compile-time, as ``reference_solver``'s; it
+    takes the robust kernel's arguments and leaves ``warm`` as it is: the seed scheme keeps no contacts)."""
     IMPULSES, PENALTY, FRICTION, RECORD, DIGEST = use_impulses, use_penalty, use_friction, record, source_digest
 
     @jit_kernel
-    def run(state, params, settings, stats, trajectory, events):
+    def run(state, params, settings, stats, trajectory, events, warm):
         _ = DIGEST  # the on-disk cache key includes every engine source (see reference_solver)
         dt, gravity, max_steps, until_rest, _, sleep_speed, sleep_time, _ = read_settings(settings)
         nb = state.shape[0]

@@ -304,9 +304,42 @@ def sleep_islands(ids, count, pose, vel, radius, awake, supported, still_for, sl
 
 
 @jit_stage
+def load_warm_start(warm, previous_keys, previous_impulses, dt):
+    """The warm start a caller kept from its last call (``layout.WARM_START``: row 0 holds the count and the
+    substep length, then a row per contact: key, normal and friction impulse), into the kernel's arrays;
+    returns (count, substep length). An empty ``warm`` (none kept) starts cold: (0, dt)."""
+    if warm.shape[0] == 0:
+        return 0, dt
+    count = min(np.int64(warm[0, 0]), warm.shape[0] - 1, previous_keys.shape[0])
+    for c in range(count):
+        previous_keys[c] = np.int64(warm[1 + c, 0])
+        previous_impulses[c, 0] = warm[1 + c, 1]
+        previous_impulses[c, 1] = warm[1 + c, 2]
+    return count, warm[0, 1] if count > 0 else dt
+
+
+@jit_stage
+def store_warm_start(warm, previous_keys, previous_impulses, n_previous, h_previous):
+    """The last substep's impulses by contact key into ``warm`` (``load_warm_start``'s layout), as many as it
+    has rows for (the keys are sorted, so a prefix is a warm start too); nothing if ``warm`` is empty."""
+    if warm.shape[0] == 0:
+        return
+    count = min(n_previous, warm.shape[0] - 1)
+    warm[0, 0] = count
+    warm[0, 1] = h_previous
+    warm[0, 2] = 0.0
+    for c in range(count):
+        warm[1 + c, 0] = previous_keys[c]
+        warm[1 + c, 1] = previous_impulses[c, 0]
+        warm[1 + c, 2] = previous_impulses[c, 1]
+
+
+@jit_stage
 def write_back(state, stats, pose, vel, first_contact, n_impacts, n_stepped, max_penetration, rest_time, n, dt,
-               status, fail_step):
-    """The bodies' final states and stats; a failure is reported on the bodies that are not finite."""
+               status, fail_step, warm, previous_keys, previous_impulses, n_previous, h_previous):
+    """The bodies' final states and stats (a failure is reported on the bodies that are not finite), and the
+    last substep's impulses into ``warm`` for the next call (``store_warm_start``)."""
+    store_warm_start(warm, previous_keys, previous_impulses, n_previous, h_previous)
     for b in range(state.shape[0]):
         state[b, 0], state[b, 1], state[b, 2] = pose[b, 0], pose[b, 1], pose[b, 2]
         state[b, 3], state[b, 4], state[b, 5] = vel[b, 0], vel[b, 1], vel[b, 2]
@@ -326,7 +359,7 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
     PENALTY, FRICTION_ON, RECORD, DIGEST = use_penalty, use_friction, record, source_digest
 
     @jit_kernel
-    def run(state, params, settings, stats, trajectory, events):
+    def run(state, params, settings, stats, trajectory, events, warm):
         _ = DIGEST  # the on-disk cache key includes every engine source (see robust_solver)
         dt, gravity, max_steps, until_rest, threshold, sleep_speed, sleep_time, slop = read_settings(settings)
         nb = state.shape[0]
@@ -360,15 +393,15 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
         update_geometry(pose, half, everyone, trig, bound)
         axis = sweep_axis(pose, everyone)
         order = np.argsort(pose[:, axis])
-        low = np.zeros(nb)
-        pair_keys = np.zeros(max(4 * nb, MIN_CAPACITY), np.int64)
+        low, pair_keys = np.zeros(nb), np.zeros(max(4 * nb, MIN_CAPACITY), np.int64)
         # bodies advanced alone: advance_box's memory rows and work arrays (contact_solver)
         memory = np.zeros((nb, MEMORY_SIZE))
         alone = np.zeros(nb, np.bool_)  # whether a body's memory row holds on (advanced alone since the substeps)
         corners = np.zeros((CORNER_ROWS, MAX_CORNERS))
         corner_delassus = np.zeros((MAX_CORNERS, MAX_CORNERS))
         corner_ids = np.zeros(MAX_CORNERS, np.int64)
-        n_previous, h_previous, count, n, n_awake, status, fail_step = 0, dt, 0, 0, nb, layout.STATUS_OK, -1
+        count, n, n_awake, status, fail_step = 0, 0, nb, layout.STATUS_OK, -1
+        n_previous, h_previous = load_warm_start(warm, previous_keys, previous_impulses, dt)  # from the last call
         if RECORD:
             record_states(trajectory, 0, pose, vel)
         if until_rest:  # bodies placed at rest sleep from the start
@@ -467,6 +500,6 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
                 if n_awake == 0:
                     break
         write_back(state, stats, pose, vel, first_contact, n_impacts, n_stepped, max_penetration, rest_time, n, dt,
-                   status, fail_step)
+                   status, fail_step, warm, previous_keys, previous_impulses, n_previous, h_previous)
 
     return run

@@ -47,10 +47,11 @@ def _grouped_kernel_source(SOLVER, IMPULSES, PENALTY, FRICTION, DIGEST):
         _ = (SOLVER, IMPULSES, PENALTY, FRICTION, DIGEST)  # part of the on-disk cache key
         trajectory = np.zeros((0, 0, layout.STATE_SIZE))  # nothing recorded
         events = np.zeros((0, 0, layout.EVENT_SIZE))
+        warm = np.zeros((0, layout.WARM_START_SIZE))  # each throw starts cold, as the single env's
         for first in range(0, state.shape[0], group_size):
             last = first + group_size
             colliding_kernel(state[first:last], params[first:last], settings, stats[first:last],  # noqa: F821
-                             trajectory, events)
+                             trajectory, events, warm)
 
     return run_groups
 

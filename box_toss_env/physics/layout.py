@@ -28,6 +28,10 @@ STATS_SIZE = 9
 # non-finite, -1 if none), N_RECORDED (rows of the trajectory written for this body).
 STATUS_OK, STATUS_NONFINITE = 0, 1
 
+# the colliding robust solver's warm start kept between runs (rows, WARM_START_SIZE), ``warm_start_memory``:
+# row 0 (count, substep length [s], 0), then per contact (key, normal impulse [N s], friction impulse [N s])
+WARM_START_SIZE = 3
+
 # impact events (n_bodies, MAX_EVENTS, EVENT_SIZE), recorded only when a trajectory is recorded
 EVENT_TIME, EVENT_APPROACH_SPEED, EVENT_CONTACTS = 0, 1, 2  # [s], [m/s], points hit at once
 EVENT_SIZE = 3

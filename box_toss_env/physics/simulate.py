@@ -102,6 +102,7 @@ class Simulator:
         self.kernel = make_kernel(flags)
         self._no_trajectory = np.zeros((0, 0, layout.STATE_SIZE))
         self._no_events = np.zeros((0, 0, layout.EVENT_SIZE))
+        self._no_warm_start = np.zeros((0, layout.WARM_START_SIZE))
         self._ready = False  # compiled or loaded for the arrays of the first run
         self._start = (background_compile.InterpretedStart(self.kernel, background_compile.kernel_recipe(flags))
                        if start_interpreted else None)
@@ -124,26 +125,67 @@ class Simulator:
             return 1
         return self.threads if self.threads is not None else numba.config.NUMBA_NUM_THREADS
 
+    @property
+    def carries_warm_start(self) -> bool:
+        """Whether ``run`` takes a ``warm_start``: the colliding kernels. The robust one keeps each contact's
+        impulses from one substep to the next and so from one run to the next; the seed scheme keeps none
+        and leaves the array as it is. The floor-only kernels have no contacts to keep."""
+        return self.flags.boxes_collide
+
     def run(self, state: np.ndarray, params: np.ndarray, settings: np.ndarray, stats: np.ndarray,
-            trajectory: np.ndarray | None = None, events: np.ndarray | None = None) -> None:
+            trajectory: np.ndarray | None = None, events: np.ndarray | None = None,
+            warm_start: np.ndarray | None = None) -> None:
         """Advance ``state`` in place and fill ``stats`` (n, STATS_SIZE); with ``record`` also
-        ``trajectory`` (max_steps + 1, n, 6) and ``events`` (n, MAX_EVENTS, 3)."""
+        ``trajectory`` (max_steps + 1, n, 6) and ``events`` (n, MAX_EVENTS, 3).
+
+        ``warm_start`` (from ``warm_start_memory``, kernels that ``carries_warm_start``): the contacts'
+        impulses at the end of the last run that was given this array, the start of this one's, and its end
+        written back. A scene advanced in several runs with one such array steps as in one run (without it
+        each run starts its contacts from zero, and a pile settles a little anew at each); give each scene or
+        episode its own, zeroed when it starts."""
         if self.flags.record and (trajectory is None or events is None):
             raise ValueError("trajectory and events arrays are required when recording")
         trajectory = self._no_trajectory if trajectory is None else trajectory
         events = self._no_events if events is None else events
-        if not self._ready:
+        if warm_start is not None and not self.carries_warm_start:
+            raise ValueError("warm_start is for scenes whose boxes collide (Simulator.carries_warm_start); "
+                             f"this kernel is {self.flags}")
+        if self.carries_warm_start:
+            warm = self._no_warm_start if warm_start is None else check_warm_start(warm_start)
+            args: tuple = (state, params, settings, stats, trajectory, events, warm)
+        else:
             args = (state, params, settings, stats, trajectory, events)
-            self.interpreted = self._start is not None and self._start.run(args, (state, stats, trajectory, events))
+        if not self._ready:
+            outputs = (state, stats, trajectory, events, *args[6:])  # and the warm start, which the kernel writes
+            self.interpreted = self._start is not None and self._start.run(args, outputs)
             if self.interpreted:
                 return
             ensure_compiled(self.kernel, args)
             self._ready = True
         shares = min(self.shares, state.shape[0])
         if shares <= 1 or self.flags.record:  # a recording's (T, n, 6) trajectory does not split into contiguous shares
-            self.kernel(state, params, settings, stats, trajectory, events)
+            self.kernel(*args)
         else:
             run_in_shares(self.kernel, shares, state, params, settings, stats, trajectory, events)
+
+
+def warm_start_memory(n_bodies: int) -> np.ndarray:
+    """A zeroed warm start for ``Simulator.run`` on a colliding scene of ``n_bodies`` (``layout.WARM_START_SIZE``
+    columns): room for 8 contacts a body, what the kernel starts with; more are kept as far as it goes."""
+    n_bodies = check_integer("n_bodies", n_bodies, 1)
+    return np.zeros((1 + max(8 * n_bodies, 16), layout.WARM_START_SIZE))
+
+
+def check_warm_start(warm_start) -> np.ndarray:
+    """``warm_start`` if it is a C-contiguous float64 array (rows, WARM_START_SIZE) with at least one row
+    (``warm_start_memory``), else a ValueError naming it."""
+    if (not isinstance(warm_start, np.ndarray) or warm_start.dtype != np.float64 or warm_start.ndim != 2
+            or warm_start.shape[0] < 1 or warm_start.shape[1] != layout.WARM_START_SIZE
+            or not warm_start.flags.c_contiguous):
+        shape = getattr(warm_start, "shape", None)
+        raise ValueError(f"warm_start must be a C-contiguous float64 array of shape (rows >= 1, "
+                         f"{layout.WARM_START_SIZE}) from warm_start_memory, got {type(warm_start).__name__} {shape}")
+    return warm_start
 
 
 def run_in_shares(kernel, shares: int, state, params, settings, stats, trajectory, events) -> None:

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from box_toss_env.physics import layout
+from box_toss_env.physics import layout, warm_start_memory
 from box_toss_env.physics.compilation import cached_on_disk, compiled_in_process, ensure_compiled
 
 COMPILING_NOTICE = "compiling the {name} kernel... (first use only)"
@@ -37,9 +37,12 @@ def load_kernel(kernel: Callable[..., Any], args: tuple) -> None:
     kernel(*args)
 
 
-def zero_step_args(state: np.ndarray, params: np.ndarray, settings: np.ndarray, stats: np.ndarray) -> tuple:
+def zero_step_args(
+    state: np.ndarray, params: np.ndarray, settings: np.ndarray, stats: np.ndarray, warm_start: bool = False
+) -> tuple:
     """Arguments for a kernel call that compiles it for these arrays' types and simulates nothing:
-    copies, with ``MAX_STEPS`` = 0 and a one-row trajectory and events (the types of the real ones)."""
+    copies, with ``MAX_STEPS`` = 0 and a one-row trajectory and events (the types of the real ones), and a
+    warm start for a kernel that carries one (``Simulator.carries_warm_start``)."""
     settings = np.array(settings, dtype=np.float64)
     settings[layout.MAX_STEPS] = 0.0
     n = state.shape[0]
@@ -50,6 +53,7 @@ def zero_step_args(state: np.ndarray, params: np.ndarray, settings: np.ndarray, 
         np.array(stats, dtype=np.float64),
         np.zeros((1, n, layout.STATE_SIZE)),
         np.zeros((n, layout.MAX_EVENTS, layout.EVENT_SIZE)),
+        *((warm_start_memory(n),) if warm_start else ()),
     )
 
 

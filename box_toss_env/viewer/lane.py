@@ -18,6 +18,7 @@ from box_toss_env.physics import (
     check_finite_stats,
     layout,
     make_settings,
+    warm_start_memory,
 )
 from box_toss_env.viewer.kernel_loader import KernelJob, KernelLoader, zero_step_args
 
@@ -83,6 +84,7 @@ class Lane:
     params: np.ndarray = field(init=False)
     settings: np.ndarray = field(init=False)
     stats: np.ndarray = field(init=False)
+    warm_start: np.ndarray | None = field(init=False, default=None)  # the contacts' impulses between frames
     timer: StepTimer = field(init=False, default_factory=StepTimer)
     sim_time: float = field(init=False, default=0.0)
     steps: int = field(init=False, default=0)
@@ -108,6 +110,7 @@ class Lane:
                 scene.body_params(),
                 make_settings(scene, 0, until_rest=False),
                 np.zeros((scene.n_bodies, layout.STATS_SIZE)),
+                warm_start=simulator.carries_warm_start,
             )
             self.job = self.loader.prepare(simulator.kernel, args, scene.solver)
 
@@ -131,6 +134,7 @@ class Lane:
         simulator = self._make_simulator(scene)
         if simulator.flags != self.simulator.flags:
             self._use_simulator(simulator, scene)
+            self.warm_start = warm_start_memory(scene.n_bodies) if simulator.carries_warm_start else None
         self.scene = scene
         self.params = scene.body_params()
         self.settings = make_settings(scene, self.steps_per_frame, until_rest=False)
@@ -139,6 +143,8 @@ class Lane:
         """Back to the scene's initial state (with the current parameters)."""
         self.state = self.scene.initial_state()
         self.stats = np.zeros((self.scene.n_bodies, layout.STATS_SIZE))
+        # the contacts' impulses carried from frame to frame, so that a pile stepped a frame at a time does not creep
+        self.warm_start = warm_start_memory(self.scene.n_bodies) if self.simulator.carries_warm_start else None
         self.timer.reset()
         self.sim_time = 0.0
         self.steps = 0
@@ -152,7 +158,7 @@ class Lane:
         if self.grab is not None:
             self._pull_grabbed_box()
         start = self.clock()
-        self.simulator.run(self.state, self.params, self.settings, self.stats)
+        self.simulator.run(self.state, self.params, self.settings, self.stats, warm_start=self.warm_start)
         elapsed = self.clock() - start
         try:
             check_finite_stats(self.stats, self.solver)

@@ -290,6 +290,7 @@ def throw_kernel_call(env) -> tuple[Any, tuple]:
         np.zeros((n, layout.PARAM_SIZE)),
         env.engine_settings,
         np.zeros((n, layout.STATS_SIZE)),
+        warm_start=Simulator(flags).carries_warm_start,
     )
     return Simulator(flags).kernel, args
 
