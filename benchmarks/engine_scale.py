@@ -59,13 +59,15 @@ OUR_DT: dict[str, float] = {"pile": 1 / 120, "wide pile": 1 / 120, "pyramid": 1 
 of 1/60, 1/120, 1/256 at which the awake scene's deepest penetration stays in the micrometres (piles of 100
 and 1,000 boxes at 1/60 end 2 s at 0.5-0.8 mm, at 1/120 at 0.3 um and 1 nm; the pyramid at 1/60 at 0.7 nm;
 Box2D v3 at its default, 5-11 mm)."""
-OUR_SOLVER = {"solver_tolerance": 1e-4, "solver_iterations": 32}
-"""Our Gauss-Seidel stop for these scenes (``Scene.solver_tolerance``, ``solver_iterations``; more than 64
-contacts): sweeps stop once they change the impulses by less than 1e-4 of their sum, after 32 at most. Against
-the scene default (1e-9, 16: the 16 sweeps nearly always run) it cost 0.6x on the awake pile of 100 with 4 um
-of penetration instead of 0.3 um, and 0.64x on the pyramid with its top box drifting 0.08 mm instead of 0.64
-(``benchmarks.pile_pareto`` shows both); a settled pile kept awake creeps more at 1e-4 (4.7 mm in 10 s, the
-default 0.1 um), which the settled runs' sleeping ends."""
+OUR_SOLVER = {"solver_tolerance": 1e-4, "solver_iterations": 32, "penetration_slop": 1e-5}
+"""Our solver settings for these scenes: the Gauss-Seidel stop (``Scene.solver_tolerance``, ``solver_iterations``;
+more than 64 contacts: sweeps stop once they change the impulses by less than 1e-4 of their sum, after 32 at most)
+and ``penetration_slop`` 10 um (the penalty leaves overlaps up to that alone; Box2D's slop is 5 mm). Against the
+scene defaults (1e-9, 16 sweeps that nearly always run, no slop), measured side by side over 2 s awake: the pile of
+100 cost 150 us per body per simulated second at 1/120 s, 94 with the stop, 71 with the slop too (penetration 0.3,
+4 and 10 um; its top box moved 1.5, 1.9 and 0.1 mm); the pyramid 175, 114 and 107 (penetration 0.7 nm, 4 and 14 um;
+top box drift 0.64, 0.08 and 0.27 mm). ``benchmarks.pile_pareto`` turns the tolerance. A settled pile kept awake
+creeps more at 1e-4 (4.7 mm in 10 s, at the defaults 0.1 um), which the settled runs' sleeping ends."""
 
 OURS = "ours"
 ENGINE_ORDER = (OURS, "box2d3", "box2d", "pymunk")
@@ -260,13 +262,16 @@ def quality(scene: Scene, start: np.ndarray, final: np.ndarray) -> tuple[float, 
 
 
 def settle(scene: Scene, engines: list[str], our_max: int = OUR_SETTLE_MAX) -> tuple[np.ndarray, str]:
-    """(the pile after SETTLE s, who settled it): ours up to ``our_max`` boxes, else the first available of
-    SETTLER_ORDER (ours if none is)."""
+    """(the pile after SETTLE s, who settled it): ours up to ``our_max`` boxes, at the scene defaults of the
+    settings in OUR_SOLVER (the most exact: every setting measured starts from the same pile), else the first
+    available of SETTLER_ORDER (ours if none is)."""
     for engine in SETTLER_ORDER if scene.n_bodies > our_max else ():
         if engine in engines:
             steps = round(SETTLE / DEFAULT_DT[engine])
             return simulate_scene(engine, scene, steps, record=False, dt=DEFAULT_DT[engine]).final_state, engine
-    return simulate(scene, duration=SETTLE).final_state, OURS
+    defaults = Scene()
+    exact = scene.replace(**{name: getattr(defaults, name) for name in OUR_SOLVER})
+    return simulate(exact, duration=SETTLE).final_state, OURS
 
 
 def scale_rows(
