@@ -8,7 +8,8 @@ The stage script of one substep of length h:
      corner within the box's reach plus the scene's largest (a struck box moves further than its own
      speed says) (speculative contacts, ``box_collision.find_contacts``); each starts from its impulse of
      the last substep when the same feature touched (warm starting), so a stack's load is carried from
-     step to step rather than rebuilt by the iterations;
+     step to step rather than rebuilt by the iterations; and from run to run when the caller keeps the
+     ``warm`` array (``load_warm_start``, ``store_warm_start``: in chunks as in one run);
   2. penalty: penetration deeper than the slop is removed by the critically damped penalty spring with
      backward Euler, as a pseudo-velocity (``robust_solver``'s split impulse, now between two bodies:
      ERP = h omega / (h omega + 2), omega = sqrt(k K_n)); positions move, velocities do not, and the
@@ -19,12 +20,15 @@ The stage script of one substep of length h:
   4. solve contact velocities: the normal impulses stay >= 0 and let each gap close but not pass
      (u_rel . n >= -max(gap, 0) / h); each contact's accumulated friction impulse is clamped to mu times
      its normal impulse (it can bring the slip at a contact to zero, never drive it the other way). Up to
-     DIRECT_LIMIT contacts the normal impulses are solved exactly together (an active set on the dense
-     Delassus matrix, ``normal_lcp``: a stack's load passes through every box at once, whatever the mass
-     ratio), alternating with friction sweeps until the impulses change by less than CONVERGED of their
-     sum (at most VELOCITY_ITERATIONS rounds); beyond that, projected Gauss-Seidel over the contacts
-     (Box2D's sequential impulses, friction then normal at each, until a sweep changes the impulses by less
-     than the scene's ``solver_tolerance`` of their sum, at most ``solver_iterations`` sweeps);
+     JOINT_LIMIT contacts, normal and friction impulses are solved exactly together (the Coulomb contact
+     LCP by an active set over each contact's stick / slide / free state, ``joint_contact_solve``); up to
+     DIRECT_LIMIT contacts, or if those states do not settle, the normal impulses are solved exactly
+     together (an active set on the dense Delassus matrix, ``normal_lcp``: a stack's load passes through
+     every box at once, whatever the mass ratio), alternating with friction sweeps until the impulses
+     change by less than CONVERGED of their sum (at most VELOCITY_ITERATIONS rounds); beyond that,
+     projected Gauss-Seidel over the contacts (Box2D's sequential impulses, friction then normal at each,
+     until a sweep changes the impulses by less than the scene's ``solver_tolerance`` of their sum, at
+     most ``solver_iterations`` sweeps);
   5. restitution, only for impacts: a contact that approached faster than the restitution threshold
      before this substep (u0 = u_rel . n < -threshold) and took an impulse gets the target
      u_rel . n >= -e u0 (Newton's law with the approach speed before the solve, as Box2D v3), so a
@@ -305,7 +309,7 @@ def sleep_islands(ids, count, pose, vel, radius, awake, supported, still_for, sl
 
 @jit_stage
 def load_warm_start(warm, previous_keys, previous_impulses, dt):
-    """The warm start a caller kept from its last call (``layout.WARM_START``: row 0 holds the count and the
+    """The warm start a caller kept from its last call (``layout.WARM_START_SIZE``: row 0 holds the count and the
     substep length, then a row per contact: key, normal and friction impulse), into the kernel's arrays;
     returns (count, substep length). An empty ``warm`` (none kept) starts cold: (0, dt)."""
     if warm.shape[0] == 0:
