@@ -47,6 +47,16 @@ def test_a_frame_is_eight_steps_of_the_engine(demo):
     assert demo.readouts(0)[1] == "0.40 s"
 
 
+def test_a_pile_stepped_frame_by_frame_is_the_pile_stepped_at_once():
+    # the lane carries the contacts' impulses from frame to frame (Simulator.run's warm_start)
+    scene = scenes.pile(12, solver="robust")
+    controller = ViewerController(scene)
+    run_frames(controller, 10)
+    lane = controller.lanes[0]
+    assert lane.warm_start is not None and lane.steps == 80
+    np.testing.assert_array_equal(lane.state, simulate(scene, steps=80).final_state)
+
+
 def test_pause_stops_stepping_and_single_step_still_steps(demo):
     demo.toggle_pause()
     before = demo.lanes[0].state.copy()
