@@ -37,7 +37,7 @@ import gymnasium as gym
 import numpy as np
 import yaml
 
-from agents import algorithms, ceiling, report, stack_planner, train
+from agents import algorithms, ceiling, report, section_merge, stack_planner, train
 from agents import config as configuration
 from agents.algorithms import ALGORITHMS
 from agents.config import algorithm_kwargs, load_hyperparams
@@ -45,6 +45,7 @@ from agents.doc_sections import README, read_section, replace_section
 from agents.envs import read_env_wrapper
 from agents.evaluation import STACK_TEST_EPISODES, TEST_TARGETS, evaluate_run, is_stack, make_baseline_run
 from agents.run_folder import read_csv
+from agents.section_merge import fill_line, merge_section
 from agents.training import RUNS, latest_checkpoint, read_timing
 from box_toss_env.envs.ballistic import BallisticThrows
 from box_toss_env.files import atomic_path, save_figure, write_atomic
@@ -333,13 +334,15 @@ def table_rows(
     root: Path, env_id: str, tier: str, algos: list[str], seeds: list[int], stored: dict[str, list[dict[str, Any]]]
 ) -> list[dict[str, Any]]:
     """The rows of the runs in ``root`` if it holds a trained one in ``tier`` (random actions alone are not a
-    table: they are shared by the tiers), else the rows stored in ``RESULTS`` (none if neither); found rows replace
-    the stored ones."""
+    table: they are shared by the tiers), else the rows stored in ``RESULTS`` (none if neither); a found row
+    replaces its algorithm's stored row, the stored rows of the other algorithms stay."""
     rows = agent_rows(root, env_id, algos, seeds, tier)
     key = section_key(env_id, tier)
     if any(row["algo"] != "random" for row in rows):
-        stored[key] = rows
-        return rows
+        found = {row["algo"] for row in rows}
+        kept = [row for row in stored.get(key, []) if row["algo"] not in found]
+        stored[key] = sorted(rows + kept, key=lambda row: section_merge.ORDER.index(row["algo"]))
+        return stored[key]
     return stored.get(key, [])
 
 
@@ -559,17 +562,19 @@ def document(
                 if title in previous:
                     lines += previous[title].rstrip("\n").splitlines() + [""]
                 continue
+            section = []
             if is_stack(env_id):
-                lines += stack_table(title, rows, stack_ceiling()) + [""]
+                section += stack_table(title, rows, stack_ceiling()) + [""]
             else:
-                lines += variant_table(title, rows, sweep if tier == "commands" else None) + [""]
-                lines += breakdowns(rows) + [""]
+                section += variant_table(title, rows, sweep if tier == "commands" else None) + [""]
+                section += breakdowns(rows) + [""]
                 if sweep and tier == "commands":
-                    lines += sweep_table(sweep) + [""]
+                    section += sweep_table(sweep) + [""]
             name = f"curves_{env_id}{'' if tier == 'commands' else '_' + tier}.png"
             figure = plot_curves(root, env_id, algos, seeds, ceiling_success(root, env_id), docs / name, tier)
             if figure is not None or (docs / name).exists():
-                lines += [f"![learning curves on {title[4:]}]({name})", ""]
+                section += [f"![learning curves on {title[4:]}]({name})", ""]
+            lines += merge_section(section, previous.get(title, "").rstrip("\n").splitlines() + [""])
     return "\n".join(lines)
 
 
@@ -615,11 +620,12 @@ def headline(
             top = ceiling_success(root, env_id)
             cells = [spread([r["success_rate"] for r in rows[a]["results"]]) if a in rows else "-" for a in algos]
             random = rows.get("random")
-            lines.append(
+            line = (
                 f"| {label} | {spread([random['results'][0]['success_rate']]) if random else '-'} | "
                 + " | ".join(cells)
                 + f" | {'-' if top is None else f'{top:.1%}'} |"
             )
+            lines.append(fill_line(line, previous.get(label)))
     return "\n".join(lines)
 
 
@@ -744,8 +750,9 @@ def main(argv: list[str] | None = None) -> None:
         return
     stored = stored_rows()
     shown = shown_variants(variants)
-    text = document(args.root, shown, args.algos, args.seeds, stored=stored)
-    summary = headline(args.root, shown, args.algos, args.seeds, stored)
+    algos = sorted(ALGORITHMS)  # the page shows every algorithm (those not trained here: their rows as stored)
+    text = document(args.root, shown, algos, args.seeds, stored=stored)
+    summary = headline(args.root, shown, algos, args.seeds, stored)
     print(summary)
     if args.readme:
         DOCS.mkdir(parents=True, exist_ok=True)
@@ -769,7 +776,7 @@ def main(argv: list[str] | None = None) -> None:
             "[docs/agents/benchmark.md](docs/agents/benchmark.md)):\n\n"
             + summary
             + "\n\n"
-            + ratios(args.root, shown, args.algos, args.seeds, stored),
+            + ratios(args.root, shown, algos, args.seeds, stored),
             "benchmark",
         )
 

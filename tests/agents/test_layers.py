@@ -8,6 +8,7 @@ LAYERS = {
     "algorithms": 0,
     "config": 1,
     "doc_sections": 0,
+    "section_merge": 0,
     "run_folder": 0,
     "envs": 0,
     "rllib_envs": 0,
