@@ -52,7 +52,8 @@ def time_loop(step, read_states, steps: int, n: int) -> tuple[float, np.ndarray]
 
 def variants(engines: list[str]):
     """(engine, knob text, dt, run(scene, start, steps) -> (wall, final state))."""
-    defaults = {"solver_tolerance": 1e-9, "solver_iterations": 16}
+    # our settings at the scene defaults (tolerance 1e-9, 16 sweeps, no slop), whatever engine_scale.OUR_SOLVER says
+    defaults = {name: getattr(Scene(), name) for name in engine_scale.OUR_SOLVER}
     for dt in OUR_DTS:
         yield (
             engine_scale.OURS,
@@ -68,7 +69,9 @@ def variants(engines: list[str]):
             f"{tolerance:g}",
             OUR_TOLERANCE_DT,
             lambda scene, start, steps, tolerance=tolerance: engine_scale.run_ours(
-                scene.replace(dt=OUR_TOLERANCE_DT, solver_tolerance=tolerance, solver_iterations=32),
+                scene.replace(
+                    **{**defaults, "solver_tolerance": tolerance, "solver_iterations": 32}, dt=OUR_TOLERANCE_DT
+                ),
                 start,
                 steps,
                 False,
