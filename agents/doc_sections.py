@@ -1,8 +1,9 @@
 """Write a command's measured output into the documentation page that holds its section, between its
 markers, so every figure the docs quote comes from a command (``<!-- NAME:start -->`` ... ``<!-- NAME:end -->``).
 
-The README is the front page: it holds the ``benchmark`` section only. The other sections live in the pages
-of the documentation site (``docs/``), named in ``SECTION_PAGES``.
+The README is the front page: it holds the ``benchmark`` section and the engine's summary
+(``engine-scale-summary``). The other sections live in the pages of the documentation site (``docs/``), named
+in ``SECTION_PAGES``.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ README = REPO / "README.md"
 DOCS = REPO / "docs"
 SECTION_PAGES = {
     "benchmark": README,  # the headline table of the front page (python -m agents.benchmark --report-only --readme)
+    "engine-scale-summary": README,  # python -m benchmarks.engine_scale --write-docs (the page's table: its own marker)
     "benchmark-goal": DOCS / "agents" / "benchmark.md",  # python -m agents.benchmark --envs BoxToss-Goal-v0 --readme
     "agents": DOCS / "agents.md",  # python -m agents.main --full --readme
     "variant-gifs": DOCS / "environment.md",  # python -m agents.variant_gifs

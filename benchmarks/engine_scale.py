@@ -91,6 +91,8 @@ DOCS = Path(__file__).resolve().parents[1] / "docs"
 DOCS_PAGE = DOCS / "engine_scale.md"
 FIGURE = DOCS / "figures" / "engine_scale.png"
 MARKER = "engine-scale"
+README_MARKER = "engine-scale-summary"  # the README's few lines of it (agents.doc_sections.SECTION_PAGES)
+README_CASES = ("pile 100", "pile 1000", "pyramid 210")  # the cases of the awake goals, in the README
 
 
 def wide_pile(n: int, layers: int = WIDE_LAYERS, seed: int = 0) -> Scene:
@@ -411,7 +413,8 @@ def write_docs(text: str, page: Path = DOCS_PAGE, marker: str = MARKER) -> None:
     replace_section(marker, text, readme=page)
 
 
-def report(args: argparse.Namespace, log: Callable[[str], None]) -> str:
+def report(args: argparse.Namespace, log: Callable[[str], None]) -> tuple[str, str]:
+    """(the page's generated text, the README's summary of it)."""
     import numba
 
     quick = args.quick
@@ -449,7 +452,37 @@ def report(args: argparse.Namespace, log: Callable[[str], None]) -> str:
     if quick:
         lines += ["", "(quick run: shorter window, smaller budget, no 5,000-box pile)"]
     plot(rows)
-    return "\n".join(lines)
+    return "\n".join(lines), readme_summary(rows, onbox, lines[0])
+
+
+def readme_summary(rows: list[Row], onbox, header: str) -> str:
+    """Ours beside Box2D v3 awake on the README_CASES, and the throw onto a box beside a floor throw: the README's
+    lines, from the same run as the page."""
+    awake = {(row.case, row.engine): row for row in rows if row.mode == "awake"}
+    lines = [
+        "| awake, us per box per simulated second | ours | Box2D v3 | ours / Box2D v3 | penetration [m]: ours "
+        "| Box2D v3 | top drift [m]: ours | Box2D v3 |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    for case in README_CASES:
+        ours, other = awake.get((case, OURS)), awake.get((case, "box2d3"))
+        if ours is None or other is None:
+            continue
+        ratio = ours.us_per_body_second / other.us_per_body_second
+        drifts = [fmt(row.drift, ".1e") if case.startswith("pyramid") else "" for row in (ours, other)]  # as ``table``
+        lines.append(
+            f"| {case} | {ours.us_per_body_second:,.1f} | {other.us_per_body_second:,.1f} | {ratio:.1f} | "
+            f"{fmt(ours.penetration, '.1e')} | {fmt(other.penetration, '.1e')} | {drifts[0]} | {drifts[1]} |"
+        )
+    kernel = {env_id: micros for env_id, _, micros, _, _ in onbox}
+    throw = ""
+    if {"BoxToss-v0", "BoxToss-OnBox-v0"} <= set(kernel):
+        throw = (
+            f" A throw onto a box (`BoxToss-OnBox-v0`) costs the engine {kernel['BoxToss-OnBox-v0']:,.0f} us, "
+            f"{kernel['BoxToss-OnBox-v0'] / kernel['BoxToss-v0']:.1f} times a floor throw's "
+            f"{kernel['BoxToss-v0']:,.0f} us."
+        )
+    return "\n".join([*lines, "", f"{header} Every engine, settled too: [the page](docs/engine_scale.md).{throw}"])
 
 
 def shortened_text(rows: list[Row], window: float) -> str:
@@ -468,13 +501,20 @@ def main(argv=None) -> None:
     parser.add_argument(
         "--budget", type=budget_seconds, default=None, help="wall seconds per (case, engine, mode), in [0.1, 600]"
     )
-    parser.add_argument("--write-docs", action="store_true", help=f"write the table into {DOCS_PAGE.name}")
+    parser.add_argument(
+        "--write-docs",
+        action="store_true",
+        help=f"write the table into {DOCS_PAGE.name} and its summary into README.md",
+    )
     args = parser.parse_args(argv)
     began = time.perf_counter()
-    text = report(args, log=lambda line: print(f"[{time.perf_counter() - began:6.1f} s] {line}", flush=True))
+    text, summary = report(args, log=lambda line: print(f"[{time.perf_counter() - began:6.1f} s] {line}", flush=True))
     print(text)
     if args.write_docs:
+        from agents.doc_sections import README
+
         write_docs(text)
+        write_docs(summary, page=README, marker=README_MARKER)
 
 
 def budget_seconds(text: str) -> float:

@@ -51,7 +51,7 @@ from .broadphase import box_bound, time_apart
 from .compilation import jit_stage
 from .contact_solver import penalty_correction_share
 from .flight import time_to_contact
-from .joint_contact_solve import JOINT_LIMIT, full_delassus, joint_impulses
+from .joint_contact_solve import JOINT_LIMIT, delassus_entry, full_delassus, joint_impulses
 from .kernel_support import store_state
 from .robust_solver import (
     FIRST_CONTACT,
@@ -162,23 +162,8 @@ def delassus_matrix(contacts, ids, count, inv_mass, inv_inertia, w):
     normal impulse at contact d changes u_rel . n at contact c (nonzero where they share a body)."""
     for c in range(count):
         for d in range(c, count):
-            value = 0.0
-            for side_c in range(2):
-                b = ids[c, BODY1 + side_c]
-                if b < 0:
-                    continue
-                rcx = contacts[c, R1X] if side_c == 0 else contacts[c, R2X]
-                rcy = contacts[c, R1Y] if side_c == 0 else contacts[c, R2Y]
-                for side_d in range(2):
-                    if ids[d, BODY1 + side_d] != b:
-                        continue
-                    rdx = contacts[d, R1X] if side_d == 0 else contacts[d, R2X]
-                    rdy = contacts[d, R1Y] if side_d == 0 else contacts[d, R2Y]
-                    sign = 1.0 if side_c == side_d else -1.0
-                    along = contacts[c, NX] * contacts[d, NX] + contacts[c, NY] * contacts[d, NY]
-                    turn = ((rcx * contacts[c, NY] - rcy * contacts[c, NX])
-                            * (rdx * contacts[d, NY] - rdy * contacts[d, NX]))
-                    value += sign * (along * inv_mass[b] + turn * inv_inertia[b])
+            value = delassus_entry(contacts, ids, c, contacts[c, NX], contacts[c, NY], d, contacts[d, NX],
+                                   contacts[d, NY], inv_mass, inv_inertia)
             w[c, d] = value
             w[d, c] = value
 

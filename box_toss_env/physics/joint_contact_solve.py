@@ -45,6 +45,28 @@ def direction(contacts, c, row):
     return -ny, nx
 
 
+@jit_stage(inline="always")
+def delassus_entry(contacts, ids, c, dcx, dcy, d, ddx, ddy, inv_mass, inv_inertia):
+    """W_ij for direction (dcx, dcy) at contact c and (ddx, ddy) at contact d: the module docstring's sum over
+    the bodies they share (``colliding_solver.delassus_matrix`` takes it on the normals alone)."""
+    value = 0.0
+    for side_c in range(2):
+        b = ids[c, BODY1 + side_c]
+        if b < 0:
+            continue
+        rcx = contacts[c, R1X] if side_c == 0 else contacts[c, R2X]
+        rcy = contacts[c, R1Y] if side_c == 0 else contacts[c, R2Y]
+        for side_d in range(2):
+            if ids[d, BODY1 + side_d] != b:
+                continue
+            rdx = contacts[d, R1X] if side_d == 0 else contacts[d, R2X]
+            rdy = contacts[d, R1Y] if side_d == 0 else contacts[d, R2Y]
+            sign = 1.0 if side_c == side_d else -1.0
+            turn = (rcx * dcy - rcy * dcx) * (rdx * ddy - rdy * ddx)
+            value += sign * ((dcx * ddx + dcy * ddy) * inv_mass[b] + turn * inv_inertia[b])
+    return value
+
+
 @jit_stage
 def full_delassus(contacts, ids, count, inv_mass, inv_inertia, w):
     """W (2 count x 2 count) into w: row 2c + 0 is contact c's normal, 2c + 1 its tangent."""
@@ -54,21 +76,7 @@ def full_delassus(contacts, ids, count, inv_mass, inv_inertia, w):
         for j in range(i, 2 * count):
             d, row_d = j // 2, j % 2
             ddx, ddy = direction(contacts, d, row_d)
-            value = 0.0
-            for side_c in range(2):
-                b = ids[c, BODY1 + side_c]
-                if b < 0:
-                    continue
-                rcx = contacts[c, R1X] if side_c == 0 else contacts[c, R2X]
-                rcy = contacts[c, R1Y] if side_c == 0 else contacts[c, R2Y]
-                for side_d in range(2):
-                    if ids[d, BODY1 + side_d] != b:
-                        continue
-                    rdx = contacts[d, R1X] if side_d == 0 else contacts[d, R2X]
-                    rdy = contacts[d, R1Y] if side_d == 0 else contacts[d, R2Y]
-                    sign = 1.0 if side_c == side_d else -1.0
-                    turn = (rcx * dcy - rcy * dcx) * (rdx * ddy - rdy * ddx)
-                    value += sign * ((dcx * ddx + dcy * ddy) * inv_mass[b] + turn * inv_inertia[b])
+            value = delassus_entry(contacts, ids, c, dcx, dcy, d, ddx, ddy, inv_mass, inv_inertia)
             w[i, j] = value
             w[j, i] = value
 

@@ -115,3 +115,17 @@ def test_the_pareto_rows_turn_every_knob_with_finite_figures(tmp_path):
         assert 0 <= penetration < 0.1 and 0 <= drift < 1, (case, engine, knob)
     pile_pareto.plot(rows, path=tmp_path / "pareto.png")
     assert (tmp_path / "pareto.png").stat().st_size > 0
+
+
+def test_the_readme_summary_is_written_from_the_rows():
+    rows = [
+        engine_scale.Row("pile 100", 100, engine_scale.OURS, 1 / 120, "awake", 240, 0.2, 1e-6, 0.0),
+        engine_scale.Row("pile 100", 100, "box2d3", 1 / 60, "awake", 120, 0.1, 2e-3, 0.0),
+        engine_scale.Row("pile 100", 100, "pymunk", 1 / 60, "awake", 120, 0.1, 1e-3, 0.0),
+        engine_scale.Row("pile 10", 10, engine_scale.OURS, 1 / 120, "awake", 240, 0.02, 1e-6, 0.0),
+    ]
+    onbox = [("BoxToss-v0", 1, 20.0, 50.0, 19.0), ("BoxToss-OnBox-v0", 2, 60.0, 60.0, 70.0)]
+    text = engine_scale.readme_summary(rows, onbox, "header.")
+    assert "| pile 100 | 1,000.0 | 500.0 | 2.0 | 1.0e-06 | 2.0e-03 |  |  |" in text
+    assert "costs the engine 60 us, 3.0 times a floor throw's 20 us" in text
+    assert "pymunk" not in text and "pile 10 |" not in text  # Box2D v3 beside ours, on the goals' cases
