@@ -59,8 +59,9 @@ beyond it the substeps are capped and only the speculative contacts remain (not 
 
 What a grid step does before and after the substeps, so that a scene pays only for what moves:
   0. wake: with ``until_rest``, every sleeping island that an awake body can reach within the step wakes
-     (``islands.wake_touched``; bodies placed at rest sleep from the start, ``islands.sleep_placed``);
-     sleeping bodies are left out of everything below;
+     (``islands.wake_touched``; the islands asleep at the end of the last call, kept in ``warm``, and the
+     bodies placed at rest sleep from the start, ``islands.start_asleep``); sleeping bodies are left out of
+     everything below;
   alone: while at most ALONE_LIMIT bodies are awake, the whole steps for which no two boxes can meet
      (``steps_alone``: on the exact parabolas while every awake body flies, or by a bound on every point's
      speed from the body's energy, ``energy_speed``, while they bounce or slide on the floor apart) are
@@ -120,7 +121,7 @@ from .colliding_solver import (
 )
 from .compilation import jit_kernel, jit_stage
 from .contact_solver import CORNER_ROWS, MAX_CORNERS
-from .islands import fall_asleep, sleep_placed, wake_touched
+from .islands import fall_asleep, keep_sleeping, start_asleep, wake_touched
 from .kernel_support import read_settings, record_event, store_state, write_stats
 from .robust_solver import MEMORY_SIZE, energy_limit_scale
 
@@ -309,41 +310,45 @@ def sleep_islands(ids, count, pose, vel, radius, awake, supported, still_for, sl
 
 @jit_stage
 def load_warm_start(warm, previous_keys, previous_impulses, dt):
-    """The warm start a caller kept from its last call (``layout.WARM_START_SIZE``: row 0 holds the count and the
-    substep length, then a row per contact: key, normal and friction impulse), into the kernel's arrays;
-    returns (count, substep length). An empty ``warm`` (none kept) starts cold: (0, dt)."""
+    """The contacts' impulses a caller kept from its last call (``layout.WARM_START_SIZE``: row 0 holds the
+    contact count, the substep length and the body count k, then two rows a body, ``islands.keep_sleeping``,
+    then a row per contact: key, normal and friction impulse), into the kernel's arrays; returns (count,
+    substep length). An empty ``warm`` (none kept) starts cold: (0, dt)."""
     if warm.shape[0] == 0:
         return 0, dt
-    count = min(np.int64(warm[0, 0]), warm.shape[0] - 1, previous_keys.shape[0])
+    first = 1 + layout.WARM_BODY_ROWS * np.int64(warm[0, 2])
+    count = min(np.int64(warm[0, 0]), warm.shape[0] - first, previous_keys.shape[0])
     for c in range(count):
-        previous_keys[c] = np.int64(warm[1 + c, 0])
-        previous_impulses[c, 0] = warm[1 + c, 1]
-        previous_impulses[c, 1] = warm[1 + c, 2]
+        previous_keys[c] = np.int64(warm[first + c, 0])
+        previous_impulses[c, 0] = warm[first + c, 1]
+        previous_impulses[c, 1] = warm[first + c, 2]
     return count, warm[0, 1] if count > 0 else dt
 
 
 @jit_stage
-def store_warm_start(warm, previous_keys, previous_impulses, n_previous, h_previous):
-    """The last substep's impulses by contact key into ``warm`` (``load_warm_start``'s layout), as many as it
-    has rows for (the keys are sorted, so a prefix is a warm start too); nothing if ``warm`` is empty."""
+def store_warm_start(warm, previous_keys, previous_impulses, n_previous, h_previous, pose, awake, island, still_for):
+    """Into ``warm`` for the next call (``load_warm_start``'s layout; nothing if it is empty): each body's sleep
+    (``islands.keep_sleeping``), then the last substep's impulses by contact key, as many as it has rows for
+    (the keys are sorted, so a prefix is a warm start too)."""
     if warm.shape[0] == 0:
         return
-    count = min(n_previous, warm.shape[0] - 1)
+    first = 1 + layout.WARM_BODY_ROWS * keep_sleeping(warm, pose, awake, island, still_for)
+    count = min(n_previous, warm.shape[0] - first)
     warm[0, 0] = count
     warm[0, 1] = h_previous
-    warm[0, 2] = 0.0
     for c in range(count):
-        warm[1 + c, 0] = previous_keys[c]
-        warm[1 + c, 1] = previous_impulses[c, 0]
-        warm[1 + c, 2] = previous_impulses[c, 1]
+        warm[first + c, 0] = previous_keys[c]
+        warm[first + c, 1] = previous_impulses[c, 0]
+        warm[first + c, 2] = previous_impulses[c, 1]
 
 
 @jit_stage
 def write_back(state, stats, pose, vel, first_contact, n_impacts, n_stepped, max_penetration, rest_time, n, dt,
-               status, fail_step, warm, previous_keys, previous_impulses, n_previous, h_previous):
+               status, fail_step, warm, previous_keys, previous_impulses, n_previous, h_previous, awake, island,
+               still_for):
     """The bodies' final states and stats (a failure is reported on the bodies that are not finite), and the
-    last substep's impulses into ``warm`` for the next call (``store_warm_start``)."""
-    store_warm_start(warm, previous_keys, previous_impulses, n_previous, h_previous)
+    bodies' sleep and the last substep's impulses into ``warm`` for the next call (``store_warm_start``)."""
+    store_warm_start(warm, previous_keys, previous_impulses, n_previous, h_previous, pose, awake, island, still_for)
     for b in range(state.shape[0]):
         state[b, 0], state[b, 1], state[b, 2] = pose[b, 0], pose[b, 1], pose[b, 2]
         state[b, 3], state[b, 4], state[b, 5] = vel[b, 0], vel[b, 1], vel[b, 2]
@@ -408,13 +413,13 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
         n_previous, h_previous = load_warm_start(warm, previous_keys, previous_impulses, dt)  # from the last call
         if RECORD:
             record_states(trajectory, 0, pose, vel)
-        if until_rest:  # bodies placed at rest sleep from the start
-            slept = sleep_placed(pose, vel, half, bound, reach, everyone, awake, island, rest_time, ready, sleep_speed,
-                                 tolerance, axis, order, low, pair_keys)
+        if until_rest:  # the islands asleep at the end of the last call and the bodies placed at rest sleep
+            slept = -1
             while slept < 0:
-                pair_keys = np.zeros(2 * pair_keys.shape[0], np.int64)
-                slept = sleep_placed(pose, vel, half, bound, reach, everyone, awake, island, rest_time, ready,
-                                     sleep_speed, tolerance, axis, order, low, pair_keys)
+                slept = start_asleep(warm, pose, vel, half, bound, reach, everyone, awake, island, still_for,
+                                     rest_time, ready, sleep_speed, tolerance, axis, order, low, pair_keys)
+                if slept < 0:
+                    pair_keys = np.zeros(2 * pair_keys.shape[0], np.int64)
             n_awake -= slept
         while n < max_steps and n_awake > 0:
             if n_awake < nb:  # 0. wake the sleeping islands an awake body can reach in this step
@@ -504,6 +509,7 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
                 if n_awake == 0:
                     break
         write_back(state, stats, pose, vel, first_contact, n_impacts, n_stepped, max_penetration, rest_time, n, dt,
-                   status, fail_step, warm, previous_keys, previous_impulses, n_previous, h_previous)
+                   status, fail_step, warm, previous_keys, previous_impulses, n_previous, h_previous, awake, island,
+                   still_for)
 
     return run

@@ -12,10 +12,19 @@ test, ``broadphase.candidate_pairs``) wakes with its island, and the test is rep
 woken. Without ``until_rest`` nothing sleeps. A body placed at rest (zero velocity, lying on a face on the
 floor, touching no other box, ``sleep_placed``) sleeps from the start, as the resting base of
 ``BoxToss-OnBox-v0``: stepping it would only find it at rest ``sleep_time`` later.
+
+Sleep carries from run to run in the caller's warm start (``simulate.warm_start_memory``, rows in
+``layout``): at the end of a run each body's island label (-1 awake), sleep timer and pose are kept
+(``keep_sleeping``); at the start of the next, every island that was asleep sleeps again, unless the
+caller moved or pushed one of its bodies since (``restore_sleeping``), and the awake bodies' timers go on.
+A pile that fell asleep costs nothing in the next run until something reaches it, as in one long run.
 """
 
 import math
 
+import numpy as np
+
+from . import layout
 from .box_collision import BODY1, BODY2
 from .broadphase import candidate_pairs
 from .compilation import jit_stage
@@ -123,7 +132,7 @@ def sleep_placed(pose, vel, half, bound, reach, everyone, awake, island, rest_ti
     if n_pairs < 0:
         return -1
     for b in range(n):
-        ready[b] = (vel[b, 0] == 0.0 and vel[b, 1] == 0.0 and vel[b, 2] == 0.0
+        ready[b] = (awake[b] and vel[b, 0] == 0.0 and vel[b, 1] == 0.0 and vel[b, 2] == 0.0
                     and is_lying_still(pose[b, 1], pose[b, 2], 0.0, 0.0, 0.0, half[b, 0], half[b, 1], sleep_speed))
     for p in range(n_pairs):
         i = keys[p] // n
@@ -137,3 +146,64 @@ def sleep_placed(pose, vel, half, bound, reach, everyone, awake, island, rest_ti
             rest_time[b] = 0.0
             slept += 1
     return slept
+
+
+@jit_stage
+def restore_sleeping(warm, pose, vel, awake, island, still_for, rest_time, intact):
+    """The sleep ``keep_sleeping`` kept in ``warm`` at the end of the last run: the awake bodies' sleep timers
+    (where the pose is as kept), and the islands asleep then asleep again, each whole island only if none of
+    its bodies was moved or set moving since (pose as kept, velocity zero: else the caller changed it, and the
+    island wakes). Bodies past the ones kept are awake. Returns how many bodies fell asleep here."""
+    n = pose.shape[0]
+    kept = min(np.int64(warm[0, 2]), n, (warm.shape[0] - 1) // layout.WARM_BODY_ROWS) if warm.shape[0] > 0 else 0
+    for b in range(n):
+        intact[b] = True
+    for b in range(kept):
+        row = 1 + layout.WARM_BODY_ROWS * b
+        label = np.int64(warm[row, 0])
+        same = pose[b, 0] == warm[row + 1, 0] and pose[b, 1] == warm[row + 1, 1] and pose[b, 2] == warm[row + 1, 2]
+        if label < 0 and same:
+            still_for[b] = warm[row, 1]
+        elif 0 <= label < kept and not (same and vel[b, 0] == 0.0 and vel[b, 1] == 0.0 and vel[b, 2] == 0.0):
+            intact[label] = False
+    slept = 0
+    for b in range(kept):
+        label = np.int64(warm[1 + layout.WARM_BODY_ROWS * b, 0])
+        if 0 <= label < kept and intact[label] and awake[b]:
+            awake[b] = False
+            island[b] = label
+            rest_time[b] = 0.0
+            slept += 1
+    return slept
+
+
+@jit_stage
+def keep_sleeping(warm, pose, awake, island, still_for):
+    """Each body's island label (its island's root while it sleeps, -1 awake), sleep timer and pose into
+    ``warm``'s body rows for the next run (``restore_sleeping``), as many bodies as there are rows for (a
+    prefix: an island's label is its smallest body, so a kept sleeping body's label is kept too); returns how
+    many bodies were kept (0 if ``warm`` is empty)."""
+    if warm.shape[0] == 0:
+        return 0
+    kept = min(pose.shape[0], (warm.shape[0] - 1) // layout.WARM_BODY_ROWS)
+    warm[0, 2] = kept
+    for b in range(kept):
+        row = 1 + layout.WARM_BODY_ROWS * b
+        warm[row, 0] = -1.0 if awake[b] else island[b]
+        warm[row, 1] = still_for[b]
+        warm[row, 2] = 0.0
+        warm[row + 1, 0], warm[row + 1, 1], warm[row + 1, 2] = pose[b, 0], pose[b, 1], pose[b, 2]
+    return kept
+
+
+@jit_stage
+def start_asleep(warm, pose, vel, half, bound, reach, everyone, awake, island, still_for, rest_time, ready,
+                 sleep_speed, tolerance, axis, order, low, keys):
+    """With ``until_rest``, who sleeps from the start: the bodies placed at rest (``sleep_placed``), and the
+    islands asleep at the end of the last run (``restore_sleeping``). Returns how many sleep, or -1 (nothing
+    changed) if ``keys`` is too short (the caller grows it and calls again)."""
+    placed = sleep_placed(pose, vel, half, bound, reach, everyone, awake, island, rest_time, ready, sleep_speed,
+                          tolerance, axis, order, low, keys)
+    if placed < 0:
+        return -1
+    return placed + restore_sleeping(warm, pose, vel, awake, island, still_for, rest_time, ready)

@@ -138,11 +138,13 @@ class Simulator:
         """Advance ``state`` in place and fill ``stats`` (n, STATS_SIZE); with ``record`` also
         ``trajectory`` (max_steps + 1, n, 6) and ``events`` (n, MAX_EVENTS, 3).
 
-        ``warm_start`` (from ``warm_start_memory``, kernels that ``carries_warm_start``): the contacts'
-        impulses at the end of the last run that was given this array, the start of this one's, and its end
-        written back. A scene advanced in several runs with one such array steps as in one run (without it
-        each run starts its contacts from zero, and a pile settles a little anew at each); give each scene or
-        episode its own, zeroed when it starts."""
+        ``warm_start`` (from ``warm_start_memory``, kernels that ``carries_warm_start``): what the last run that
+        was given this array ended with (each contact's impulses, each body's sleep: ``islands``), the start of
+        this one's, and its end written back. A scene advanced in several runs with one such array steps as in
+        one run: its contacts keep their load (without it each run starts them from zero, and a pile settles a
+        little anew at each) and, with ``until_rest``, an island that fell asleep stays asleep, at no cost,
+        until something reaches it or the caller moves or pushes one of its bodies. Give each scene or episode
+        its own, zeroed when it starts."""
         if self.flags.record and (trajectory is None or events is None):
             raise ValueError("trajectory and events arrays are required when recording")
         trajectory = self._no_trajectory if trajectory is None else trajectory
@@ -170,10 +172,11 @@ class Simulator:
 
 
 def warm_start_memory(n_bodies: int) -> np.ndarray:
-    """A zeroed warm start for ``Simulator.run`` on a colliding scene of ``n_bodies`` (``layout.WARM_START_SIZE``
-    columns): room for 8 contacts a body, what the kernel starts with; more are kept as far as it goes."""
+    """A zeroed warm start for ``Simulator.run`` on a colliding scene of up to ``n_bodies`` bodies
+    (``layout.WARM_START_SIZE`` columns): two rows a body for its sleep, room for 8 contacts a body, what the
+    kernel starts with; more are kept as far as it goes."""
     n_bodies = check_integer("n_bodies", n_bodies, 1)
-    return np.zeros((1 + max(8 * n_bodies, 16), layout.WARM_START_SIZE))
+    return np.zeros((1 + layout.WARM_BODY_ROWS * n_bodies + max(8 * n_bodies, 16), layout.WARM_START_SIZE))
 
 
 def check_warm_start(warm_start) -> np.ndarray:

@@ -2,6 +2,7 @@
 pair finds, islands fall asleep and wake, bodies placed at rest sleep from the start, and a box that no other
 can reach is advanced by the floor-only solver: free flight in closed form, impacts with the floor located."""
 
+import dataclasses
 import math
 
 import numba
@@ -236,3 +237,66 @@ def test_the_warm_start_is_checked_and_only_for_colliding_scenes():
     assert simulator.carries_warm_start and not floor_only.carries_warm_start
     with pytest.raises(ValueError, match="warm_start is for scenes whose boxes collide"):
         floor_only.run(state[:1], params[:1], settings, stats[:1], warm_start=warm_start_memory(1))
+
+
+def settle_in_runs(scene, runs: int, steps: int, warm_start: bool) -> tuple[np.ndarray, int]:
+    """(state, steps integrated in all) after ``runs`` calls of ``steps`` steps each until rest, with one warm
+    start carried through the calls or none."""
+    simulator = Simulator.for_scene(scene, parallel=False)
+    state, params = scene.initial_state(), scene.body_params()
+    stats = np.zeros((scene.n_bodies, layout.STATS_SIZE))
+    warm = warm_start_memory(scene.n_bodies) if warm_start else None
+    stepped = 0
+    for _ in range(runs):
+        simulator.run(state, params, make_settings(scene, steps, until_rest=True), stats, warm_start=warm)
+        stepped += int(stats[:, layout.N_STEPS].max())
+    return state, stepped
+
+
+@pytest.mark.parametrize("n", [10, 30])
+def test_a_pile_settling_in_chunks_with_its_warm_start_sleeps_as_in_one_run(n):
+    """Sleep carries in the warm start: islands asleep at the end of a call sleep in the next, the awake
+    bodies' sleep timers go on, so chunks of 30 steps are one run of 480 bit for bit, steps integrated
+    included; without it each call wakes the pile and steps it until it falls asleep again."""
+    scene = scenes.pile(n, dt=1 / 120)
+    once, stepped = settle_in_runs(scene, 1, 480, warm_start=True)
+    assert 0 < stepped < 480  # the pile fell asleep within the run
+    chunked, stepped_in_chunks = settle_in_runs(scene, 16, 30, warm_start=True)
+    assert np.array_equal(chunked, once) and stepped_in_chunks == stepped
+    cold, stepped_cold = settle_in_runs(scene, 16, 30, warm_start=False)
+    assert stepped_cold > stepped + 12 * 10  # re-stepped at every call: sleep_time (12 steps) and more
+    assert not np.array_equal(cold, once)
+
+
+def test_a_sleeping_pile_costs_no_step_until_a_body_of_it_is_moved_pushed_or_reached():
+    scene = scenes.pile(10, dt=1 / 120)
+    simulator = Simulator.for_scene(scene, parallel=False)
+    state, params = scene.initial_state(), scene.body_params()
+    stats = np.zeros((10, layout.STATS_SIZE))
+    warm = warm_start_memory(11)  # room for a box thrown later
+    settings = make_settings(scene, 480, until_rest=True)
+    simulator.run(state, params, settings, stats, warm_start=warm)
+    asleep = state.copy()
+    simulator.run(state, params, settings, stats, warm_start=warm)
+    assert np.array_equal(state, asleep) and not stats[:, layout.N_STEPS].any()
+    assert np.all(stats[:, layout.REST_TIME] == 0.0)  # asleep from the start, as bodies placed at rest
+    top = int(np.argmax(state[:, 1]))
+    for change in ("pushed", "moved"):
+        state = asleep.copy()
+        warm_then = warm.copy()
+        if change == "pushed":
+            state[top, 3] = 0.5
+        else:
+            state[top, 0] += 1e-3
+        simulator.run(state, params, settings, stats, warm_start=warm_then)
+        assert stats[top, layout.N_STEPS] > 0  # its island woke (the caller changed one of its bodies)
+    # a box dropped onto the sleeping pile: a body past the ones kept, awake; it wakes the pile when it reaches it
+    dropped = dataclasses.replace(scene.boxes[top], position=(float(asleep[top, 0]), float(asleep[top, 1]) + 1.0),
+                                  angle=0.0)
+    scene11 = scene.replace(boxes=(*scene.boxes, dropped))
+    state11 = np.vstack([asleep, scene11.initial_state()[10:]])
+    stats11 = np.zeros((11, layout.STATS_SIZE))
+    Simulator.for_scene(scene11, parallel=False).run(state11, scene11.body_params(), make_settings(scene11, 480, True),
+                                                     stats11, warm_start=warm)
+    assert stats11[10, layout.N_STEPS] > 0 and stats11[top, layout.N_STEPS] > 0
+    assert state11[10, 1] > asleep[top, 1]  # it lies on the pile
