@@ -393,9 +393,8 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
         free, x, lcp_y = np.zeros(DIRECT_LIMIT), np.zeros(DIRECT_LIMIT), np.zeros(DIRECT_LIMIT)
         active, index = np.zeros(DIRECT_LIMIT, np.bool_), np.zeros(DIRECT_LIMIT, np.int64)
         contact_state = np.zeros(DIRECT_LIMIT, np.int64)
-        # broadphase (sort and sweep) and islands (sleeping)
-        everyone, awake = np.ones(nb, np.bool_), np.ones(nb, np.bool_)
-        island = np.full(nb, -1, np.int64)  # a sleeping body's island (its root body); -1 while awake
+        # broadphase (sort and sweep) and islands (sleeping; island: a sleeping body's root body, -1 while awake)
+        everyone, awake, island = np.ones(nb, np.bool_), np.ones(nb, np.bool_), np.full(nb, -1, np.int64)
         still_for = np.zeros(nb)  # [s] how long each awake body has been supported and still
         rest_time = np.full(nb, math.nan)  # when each body last fell asleep
         parent = np.zeros(nb, np.int64)

@@ -291,12 +291,14 @@ def test_a_sleeping_pile_costs_no_step_until_a_body_of_it_is_moved_pushed_or_rea
         simulator.run(state, params, settings, stats, warm_start=warm_then)
         assert stats[top, layout.N_STEPS] > 0  # its island woke (the caller changed one of its bodies)
     # a box dropped onto the sleeping pile: a body past the ones kept, awake; it wakes the pile when it reaches it
-    dropped = dataclasses.replace(scene.boxes[top], position=(float(asleep[top, 0]), float(asleep[top, 1]) + 1.0),
-                                  angle=0.0)
+    dropped = dataclasses.replace(
+        scene.boxes[top], position=(float(asleep[top, 0]), float(asleep[top, 1]) + 1.0), angle=0.0
+    )
     scene11 = scene.replace(boxes=(*scene.boxes, dropped))
     state11 = np.vstack([asleep, scene11.initial_state()[10:]])
     stats11 = np.zeros((11, layout.STATS_SIZE))
-    Simulator.for_scene(scene11, parallel=False).run(state11, scene11.body_params(), make_settings(scene11, 480, True),
-                                                     stats11, warm_start=warm)
+    Simulator.for_scene(scene11, parallel=False).run(
+        state11, scene11.body_params(), make_settings(scene11, 480, True), stats11, warm_start=warm
+    )
     assert stats11[10, layout.N_STEPS] > 0 and stats11[top, layout.N_STEPS] > 0
     assert state11[10, 1] > asleep[top, 1]  # it lies on the pile
