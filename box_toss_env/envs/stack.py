@@ -14,7 +14,16 @@ from gymnasium.error import ResetNeeded
 from box_toss_env.envs import stack_task, task
 from box_toss_env.envs.box_toss import EnergyGainError, check_render_mode_type
 from box_toss_env.envs.random_streams import check_seed
-from box_toss_env.physics import Box, KernelFlags, Scene, Simulator, check_finite_stats, layout, make_settings
+from box_toss_env.physics import (
+    Box,
+    KernelFlags,
+    Scene,
+    Simulator,
+    check_finite_stats,
+    layout,
+    make_settings,
+    warm_start_memory,
+)
 from box_toss_env.physics.grouped import GroupedSimulator
 from box_toss_env.physics.ranges import check_step_count
 from box_toss_env.physics.validation import check_integer
@@ -33,7 +42,9 @@ class BoxTossStackEnv(gym.Env):
     thrown stays in the scene: the boxes thrown so far are one scene of colliding boxes
     (``Scene(boxes_collide=True)``, the engine's box-box contact), simulated after each throw until every
     body rests (the engine's ``until_rest``: islands of touching boxes fall asleep once still) or for
-    ``max_sim_time``. A throw may land on the stack, bounce off it, or knock it over.
+    ``max_sim_time``. The pile asleep at the end of a throw stays asleep in the next until the thrown box
+    reaches it (the engine's warm start, carried from throw to throw). A throw may land on the stack, bounce
+    off it, or knock it over.
 
     The goal is the tallest stable stack on the target. Height is what a thrower can control only by
     placing each box on what the last ones built (a box beside the stack adds nothing), and a bad throw is
@@ -290,6 +301,7 @@ class BoxTossStackEnv(gym.Env):
         self._params = np.zeros((n, layout.PARAM_SIZE))
         self._state = np.zeros((n, layout.STATE_SIZE))  # row j: box j once thrown
         self._stats = np.zeros((n, layout.STATS_SIZE))
+        self._warm = warm_start_memory(n)  # what each throw's run ends with (the pile's sleep), the next one's start
         self._thrown = 0
         self._height = 0.0
         self._score = 0.0
@@ -326,6 +338,7 @@ class BoxTossStackEnv(gym.Env):
         self._hand, self._target_x = stack_task.draw_episode(self.np_random, self.config)
         self._params[:] = stack_task.body_params(self._hand, self.config)
         self._state[:] = 0.0
+        self._warm[:] = 0.0
         self._thrown, self._height, self._score, self._last = 0, 0.0, 0.0, None
         self._needs_reset = False
         if self.render_mode == "human":
@@ -351,7 +364,7 @@ class BoxTossStackEnv(gym.Env):
         self._state[k] = stack_task.thrown_states(self._hand[k, stack_task.E_RELEASE_X :], actions, self.config)[0]
         rows = slice(0, k + 1)
         simulator = self._simulator or self._build_simulator()
-        simulator.run(self._state[rows], self._params[rows], self._settings, self._stats[rows])
+        simulator.run(self._state[rows], self._params[rows], self._settings, self._stats[rows], warm_start=self._warm)
         stats = self._stats[rows]
         if np.any(stats[:, layout.STATUS] != layout.STATUS_OK):
             check_finite_stats(stats, "robust")  # raises NonFiniteStateError
@@ -418,7 +431,7 @@ class BoxTossStackEnv(gym.Env):
         stats = np.zeros((m * (k + 1), layout.STATS_SIZE))
         flat = states.reshape(m * (k + 1), layout.STATE_SIZE)
         simulator = GroupedSimulator(dataclasses.replace(self.flags, parallel=threads != 1), k + 1, threads=threads)
-        simulator.run(flat, params, self._settings, stats)
+        simulator.run(flat, params, self._settings, stats, warm_start=np.repeat(self._warm[None], m, axis=0))
         finite = (stats[:, layout.STATUS] == layout.STATUS_OK).reshape(m, k + 1).all(axis=1)
         at_rest = ~np.isnan(stats[:, layout.REST_TIME]).reshape(m, k + 1).any(axis=1)
         half = self._params[: k + 1, layout.HALF_LENGTH : layout.HALF_WIDTH + 1]

@@ -32,7 +32,7 @@ from box_toss_env.envs.box_toss import EnergyGainError
 from box_toss_env.envs.box_toss_vector import MAX_NUM_ENVS, with_masks
 from box_toss_env.envs.random_streams import RandomStreams, check_seeds, fill_uniform
 from box_toss_env.envs.stack import BoxTossStackEnv
-from box_toss_env.physics import check_finite_stats, layout
+from box_toss_env.physics import check_finite_stats, layout, warm_start_memory
 from box_toss_env.physics.grouped import GroupedSimulator
 from box_toss_env.physics.simulate import check_threads
 from box_toss_env.physics.validation import check_integer
@@ -83,6 +83,7 @@ class BoxTossStackVectorEnv(VectorEnv):
         self._targets = np.zeros(n)
         self._params = np.zeros((n, boxes, layout.PARAM_SIZE))
         self._state = np.zeros((n, boxes, layout.STATE_SIZE))
+        self._warm = np.zeros((n, *warm_start_memory(boxes).shape))  # each env's warm start (its pile's sleep)
         self._thrown = np.zeros(n, dtype=np.int64)
         self._height = np.zeros(n)
         self._uniforms = np.zeros((n, stack_task.uniforms_per_episode(config)))
@@ -108,6 +109,7 @@ class BoxTossStackVectorEnv(VectorEnv):
         self._hands[envs], self._targets[envs] = hands, targets
         self._params[envs] = stack_task.body_params(hands, self.config)
         self._state[envs] = 0.0
+        self._warm[envs] = 0.0
         self._thrown[envs] = 0
         self._height[envs] = 0.0
 
@@ -186,7 +188,9 @@ class BoxTossStackVectorEnv(VectorEnv):
         scenes = np.ascontiguousarray(self._state[envs, :size]).reshape(m * size, layout.STATE_SIZE)
         params = np.ascontiguousarray(self._params[envs, :size]).reshape(m * size, layout.PARAM_SIZE)
         stats: np.ndarray = np.zeros((m * size, layout.STATS_SIZE))
-        self._simulator(size).run(scenes, params, self._settings, stats)
+        warm = np.ascontiguousarray(self._warm[envs])
+        self._simulator(size).run(scenes, params, self._settings, stats, warm_start=warm)
+        self._warm[envs] = warm
         if np.any(stats[:, layout.STATUS] != layout.STATUS_OK):
             check_finite_stats(stats, "robust")
         after = scenes.reshape(m, size, layout.STATE_SIZE)

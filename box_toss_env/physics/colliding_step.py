@@ -309,14 +309,15 @@ def sleep_islands(ids, count, pose, vel, radius, awake, supported, still_for, sl
 
 
 @jit_stage
-def load_warm_start(warm, previous_keys, previous_impulses, dt):
+def load_warm_start(warm, n, previous_keys, previous_impulses, dt):
     """The contacts' impulses a caller kept from its last call (``layout.WARM_START_SIZE``: row 0 holds the
     contact count, the substep length and the body count k, then two rows a body, ``islands.keep_sleeping``,
     then a row per contact: key, normal and friction impulse), into the kernel's arrays; returns (count,
-    substep length). An empty ``warm`` (none kept) starts cold: (0, dt)."""
-    if warm.shape[0] == 0:
+    substep length). An empty ``warm`` (none kept), or one kept from a scene of another number of bodies than
+    this one's ``n`` (a contact's key names its bodies by their number among n), starts cold: (0, dt)."""
+    if warm.shape[0] == 0 or np.int64(warm[0, 2]) != n:
         return 0, dt
-    first = 1 + layout.WARM_BODY_ROWS * np.int64(warm[0, 2])
+    first = 1 + layout.WARM_BODY_ROWS * n
     count = min(np.int64(warm[0, 0]), warm.shape[0] - first, previous_keys.shape[0])
     for c in range(count):
         previous_keys[c] = np.int64(warm[first + c, 0])
@@ -409,7 +410,7 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
         corner_delassus = np.zeros((MAX_CORNERS, MAX_CORNERS))
         corner_ids = np.zeros(MAX_CORNERS, np.int64)
         count, n, n_awake, status, fail_step = 0, 0, nb, layout.STATUS_OK, -1
-        n_previous, h_previous = load_warm_start(warm, previous_keys, previous_impulses, dt)  # from the last call
+        n_previous, h_previous = load_warm_start(warm, nb, previous_keys, previous_impulses, dt)  # from the last call
         if RECORD:
             record_states(trajectory, 0, pose, vel)
         if until_rest:  # the islands asleep at the end of the last call and the bodies placed at rest sleep

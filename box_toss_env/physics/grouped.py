@@ -7,7 +7,7 @@ boxes it may land on). ``make_grouped_kernel`` compiles a kernel that runs the c
 consecutive group of rows in turn, so a batch costs one call from Python, and each group's result is
 bit for bit what the colliding kernel gives that group alone (the single env's call).
 
-    run_groups(state, params, settings, stats, group_size)    # state (n_groups * group_size, 6) ...
+    run_groups(state, params, settings, stats, group_size, warm)    # state (n_groups * group_size, 6) ...
 
 ``GroupedSimulator`` is ``Simulator``'s counterpart: it splits the groups over threads (whole groups per
 thread, so the split never changes a result). A scene whose boxes cannot meet has groups of one body and
@@ -43,23 +43,25 @@ def _grouped_kernel_source(SOLVER, IMPULSES, PENALTY, FRICTION, DIGEST):
     these flags; the flags themselves are closure constants, so numba's on-disk cache (keyed by the code
     and the closure's values) keeps one entry per set of flags and finds it again in the next process."""
 
-    def run_groups(state, params, settings, stats, group_size):
+    def run_groups(state, params, settings, stats, group_size, warm):
         _ = (SOLVER, IMPULSES, PENALTY, FRICTION, DIGEST)  # part of the on-disk cache key
         trajectory = np.zeros((0, 0, layout.STATE_SIZE))  # nothing recorded
         events = np.zeros((0, 0, layout.EVENT_SIZE))
-        warm = np.zeros((0, layout.WARM_START_SIZE))  # each throw starts cold, as the single env's
-        for first in range(0, state.shape[0], group_size):
+        cold = np.zeros((0, layout.WARM_START_SIZE))  # without warm starts each group starts cold
+        for group in range(state.shape[0] // group_size):
+            first = group * group_size
             last = first + group_size
             colliding_kernel(state[first:last], params[first:last], settings, stats[first:last],  # noqa: F821
-                             trajectory, events, warm)
+                             trajectory, events, warm[group] if warm.shape[0] > 0 else cold)
 
     return run_groups
 
 
 @functools.cache
 def make_grouped_kernel(solver: str, use_impulses: bool, use_penalty: bool, use_friction: bool):
-    """``run_groups(state, params, settings, stats, group_size)``: the colliding kernel of these flags
-    (no recording) run on each consecutive group of ``group_size`` rows of the body arrays."""
+    """``run_groups(state, params, settings, stats, group_size, warm)``: the colliding kernel of these flags
+    (no recording) run on each consecutive group of ``group_size`` rows of the body arrays, group g with the
+    warm start ``warm[g]`` (``warm`` (n_groups, rows, WARM_START_SIZE), or (0, 0, WARM_START_SIZE): none)."""
     kernel = make_kernel(KernelFlags(solver=solver, use_impulses=use_impulses, use_penalty=use_penalty,
                                      use_friction=use_friction, record=False, boxes_collide=True))
     function = _grouped_kernel_source(solver, use_impulses, use_penalty, use_friction, source_digest())
@@ -96,6 +98,7 @@ class GroupedSimulator:
         recipe = {"solver": flags.solver, "use_impulses": flags.use_impulses, "use_penalty": flags.use_penalty,
                   "use_friction": flags.use_friction}
         self.kernel = make_grouped_kernel(**recipe)
+        self._no_warm_start = np.zeros((0, 0, layout.WARM_START_SIZE))
         self._ready = False
         recipe_call = (__name__, "make_grouped_kernel", recipe)
         self._start = (background_compile.InterpretedStart(self.kernel, recipe_call, MAX_INTERPRETED_GROUPED_BODIES)
@@ -109,36 +112,56 @@ class GroupedSimulator:
         return self.threads if self.threads is not None else numba.config.NUMBA_NUM_THREADS
 
     def run(self, state: np.ndarray, params: np.ndarray, settings: np.ndarray, stats: np.ndarray,
-            trajectory: np.ndarray | None = None, events: np.ndarray | None = None) -> None:
+            trajectory: np.ndarray | None = None, events: np.ndarray | None = None,
+            warm_start: np.ndarray | None = None) -> None:
         """Advance ``state`` (n_groups * group_size, 6) in place and fill ``stats``; ``trajectory``
-        and ``events`` must be None (kept for ``Simulator``'s signature)."""
+        and ``events`` must be None (kept for ``Simulator``'s signature). ``warm_start``: one
+        ``warm_start_memory`` a group, stacked (n_groups, rows, WARM_START_SIZE) (``Simulator.run``'s, group by
+        group), or None: each group starts cold."""
         if trajectory is not None or events is not None:
             raise ValueError("GroupedSimulator does not record: trajectory and events must be None")
         size = self.group_size
         if state.shape[0] % size:
             raise ValueError(f"state must hold whole groups of group_size={size} bodies, got {state.shape[0]} rows")
+        groups = state.shape[0] // size
+        warm = self._no_warm_start if warm_start is None else check_group_warm_starts(warm_start, groups)
         if not self._ready:
-            args = (state, params, settings, stats, size)
-            self.interpreted = self._start is not None and self._start.run(args, (state, stats))
+            args = (state, params, settings, stats, size, warm)
+            self.interpreted = self._start is not None and self._start.run(args, (state, stats, warm))
             if self.interpreted:
                 return
             ensure_compiled(self.kernel, args)
             self._ready = True
-        groups = state.shape[0] // size
         shares = min(self.shares, groups)
         if shares <= 1:
-            self.kernel(state, params, settings, stats, size)
+            self.kernel(state, params, settings, stats, size, warm)
             return
-        edges = [size * (groups * k // shares) for k in range(shares + 1)]
+        edges = [groups * k // shares for k in range(shares + 1)]
+
+        def share(a: int, b: int) -> tuple:
+            rows = slice(size * a, size * b)
+            return state[rows], params[rows], settings, stats[rows], size, warm[a:b] if warm.shape[0] else warm
+
         pool = thread_pool(shares - 1)
-        futures = [pool.submit(self.kernel, state[a:b], params[a:b], settings, stats[a:b], size)
-                   for a, b in zip(edges[:-2], edges[1:-1], strict=True)]
-        a = edges[-2]
+        futures = [pool.submit(self.kernel, *share(a, b)) for a, b in zip(edges[:-2], edges[1:-1], strict=True)]
         try:
-            self.kernel(state[a:], params[a:], settings, stats[a:], size)
+            self.kernel(*share(edges[-2], groups))
         finally:
             for future in futures:
                 future.result()
+
+
+def check_group_warm_starts(warm_start, groups: int) -> np.ndarray:
+    """``warm_start`` if it is a C-contiguous float64 array (groups, rows >= 1, WARM_START_SIZE) (a
+    ``warm_start_memory`` a group), else a ValueError naming it."""
+    if (not isinstance(warm_start, np.ndarray) or warm_start.dtype != np.float64 or warm_start.ndim != 3
+            or warm_start.shape[0] != groups or warm_start.shape[1] < 1
+            or warm_start.shape[2] != layout.WARM_START_SIZE or not warm_start.flags.c_contiguous):
+        shape = getattr(warm_start, "shape", None)
+        raise ValueError(f"warm_start must be a C-contiguous float64 array of shape ({groups} groups, rows >= 1, "
+                         f"{layout.WARM_START_SIZE}), a warm_start_memory a group, got {type(warm_start).__name__} "
+                         f"{shape}")
+    return warm_start
 
 
 def make_simulator(flags: KernelFlags, group_size: int = 1, threads: int | None = None,

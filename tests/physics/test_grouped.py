@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from box_toss_env.physics import Box, KernelFlags, Scene, Simulator, layout, make_settings
+from box_toss_env.physics import Box, KernelFlags, Scene, Simulator, layout, make_settings, warm_start_memory
 from box_toss_env.physics.grouped import GroupedSimulator, make_simulator
 
 FLAGS = KernelFlags(boxes_collide=True, parallel=True)
@@ -45,6 +45,11 @@ def run_alone(scene, settings):
     return state, stats
 
 
+def push_even_scenes(state, size):
+    """Set the first box of every other scene moving (its island wakes in the next run)."""
+    state[0 :: 2 * size, 3] += 0.5
+
+
 @pytest.mark.parametrize("threads", [1, 2])
 def test_each_group_ends_bit_for_bit_as_its_scene_alone(threads):
     scenes = toss_scenes(7)
@@ -79,3 +84,41 @@ def test_bad_use_is_refused_with_clear_errors():
     simulator = GroupedSimulator(FLAGS, 2)
     with pytest.raises(ValueError, match="whole groups of group_size=2"):
         simulator.run(np.zeros((3, 6)), np.ones((3, 7)), np.zeros(8), np.zeros((3, 9)))
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_each_group_carries_its_own_warm_start_as_its_scene_alone(threads):
+    """Two runs with one warm start a group (its contacts and its sleep, ``warm_start_memory``), every other
+    scene pushed between them: each group ends each run as its scene run alone with its own warm start."""
+    scenes = toss_scenes(5, seed=1)
+    settings = make_settings(scenes[0], 1280, until_rest=True)
+    state = np.concatenate([s.initial_state() for s in scenes])
+    params = np.concatenate([s.body_params() for s in scenes])
+    stats = np.zeros((len(state), layout.STATS_SIZE))
+    warm = np.stack([warm_start_memory(2) for _ in scenes])
+    alone = [(s.initial_state(), warm_start_memory(2)) for s in scenes]
+    simulator, single = GroupedSimulator(FLAGS, 2, threads=threads), Simulator(KernelFlags(boxes_collide=True))
+    for run in range(2):
+        if run == 1:
+            push_even_scenes(state, 2)
+            for alone_state, _ in alone[::2]:
+                alone_state[0, 3] += 0.5
+        simulator.run(state, params, settings, stats, warm_start=warm)
+        for i, (alone_state, alone_warm) in enumerate(alone):
+            alone_stats = np.zeros((2, layout.STATS_SIZE))
+            single.run(alone_state, params[2 * i : 2 * i + 2], settings, alone_stats, warm_start=alone_warm)
+            assert state[2 * i : 2 * i + 2].tobytes() == alone_state.tobytes()
+            np.testing.assert_array_equal(stats[2 * i : 2 * i + 2], alone_stats)
+            np.testing.assert_array_equal(warm[i], alone_warm)
+    # the scenes not pushed slept through the second run; the pushed ones were stepped
+    assert not stats[2::4, layout.N_STEPS].any() and stats[0::4, layout.N_STEPS].all()
+
+
+def test_the_group_warm_starts_are_checked():
+    scenes = toss_scenes(2)
+    state = np.concatenate([s.initial_state() for s in scenes])
+    params = np.concatenate([s.body_params() for s in scenes])
+    stats = np.zeros((4, layout.STATS_SIZE))
+    settings = make_settings(scenes[0], 16, until_rest=True)
+    with pytest.raises(ValueError, match=r"warm_start must be .* \(2 groups"):
+        GroupedSimulator(FLAGS, 2).run(state, params, settings, stats, warm_start=warm_start_memory(2))
