@@ -16,6 +16,7 @@ import box_toss_env  # noqa: F401  (registers the ids)
 from box_toss_env.envs import stack_task
 from box_toss_env.envs.stack import BoxTossStackEnv
 from box_toss_env.envs.stack_commands import StackCommands, command_actions
+from box_toss_env.physics import layout
 
 ENV_ID = "BoxToss-Stack-v0"
 LOB = np.array([[0.6, 0.0, 0.0]])
@@ -126,6 +127,22 @@ def test_a_box_lobbed_onto_the_stack_stays_on_it(seed):
     assert abs(state[1, 0] - state[0, 0]) < 0.5 * info["box_lengths"][0]  # its centre over the lower box's top
     assert np.abs(state[0, :3] - base[:3]).max() < 0.005  # the box below stayed where it was
     assert reward == pytest.approx(5.0 * widths[1], abs=0.05)
+
+
+def test_the_stack_sleeps_through_a_throw_that_does_not_reach_it():
+    """The pile asleep at the end of a throw stays asleep in the next (the warm start carried from throw to throw):
+    a box thrown away from it costs the stack no step and leaves it bit for bit where it was."""
+    env = gym.make(ENV_ID)
+    observation, _ = env.reset(seed=0)
+    for _ in range(2):
+        observation, *_ = env.step(lob(env, observation))
+    unwrapped = env.unwrapped
+    stack = unwrapped.scene[0].copy()
+    away = stack_task.actions_of_throws(np.array([3.0]), np.array([math.pi - 0.5]), np.array([0.0]), unwrapped.config)
+    _, _, _, _, info = env.step(away[0])
+    assert info["at_rest"] and not info["fell"]
+    assert not unwrapped._stats[:2, layout.N_STEPS].any() and unwrapped._stats[2, layout.N_STEPS] > 0
+    assert unwrapped.scene[0][:2].tobytes() == stack.tobytes()
 
 
 def test_a_box_that_knocks_the_stack_over_ends_the_episode():
