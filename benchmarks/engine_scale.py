@@ -1,5 +1,5 @@
 """Every engine side by side in one run, from one box to 5,000: cost per body-step and per body per
-simulated second, awake and settled, with the quality bought (penetration, the pyramid's drift).
+simulated second, awake, settling and asleep, with the quality bought (penetration, the pyramid's drift).
 Prints one table; asserts nothing.
 
     python -m benchmarks.engine_scale [--quick] [--budget SECONDS] [--write-docs]
@@ -21,7 +21,11 @@ exact initial state) and is timed over ``WINDOW`` s of simulated time, its stepp
 - **settled**: each engine's own sleeping allowed (ours ``until_rest=True``: the run stops once every box
   has lain still ``sleep_time``, and its figures divide by the whole window, the steps skipped at rest
   included, as a sleeping Box2D island's steps are; Box2D's islands sleep after 0.5 s; pymunk does not
-  sleep by default).
+  sleep by default), from a fresh start: what falling asleep costs;
+- **asleep**: the same, once the scene has fallen asleep: each engine first runs ``FALL_ASLEEP`` s untimed
+  (Box2D's world stepped on, ours a run until rest with a warm start, ``warm_start_memory``, which carries
+  the islands' sleep into the timed run, as one long run would), then the window is timed: what a pile
+  that lies still costs while a scene goes on.
 
 Figures: ns per body-step = wall / (steps n); us per body per simulated second = wall / (n T), T the
 simulated time covered, which puts engines with different steps on one scale. Each engine runs at its
@@ -40,6 +44,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -52,7 +57,7 @@ from benchmarks.other_scenes import (
     simulate_scene,
 )
 from box_toss_env.files import save_figure
-from box_toss_env.physics import Box, Scene, Simulator, layout, make_settings, scenes, simulate
+from box_toss_env.physics import Box, Scene, Simulator, layout, make_settings, scenes, simulate, warm_start_memory
 
 OUR_DT: dict[str, float] = {"pile": 1 / 120, "wide pile": 1 / 120, "pyramid": 1 / 60}
 """[s] our engine's step per kind of scene: the one place to edit when the engine picks its own. The largest
@@ -84,6 +89,8 @@ REPEATS = 3  # best of this many timed runs, as far as the budget allows
 OUR_SETTLE_MAX = 100  # piles up to this many boxes are settled by our engine (above: minutes)
 BUDGET, QUICK_BUDGET = 5.0, 1.5  # [s] of wall time per (case, engine, mode)
 NEVER_SLEEP = 1e6  # [s] our sleep_time in awake runs
+FALL_ASLEEP = 2.0  # [s] untimed before an asleep run (Box2D's islands sleep after 0.5 s still)
+MODES = ("awake", "settled", "asleep")
 ONBOX_THROWS, QUICK_ONBOX_THROWS = 400, 100
 BATCH, BATCHES, QUICK_BATCHES = 256, 3, 1  # make_vec(BATCH, threads=1), batch steps timed
 
@@ -171,7 +178,7 @@ class Row:
     n: int
     engine: str
     dt: float  # [s] the engine's step
-    mode: str  # "awake" or "settled"
+    mode: str  # one of MODES
     steps: int  # steps timed
     wall: float  # [s]
     penetration: float = math.nan  # [m]
@@ -194,19 +201,25 @@ def budget_steps(step_seconds: float, dt: float, window: float, budget: float) -
     return int(min(full, max(MIN_STEPS, budget / max(step_seconds, 1e-9))))
 
 
-def run_ours(scene: Scene, start: np.ndarray, steps: int, sleep: bool) -> tuple[float, np.ndarray, int]:
-    """(wall s, final state, steps actually integrated) of our engine from ``start``, single thread; awake runs
-    never sleep, settled runs stop once every box is at rest (``until_rest``)."""
-    scene = scene if sleep else scene.replace(sleep_time=NEVER_SLEEP)
+def run_ours(scene: Scene, start: np.ndarray, steps: int, mode: str) -> tuple[float, np.ndarray, str]:
+    """(wall s, final state, note) of our engine from ``start``, single thread, in ``mode`` (MODES): awake runs
+    never sleep, the others stop once every box is at rest (``until_rest``); an asleep run is timed after an
+    untimed run of FALL_ASLEEP s, whose sleep it carries (the note says how many boxes were asleep then)."""
+    scene = scene.replace(sleep_time=NEVER_SLEEP) if mode == "awake" else scene
     simulator = Simulator.for_scene(scene, parallel=False)
     params = scene.body_params()
     stats = np.zeros((scene.n_bodies, layout.STATS_SIZE))
     simulator.run(start.copy(), params, make_settings(scene, 1, False), stats)  # compile / load, untimed
-    state = start.copy()
-    settings = make_settings(scene, steps, until_rest=sleep)
+    state, warm, note = start.copy(), None, ""
+    if mode == "asleep":
+        warm = warm_start_memory(scene.n_bodies)
+        simulator.run(state, params, make_settings(scene, round(FALL_ASLEEP / scene.dt), True), stats, warm_start=warm)
+        asleep = int(np.count_nonzero(~np.isnan(stats[:, layout.REST_TIME])))
+        note = "" if asleep == scene.n_bodies else f"{asleep:,} of {scene.n_bodies:,} boxes asleep when timing began"
+    settings = make_settings(scene, steps, until_rest=mode != "awake")
     begin = time.perf_counter()
-    simulator.run(state, params, settings, stats)
-    return time.perf_counter() - begin, state, int(stats[:, layout.N_STEPS].max())
+    simulator.run(state, params, settings, stats, warm_start=warm)
+    return time.perf_counter() - begin, state, note
 
 
 def best_of(run: Callable[[], tuple[float, np.ndarray]], budget: float) -> tuple[float, np.ndarray]:
@@ -221,28 +234,25 @@ def best_of(run: Callable[[], tuple[float, np.ndarray]], budget: float) -> tuple
     return best, state
 
 
-def time_ours(case: str, scene: Scene, start: np.ndarray, sleep: bool, window: float, budget: float) -> Row:
-    probe, _, _ = run_ours(scene, start, MIN_STEPS, sleep=False)
+def time_ours(case: str, scene: Scene, start: np.ndarray, mode: str, window: float, budget: float) -> Row:
+    probe, _, _ = run_ours(scene, start, MIN_STEPS, "awake")
     steps = budget_steps(probe / MIN_STEPS, scene.dt, window, budget)
-    wall, state = best_of(lambda: run_ours(scene, start, steps, sleep)[:2], budget)
+    notes = []
+
+    def run() -> tuple[float, np.ndarray]:
+        wall, state, note = run_ours(scene, start, steps, mode)
+        notes.append(note)
+        return wall, state
+
+    wall, state = best_of(run, budget)
     # until_rest stops early: the rest of the window is simulated for free, so the figure is per ``steps``
-    return Row(
-        case,
-        scene.n_bodies,
-        OURS,
-        scene.dt,
-        "settled" if sleep else "awake",
-        steps,
-        wall,
-        *quality(scene, start, state),
-    )
+    return Row(case, scene.n_bodies, OURS, scene.dt, mode, steps, wall, *quality(scene, start, state), note=notes[-1])
 
 
-def time_other(
-    engine: str, case: str, scene: Scene, start: np.ndarray, sleep: bool, window: float, budget: float
-) -> Row:
+def time_other(engine: str, case: str, scene: Scene, start: np.ndarray, mode: str, window: float, budget: float) -> Row:
     dt = DEFAULT_DT[engine]
-    mode = "settled" if sleep else "awake"
+    sleep = mode != "awake"
+    untimed = round(FALL_ASLEEP / dt) if mode == "asleep" else 0
     try:
         probe = simulate_scene(engine, scene, MIN_STEPS, record=False, sleep=False, state=start, dt=dt)
     except UnsupportedScene as error:
@@ -250,7 +260,7 @@ def time_other(
     steps = budget_steps(probe.wall_seconds / MIN_STEPS, dt, window, budget)
 
     def run() -> tuple[float, np.ndarray]:
-        done = simulate_scene(engine, scene, steps, record=False, sleep=sleep, state=start, dt=dt)
+        done = simulate_scene(engine, scene, steps, record=False, sleep=sleep, state=start, dt=dt, untimed=untimed)
         return done.wall_seconds, done.final_state
 
     wall, state = best_of(run, budget)
@@ -285,7 +295,7 @@ def scale_rows(
     our_settle_max: int = OUR_SETTLE_MAX,
     pyramid: bool = True,
 ) -> tuple[list[Row], dict[str, str]]:
-    """Every case in every engine, awake and settled: (rows, who settled each case)."""
+    """Every case in every engine, in every mode (MODES): (rows, who settled each case)."""
     engines = [OURS, *available_scene_engines()] if engines is None else engines
     others = [e for e in engines if e != OURS]
     cases = [(f"pile {n}", *pile_case(n)[1:], True) for n in sizes]
@@ -298,12 +308,10 @@ def scale_rows(
         else:
             start = scene.initial_state()
         for engine in engines:
-            for sleep in (False, True):
-                log(f"{name}: {engine}, {'settled' if sleep else 'awake'}")
-                if engine == OURS:
-                    rows.append(time_ours(name, scene, start, sleep, window, budget))
-                else:
-                    rows.append(time_other(engine, name, scene, start, sleep, window, budget))
+            for mode in MODES:
+                log(f"{name}: {engine}, {mode}")
+                timer = time_ours if engine == OURS else partial(time_other, engine)
+                rows.append(timer(name, scene, start, mode, window, budget))
     return rows, settlers
 
 
@@ -355,25 +363,25 @@ def fmt(value: float, spec: str) -> str:
 
 
 def table(rows: list[Row]) -> list[str]:
-    """One markdown table: a line per (case, engine), awake and settled side by side."""
+    """One markdown table: a line per (case, engine), the modes side by side."""
     by = {(r.case, r.engine, r.mode): r for r in rows}
     keys = list(dict.fromkeys((r.case, r.engine) for r in rows))
     lines = [
         "| case | boxes | engine | dt [s] | awake ns/body-step | awake us/body/sim-s | steps | "
-        "settled ns/body-step | settled us/body/sim-s | steps | max penetration [m] | top drift [m] |",
-        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+        "settled us/body/sim-s | asleep us/body/sim-s | max penetration [m] | top drift [m] |",
+        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for case, engine in keys:
-        awake, rest = by[(case, engine, "awake")], by[(case, engine, "settled")]
+        awake, rest, asleep = (by[(case, engine, mode)] for mode in MODES)
         drift = fmt(awake.drift, ".2e") if case.startswith("pyramid") else ""
         lines.append(
             f"| {case} | {awake.n} | {engine} | {dt_text(awake.dt)} | "
             f"{fmt(awake.ns_per_body_step, ',.0f')} | {fmt(awake.us_per_body_second, ',.1f')} | "
-            f"{awake.steps} | {fmt(rest.ns_per_body_step, ',.0f')} | {fmt(rest.us_per_body_second, ',.1f')} | "
-            f"{rest.steps} | "
+            f"{awake.steps} | {fmt(rest.us_per_body_second, ',.1f')} | {fmt(asleep.us_per_body_second, ',.2f')} | "
             f"{fmt(awake.penetration, '.2e')} | {drift} |"
         )
-    return lines + [f"- {r.engine}, {r.case}: {r.note}" for r in rows if r.note and r.mode == "awake"]
+    notes = [r for r in rows if r.note and (r.mode == "awake" or r.engine == OURS)]
+    return lines + [f"- {r.engine}, {r.case}, {r.mode}: {r.note}" for r in notes]
 
 
 def dt_text(dt: float) -> str:
@@ -381,8 +389,8 @@ def dt_text(dt: float) -> str:
 
 
 def plot(rows: list[Row], path: Path = FIGURE) -> None:
-    """Log-log: us per body per simulated second against boxes, one line per engine (solid awake,
-    dashed settled), piles only."""
+    """Log-log: us per body per simulated second against boxes, one line per engine and mode (solid awake,
+    dashed settled, dotted asleep), piles only."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -391,7 +399,7 @@ def plot(rows: list[Row], path: Path = FIGURE) -> None:
     fig, ax = plt.subplots(figsize=(7, 4.5))
     piles = [r for r in rows if r.case.startswith("pile") and r.steps]
     for k, engine in enumerate(dict.fromkeys(r.engine for r in piles)):
-        for mode, style in (("awake", "-"), ("settled", "--")):
+        for mode, style in zip(MODES, ("-", "--", ":"), strict=True):
             points = sorted((r.n, r.us_per_body_second) for r in piles if r.engine == engine and r.mode == mode)
             if points:
                 ax.loglog(*zip(*points, strict=True), style, marker="o", color=f"C{k}", label=f"{engine}, {mode}")
@@ -432,7 +440,8 @@ def report(args: argparse.Namespace, log: Callable[[str], None]) -> tuple[str, s
         f"Window {window:g} s of simulated time per case, per-case budget {budget:g} s of wall time: "
         f"where the window would take longer, fewer steps are timed (`steps`, at least {MIN_STEPS}): "
         f"{shortened_text(rows, window)}. "
-        "Settled: sleeping allowed (ours until rest, so fewer steps when everyone sleeps). Piles settled "
+        "Settled: sleeping allowed, from a fresh start (ours until rest, so fewer steps when everyone sleeps). "
+        f"Asleep: the same after {FALL_ASLEEP:g} s untimed (ours carrying its sleep in a warm start). Piles settled "
         f"{SETTLE:g} s first by " + ", ".join(f"{case}: {who}" for case, who in settlers.items()) + ".",
         "",
     ]

@@ -333,16 +333,20 @@ def simulate_scene(
     sleep: bool = True,
     state: np.ndarray | None = None,
     dt: float | None = None,
+    untimed: int = 0,
 ) -> SceneRun:
     """Build ``scene`` in ``engine`` and step it ``steps`` times of ``scene.dt``, timing the loop alone
     (with ``record``, reading every box's state after each step is inside the loop: time without it).
     ``sleep=False`` keeps every body awake (Box2D's ``doSleep``; pymunk never sleeps by default);
     ``state`` (n, 6) starts the boxes there instead of at the scene's initial state (e.g. a pile settled
     by another engine, which may overlap a little: no check is made); ``dt`` steps at that instead of
-    ``scene.dt`` (e.g. ``DEFAULT_DT[engine]``)."""
-    if steps < 0:
-        raise ValueError(f"steps must be >= 0, got {steps}")
+    ``scene.dt`` (e.g. ``DEFAULT_DT[engine]``); ``untimed`` steps are taken first, outside the timing and the
+    record (e.g. for Box2D's islands to fall asleep)."""
+    if steps < 0 or untimed < 0:
+        raise ValueError(f"steps and untimed must be >= 0, got {steps} and {untimed}")
     step, read_states = SCENE_ENGINES[engine](scene, sleep, state, dt)
+    for _ in range(untimed):
+        step()
     n = scene.n_bodies
     states = None
     if record:

@@ -153,7 +153,8 @@ def restore_sleeping(warm, pose, vel, awake, island, still_for, rest_time, intac
     """The sleep ``keep_sleeping`` kept in ``warm`` at the end of the last run: the awake bodies' sleep timers
     (where the pose is as kept), and the islands asleep then asleep again, each whole island only if none of
     its bodies was moved or set moving since (pose as kept, velocity zero: else the caller changed it, and the
-    island wakes). Bodies past the ones kept are awake. Returns how many bodies fell asleep here."""
+    island wakes). Bodies past the ones kept are awake. Returns how many bodies sleep so (called again, the
+    same)."""
     n = pose.shape[0]
     kept = min(np.int64(warm[0, 2]), n, (warm.shape[0] - 1) // layout.WARM_BODY_ROWS) if warm.shape[0] > 0 else 0
     for b in range(n):
@@ -169,7 +170,7 @@ def restore_sleeping(warm, pose, vel, awake, island, still_for, rest_time, intac
     slept = 0
     for b in range(kept):
         label = np.int64(warm[1 + layout.WARM_BODY_ROWS * b, 0])
-        if 0 <= label < kept and intact[label] and awake[b]:
+        if 0 <= label < kept and intact[label]:
             awake[b] = False
             island[b] = label
             rest_time[b] = 0.0
@@ -199,11 +200,13 @@ def keep_sleeping(warm, pose, awake, island, still_for):
 @jit_stage
 def start_asleep(warm, pose, vel, half, bound, reach, everyone, awake, island, still_for, rest_time, ready,
                  sleep_speed, tolerance, axis, order, low, keys):
-    """With ``until_rest``, who sleeps from the start: the bodies placed at rest (``sleep_placed``), and the
-    islands asleep at the end of the last run (``restore_sleeping``). Returns how many sleep, or -1 (nothing
-    changed) if ``keys`` is too short (the caller grows it and calls again)."""
+    """With ``until_rest``, who sleeps from the start: the islands asleep at the end of the last run
+    (``restore_sleeping``), then, unless that is every body, the bodies placed at rest (``sleep_placed``).
+    Returns how many sleep, or -1 if ``keys`` is too short (the caller grows it and calls again: the first
+    part gives the same bodies again, the second had changed nothing)."""
+    restored = restore_sleeping(warm, pose, vel, awake, island, still_for, rest_time, ready)
+    if restored == pose.shape[0]:
+        return restored
     placed = sleep_placed(pose, vel, half, bound, reach, everyone, awake, island, rest_time, ready, sleep_speed,
                           tolerance, axis, order, low, keys)
-    if placed < 0:
-        return -1
-    return placed + restore_sleeping(warm, pose, vel, awake, island, still_for, rest_time, ready)
+    return -1 if placed < 0 else restored + placed

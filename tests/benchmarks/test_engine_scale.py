@@ -57,7 +57,7 @@ def test_the_scale_rows_cover_every_engine_with_finite_positive_figures():
     engines = [engine_scale.OURS, *available_scene_engines()]
     rows, settlers = engine_scale.scale_rows(sizes=(1, 3), engines=engines, window=0.1, budget=0.5, pyramid=False)
     assert {(r.engine, r.case, r.mode) for r in rows} == {
-        (e, c, m) for e in engines for c in ("pile 1", "pile 3") for m in ("awake", "settled")
+        (e, c, m) for e in engines for c in ("pile 1", "pile 3") for m in engine_scale.MODES
     }
     assert set(settlers) == {"pile 1", "pile 3"}
     for row in rows:
@@ -97,7 +97,7 @@ def test_docs_and_plot_are_written_between_markers(tmp_path):
     page.write_text("before\n<!-- engine-scale:start -->\nold\n<!-- engine-scale:end -->\nafter\n")
     engine_scale.write_docs("new table", page=page)
     assert page.read_text() == "before\n<!-- engine-scale:start -->\nnew table\n<!-- engine-scale:end -->\nafter\n"
-    rows = [engine_scale.Row("pile 1", 1, "ours", 1 / 256, mode, 10, 1e-3) for mode in ("awake", "settled")]
+    rows = [engine_scale.Row("pile 1", 1, "ours", 1 / 256, mode, 10, 1e-3) for mode in engine_scale.MODES]
     engine_scale.plot(rows, path=tmp_path / "scale.png")
     assert (tmp_path / "scale.png").stat().st_size > 0
 
