@@ -17,12 +17,13 @@ exact initial state) and is timed over ``WINDOW`` s of simulated time, its stepp
 ``REPEATS`` runs as far as the budget allows:
 
 - **awake**: nobody may sleep (ours ``sleep_time`` 1e6 s; Box2D sleeping off on the world and on every
-  body; pymunk never sleeps), so every step solves every contact;
+  body; pymunk never sleeps), so every step solves every contact; timed after ``LEAD_IN`` s untimed in the
+  same world, so that every engine's contacts are warm;
 - **settled**: each engine's own sleeping allowed (ours ``until_rest=True``: the run stops once every box
   has lain still ``sleep_time``, and its figures divide by the whole window, the steps skipped at rest
   included, as a sleeping Box2D island's steps are; Box2D's islands sleep after 0.5 s; pymunk does not
   sleep by default), from a fresh start: what falling asleep costs;
-- **asleep**: the same, once the scene has fallen asleep: each engine first runs ``FALL_ASLEEP`` s untimed
+- **asleep**: the same, once the scene has fallen asleep: each engine first runs ``LEAD_IN`` s untimed
   (Box2D's world stepped on, ours a run until rest with a warm start, ``warm_start_memory``, which carries
   the islands' sleep into the timed run, as one long run would), then the window is timed: what a pile
   that lies still costs while a scene goes on.
@@ -89,8 +90,13 @@ REPEATS = 3  # best of this many timed runs, as far as the budget allows
 OUR_SETTLE_MAX = 100  # piles up to this many boxes are settled by our engine (above: minutes)
 BUDGET, QUICK_BUDGET = 5.0, 1.5  # [s] of wall time per (case, engine, mode)
 NEVER_SLEEP = 1e6  # [s] our sleep_time in awake runs
-FALL_ASLEEP = 2.0  # [s] untimed before an asleep run (Box2D's islands sleep after 0.5 s still)
 MODES = ("awake", "settled", "asleep")
+LEAD_IN = {"awake": 0.5, "settled": 0.0, "asleep": 2.0}
+"""[s] simulated untimed before the window, per mode, in the same world (ours: a run whose warm start carries its
+contacts' impulses and its sleep into the timed one): awake, so that every engine is timed with its contacts warm,
+as a scene that goes on is (ours pays its cold start once: its Gauss-Seidel sweeps build a pile's load from zero over
+the first 15-20 steps, at about 4 times the cost of a warm step); asleep, so that Box2D's islands (0.5 s still) and
+ours have fallen asleep; settled from a fresh start: what falling asleep costs."""
 ONBOX_THROWS, QUICK_ONBOX_THROWS = 400, 100
 BATCH, BATCHES, QUICK_BATCHES = 256, 3, 1  # make_vec(BATCH, threads=1), batch steps timed
 
@@ -203,20 +209,23 @@ def budget_steps(step_seconds: float, dt: float, window: float, budget: float) -
 
 def run_ours(scene: Scene, start: np.ndarray, steps: int, mode: str) -> tuple[float, np.ndarray, str]:
     """(wall s, final state, note) of our engine from ``start``, single thread, in ``mode`` (MODES): awake runs
-    never sleep, the others stop once every box is at rest (``until_rest``); an asleep run is timed after an
-    untimed run of FALL_ASLEEP s, whose sleep it carries (the note says how many boxes were asleep then)."""
+    never sleep, the others stop once every box is at rest (``until_rest``); the timed run follows an untimed one
+    of LEAD_IN[mode] s whose warm start it carries (the note says how many boxes were asleep when an asleep
+    run's timing began, if not all)."""
     scene = scene.replace(sleep_time=NEVER_SLEEP) if mode == "awake" else scene
     simulator = Simulator.for_scene(scene, parallel=False)
     params = scene.body_params()
     stats = np.zeros((scene.n_bodies, layout.STATS_SIZE))
     simulator.run(start.copy(), params, make_settings(scene, 1, False), stats)  # compile / load, untimed
-    state, warm, note = start.copy(), None, ""
+    state, warm, note = start.copy(), warm_start_memory(scene.n_bodies), ""
+    until_rest = mode != "awake"
+    lead_in = round(LEAD_IN[mode] / scene.dt)
+    if lead_in:
+        simulator.run(state, params, make_settings(scene, lead_in, until_rest), stats, warm_start=warm)
     if mode == "asleep":
-        warm = warm_start_memory(scene.n_bodies)
-        simulator.run(state, params, make_settings(scene, round(FALL_ASLEEP / scene.dt), True), stats, warm_start=warm)
         asleep = int(np.count_nonzero(~np.isnan(stats[:, layout.REST_TIME])))
         note = "" if asleep == scene.n_bodies else f"{asleep:,} of {scene.n_bodies:,} boxes asleep when timing began"
-    settings = make_settings(scene, steps, until_rest=mode != "awake")
+    settings = make_settings(scene, steps, until_rest)
     begin = time.perf_counter()
     simulator.run(state, params, settings, stats, warm_start=warm)
     return time.perf_counter() - begin, state, note
@@ -252,7 +261,7 @@ def time_ours(case: str, scene: Scene, start: np.ndarray, mode: str, window: flo
 def time_other(engine: str, case: str, scene: Scene, start: np.ndarray, mode: str, window: float, budget: float) -> Row:
     dt = DEFAULT_DT[engine]
     sleep = mode != "awake"
-    untimed = round(FALL_ASLEEP / dt) if mode == "asleep" else 0
+    untimed = round(LEAD_IN[mode] / dt)
     try:
         probe = simulate_scene(engine, scene, MIN_STEPS, record=False, sleep=False, state=start, dt=dt)
     except UnsupportedScene as error:
@@ -441,7 +450,8 @@ def report(args: argparse.Namespace, log: Callable[[str], None]) -> tuple[str, s
         f"where the window would take longer, fewer steps are timed (`steps`, at least {MIN_STEPS}): "
         f"{shortened_text(rows, window)}. "
         "Settled: sleeping allowed, from a fresh start (ours until rest, so fewer steps when everyone sleeps). "
-        f"Asleep: the same after {FALL_ASLEEP:g} s untimed (ours carrying its sleep in a warm start). Piles settled "
+        f"Asleep: the same after {LEAD_IN['asleep']:g} s untimed; awake after {LEAD_IN['awake']:g} s untimed, every "
+        "engine in its own world (ours carrying its contacts and sleep in a warm start). Piles settled "
         f"{SETTLE:g} s first by " + ", ".join(f"{case}: {who}" for case, who in settlers.items()) + ".",
         "",
     ]

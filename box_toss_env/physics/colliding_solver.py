@@ -60,6 +60,7 @@ from .robust_solver import (
     MAX_ROTATION_PER_STEP,
     N_IMPACTS,
     N_STEPS,
+    PENALTY_TRIGGER,
     REST_TIME,
     STATUS,
     STILL_FOR,
@@ -78,6 +79,7 @@ MIN_CAPACITY = 16
 DIRECT_LIMIT = 64  # contacts: up to this many, the normal impulses are solved exactly (``normal_lcp``)
 REGULARISATION = 1e-12  # share of W_cc added to the diagonal of the exact solve (redundant contacts)
 LCP_TOLERANCE = 1e-12  # share of the largest |free velocity|: a contact left free may approach by this much
+SUPPORT_SLOPE = 0.5  # [-] |n_y| above which a contact carries weight in a cold start's guess (``resting_loads``)
 ALONE_LIMIT = 8  # awake bodies at most for which whole steps alone against the floor are looked for (steps_alone)
 ALONE_LOWEST = 0.5  # [share of the smaller half extent] a box's centre is taken never to sink below this height
 
@@ -136,17 +138,71 @@ def prepare_contacts(contacts, ids, count, params, inv_mass, inv_inertia):
         contacts[c, TANGENT_MASS] = 1.0 / k_t
 
 
-@jit_stage
-def warm_start(contacts, ids, count, previous_keys, previous_impulses, n_previous, ratio, vel, inv_mass,
-               inv_inertia):
-    """Start each contact from the impulses its key had in the last substep (times ``ratio``, the ratio
-    of the substep lengths), applied to the velocities; new contacts start from zero."""
+@jit_stage(nrt=True)  # it allocates its work arrays (once a cold start)
+def resting_loads(contacts, ids, count, pose, vel, inv_mass, inv_inertia, h, gravity):
+    """A first guess at the normal impulses of a resting scene, for a cold start (no warm start kept): from
+    the highest body down, each body's weight m |g| h and the load passed to it from above are shared
+    equally among the contacts that hold it up (|n_y| > SUPPORT_SLOPE, the body above on the side n points
+    to, and near: a gap that a body at rest closes within the substep, |g| h^2), each contact's impulse
+    p = share / |n_y| so that the vertical parts add up to the load, which passes on to the body below;
+    applied to the velocities. The solve then corrects the guess: from zero, Gauss-Seidel needs a sweep per
+    layer to carry a load down a pile (a column of 40 boxes, cold, sank 0.24 m/s in its first step of
+    1/60 s; with the guess it stays at rest). Returns how many contacts got an impulse."""
+    n = pose.shape[0]
+    load = np.empty(n)
+    first = np.zeros(n + 1, np.int64)
+    near = -gravity * h * h  # what a body at rest falls in the substep
+    for b in range(n):
+        load[b] = -gravity * h / inv_mass[b]
     for c in range(count):
         contacts[c, IMPULSE] = 0.0
         contacts[c, FRICTION_IMPULSE] = 0.0
-        if n_previous == 0:
+        ny = contacts[c, NY]
+        if contacts[c, GAP] <= near and abs(ny) > SUPPORT_SLOPE:
+            first[1 + (ids[c, BODY1] if ny > 0.0 else ids[c, BODY2])] += 1
+    for b in range(n):
+        first[b + 1] += first[b]
+    held = np.empty(first[n], np.int64)  # the contacts that hold each body up, body by body
+    filled = first[:n].copy()
+    for c in range(count):
+        ny = contacts[c, NY]
+        if contacts[c, GAP] <= near and abs(ny) > SUPPORT_SLOPE:
+            upper = ids[c, BODY1] if ny > 0.0 else ids[c, BODY2]
+            held[filled[upper]] = c
+            filled[upper] += 1
+    for b in np.argsort(-pose[:, 1]):
+        k = first[b + 1] - first[b]
+        if k == 0:
             continue
-        at = np.searchsorted(previous_keys[:n_previous], ids[c, KEY])
+        share = load[b] / k
+        for i in range(first[b], first[b + 1]):
+            c = held[i]
+            ny = contacts[c, NY]
+            p = share / abs(ny)
+            contacts[c, IMPULSE] = p
+            apply_impulse(c, p * contacts[c, NX], p * ny, contacts, ids, vel, inv_mass, inv_inertia)
+            lower = ids[c, BODY2] if ny > 0.0 else ids[c, BODY1]
+            if lower >= 0:
+                load[lower] += share
+    return first[n]
+
+
+@jit_stage
+def warm_start(contacts, ids, count, previous_keys, previous_impulses, n_previous, ratio, vel, inv_mass,
+               inv_inertia, pose, h, gravity):
+    """Start each contact from the impulses its key had in the last substep (times ``ratio``, the ratio
+    of the substep lengths), applied to the velocities; new contacts start from zero. Both lists of keys
+    increase (``find_contacts``' order), so one pass over them together pairs them. A cold start (none kept)
+    of more contacts than the exact solves take starts from ``resting_loads``' guess instead."""
+    if n_previous == 0 and count > DIRECT_LIMIT:
+        resting_loads(contacts, ids, count, pose, vel, inv_mass, inv_inertia, h, gravity)
+        return
+    at = 0
+    for c in range(count):
+        contacts[c, IMPULSE] = 0.0
+        contacts[c, FRICTION_IMPULSE] = 0.0
+        while at < n_previous and previous_keys[at] < ids[c, KEY]:
+            at += 1
         if at < n_previous and previous_keys[at] == ids[c, KEY]:
             p = ratio * previous_impulses[at, 0]
             q = ratio * previous_impulses[at, 1]
@@ -436,7 +492,7 @@ def correct_penetrations(contacts, ids, count, pose, vel, pseudo, inv_mass, inv_
     deepest = 0.0
     for c in range(count):
         deepest = max(deepest, -contacts[c, GAP])
-    if deepest <= slop + tolerance:
+    if deepest <= PENALTY_TRIGGER * slop + tolerance:
         return deepest
     n = pose.shape[0]
     for b in range(n):

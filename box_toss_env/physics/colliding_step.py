@@ -9,8 +9,10 @@ The stage script of one substep of length h:
      speed says) (speculative contacts, ``box_collision.find_contacts``); each starts from its impulse of
      the last substep when the same feature touched (warm starting), so a stack's load is carried from
      step to step rather than rebuilt by the iterations; and from run to run when the caller keeps the
-     ``warm`` array (``load_warm_start``, ``store_warm_start``: in chunks as in one run);
-  2. penalty: penetration deeper than the slop is removed by the critically damped penalty spring with
+     ``warm`` array (``load_warm_start``, ``store_warm_start``: in chunks as in one run); a cold start of
+     more than DIRECT_LIMIT contacts starts from a guess of a resting pile's loads (``resting_loads``);
+  2. penalty: once a contact is deeper than twice the slop, penetration deeper than the slop is removed by
+     the critically damped penalty spring with
      backward Euler, as a pseudo-velocity (``robust_solver``'s split impulse, now between two bodies:
      ERP = h omega / (h omega + 2), omega = sqrt(k K_n)); positions move, velocities do not, and the
      potential energy it returns is taken from the kinetic energy of the bodies it moved, as far as
@@ -482,7 +484,7 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
                 # 4. warm start, solve (speculative targets), store impulses for the next substep
                 speculative_targets(contacts, count, h)
                 warm_start(contacts, ids, count, previous_keys, previous_impulses, n_previous, h / h_previous, vel,
-                           inv_mass, inv_inertia)
+                           inv_mass, inv_inertia, pose, h, gravity)
                 solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, FRICTION_ON, w, factor, free, x,
                                  active, index, lcp_y, contact_state, settings)
                 n_previous = store_impulses(contacts, ids, count, previous_keys, previous_impulses)

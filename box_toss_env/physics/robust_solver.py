@@ -74,6 +74,9 @@ from .kernel_support import lies_still, read_settings, record_event, store_state
 
 MAX_ROTATION_PER_STEP = 0.05  # [rad] a contact step turning the box further is split
 MAX_SUBSTEPS = 64
+PENALTY_TRIGGER = 2.0  # [slops] the penalty starts once a corner is this deep, then removes what lies beyond one slop
+# (a band, as Box2D 2.x's position solver stops within 3 slops: a pile whose looser solve lets corners creep to
+# the slop would otherwise run the penalty at every step)
 CONTACT_TOLERANCE = 1e-12  # [m per m of corner radius + 1 m] a corner this close touches
 SIMULTANEOUS_TOLERANCE = 1e-9  # [same units] corners this close hit at the same instant
 FRICTION_ITERATIONS = 8  # at most this many Gauss-Seidel sweeps over friction and the normal block
@@ -508,7 +511,7 @@ def advance_box(i, state, params, memory, n, n_end, dt, gravity, until_rest, thr
                 max_penetration = max(max_penetration, penetration)
                 # 6. penalty: implicit correction of what penetrates beyond the slop, at the lowest corner
                 # and its neighbours; the potential energy it returns is taken from the kinetic energy
-                if use_penalty and penetration > slop + tolerance:
+                if use_penalty and penetration > PENALTY_TRIGGER * slop + tolerance:
                     y, angle, vx, vy, spin = penalty_step(y, angle, vx, vy, spin, first, cos_a, sin_a, hx, hy, slop,
                                                           stiffness, piece, gravity, inv_mass, inv_inertia, corners, k)
                     cos_a = math.cos(angle)

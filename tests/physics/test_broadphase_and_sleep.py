@@ -302,3 +302,37 @@ def test_a_sleeping_pile_costs_no_step_until_a_body_of_it_is_moved_pushed_or_rea
     )
     assert stats11[10, layout.N_STEPS] > 0 and stats11[top, layout.N_STEPS] > 0
     assert state11[10, 1] > asleep[top, 1]  # it lies on the pile
+
+
+def test_a_column_of_40_boxes_starting_cold_stays_at_rest():
+    """Over 64 contacts a cold start begins from the resting loads (``colliding_solver.resting_loads``): each
+    contact carries the weight above it, so a column of 40 boxes built exactly on one another stays at rest in
+    its first step of 1/60 s (from zero, its 16 Gauss-Seidel sweeps cannot carry the load down 40 layers:
+    it sank at 0.24 m/s)."""
+    boxes = tuple(Box(length=0.4, width=0.2, mass=2.0, position=(0.0, 0.1 + 0.2 * k)) for k in range(40))
+    scene = Scene(boxes=boxes, dt=1 / 60, restitution=0.3, friction=0.5, penalty_stiffness=1e5, boxes_collide=True)
+    state, params = scene.initial_state(), scene.body_params()
+    stats = np.zeros((40, layout.STATS_SIZE))
+    for _ in range(3):  # three cold starts, one step each
+        Simulator.for_scene(scene, parallel=False).run(state, params, make_settings(scene, 1, False), stats)
+        assert np.abs(state[:, 3:]).max() < 1e-12
+    np.testing.assert_allclose(state, scene.initial_state(), atol=1e-12)
+
+
+@pytest.mark.parametrize("depth_in_slops", [1.5, 3.0])
+def test_the_penalty_starts_at_twice_the_slop_and_stops_at_it(depth_in_slops):
+    """Two boxes side by side (stepped together), both sunk into the floor: less than twice the slop deep they
+    are left alone; deeper, the penalty lifts them to between one and two slops."""
+    slop = 1e-4
+    boxes = tuple(Box(length=0.4, width=0.2, mass=2.0, position=(x, 0.1 - depth_in_slops * slop)) for x in (0.0, 0.4))
+    scene = Scene(
+        boxes=boxes, dt=1 / 120, friction=0.5, penalty_stiffness=1e5, boxes_collide=True, penetration_slop=slop
+    )
+    state, params = scene.initial_state(), scene.body_params()
+    stats = np.zeros((2, layout.STATS_SIZE))
+    Simulator.for_scene(scene, parallel=False).run(state, params, make_settings(scene, 60, False), stats)
+    depth = 0.1 - state[:, 1]
+    if depth_in_slops < 2.0:
+        np.testing.assert_allclose(depth, depth_in_slops * slop, rtol=1e-9)
+    else:
+        assert np.all((depth > slop) & (depth <= 2.0 * slop + 1e-12))
