@@ -388,9 +388,9 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
         touched, supported, ready = np.zeros(nb, np.bool_), np.zeros(nb, np.bool_), np.zeros(nb, np.bool_)
         impacted, n_impacts, n_stepped = np.zeros(nb, np.int64), np.zeros(nb, np.int64), np.zeros(nb, np.int64)
         first_contact = np.full(nb, math.nan)
-        capacity = max(8 * nb, MIN_CAPACITY)
-        contacts, ids = np.zeros((capacity, CONTACT_COLUMNS)), np.zeros((capacity, ID_COLUMNS), np.int64)
-        previous_keys, previous_impulses = np.zeros(capacity, np.int64), np.zeros((capacity, 2))
+        capacity = max(8 * nb, MIN_CAPACITY)  # contact rows, each written before it is read: left unzeroed
+        contacts, ids = np.empty((capacity, CONTACT_COLUMNS)), np.empty((capacity, ID_COLUMNS), np.int64)
+        previous_keys, previous_impulses = np.empty(capacity, np.int64), np.empty((capacity, 2))
         # the exact solves' work arrays (normal_lcp, joint_contact_solve)
         w, factor = np.zeros((DIRECT_LIMIT, DIRECT_LIMIT)), np.zeros((DIRECT_LIMIT, DIRECT_LIMIT))
         free, x, lcp_y = np.zeros(DIRECT_LIMIT), np.zeros(DIRECT_LIMIT), np.zeros(DIRECT_LIMIT)
