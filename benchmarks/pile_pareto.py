@@ -1,6 +1,6 @@
 """Error against run time for piles: penetration and drift against cost as each engine's accuracy knob
-turns (our dt at the scene's default Gauss-Seidel stop, and our ``solver_tolerance`` at a fixed dt; Box2D v3's
-substeps; pymunk's iterations), on the 210-box pyramid and a 100-box pile.
+turns (our dt at the scene's default Gauss-Seidel stop, and our ``solver_tolerance`` and ``penetration_slop`` at a
+fixed dt; Box2D v3's substeps; pymunk's iterations), on the 210-box pyramid and a 100-box pile.
 Prints one table and writes one Pareto plot; asserts nothing.
 
     python -m benchmarks.pile_pareto [--quick] [--write-docs]
@@ -31,6 +31,8 @@ OUR_DTS = (1 / 64, 1 / 128, 1 / 256, 1 / 512)  # [s], at the scene's default sol
 OUR_TOLERANCES = (1e-3, 1e-4, 1e-5, 1e-6)  # solver_tolerance with 32 sweeps at most, at OUR_TOLERANCE_DT
 OUR_TOLERANCE_DT = 1 / 120  # [s]
 OURS_BY_TOLERANCE = "ours, solver_tolerance"
+OUR_SLOPS = (1e-5, 3e-5, 1e-4, 3e-4)  # [m] penetration_slop at OUR_TOLERANCE_DT, tolerance 1e-4, 32 sweeps at most
+OURS_BY_SLOP = "ours, penetration_slop"
 BOX2D3_SUBSTEPS = (1, 2, 4, 8)  # at its default 60 Hz
 PYMUNK_ITERATIONS = (5, 10, 20, 40)  # at 60 Hz
 PYMUNK_DT = 1 / 60
@@ -75,6 +77,21 @@ def variants(engines: list[str]):
             lambda scene, start, steps, tolerance=tolerance: engine_scale.run_ours(
                 scene.replace(
                     **{**defaults, "solver_tolerance": tolerance, "solver_iterations": 32}, dt=OUR_TOLERANCE_DT
+                ),
+                start,
+                steps,
+                "awake",
+            )[:2],
+        )
+    for slop in OUR_SLOPS:
+        yield (
+            OURS_BY_SLOP,
+            f"{slop:g} m",
+            OUR_TOLERANCE_DT,
+            lambda scene, start, steps, slop=slop: engine_scale.run_ours(
+                scene.replace(
+                    **{**defaults, "solver_tolerance": 1e-4, "solver_iterations": 32, "penetration_slop": slop},
+                    dt=OUR_TOLERANCE_DT,
                 ),
                 start,
                 steps,
