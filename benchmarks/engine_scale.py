@@ -505,7 +505,21 @@ def readme_summary(rows: list[Row], onbox, header: str) -> str:
             f"{kernel['BoxToss-OnBox-v0'] / kernel['BoxToss-v0']:.1f} times a floor throw's "
             f"{kernel['BoxToss-v0']:,.0f} us."
         )
-    return "\n".join([*lines, "", f"{header} Every engine, settled too: [the page](docs/engine_scale.md).{throw}"])
+    rest = {(row.case, row.engine, row.mode): row for row in rows if row.mode != "awake"}
+    still = [
+        f"{case}: ours {rest[(case, OURS, 'settled')].us_per_body_second:,.1f} and "
+        f"{rest[(case, OURS, 'asleep')].us_per_body_second:,.2f}, Box2D v3 "
+        f"{rest[(case, 'box2d3', 'settled')].us_per_body_second:,.1f} and "
+        f"{rest[(case, 'box2d3', 'asleep')].us_per_body_second:,.2f}"
+        for case in README_CASES
+        if all((case, engine, mode) in rest for engine in (OURS, "box2d3") for mode in ("settled", "asleep"))
+    ]
+    sleeping = (
+        f" Falling asleep from a fresh start, and asleep, us per box per simulated second: {'; '.join(still)}."
+        if still
+        else ""
+    )
+    return "\n".join([*lines, "", f"{header}{sleeping} Every engine: [the page](docs/engine_scale.md).{throw}"])
 
 
 def shortened_text(rows: list[Row], window: float) -> str:

@@ -129,3 +129,11 @@ def test_the_readme_summary_is_written_from_the_rows():
     assert "| pile 100 | 1,000.0 | 500.0 | 2.0 | 1.0e-06 | 2.0e-03 |  |  |" in text
     assert "costs the engine 60 us, 3.0 times a floor throw's 20 us" in text
     assert "pymunk" not in text and "pile 10 |" not in text  # Box2D v3 beside ours, on the goals' cases
+    assert "asleep" not in text  # no settled and asleep rows: no sentence about them
+    rows += [
+        engine_scale.Row("pile 100", 100, engine, dt, mode, 120, wall)
+        for engine, dt in ((engine_scale.OURS, 1 / 120), ("box2d3", 1 / 60))
+        for mode, wall in (("settled", 0.05), ("asleep", 0.001))
+    ]
+    text = engine_scale.readme_summary(rows, onbox, "header.")
+    assert "pile 100: ours 500.0 and 10.00, Box2D v3 250.0 and 5.00." in text
