@@ -61,9 +61,9 @@ beyond it the substeps are capped and only the speculative contacts remain (not 
 
 What a grid step does before and after the substeps, so that a scene pays only for what moves:
   0. wake: with ``until_rest``, every sleeping island that an awake body can reach within the step wakes
-     (``islands.wake_touched``; the islands asleep at the end of the last call, kept in ``warm``, and the
-     bodies placed at rest sleep from the start, ``islands.start_asleep``); sleeping bodies are left out of
-     everything below;
+     (``islands.wake_touched``; the islands asleep at the end of the last call, kept in ``warm``, sleep from
+     the start, ``islands.restore_sleeping``, and so do the bodies placed at rest, ``islands.sleep_placed``);
+     sleeping bodies are left out of everything below;
   alone: while at most ALONE_LIMIT bodies are awake, the whole steps for which no two boxes can meet
      (``steps_alone``: on the exact parabolas while every awake body flies, or by a bound on every point's
      speed from the body's energy, ``energy_speed``, while they bounce or slide on the floor apart) are
@@ -123,7 +123,7 @@ from .colliding_solver import (
 )
 from .compilation import jit_kernel, jit_stage
 from .contact_solver import CORNER_ROWS, MAX_CORNERS
-from .islands import fall_asleep, keep_sleeping, start_asleep, wake_touched
+from .islands import fall_asleep, keep_sleeping, restore_sleeping, sleep_placed, wake_touched
 from .kernel_support import read_settings, record_event, store_state, write_stats
 from .robust_solver import MEMORY_SIZE, energy_limit_scale
 
@@ -150,6 +150,16 @@ def note_penetration(contacts, ids, count, max_penetration):
         max_penetration[b1] = max(max_penetration[b1], depth)
         if b2 >= 0:
             max_penetration[b2] = max(max_penetration[b2], depth)
+
+
+@jit_stage(nrt=True)  # it sorts (numba's sort keeps a stack array)
+def start_sweep(pose, half, everyone, trig, bound, order):
+    """Every box's geometry (``update_geometry``), the sweep's axis (returned) and the boxes in order along it
+    (into ``order``), for the broadphase's first search."""
+    update_geometry(pose, half, everyone, trig, bound)
+    axis = sweep_axis(pose, everyone)
+    order[:] = np.argsort(pose[:, axis])
+    return axis
 
 
 # -- 2.-3. before the solve: energies, approach speeds, gravity ------------------------------------
@@ -313,7 +323,7 @@ def sleep_islands(ids, count, pose, vel, radius, awake, supported, still_for, sl
 @jit_stage
 def load_warm_start(warm, n, previous_keys, previous_impulses, dt):
     """The contacts' impulses a caller kept from its last call (``layout.WARM_START_SIZE``: row 0 holds the
-    contact count, the substep length and the body count k, then two rows a body, ``islands.keep_sleeping``,
+    contact count, the substep length and the body count k, then WARM_BODY_ROWS a body, ``islands.keep_sleeping``,
     then a row per contact: key, normal and friction impulse), into the kernel's arrays; returns (count,
     substep length). An empty ``warm`` (none kept), or one kept from a scene of another number of bodies than
     this one's ``n`` (a contact's key names its bodies by their number among n), starts cold: (0, dt)."""
@@ -329,13 +339,14 @@ def load_warm_start(warm, n, previous_keys, previous_impulses, dt):
 
 
 @jit_stage
-def store_warm_start(warm, previous_keys, previous_impulses, n_previous, h_previous, pose, awake, island, still_for):
+def store_warm_start(warm, previous_keys, previous_impulses, n_previous, h_previous, pose, params, awake, island,
+                     still_for):
     """Into ``warm`` for the next call (``load_warm_start``'s layout; nothing if it is empty): each body's sleep
     (``islands.keep_sleeping``), then the last substep's impulses by contact key, as many as it has rows for
     (the keys are sorted, so a prefix is a warm start too)."""
     if warm.shape[0] == 0:
         return
-    first = 1 + layout.WARM_BODY_ROWS * keep_sleeping(warm, pose, awake, island, still_for)
+    first = 1 + layout.WARM_BODY_ROWS * keep_sleeping(warm, pose, params, awake, island, still_for)
     count = min(n_previous, warm.shape[0] - first)
     warm[0, 0] = count
     warm[0, 1] = h_previous
@@ -348,10 +359,11 @@ def store_warm_start(warm, previous_keys, previous_impulses, n_previous, h_previ
 @jit_stage
 def write_back(state, stats, pose, vel, first_contact, n_impacts, n_stepped, max_penetration, rest_time, n, dt,
                status, fail_step, warm, previous_keys, previous_impulses, n_previous, h_previous, awake, island,
-               still_for):
+               still_for, params):
     """The bodies' final states and stats (a failure is reported on the bodies that are not finite), and the
     bodies' sleep and the last substep's impulses into ``warm`` for the next call (``store_warm_start``)."""
-    store_warm_start(warm, previous_keys, previous_impulses, n_previous, h_previous, pose, awake, island, still_for)
+    store_warm_start(warm, previous_keys, previous_impulses, n_previous, h_previous, pose, params, awake, island,
+                     still_for)
     for b in range(state.shape[0]):
         state[b, 0], state[b, 1], state[b, 2] = pose[b, 0], pose[b, 1], pose[b, 2]
         state[b, 3], state[b, 4], state[b, 5] = vel[b, 0], vel[b, 1], vel[b, 2]
@@ -401,10 +413,7 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
         still_for = np.zeros(nb)  # [s] how long each awake body has been supported and still
         rest_time = np.full(nb, math.nan)  # when each body last fell asleep
         parent = np.zeros(nb, np.int64)
-        update_geometry(pose, half, everyone, trig, bound)
-        axis = sweep_axis(pose, everyone)
-        order = np.argsort(pose[:, axis])
-        low, pair_keys = np.zeros(nb), np.zeros(max(4 * nb, MIN_CAPACITY), np.int64)
+        low, order, pair_keys = np.zeros(nb), np.empty(nb, np.int64), np.zeros(max(4 * nb, MIN_CAPACITY), np.int64)
         # bodies advanced alone: advance_box's memory rows and work arrays (contact_solver)
         memory = np.zeros((nb, MEMORY_SIZE))
         alone = np.zeros(nb, np.bool_)  # whether a body's memory row holds on (advanced alone since the substeps)
@@ -415,11 +424,14 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
         n_previous, h_previous = load_warm_start(warm, nb, previous_keys, previous_impulses, dt)  # from the last call
         if RECORD:
             record_states(trajectory, 0, pose, vel)
-        if until_rest:  # the islands asleep at the end of the last call and the bodies placed at rest sleep
+        if until_rest:  # the islands asleep at the end of the last call sleep again
+            n_awake -= restore_sleeping(warm, pose, vel, params, awake, island, still_for, rest_time, ready)
+        axis = start_sweep(pose, half, everyone, trig, bound, order) if n_awake > 0 else 0  # all asleep: no sweep
+        if until_rest and n_awake > 0:  # and the bodies placed at rest
             slept = -1
             while slept < 0:
-                slept = start_asleep(warm, pose, vel, half, bound, reach, everyone, awake, island, still_for,
-                                     rest_time, ready, sleep_speed, tolerance, axis, order, low, pair_keys)
+                slept = sleep_placed(pose, vel, half, bound, reach, everyone, awake, island, rest_time, ready,
+                                     sleep_speed, tolerance, axis, order, low, pair_keys)
                 if slept < 0:
                     pair_keys = np.zeros(2 * pair_keys.shape[0], np.int64)
             n_awake -= slept
@@ -512,6 +524,6 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
                     break
         write_back(state, stats, pose, vel, first_contact, n_impacts, n_stepped, max_penetration, rest_time, n, dt,
                    status, fail_step, warm, previous_keys, previous_impulses, n_previous, h_previous, awake, island,
-                   still_for)
+                   still_for, params)
 
     return run

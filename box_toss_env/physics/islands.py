@@ -16,7 +16,7 @@ floor, touching no other box, ``sleep_placed``) sleeps from the start, as the re
 Sleep carries from run to run in the caller's warm start (``simulate.warm_start_memory``, rows in
 ``layout``): at the end of a run each body's island label (-1 awake), sleep timer and pose are kept
 (``keep_sleeping``); at the start of the next, every island that was asleep sleeps again, unless the
-caller moved or pushed one of its bodies since (``restore_sleeping``), and the awake bodies' timers go on.
+caller moved, pushed or changed one of its bodies since (``restore_sleeping``), and the awake bodies' timers go on.
 A pile that fell asleep costs nothing in the next run until something reaches it, as in one long run.
 """
 
@@ -149,12 +149,12 @@ def sleep_placed(pose, vel, half, bound, reach, everyone, awake, island, rest_ti
 
 
 @jit_stage
-def restore_sleeping(warm, pose, vel, awake, island, still_for, rest_time, intact):
+def restore_sleeping(warm, pose, vel, params, awake, island, still_for, rest_time, intact):
     """The sleep ``keep_sleeping`` kept in ``warm`` at the end of the last run: the awake bodies' sleep timers
-    (where the pose is as kept), and the islands asleep then asleep again, each whole island only if none of
-    its bodies was moved or set moving since (pose as kept, velocity zero: else the caller changed it, and the
-    island wakes). Bodies past the ones kept are awake. Returns how many bodies sleep so (called again, the
-    same)."""
+    (where the pose and parameters are as kept), and the islands asleep then asleep again, each whole island
+    only if none of its bodies was moved, set moving or changed since (pose and parameters as kept, velocity
+    zero: else the caller changed it, and the island wakes). Bodies past the ones kept are awake. Returns how
+    many bodies sleep so."""
     n = pose.shape[0]
     kept = min(np.int64(warm[0, 2]), n, (warm.shape[0] - 1) // layout.WARM_BODY_ROWS) if warm.shape[0] > 0 else 0
     for b in range(n):
@@ -163,6 +163,8 @@ def restore_sleeping(warm, pose, vel, awake, island, still_for, rest_time, intac
         row = 1 + layout.WARM_BODY_ROWS * b
         label = np.int64(warm[row, 0])
         same = pose[b, 0] == warm[row + 1, 0] and pose[b, 1] == warm[row + 1, 1] and pose[b, 2] == warm[row + 1, 2]
+        for k in range(params.shape[1]):
+            same = same and params[b, k] == warm[row + 2 + k // 3, k % 3]
         if label < 0 and same:
             still_for[b] = warm[row, 1]
         elif 0 <= label < kept and not (same and vel[b, 0] == 0.0 and vel[b, 1] == 0.0 and vel[b, 2] == 0.0):
@@ -179,8 +181,8 @@ def restore_sleeping(warm, pose, vel, awake, island, still_for, rest_time, intac
 
 
 @jit_stage
-def keep_sleeping(warm, pose, awake, island, still_for):
-    """Each body's island label (its island's root while it sleeps, -1 awake), sleep timer and pose into
+def keep_sleeping(warm, pose, params, awake, island, still_for):
+    """Each body's island label (its island's root while it sleeps, -1 awake), sleep timer, pose and parameters into
     ``warm``'s body rows for the next run (``restore_sleeping``), as many bodies as there are rows for (a
     prefix: an island's label is its smallest body, so a kept sleeping body's label is kept too); returns how
     many bodies were kept (0 if ``warm`` is empty)."""
@@ -194,19 +196,6 @@ def keep_sleeping(warm, pose, awake, island, still_for):
         warm[row, 1] = still_for[b]
         warm[row, 2] = 0.0
         warm[row + 1, 0], warm[row + 1, 1], warm[row + 1, 2] = pose[b, 0], pose[b, 1], pose[b, 2]
+        for k in range(params.shape[1]):
+            warm[row + 2 + k // 3, k % 3] = params[b, k]
     return kept
-
-
-@jit_stage
-def start_asleep(warm, pose, vel, half, bound, reach, everyone, awake, island, still_for, rest_time, ready,
-                 sleep_speed, tolerance, axis, order, low, keys):
-    """With ``until_rest``, who sleeps from the start: the islands asleep at the end of the last run
-    (``restore_sleeping``), then, unless that is every body, the bodies placed at rest (``sleep_placed``).
-    Returns how many sleep, or -1 if ``keys`` is too short (the caller grows it and calls again: the first
-    part gives the same bodies again, the second had changed nothing)."""
-    restored = restore_sleeping(warm, pose, vel, awake, island, still_for, rest_time, ready)
-    if restored == pose.shape[0]:
-        return restored
-    placed = sleep_placed(pose, vel, half, bound, reach, everyone, awake, island, rest_time, ready, sleep_speed,
-                          tolerance, axis, order, low, keys)
-    return -1 if placed < 0 else restored + placed

@@ -143,7 +143,7 @@ class Simulator:
         this one's, and its end written back. A scene advanced in several runs with one such array steps as in
         one run: its contacts keep their load (without it each run starts them from zero, and a pile settles a
         little anew at each) and, with ``until_rest``, an island that fell asleep stays asleep, at no cost,
-        until something reaches it or the caller moves or pushes one of its bodies. Give each scene or episode
+        until something reaches it or the caller moves, pushes or changes one of its bodies. Give each scene or episode
         its own, zeroed when it starts."""
         if self.flags.record and (trajectory is None or events is None):
             raise ValueError("trajectory and events arrays are required when recording")
@@ -173,7 +173,7 @@ class Simulator:
 
 def warm_start_memory(n_bodies: int) -> np.ndarray:
     """A zeroed warm start for ``Simulator.run`` on a colliding scene of up to ``n_bodies`` bodies
-    (``layout.WARM_START_SIZE`` columns): two rows a body for its sleep, room for 8 contacts a body, what the
+    (``layout.WARM_START_SIZE`` columns): WARM_BODY_ROWS a body for its sleep, room for 8 contacts a body, what the
     kernel starts with; more are kept as far as it goes."""
     n_bodies = check_integer("n_bodies", n_bodies, 1)
     return np.zeros((1 + layout.WARM_BODY_ROWS * n_bodies + max(8 * n_bodies, 16), layout.WARM_START_SIZE))

@@ -268,7 +268,7 @@ def test_a_pile_settling_in_chunks_with_its_warm_start_sleeps_as_in_one_run(n):
     assert not np.array_equal(cold, once)
 
 
-def test_a_sleeping_pile_costs_no_step_until_a_body_of_it_is_moved_pushed_or_reached():
+def test_a_sleeping_pile_costs_no_step_until_a_body_of_it_is_moved_pushed_changed_or_reached():
     scene = scenes.pile(10, dt=1 / 120)
     simulator = Simulator.for_scene(scene, parallel=False)
     state, params = scene.initial_state(), scene.body_params()
@@ -281,14 +281,16 @@ def test_a_sleeping_pile_costs_no_step_until_a_body_of_it_is_moved_pushed_or_rea
     assert np.array_equal(state, asleep) and not stats[:, layout.N_STEPS].any()
     assert np.all(stats[:, layout.REST_TIME] == 0.0)  # asleep from the start, as bodies placed at rest
     top = int(np.argmax(state[:, 1]))
-    for change in ("pushed", "moved"):
-        state = asleep.copy()
+    for change in ("pushed", "moved", "changed"):
+        state, changed = asleep.copy(), params.copy()
         warm_then = warm.copy()
         if change == "pushed":
             state[top, 3] = 0.5
-        else:
+        elif change == "moved":
             state[top, 0] += 1e-3
-        simulator.run(state, params, settings, stats, warm_start=warm_then)
+        else:
+            changed[top, layout.FRICTION] *= 0.5
+        simulator.run(state, changed, settings, stats, warm_start=warm_then)
         assert stats[top, layout.N_STEPS] > 0  # its island woke (the caller changed one of its bodies)
     # a box dropped onto the sleeping pile: a body past the ones kept, awake; it wakes the pile when it reaches it
     dropped = dataclasses.replace(
