@@ -51,6 +51,7 @@ from .broadphase import box_bound, time_apart
 from .compilation import jit_stage
 from .contact_solver import penalty_correction_share
 from .flight import time_to_contact
+from .islands import islands_deeper_than
 from .joint_contact_solve import JOINT_LIMIT, delassus_entry, full_delassus, joint_impulses
 from .kernel_support import store_state
 from .robust_solver import (
@@ -80,6 +81,7 @@ DIRECT_LIMIT = 64  # contacts: up to this many, the normal impulses are solved e
 REGULARISATION = 1e-12  # share of W_cc added to the diagonal of the exact solve (redundant contacts)
 LCP_TOLERANCE = 1e-12  # share of the largest |free velocity|: a contact left free may approach by this much
 SUPPORT_SLOPE = 0.5  # [-] |n_y| above which a contact carries weight in a cold start's guess (``resting_loads``)
+EVERY_CONTACT = np.zeros(0, np.bool_)  # ``gauss_seidel``'s ``only`` that sweeps every contact
 ALONE_LIMIT = 8  # awake bodies at most for which whole steps alone against the floor are looked for (steps_alone)
 ALONE_LOWEST = 0.5  # [share of the smaller half extent] a box's centre is taken never to sink below this height
 
@@ -193,8 +195,9 @@ def warm_start(contacts, ids, count, previous_keys, previous_impulses, n_previou
     """Start each contact from the impulses its key had in the last substep (times ``ratio``, the ratio
     of the substep lengths), applied to the velocities; new contacts start from zero. Both lists of keys
     increase (``find_contacts``' order), so one pass over them together pairs them. A cold start (none kept)
-    of more contacts than the exact solves take starts from ``resting_loads``' guess instead."""
-    if n_previous == 0 and count > DIRECT_LIMIT:
+    of more contacts than the exact solves take, under a gravity that pulls down, starts from ``resting_loads``'
+    guess instead."""
+    if n_previous == 0 and count > DIRECT_LIMIT and gravity < 0.0:
         resting_loads(contacts, ids, count, pose, vel, inv_mass, inv_inertia, h, gravity)
         return
     at = 0
@@ -352,7 +355,8 @@ def solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, use_frict
         if solved:
             return
     sweep_tolerance, sweeps = solver_settings(settings)
-    gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, IMPULSE, sweeps, sweep_tolerance)
+    gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, IMPULSE, sweeps, sweep_tolerance,
+                 EVERY_CONTACT)
 
 
 @jit_stage
@@ -401,17 +405,19 @@ def friction_sweep(contacts, ids, count, vel, inv_mass, inv_inertia):
 
 
 @jit_stage
-def gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, column, iterations, tolerance):
+def gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, column, iterations, tolerance, only):
     """Projected Gauss-Seidel over the contacts (Box2D's sequential impulses), at most ``iterations`` sweeps,
     stopping once a sweep changes the impulses by less than ``tolerance`` of their sum:
     friction clamped to mu times the normal impulse, then the normal impulse >= 0 with u_rel . n >= target
     (column TARGET), the normal impulses accumulated in ``contacts[:, column]`` and applied to ``vel``. Stage 4
     runs it on the velocities (IMPULSE, with friction), stage 2 on the penalty's pseudo-velocities
-    (PSEUDO_IMPULSE, without)."""
+    (PSEUDO_IMPULSE, without). ``only``: the contacts to sweep (a mask), or empty (EVERY_CONTACT) for all."""
     for _ in range(iterations):
         change = 0.0
         total = 0.0
         for c in range(count):
+            if only.shape[0] > 0 and not only[c]:
+                continue
             nx, ny = contacts[c, NX], contacts[c, NY]
             if use_friction and contacts[c, FRICTION] > 0.0:
                 ux, uy = relative_velocity(c, contacts, ids, vel)
@@ -477,12 +483,15 @@ def apply_restitution(contacts, ids, count, vel, inv_mass, inv_inertia, threshol
     return impacts
 
 
-@jit_stage
+@jit_stage(nrt=True)  # it allocates its work arrays (when the penalty runs)
 def correct_penetrations(contacts, ids, count, pose, vel, pseudo, inv_mass, inv_inertia, h, settings, tolerance,
                          gravity, params, w, factor, free, x, active, index, y):
-    """Stage 2: pseudo-velocities that remove the penalty's share of each penetration deeper than the slop
-    (normal impulses >= 0 with targets ERP depth / h; the other contacts may close their gap but not pass
-    it), moved into the positions; the gaps of every contact follow to first order, and the potential
+    """Stage 2, island by island (bodies joined by box-box contacts): in the islands holding a contact deeper
+    than PENALTY_TRIGGER slops (``islands.islands_deeper_than``), pseudo-velocities that remove the penalty's
+    share of each penetration deeper than the slop (normal impulses >= 0 with targets ERP depth / h; the other
+    contacts, and every contact of the other islands, may close their gap but not pass it: their impulses stay
+    zero unless pressed, so the sweeps leave out the other islands' contacts, the same result), moved into the
+    positions; the gaps of every contact follow to first order, and the potential
     energy gained is taken from the kinetic energy of the moved bodies. Up to DIRECT_LIMIT contacts the
     impulses are solved exactly (``normal_lcp``, as the velocities: Gauss-Seidel leaves a light box
     between heavy ones turning), beyond that by Gauss-Seidel (the scene's ``solver_tolerance``, at most
@@ -499,10 +508,12 @@ def correct_penetrations(contacts, ids, count, pose, vel, pseudo, inv_mass, inv_
         pseudo[b, 0] = 0.0
         pseudo[b, 1] = 0.0
         pseudo[b, 2] = 0.0
+    parent, marked, deep_island = np.empty(n, np.int64), np.empty(n, np.bool_), np.empty(count, np.bool_)
+    islands_deeper_than(contacts, ids, count, PENALTY_TRIGGER * slop + tolerance, parent, marked, deep_island)
     for c in range(count):
         depth = -contacts[c, GAP] - slop
         contacts[c, PSEUDO_IMPULSE] = 0.0
-        if depth > tolerance:
+        if depth > tolerance and deep_island[c]:
             share = penalty_correction_share(contacts[c, STIFFNESS], 1.0 / contacts[c, NORMAL_MASS], h)
             contacts[c, TARGET] = share * depth / h
         else:
@@ -523,7 +534,7 @@ def correct_penetrations(contacts, ids, count, pose, vel, pseudo, inv_mass, inv_
     if not solved:
         sweep_tolerance, sweeps = solver_settings(settings)
         gauss_seidel(contacts, ids, count, pseudo, inv_mass, inv_inertia, False, PSEUDO_IMPULSE,
-                     min(sweeps, PENALTY_ITERATIONS), sweep_tolerance)
+                     min(sweeps, PENALTY_ITERATIONS), sweep_tolerance, deep_island)
     for c in range(count):
         ux, uy = relative_velocity(c, contacts, ids, pseudo)
         contacts[c, GAP] += h * (ux * contacts[c, NX] + uy * contacts[c, NY])

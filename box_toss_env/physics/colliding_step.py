@@ -11,8 +11,8 @@ The stage script of one substep of length h:
      step to step rather than rebuilt by the iterations; and from run to run when the caller keeps the
      ``warm`` array (``load_warm_start``, ``store_warm_start``: in chunks as in one run); a cold start of
      more than DIRECT_LIMIT contacts starts from a guess of a resting pile's loads (``resting_loads``);
-  2. penalty: once a contact is deeper than twice the slop, penetration deeper than the slop is removed by
-     the critically damped penalty spring with
+  2. penalty, island by island: in an island holding a contact deeper than twice the slop, penetration deeper
+     than the slop is removed by the critically damped penalty spring with
      backward Euler, as a pseudo-velocity (``robust_solver``'s split impulse, now between two bodies:
      ERP = h omega / (h omega + 2), omega = sqrt(k K_n)); positions move, velocities do not, and the
      potential energy it returns is taken from the kinetic energy of the bodies it moved, as far as

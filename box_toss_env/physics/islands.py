@@ -14,7 +14,7 @@ floor, touching no other box, ``sleep_placed``) sleeps from the start, as the re
 ``BoxToss-OnBox-v0``: stepping it would only find it at rest ``sleep_time`` later.
 
 Sleep carries from run to run in the caller's warm start (``simulate.warm_start_memory``, rows in
-``layout``): at the end of a run each body's island label (-1 awake), sleep timer and pose are kept
+``layout``): at the end of a run each body's island label (-1 awake), sleep timer, pose and parameters are kept
 (``keep_sleeping``); at the start of the next, every island that was asleep sleeps again, unless the
 caller moved, pushed or changed one of its bodies since (``restore_sleeping``), and the awake bodies' timers go on.
 A pile that fell asleep costs nothing in the next run until something reaches it, as in one long run.
@@ -25,7 +25,7 @@ import math
 import numpy as np
 
 from . import layout
-from .box_collision import BODY1, BODY2
+from .box_collision import BODY1, BODY2, GAP
 from .broadphase import candidate_pairs
 from .compilation import jit_stage
 from .kernel_support import is_lying_still
@@ -164,7 +164,7 @@ def restore_sleeping(warm, pose, vel, params, awake, island, still_for, rest_tim
         label = np.int64(warm[row, 0])
         same = pose[b, 0] == warm[row + 1, 0] and pose[b, 1] == warm[row + 1, 1] and pose[b, 2] == warm[row + 1, 2]
         for k in range(params.shape[1]):
-            same = same and params[b, k] == warm[row + 2 + k // 3, k % 3]
+            same = same and params[b, k] == warm[row + 2 + k // layout.WARM_START_SIZE, k % layout.WARM_START_SIZE]
         if label < 0 and same:
             still_for[b] = warm[row, 1]
         elif 0 <= label < kept and not (same and vel[b, 0] == 0.0 and vel[b, 1] == 0.0 and vel[b, 2] == 0.0):
@@ -197,5 +197,27 @@ def keep_sleeping(warm, pose, params, awake, island, still_for):
         warm[row, 2] = 0.0
         warm[row + 1, 0], warm[row + 1, 1], warm[row + 1, 2] = pose[b, 0], pose[b, 1], pose[b, 2]
         for k in range(params.shape[1]):
-            warm[row + 2 + k // 3, k % 3] = params[b, k]
+            warm[row + 2 + k // layout.WARM_START_SIZE, k % layout.WARM_START_SIZE] = params[b, k]
     return kept
+
+
+@jit_stage
+def islands_deeper_than(contacts, ids, count, depth, parent, marked, deep_island):
+    """``deep_island[c]``: whether contact c's island (bodies joined by the box-box contacts among the first
+    ``count``, a union-find in ``parent``) holds a contact deeper than ``depth`` (-gap > depth); ``marked``
+    per root body, work."""
+    for b in range(parent.shape[0]):
+        parent[b] = b
+        marked[b] = False
+    for c in range(count):
+        b2 = ids[c, BODY2]
+        if b2 >= 0:
+            r1 = find_root(parent, ids[c, BODY1])
+            r2 = find_root(parent, b2)
+            if r1 != r2:
+                parent[max(r1, r2)] = min(r1, r2)
+    for c in range(count):
+        if -contacts[c, GAP] > depth:
+            marked[find_root(parent, ids[c, BODY1])] = True
+    for c in range(count):
+        deep_island[c] = marked[find_root(parent, ids[c, BODY1])]

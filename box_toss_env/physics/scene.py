@@ -63,7 +63,7 @@ class Scene:
     The next four settings belong to the robust solver: impacts slower than
     ``restitution_threshold`` are inelastic, a box lying on a face slower than ``sleep_speed``
     for ``sleep_time`` is put to sleep, and ``penetration_slop`` is left uncorrected (the penalty starts once a
-    corner is twice that deep, then removes what lies beyond it). The last two
+    corner is twice that deep, island by island, then removes what lies beyond it). The last two
     belong to its colliding scenes with more contacts than it solves exactly (``colliding_solver``:
     over 64 in a substep, a pile): their projected Gauss-Seidel sweeps stop once a sweep changes the
     impulses by less than ``solver_tolerance`` of their sum, after ``solver_iterations`` sweeps at most

@@ -338,3 +338,24 @@ def test_the_penalty_starts_at_twice_the_slop_and_stops_at_it(depth_in_slops):
         np.testing.assert_allclose(depth, depth_in_slops * slop, rtol=1e-9)
     else:
         assert np.all((depth > slop) & (depth <= 2.0 * slop + 1e-12))
+
+
+@pytest.mark.parametrize("per_island", [2, 20])  # the exact solve (24 contacts), Gauss-Seidel (over 64)
+def test_the_penalty_acts_island_by_island(per_island):
+    """Two rows of boxes side by side, apart (two islands): the row sunk 3 slops into the floor is lifted to between
+    one and two slops, the row sunk 1.5 slops, in the same scene, is left alone."""
+    slop = 1e-4
+    boxes = tuple(
+        Box(length=0.4, width=0.2, mass=2.0, position=(row * 20.0 + 0.4 * k, 0.1 - sunk * slop))
+        for row, sunk in enumerate((3.0, 1.5))
+        for k in range(per_island)
+    )
+    scene = Scene(
+        boxes=boxes, dt=1 / 120, friction=0.5, penalty_stiffness=1e5, boxes_collide=True, penetration_slop=slop
+    )
+    state, params = scene.initial_state(), scene.body_params()
+    stats = np.zeros((2 * per_island, layout.STATS_SIZE))
+    Simulator.for_scene(scene, parallel=False).run(state, params, make_settings(scene, 60, False), stats)
+    depth = 0.1 - state[:, 1]
+    assert np.all((depth[:per_island] > slop) & (depth[:per_island] <= 2.0 * slop + 1e-12))
+    np.testing.assert_allclose(depth[per_island:], 1.5 * slop, rtol=1e-9)
