@@ -71,14 +71,13 @@ more than 64 contacts: sweeps stop once they change the impulses by less than 1e
 and ``penetration_slop`` 30 um (the penalty starts once a contact is twice that deep and leaves up to that alone;
 Box2D's slop is 5 mm). Against the scene defaults (1e-9, 16 sweeps that nearly always run, no slop), measured side
 by side at stop 30 over 2 s awake: the pile of 100 cost 150 us per body per simulated second at 1/120 s, 94 with
-the stop, 71 with a slop of 10 um too. Measured side by side this session (2 s awake after the lead-in, one core
-beside a training), us per body per simulated second and penetration, for the pile of 100 at 1/60, the wide pile of
-1,000 at 1/120 and the pyramid at 1/60: slop 10 um 32.7, 48.1, 24.5 (57, 21, 16 um); slop 30 um 33.5, 24.8, 24.1
-(76, 42, 35 um; pyramid top drift 0.12 mm), and 27.3, 24.6, 24.1 once the penalty acted island by island;
-tolerance 1e-3 instead: 30.6, 57.5, 77.3 (a looser solve lets more contacts sink into the penalty's band, whose
-sweeps then run). A settled pile kept awake creeps at 1e-4 (4.7 mm in
-10 s, at the defaults 0.1 um), which the settled runs' sleeping ends; ``benchmarks.pile_pareto`` turns the
-tolerance."""
+the stop, 71 with a slop of 10 um too. Measured side by side on 2026-11-27 (2 s awake after the lead-in, thread CPU
+time, one core beside a training), us per body per simulated second and penetration, for the pile of 100 at 1/60,
+the wide pile of 1,000 at 1/120 and the pyramid at 1/60: slop 10 um 32.7, 48.1, 24.5 (57, 21, 16 um); slop 30 um
+33.5, 24.8, 24.1 (76, 42, 35 um; pyramid top drift 0.12 mm), and 27.3, 24.6, 24.1 once the penalty acted island by
+island; tolerance 1e-3 instead: 30.6, 57.5, 77.3 (a looser solve lets more contacts sink into the penalty's band,
+whose sweeps then run). A settled pile kept awake creeps at 1e-4 (4.7 mm in 10 s, at the defaults 0.1 um), which
+the settled runs' sleeping ends; ``benchmarks.pile_pareto`` turns the tolerance."""
 
 OURS = "ours"
 ENGINE_ORDER = (OURS, "box2d3", "box2d", "pymunk")
