@@ -56,6 +56,14 @@ def time_loop(step, read_states, steps: int, n: int, dt: float) -> tuple[float, 
     return wall, out
 
 
+def ours_at(defaults: dict, **settings):
+    """run(scene, start, steps) of our engine at OUR_TOLERANCE_DT, 32 sweeps at most, ``defaults`` with ``settings``."""
+    changed = {**defaults, "solver_iterations": 32, **settings}
+    return lambda scene, start, steps: engine_scale.run_ours(
+        scene.replace(**changed, dt=OUR_TOLERANCE_DT), start, steps, "awake"
+    )[:2]
+
+
 def variants(engines: list[str]):
     """(engine, knob text, dt, run(scene, start, steps) -> (wall, final state))."""
     # our settings at the scene defaults (tolerance 1e-9, 16 sweeps, no slop), whatever engine_scale.OUR_SOLVER says
@@ -70,33 +78,13 @@ def variants(engines: list[str]):
             )[:2],
         )
     for tolerance in OUR_TOLERANCES:
-        yield (
-            OURS_BY_TOLERANCE,
-            f"{tolerance:g}",
-            OUR_TOLERANCE_DT,
-            lambda scene, start, steps, tolerance=tolerance: engine_scale.run_ours(
-                scene.replace(
-                    **{**defaults, "solver_tolerance": tolerance, "solver_iterations": 32}, dt=OUR_TOLERANCE_DT
-                ),
-                start,
-                steps,
-                "awake",
-            )[:2],
-        )
+        yield OURS_BY_TOLERANCE, f"{tolerance:g}", OUR_TOLERANCE_DT, ours_at(defaults, solver_tolerance=tolerance)
     for slop in OUR_SLOPS:
         yield (
             OURS_BY_SLOP,
             f"{slop:g} m",
             OUR_TOLERANCE_DT,
-            lambda scene, start, steps, slop=slop: engine_scale.run_ours(
-                scene.replace(
-                    **{**defaults, "solver_tolerance": 1e-4, "solver_iterations": 32, "penetration_slop": slop},
-                    dt=OUR_TOLERANCE_DT,
-                ),
-                start,
-                steps,
-                "awake",
-            )[:2],
+            ours_at(defaults, solver_tolerance=1e-4, penetration_slop=slop),
         )
     if "box2d3" in engines:
         for sub in BOX2D3_SUBSTEPS:

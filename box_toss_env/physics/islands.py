@@ -41,10 +41,10 @@ def find_root(parent, b):
 
 
 @jit_stage
-def join_islands(ids, count, awake, parent):
-    """``parent``: a union-find forest in which two awake bodies share a root when a chain of box-box
-    contacts (of the first ``count`` rows of ``ids``) joins them; a body's root is the island's smallest body."""
-    for b in range(awake.shape[0]):
+def join_islands(ids, count, parent):
+    """``parent``: a union-find forest in which two bodies share a root when a chain of box-box contacts (of
+    the first ``count`` rows of ``ids``) joins them; a body's root is the island's smallest body."""
+    for b in range(parent.shape[0]):
         parent[b] = b
     for c in range(count):
         b2 = ids[c, BODY2]
@@ -62,7 +62,7 @@ def fall_asleep(ids, count, awake, still_for, sleep_time, parent, ready, island,
     (``still_for``): velocities zero, ``awake`` False, ``island`` the island's root. Returns how many bodies
     fell asleep."""
     n = awake.shape[0]
-    join_islands(ids, count, awake, parent)
+    join_islands(ids, count, parent)
     for b in range(n):
         ready[b] = True
     for b in range(n):
@@ -206,16 +206,9 @@ def islands_deeper_than(contacts, ids, count, depth, parent, marked, deep_island
     """``deep_island[c]``: whether contact c's island (bodies joined by the box-box contacts among the first
     ``count``, a union-find in ``parent``) holds a contact deeper than ``depth`` (-gap > depth); ``marked``
     per root body, work."""
+    join_islands(ids, count, parent)
     for b in range(parent.shape[0]):
-        parent[b] = b
         marked[b] = False
-    for c in range(count):
-        b2 = ids[c, BODY2]
-        if b2 >= 0:
-            r1 = find_root(parent, ids[c, BODY1])
-            r2 = find_root(parent, b2)
-            if r1 != r2:
-                parent[max(r1, r2)] = min(r1, r2)
     for c in range(count):
         if -contacts[c, GAP] > depth:
             marked[find_root(parent, ids[c, BODY1])] = True
