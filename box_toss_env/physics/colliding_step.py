@@ -123,7 +123,7 @@ from .colliding_solver import (
 )
 from .compilation import jit_kernel, jit_stage
 from .contact_solver import CORNER_ROWS, MAX_CORNERS
-from .islands import fall_asleep, keep_sleeping, restore_sleeping, sleep_placed, wake_touched
+from .islands import fall_asleep, keep_sleeping, restore_sleeping, sleep_placed, sleeps_through, wake_touched
 from .kernel_support import read_settings, record_event, store_state, write_stats
 from .robust_solver import MEMORY_SIZE, energy_limit_scale
 
@@ -387,6 +387,8 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
         _ = DIGEST  # the on-disk cache key includes every engine source (see robust_solver)
         dt, gravity, max_steps, until_rest, threshold, sleep_speed, sleep_time, slop = read_settings(settings)
         nb = state.shape[0]
+        if until_rest and not RECORD and sleeps_through(warm, state, params, dt, max(8 * nb, MIN_CAPACITY), stats):
+            return  # every body kept asleep and untouched: nothing to set up
         pose = state[:, 0:3].copy()
         vel = state[:, 3:6].copy()
         half = params[:, 0:2].copy()
@@ -411,14 +413,12 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
         # broadphase (sort and sweep) and islands (sleeping; island: a sleeping body's root body, -1 while awake)
         everyone, awake, island = np.ones(nb, np.bool_), np.ones(nb, np.bool_), np.full(nb, -1, np.int64)
         still_for = np.zeros(nb)  # [s] how long each awake body has been supported and still
-        rest_time = np.full(nb, math.nan)  # when each body last fell asleep
-        parent = np.zeros(nb, np.int64)
+        rest_time, parent = np.full(nb, math.nan), np.zeros(nb, np.int64)  # when each body last fell asleep; work
         low, order, pair_keys = np.zeros(nb), np.empty(nb, np.int64), np.zeros(max(4 * nb, MIN_CAPACITY), np.int64)
         # bodies advanced alone: advance_box's memory rows and work arrays (contact_solver)
         memory = np.zeros((nb, MEMORY_SIZE))
         alone = np.zeros(nb, np.bool_)  # whether a body's memory row holds on (advanced alone since the substeps)
-        corners = np.zeros((CORNER_ROWS, MAX_CORNERS))
-        corner_delassus = np.zeros((MAX_CORNERS, MAX_CORNERS))
+        corners, corner_delassus = np.zeros((CORNER_ROWS, MAX_CORNERS)), np.zeros((MAX_CORNERS, MAX_CORNERS))
         corner_ids = np.zeros(MAX_CORNERS, np.int64)
         count, n, n_awake, status, fail_step = 0, 0, nb, layout.STATUS_OK, -1
         n_previous, h_previous = load_warm_start(warm, nb, previous_keys, previous_impulses, dt)  # from the last call

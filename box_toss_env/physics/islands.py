@@ -17,7 +17,8 @@ Sleep carries from run to run in the caller's warm start (``simulate.warm_start_
 ``layout``): at the end of a run each body's island label (-1 awake), sleep timer, pose and parameters are kept
 (``keep_sleeping``); at the start of the next, every island that was asleep sleeps again, unless the
 caller moved, pushed or changed one of its bodies since (``restore_sleeping``), and the awake bodies' timers go on.
-A pile that fell asleep costs nothing in the next run until something reaches it, as in one long run.
+A pile that fell asleep costs nothing in the next run until something reaches it, as in one long run; a run in
+which every body is kept asleep and untouched skips even the run's set-up (``sleeps_through``).
 """
 
 import math
@@ -28,7 +29,7 @@ from . import layout
 from .box_collision import BODY1, BODY2, GAP
 from .broadphase import candidate_pairs
 from .compilation import jit_stage
-from .kernel_support import is_lying_still
+from .kernel_support import is_lying_still, write_stats
 
 
 @jit_stage
@@ -178,6 +179,39 @@ def restore_sleeping(warm, pose, vel, params, awake, island, still_for, rest_tim
             rest_time[b] = 0.0
             slept += 1
     return slept
+
+
+@jit_stage
+def sleeps_through(warm, state, params, dt, capacity, stats):
+    """Whether every body sleeps through this run: ``warm`` kept all of them asleep and none was moved, set
+    moving or changed since (``restore_sleeping`` would put every island to sleep again, and nothing is awake to
+    step). If so, what the run would leave is written at once, without its set-up: each body's stats (no step,
+    at rest from the start), ``warm`` as ``keep_sleeping`` and the contact rows would leave it (sleep timers 0,
+    at most ``capacity`` contacts, the kernel's room for them), ``state`` untouched."""
+    n = state.shape[0]
+    if warm.shape[0] == 0 or np.int64(warm[0, 2]) != n or (warm.shape[0] - 1) // layout.WARM_BODY_ROWS < n:
+        return False
+    for b in range(n):
+        row = 1 + layout.WARM_BODY_ROWS * b
+        if not 0.0 <= warm[row, 0] < n or state[b, 3] != 0.0 or state[b, 4] != 0.0 or state[b, 5] != 0.0:
+            return False
+        for k in range(3):
+            if state[b, k] != warm[row + 1, k]:
+                return False
+        for k in range(params.shape[1]):
+            if params[b, k] != warm[row + 2 + k // layout.WARM_START_SIZE, k % layout.WARM_START_SIZE]:
+                return False
+    for b in range(n):
+        row = 1 + layout.WARM_BODY_ROWS * b
+        warm[row, 1] = 0.0
+        warm[row, 2] = 0.0
+        write_stats(stats, b, math.nan, 0, 0, 0.0, 0.0, 0.0, layout.STATUS_OK, -1, 1)
+    first = 1 + layout.WARM_BODY_ROWS * n
+    count = min(np.int64(warm[0, 0]), warm.shape[0] - first, capacity)
+    warm[0, 0] = count
+    if count == 0:
+        warm[0, 1] = dt
+    return True
 
 
 @jit_stage

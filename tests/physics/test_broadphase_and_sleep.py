@@ -306,6 +306,32 @@ def test_a_sleeping_pile_costs_no_step_until_a_body_of_it_is_moved_pushed_change
     assert state11[10, 1] > asleep[top, 1]  # it lies on the pile
 
 
+def test_a_run_on_a_pile_asleep_throughout_leaves_what_the_stepping_run_leaves():
+    """A call on bodies all kept asleep and untouched skips the run's set-up (``islands.sleeps_through``): its
+    state, stats and warm start are those of the recording kernel, which sets everything up and finds nothing
+    awake to step."""
+    scene = scenes.pile(100, dt=1 / 60)
+    state, params = scene.initial_state(), scene.body_params()
+    stats, warm = np.zeros((100, layout.STATS_SIZE)), warm_start_memory(100)
+    settings = make_settings(scene, 600, until_rest=True)
+    Simulator.for_scene(scene, parallel=False).run(state, params, settings, stats, warm_start=warm)
+    assert not np.isnan(stats[:, layout.REST_TIME]).any()  # the pile fell asleep
+    results = []
+    for record in (False, True):
+        simulator = Simulator.for_scene(scene, parallel=False, record=record)
+        again, again_stats, again_warm = state.copy(), np.full_like(stats, -7.0), warm.copy()
+        extra = {}
+        if record:
+            extra = dict(trajectory=np.zeros((601, 100, 6)), events=np.zeros((100, layout.MAX_EVENTS, 3)))
+        simulator.run(again, params, settings, again_stats, warm_start=again_warm, **extra)
+        results.append((again, again_stats, again_warm))
+    (skipped, skipped_stats, skipped_warm), (stepped, stepped_stats, stepped_warm) = results
+    assert np.array_equal(skipped, state) and np.array_equal(stepped, state)
+    assert np.array_equal(skipped_stats, stepped_stats, equal_nan=True)
+    assert np.array_equal(skipped_warm, stepped_warm)
+    assert not skipped_stats[:, layout.N_STEPS].any() and np.all(skipped_stats[:, layout.REST_TIME] == 0.0)
+
+
 def test_a_column_of_40_boxes_starting_cold_stays_at_rest():
     """Over 64 contacts a cold start begins from the resting loads (``colliding_solver.resting_loads``): each
     contact carries the weight above it, so a column of 40 boxes built exactly on one another stays at rest in
