@@ -314,14 +314,17 @@ def solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, use_frict
     are solved together, exactly (``joint_contact_solve``); up to DIRECT_LIMIT contacts (or if that does not
     settle), the normal impulses are solved exactly together (``normal_lcp``: a stack's load passes through
     every box at once, whatever the mass ratio), alternating with a friction sweep until the impulses settle;
-    beyond that, or if the exact solve fails, projected Gauss-Seidel (``gauss_seidel``, with the scene's
+    beyond that, if the exact solve fails, or if the scene's ``solver_tolerance`` is looser than CONVERGED (it
+    chose the sweeps' speed: the exact solve's pivots on tens of contacts, the last islands of a settling pile
+    awake, cost more than its sweeps), projected Gauss-Seidel (``gauss_seidel``, with the scene's
     ``solver_tolerance`` and ``solver_iterations`` from ``settings``)."""
     if count == 0:
         return
     if use_friction and count <= JOINT_LIMIT and solve_jointly(contacts, ids, count, vel, inv_mass, inv_inertia, w,
                                                                factor, free, x, y, index, state):
         return
-    if count <= DIRECT_LIMIT:
+    sweep_tolerance, sweeps = solver_settings(settings)
+    if count <= DIRECT_LIMIT and sweep_tolerance <= CONVERGED:
         delassus_matrix(contacts, ids, count, inv_mass, inv_inertia, w)
         for c in range(count):
             active[c] = contacts[c, IMPULSE] > 0.0
@@ -354,7 +357,6 @@ def solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, use_frict
                 break
         if solved:
             return
-    sweep_tolerance, sweeps = solver_settings(settings)
     gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, IMPULSE, sweeps, sweep_tolerance,
                  EVERY_CONTACT)
 
@@ -494,8 +496,9 @@ def correct_penetrations(contacts, ids, count, pose, vel, pseudo, inv_mass, inv_
     positions; the gaps of every contact follow to first order, and the potential
     energy gained is taken from the kinetic energy of the moved bodies. Up to DIRECT_LIMIT contacts the
     impulses are solved exactly (``normal_lcp``, as the velocities: Gauss-Seidel leaves a light box
-    between heavy ones turning), beyond that by Gauss-Seidel (the scene's ``solver_tolerance``, at most
-    PENALTY_ITERATIONS or ``solver_iterations`` sweeps). ``settings`` gives the slop and the sweeps.
+    between heavy ones turning), beyond that, or at a looser tolerance as the velocities, by Gauss-Seidel (the
+    scene's ``solver_tolerance``, at most PENALTY_ITERATIONS or ``solver_iterations`` sweeps). ``settings``
+    gives the slop and the sweeps.
     Returns the deepest penetration (0 if none)."""
     slop = settings[layout.PENETRATION_SLOP]
     deepest = 0.0
@@ -519,7 +522,8 @@ def correct_penetrations(contacts, ids, count, pose, vel, pseudo, inv_mass, inv_
         else:
             contacts[c, TARGET] = -max(contacts[c, GAP], 0.0) / h
     solved = False
-    if count <= DIRECT_LIMIT:
+    sweep_tolerance, sweeps = solver_settings(settings)
+    if count <= DIRECT_LIMIT and sweep_tolerance <= CONVERGED:
         delassus_matrix(contacts, ids, count, inv_mass, inv_inertia, w)
         for c in range(count):
             free[c] = -contacts[c, TARGET]
@@ -532,7 +536,6 @@ def correct_penetrations(contacts, ids, count, pose, vel, pseudo, inv_mass, inv_
                     apply_impulse(c, x[c] * contacts[c, NX], x[c] * contacts[c, NY], contacts, ids, pseudo, inv_mass,
                                   inv_inertia)
     if not solved:
-        sweep_tolerance, sweeps = solver_settings(settings)
         gauss_seidel(contacts, ids, count, pseudo, inv_mass, inv_inertia, False, PSEUDO_IMPULSE,
                      min(sweeps, PENALTY_ITERATIONS), sweep_tolerance, deep_island)
     for c in range(count):
