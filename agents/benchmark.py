@@ -9,7 +9,9 @@
 
 ``BoxToss-Stack-v0`` (a hand of throws per episode) is scored per episode (``agents.evaluation.evaluate_stack``);
 its ceiling is ``agents.stack_planner``'s measured rows (``docs/agents/stack_ceiling.json``). The ``raw`` tier
-trains a recipe without its ``env_wrapper`` (the env's own actions), in ``runs/benchmark/<env id>/raw/``.
+trains a recipe without its ``env_wrapper`` (the env's own actions), in ``runs/benchmark/<env id>/raw/``: the
+entry of ``agents/hyperparams/raw/<algo>.yml`` where that file has one (a recipe measured in raw actions), else
+the commands recipe with ``env_wrapper=null``.
 
 Each training is ``python -m agents.train`` with the hyperparameters of ``agents/hyperparams/<algo>.yml``
 for that env id, in ``runs/benchmark/<env id>/<algo>-seed<k>``; a run that has finished is kept, so
@@ -83,6 +85,13 @@ TIERS = {
 TIER_OVERRIDES = {"commands": [], "raw": ["env_wrapper=null"]}
 
 
+def tier_hyperparams(algo: str, env_id: str, tier: str) -> Path:
+    """The folder of the recipe ``tier`` trains: ``agents/hyperparams/raw/`` for a raw run whose file there has an
+    entry for ``env_id``, else ``agents/hyperparams/``."""
+    raw = tier == "raw" and configuration.has_entry(algo, env_id, configuration.RAW_HYPERPARAMS)
+    return configuration.RAW_HYPERPARAMS if raw else configuration.HYPERPARAMS
+
+
 def run_dir(root: Path, env_id: str, algo: str, seed: int, tier: str = "commands") -> Path:
     folder = root / env_id if tier == "commands" else root / env_id / tier
     return folder / f"{algo}-seed{seed}"
@@ -113,6 +122,8 @@ def ensure_trained(
                 str(path.parent),
                 "--name",
                 path.name,
+                "--hyperparams",
+                str(tier_hyperparams(algo, env_id, tier)),
                 *settings,
             ]
         )
@@ -532,7 +543,8 @@ INTRO = (
     "whole hand stacked on the target, the ceiling is `agents.stack_planner`'s on its own episodes. A table "
     "titled *raw actions* is the same recipe trained in the env's own actions (speed, direction, spin: `--set "
     "env_wrapper=null`, `python -m agents.benchmark --tiers raw`; PPO's recipes for BoxToss-v0 and BoxToss-"
-    "LongSide-v0 have no env_wrapper, so there both tiers train the same thing); a smaller budget than the "
+    "LongSide-v0 have no env_wrapper, so there both tiers train the same thing), or where "
+    "`agents/hyperparams/raw/<algo>.yml` has an entry for the variant, that recipe; a smaller budget than the "
     "recipe's is given by `--set n_timesteps=N` (the env steps column says what was trained). A section whose "
     "runs are not on the machine that wrote this page is rebuilt from `docs/agents/benchmark_results.json` "
     "(the rows as measured), or kept as it was."
@@ -684,7 +696,9 @@ def check_options(parser: argparse.ArgumentParser, args: argparse.Namespace) -> 
             for tier in args.tiers:
                 try:
                     config = configuration.apply_overrides(
-                        configuration.load_hyperparams(algo, env_id), [*TIER_OVERRIDES[tier], *args.overrides], algo
+                        configuration.load_hyperparams(algo, env_id, tier_hyperparams(algo, env_id, tier)),
+                        [*TIER_OVERRIDES[tier], *args.overrides],
+                        algo,
                     )
                     configuration.check_config(config, algo)
                 except configuration.ConfigError as error:
@@ -770,7 +784,8 @@ def main(argv: list[str] | None = None) -> None:
             "### Benchmark: every variant, every algorithm, against the ceiling\n\n"
             "`python -m agents.benchmark` (then `--report-only --readme`). Success on the test "
             "targets (`BoxToss-Stack-v0`: on test episodes, its ceiling the stack planner's; *raw "
-            "actions*: the recipe without its ballistic command); the ceiling is the oracle whose "
+            "actions*: the recipe without its ballistic command, or `agents/hyperparams/raw/`'s); the ceiling is "
+            "the oracle whose "
             "search grew until its success stopped rising "
             "(details, breakdowns by face and distance, the oracle's budgets and the learning curves: "
             "[docs/agents/benchmark.md](docs/agents/benchmark.md)):\n\n"

@@ -10,6 +10,10 @@ Two files, both keyed by env id:
 - ``agents/hyperparams/project.yml`` holds what only our scripts use (engine threads, torch threads,
   validation and checkpoint frequency): ``defaults`` for every run, then per algorithm and env id.
 
+``agents/hyperparams/raw/<algo>.yml`` (``RAW_HYPERPARAMS``, RL Zoo's format too) holds the recipes of the raw tier
+(the env's own actions, no ``env_wrapper``) where they differ from the file above without its wrapper; a folder
+without its own ``project.yml`` uses its parent's.
+
 A configuration is one plain dict of both (what ``config.yml`` in a run folder holds), with Zoo's
 expression strings read into dicts (``activation_fn: nn.Tanh`` stays a name). Expressions are read
 with ``ast``, never evaluated: only ``dict(...)``, literals and ``nn.<Name>`` are accepted.
@@ -37,6 +41,7 @@ from agents.envs import read_env_wrapper
 from box_toss_env.files import write_atomic
 
 HYPERPARAMS = Path(__file__).parent / "hyperparams"
+RAW_HYPERPARAMS = HYPERPARAMS / "raw"
 PROJECT_FILE = "project.yml"
 
 ZOO_KEYS = {
@@ -84,8 +89,21 @@ def load_hyperparams(algo: str, env_id: str, directory: str | Path = HYPERPARAMS
     if env_id not in table:
         raise ConfigError(f"{path} has no entry for {env_id!r}; it has {sorted(table)}")
     config = read_zoo_entry(table[env_id], f"{path}: {env_id}")
-    config.update(project_settings(algo, env_id, Path(directory) / PROJECT_FILE))
+    config.update(project_settings(algo, env_id, project_path(directory)))
     return config
+
+
+def project_path(directory: str | Path) -> Path:
+    """``project.yml`` of ``directory``, or of its parent if it has none (``raw/`` shares the recipes' settings)."""
+    path = Path(directory) / PROJECT_FILE
+    parent = Path(directory).parent / PROJECT_FILE
+    return parent if not path.exists() and parent.exists() else path
+
+
+def has_entry(algo: str, env_id: str, directory: str | Path) -> bool:
+    """Whether ``directory``'s ``<algo>.yml`` exists and has an entry for ``env_id``."""
+    path = hyperparams_path(algo, directory)
+    return path.exists() and env_id in read_mapping(path)
 
 
 def read_mapping(path: Path) -> dict[str, Any]:

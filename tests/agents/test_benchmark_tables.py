@@ -3,6 +3,7 @@
 import json
 
 from agents import benchmark
+from agents import config as configuration
 
 
 def stack_row(algo: str, success: float, seed: int) -> dict:
@@ -56,3 +57,11 @@ def test_a_run_of_some_variants_shows_every_variant():
     """``--envs BoxToss-Stack-v0 --readme`` rewrote the page and the README with the stack's rows alone."""
     assert benchmark.shown_variants(["BoxToss-Stack-v0"]) == list(benchmark.VARIANTS)
     assert benchmark.shown_variants([]) == list(benchmark.VARIANTS)
+
+
+def test_the_raw_tier_trains_the_raw_recipe_where_there_is_one():
+    raw, main = configuration.RAW_HYPERPARAMS, configuration.HYPERPARAMS
+    assert benchmark.tier_hyperparams("ppo", "BoxToss-ThisSideUp-v0", "raw") == raw
+    assert benchmark.tier_hyperparams("ppo", "BoxToss-ThisSideUp-v0", "commands") == main
+    assert benchmark.tier_hyperparams("ppo", "BoxToss-v0", "raw") == main  # no entry: ppo.yml's, unwrapped
+    assert benchmark.tier_hyperparams("sac", "BoxToss-ThisSideUp-v0", "raw") == main

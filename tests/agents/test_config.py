@@ -120,3 +120,29 @@ def test_a_file_that_is_not_a_mapping_is_one_clear_error(tmp_path):
     (tmp_path / "ppo.yml").write_text("BoxToss-v0: [1, 2]\n")
     with pytest.raises(config.ConfigError, match="mapping of hyperparameters"):
         config.load_hyperparams("ppo", "BoxToss-v0", tmp_path)
+
+
+@pytest.mark.parametrize("algo", sorted(algorithms.ALGORITHMS))
+def test_raw_recipes_are_valid_zoo_entries_without_a_wrapper(algo):
+    """agents/hyperparams/raw/<algo>.yml (the raw tier's recipes, if the algorithm has any) loads like the main
+    files, acts in the env's own actions, and takes its project settings from agents/hyperparams/project.yml."""
+    path = config.hyperparams_path(algo, config.RAW_HYPERPARAMS)
+    if not path.exists():
+        pytest.skip(f"no raw recipes for {algo}")
+    for env_id in config.read_mapping(path):
+        assert env_id in VARIANTS
+        hyperparams = config.load_hyperparams(algo, env_id, config.RAW_HYPERPARAMS)
+        config.check_config(hyperparams, algo)
+        assert set(config.algorithm_kwargs(hyperparams, algo)) <= algorithms.constructor_keys(algo)
+        assert hyperparams.get("env_wrapper") is None
+        assert hyperparams["torch_threads"] == config.load_hyperparams(algo, env_id)["torch_threads"]
+
+
+def test_a_folder_without_project_settings_uses_its_parents(tmp_path):
+    (tmp_path / "project.yml").write_text("defaults: {eval_freq: 123}\n")
+    (tmp_path / "raw").mkdir()
+    (tmp_path / "raw" / "ppo.yml").write_text("BoxToss-v0: {n_timesteps: 10}\n")
+    assert config.load_hyperparams("ppo", "BoxToss-v0", tmp_path / "raw")["eval_freq"] == 123
+    assert config.has_entry("ppo", "BoxToss-v0", tmp_path / "raw")
+    assert not config.has_entry("ppo", "BoxToss-OnBox-v0", tmp_path / "raw")
+    assert not config.has_entry("sac", "BoxToss-v0", tmp_path / "raw")
