@@ -149,6 +149,16 @@ def sleep_placed(pose, vel, half, bound, reach, everyone, awake, island, rest_ti
     return slept
 
 
+@jit_stage(inline="always")  # a few comparisons, per body
+def as_kept(warm, row, pose, params, b):
+    """Whether body b's pose (the first three columns of ``pose``) and parameters are those ``keep_sleeping`` kept
+    in ``warm``'s body rows from ``row``."""
+    same = pose[b, 0] == warm[row + 1, 0] and pose[b, 1] == warm[row + 1, 1] and pose[b, 2] == warm[row + 1, 2]
+    for k in range(params.shape[1]):
+        same = same and params[b, k] == warm[row + 2 + k // layout.WARM_START_SIZE, k % layout.WARM_START_SIZE]
+    return same
+
+
 @jit_stage
 def restore_sleeping(warm, pose, vel, params, awake, island, still_for, rest_time, intact):
     """The sleep ``keep_sleeping`` kept in ``warm`` at the end of the last run: the awake bodies' sleep timers
@@ -163,9 +173,7 @@ def restore_sleeping(warm, pose, vel, params, awake, island, still_for, rest_tim
     for b in range(kept):
         row = 1 + layout.WARM_BODY_ROWS * b
         label = np.int64(warm[row, 0])
-        same = pose[b, 0] == warm[row + 1, 0] and pose[b, 1] == warm[row + 1, 1] and pose[b, 2] == warm[row + 1, 2]
-        for k in range(params.shape[1]):
-            same = same and params[b, k] == warm[row + 2 + k // layout.WARM_START_SIZE, k % layout.WARM_START_SIZE]
+        same = as_kept(warm, row, pose, params, b)
         if label < 0 and same:
             still_for[b] = warm[row, 1]
         elif 0 <= label < kept and not (same and vel[b, 0] == 0.0 and vel[b, 1] == 0.0 and vel[b, 2] == 0.0):
@@ -195,12 +203,8 @@ def sleeps_through(warm, state, params, dt, capacity, stats):
         row = 1 + layout.WARM_BODY_ROWS * b
         if not 0.0 <= warm[row, 0] < n or state[b, 3] != 0.0 or state[b, 4] != 0.0 or state[b, 5] != 0.0:
             return False
-        for k in range(3):
-            if state[b, k] != warm[row + 1, k]:
-                return False
-        for k in range(params.shape[1]):
-            if params[b, k] != warm[row + 2 + k // layout.WARM_START_SIZE, k % layout.WARM_START_SIZE]:
-                return False
+        if not as_kept(warm, row, state, params, b):
+            return False
     for b in range(n):
         row = 1 + layout.WARM_BODY_ROWS * b
         warm[row, 1] = 0.0
