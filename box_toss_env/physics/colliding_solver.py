@@ -81,7 +81,6 @@ DIRECT_LIMIT = 64  # contacts: up to this many, the normal impulses are solved e
 REGULARISATION = 1e-12  # share of W_cc added to the diagonal of the exact solve (redundant contacts)
 LCP_TOLERANCE = 1e-12  # share of the largest |free velocity|: a contact left free may approach by this much
 SUPPORT_SLOPE = 0.5  # [-] |n_y| above which a contact carries weight in a cold start's guess (``resting_loads``)
-EVERY_CONTACT = np.zeros(0, np.bool_)  # ``gauss_seidel``'s ``only`` that sweeps every contact
 ALONE_LIMIT = 8  # awake bodies at most for which whole steps alone against the floor are looked for (steps_alone)
 ALONE_LOWEST = 0.5  # [share of the smaller half extent] a box's centre is taken never to sink below this height
 
@@ -142,20 +141,26 @@ def prepare_contacts(contacts, ids, count, params, inv_mass, inv_inertia):
 
 @jit_stage(nrt=True)  # it allocates its work arrays (once a cold start)
 def resting_loads(contacts, ids, count, pose, vel, inv_mass, inv_inertia, h, gravity):
-    """A first guess at the normal impulses of a resting scene, for a cold start (no warm start kept): from
-    the highest body down, each body's weight m |g| h and the load passed to it from above are shared
-    equally among the contacts that hold it up (|n_y| > SUPPORT_SLOPE, the body above on the side n points
-    to, and near: a gap that a body at rest closes within the substep, |g| h^2), each contact's impulse
-    p = share / |n_y| so that the vertical parts add up to the load, which passes on to the body below;
-    applied to the velocities. The solve then corrects the guess: from zero, Gauss-Seidel needs a sweep per
-    layer to carry a load down a pile (a column of 40 boxes, cold, sank 0.24 m/s in its first step of
-    1/60 s; with the guess it stays at rest). Returns how many contacts got an impulse."""
+    """A first guess at the impulses of a resting scene, for a cold start (no warm start kept). From the
+    highest body down, each body's vertical load F (its weight m |g| h and what rests on it) acts along the
+    line x_F = sum(F_i x_i) / F; the contacts that hold the body up (|n_y| > SUPPORT_SLOPE, the body above
+    on the side n points to, and near: a gap that a body at rest closes within the substep, |g| h^2), at
+    points x_i, share it as a statics problem would: F_i = F (1/k + (x_i - xbar)(x_F - xbar) / sum (x_j - xbar)^2),
+    the linear split whose forces add up to F and whose moment about any point is F's (lever rule), or, where
+    that split has a negative share, all on the two outermost points by the lever rule, x_F clamped between
+    them. Each contact gets the normal and friction impulses whose sum is vertical, p = F_i |n_y|,
+    q = F_i n_x sign(n_y) (q within mu p), applied to the velocities; F_i passes on, at x_i, to the body
+    below. The solve then corrects the guess: from zero, Gauss-Seidel needs a sweep per layer to carry a
+    load down a pile (a column of 40 boxes, cold, sank 0.24 m/s in its first step of 1/60 s; with the
+    guess it stays at rest). Returns how many contacts got an impulse."""
     n = pose.shape[0]
     load = np.empty(n)
+    moment = np.empty(n)  # sum of F_i x_i over the loads on a body
     first = np.zeros(n + 1, np.int64)
     near = -gravity * h * h  # what a body at rest falls in the substep
     for b in range(n):
         load[b] = -gravity * h / inv_mass[b]
+        moment[b] = load[b] * pose[b, 0]
     for c in range(count):
         contacts[c, IMPULSE] = 0.0
         contacts[c, FRICTION_IMPULSE] = 0.0
@@ -165,28 +170,71 @@ def resting_loads(contacts, ids, count, pose, vel, inv_mass, inv_inertia, h, gra
     for b in range(n):
         first[b + 1] += first[b]
     held = np.empty(first[n], np.int64)  # the contacts that hold each body up, body by body
+    at_x = np.empty(first[n])  # [m] where each holds it
     filled = first[:n].copy()
     for c in range(count):
         ny = contacts[c, NY]
         if contacts[c, GAP] <= near and abs(ny) > SUPPORT_SLOPE:
             upper = ids[c, BODY1] if ny > 0.0 else ids[c, BODY2]
             held[filled[upper]] = c
+            at_x[filled[upper]] = pose[upper, 0] + (contacts[c, R1X] if ny > 0.0 else contacts[c, R2X])
             filled[upper] += 1
+    share = np.empty(first[n])
     for b in np.argsort(-pose[:, 1]):
-        k = first[b + 1] - first[b]
-        if k == 0:
-            continue
-        share = load[b] / k
+        lever_shares(at_x, first[b], first[b + 1], moment[b] / load[b], share)
         for i in range(first[b], first[b + 1]):
             c = held[i]
+            force = load[b] * share[i]
             ny = contacts[c, NY]
-            p = share / abs(ny)
+            p = force * abs(ny)
+            q = force * contacts[c, NX] * (1.0 if ny > 0.0 else -1.0)
+            bound = contacts[c, FRICTION] * p
+            q = min(max(q, -bound), bound)
             contacts[c, IMPULSE] = p
-            apply_impulse(c, p * contacts[c, NX], p * ny, contacts, ids, vel, inv_mass, inv_inertia)
+            contacts[c, FRICTION_IMPULSE] = q
+            apply_impulse(c, p * contacts[c, NX] - q * ny, p * ny + q * contacts[c, NX], contacts, ids, vel,
+                          inv_mass, inv_inertia)
             lower = ids[c, BODY2] if ny > 0.0 else ids[c, BODY1]
             if lower >= 0:
-                load[lower] += share
+                load[lower] += force
+                moment[lower] += force * at_x[i]
     return first[n]
+
+
+@jit_stage(inline="always")
+def lever_shares(x, begin, end, centre, share):
+    """Shares share[begin:end] of a vertical load along x = ``centre`` among supports at x[begin:end] that
+    add up to 1 and balance its moment (``resting_loads``' split)."""
+    k = end - begin
+    if k == 0:
+        return
+    mean = 0.0
+    low, high = begin, begin
+    for i in range(begin, end):
+        mean += x[i]
+        if x[i] < x[low]:
+            low = i
+        if x[i] > x[high]:
+            high = i
+    mean /= k
+    spread = 0.0
+    for i in range(begin, end):
+        spread += (x[i] - mean) ** 2
+    if x[high] - x[low] <= 1e-9:
+        for i in range(begin, end):
+            share[i] = 1.0 / k
+        return
+    centre = min(max(centre, x[low]), x[high])
+    lowest = 1.0
+    for i in range(begin, end):
+        share[i] = 1.0 / k + (x[i] - mean) * (centre - mean) / spread
+        lowest = min(lowest, share[i])
+    if lowest >= 0.0:
+        return
+    for i in range(begin, end):
+        share[i] = 0.0
+    share[high] = (centre - x[low]) / (x[high] - x[low])
+    share[low] = 1.0 - share[high]
 
 
 @jit_stage
@@ -357,8 +405,7 @@ def solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, use_frict
                 break
         if solved:
             return
-    gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, IMPULSE, sweeps, sweep_tolerance,
-                 EVERY_CONTACT)
+    gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, sweeps, sweep_tolerance)
 
 
 @jit_stage
@@ -407,25 +454,21 @@ def friction_sweep(contacts, ids, count, vel, inv_mass, inv_inertia):
 
 
 @jit_stage
-def gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, column, iterations, tolerance, only):
+def gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, iterations, tolerance):
     """Projected Gauss-Seidel over the contacts (Box2D's sequential impulses), at most ``iterations`` sweeps,
-    stopping once a sweep changes the impulses by less than ``tolerance`` of their sum:
-    friction clamped to mu times the normal impulse, then the normal impulse >= 0 with u_rel . n >= target
-    (column TARGET), the normal impulses accumulated in ``contacts[:, column]`` and applied to ``vel``. Stage 4
-    runs it on the velocities (IMPULSE, with friction), stage 2 on the penalty's pseudo-velocities
-    (PSEUDO_IMPULSE, without). ``only``: the contacts to sweep (a mask), or empty (EVERY_CONTACT) for all."""
+    stopping once a sweep changes the impulses by less than ``tolerance`` of their sum: friction clamped to mu
+    times the normal impulse, then the normal impulse >= 0 with u_rel . n >= target (column TARGET), applied to
+    ``vel``. The penalty's pseudo-velocities have their own sweeps (``penalty_sweeps``)."""
     for _ in range(iterations):
         change = 0.0
         total = 0.0
         for c in range(count):
-            if only.shape[0] > 0 and not only[c]:
-                continue
             nx, ny = contacts[c, NX], contacts[c, NY]
             if use_friction and contacts[c, FRICTION] > 0.0:
                 ux, uy = relative_velocity(c, contacts, ids, vel)
                 slip = -ux * ny + uy * nx  # u_rel . t, t = (-ny, nx)
                 before = contacts[c, FRICTION_IMPULSE]
-                limit = contacts[c, FRICTION] * contacts[c, column]
+                limit = contacts[c, FRICTION] * contacts[c, IMPULSE]
                 after = min(max(before - slip * contacts[c, TANGENT_MASS], -limit), limit)
                 contacts[c, FRICTION_IMPULSE] = after
                 dq = after - before
@@ -433,12 +476,36 @@ def gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction,
                     apply_impulse(c, -dq * ny, dq * nx, contacts, ids, vel, inv_mass, inv_inertia)
                 change += abs(dq)
             ux, uy = relative_velocity(c, contacts, ids, vel)
-            before = contacts[c, column]
+            before = contacts[c, IMPULSE]
             after = max(before - (ux * nx + uy * ny - contacts[c, TARGET]) * contacts[c, NORMAL_MASS], 0.0)
-            contacts[c, column] = after
+            contacts[c, IMPULSE] = after
             dp = after - before
             if dp != 0.0:
                 apply_impulse(c, dp * nx, dp * ny, contacts, ids, vel, inv_mass, inv_inertia)
+            change += abs(dp)
+            total += after
+        if change <= tolerance * total:
+            break
+
+
+@jit_stage
+def penalty_sweeps(contacts, ids, listed, n_listed, pseudo, inv_mass, inv_inertia, iterations, tolerance):
+    """``gauss_seidel`` on the penalty's pseudo-velocities (column PSEUDO_IMPULSE, no friction) over the contacts
+    ``listed[:n_listed]`` alone (the deep islands': a pile's penalty usually acts on one column, and sweeping a
+    mask of every contact cost more than the column's sweeps)."""
+    for _ in range(iterations):
+        change = 0.0
+        total = 0.0
+        for i in range(n_listed):
+            c = listed[i]
+            nx, ny = contacts[c, NX], contacts[c, NY]
+            ux, uy = relative_velocity(c, contacts, ids, pseudo)
+            before = contacts[c, PSEUDO_IMPULSE]
+            after = max(before - (ux * nx + uy * ny - contacts[c, TARGET]) * contacts[c, NORMAL_MASS], 0.0)
+            contacts[c, PSEUDO_IMPULSE] = after
+            dp = after - before
+            if dp != 0.0:
+                apply_impulse(c, dp * nx, dp * ny, contacts, ids, pseudo, inv_mass, inv_inertia)
             change += abs(dp)
             total += after
         if change <= tolerance * total:
@@ -536,8 +603,14 @@ def correct_penetrations(contacts, ids, count, pose, vel, pseudo, inv_mass, inv_
                     apply_impulse(c, x[c] * contacts[c, NX], x[c] * contacts[c, NY], contacts, ids, pseudo, inv_mass,
                                   inv_inertia)
     if not solved:
-        gauss_seidel(contacts, ids, count, pseudo, inv_mass, inv_inertia, False, PSEUDO_IMPULSE,
-                     min(sweeps, PENALTY_ITERATIONS), sweep_tolerance, deep_island)
+        listed = np.empty(count, np.int64)  # the deep islands' contacts: the sweeps leave the others out
+        n_listed = 0
+        for c in range(count):
+            if deep_island[c]:
+                listed[n_listed] = c
+                n_listed += 1
+        penalty_sweeps(contacts, ids, listed, n_listed, pseudo, inv_mass, inv_inertia,
+                       min(sweeps, PENALTY_ITERATIONS), sweep_tolerance)
     for c in range(count):
         ux, uy = relative_velocity(c, contacts, ids, pseudo)
         contacts[c, GAP] += h * (ux * contacts[c, NX] + uy * contacts[c, NY])
