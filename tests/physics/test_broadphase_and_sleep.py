@@ -398,3 +398,30 @@ def test_a_leaning_column_starting_cold_stays_at_rest():
     stats = np.zeros((40, layout.STATS_SIZE))
     Simulator.for_scene(scene, parallel=False).run(state, params, make_settings(scene, 1, False), stats)
     assert np.abs(state[:, 3:]).max() < 1e-9
+
+
+def test_the_sweeps_stop_only_once_every_contact_is_solved():
+    """``colliding_solver.gauss_seidel`` stops once a sweep changes the impulses by less than the tolerance of their
+    sum *and* none by more than SINGLE_CHANGE times that share of their mean. Beside 2,000 boxes lying apart (4,000
+    contacts whose sum hides one column's), a box dropped from 1 mm onto a column of 10 passes its load down the
+    column within the penalty's band (under 4 slops, 0.2 mm); stopped by the sum alone, the column took 0.33 mm."""
+    slop = 5e-5
+    boxes = [Box(length=0.4, width=0.2, mass=2.0, position=(2.0 + k, 0.1)) for k in range(2000)]
+    boxes += [
+        Box(length=0.4, width=0.2, mass=2.0, position=(0.0, 0.1 + 0.2 * k + (1e-3 if k == 10 else 0.0)))
+        for k in range(11)
+    ]
+    scene = Scene(
+        boxes=tuple(boxes),
+        dt=1 / 60,
+        friction=0.5,
+        penalty_stiffness=1e5,
+        boxes_collide=True,
+        solver_tolerance=1e-4,
+        solver_iterations=32,
+        penetration_slop=slop,
+    )
+    state, params = scene.initial_state(), scene.body_params()
+    stats = np.zeros((scene.n_bodies, layout.STATS_SIZE))
+    Simulator.for_scene(scene, parallel=False).run(state, params, make_settings(scene, 60, False), stats)
+    assert stats[:, layout.MAX_PENETRATION].max() < 4 * slop
