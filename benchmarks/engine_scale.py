@@ -62,13 +62,16 @@ from box_toss_env.physics import Box, Scene, Simulator, layout, make_settings, s
 
 OUR_DT: dict[str, float] = {"pile": 1 / 60, "wide pile": 1 / 90, "pyramid": 1 / 60}
 """[s] our engine's step per kind of scene: the one place to edit when the engine picks its own. The cheapest of
-1/60, 1/90 and 1/120 at which the awake scene's deepest penetration stays under 0.2 mm throughout (twice the depth
-at which OUR_SOLVER's penalty starts). Measured on 2026-11-27 over 0.5 s of lead-in and 2 s awake with OUR_SOLVER
-(thread CPU time beside two trainings), us per body per simulated second and deepest penetration: the pile of 100
-at 1/60 23.8 (115 um), 1/90 27.6 (107 um), 1/120 30.2 (98 um); the wide pile of 1,000 at 1/60 21.4 (121 um), 1/90
-20.5 (95 um), 1/120 25.0 (93 um): a larger step runs more sweeps a step, and the penalty's more often; the pyramid
-at 1/60 35 um. With a slop of 30 um the wide pile at 1/120 had cost 24.5, at 1/90 18.5 (59 um). Box2D v3 at its
-default: 5-11 mm."""
+1/60, 1/90 and 1/120 at which the awake scene's deepest penetration stays under 0.5 mm throughout and ends the run
+under 0.2 mm (twice the depth at which OUR_SOLVER's penalty starts). Measured on 2026-11-27 after the lever-rule
+cold start (0.5 s of lead-in and 2 s awake with OUR_SOLVER, thread CPU time beside trainings), us per body per
+simulated second and deepest penetration throughout / at the end: the wide pile of 1,000 at 1/60 21.0 (733 / 115
+um), 1/90 34.8 (391 / 97 um), 1/120 50.5 (296 / 102 um); of 5,000 at 1/60 46.4 (548 / 523 um), 1/90 41.9 (332 /
+102 um), 1/120 53.7 (286 / 98 um): a box toppling off the top makes the peaks. Before it, with the equal-split cold
+start, the piles of 1,000 and 5,000 stood frozen at these settings (every speed under 0.05 mm/s after 20 steps,
+93-100 um throughout) and 1/90 cost 18.5-22.5; the pile of 100 at 1/60 23.8 (115 um), 1/90 27.6, 1/120 30.2; the
+pyramid at 1/60 35 um. Box2D v3 at
+its default: 5-11 mm."""
 OUR_SOLVER = {"solver_tolerance": 1e-4, "solver_iterations": 32, "penetration_slop": 5e-5}
 """Our solver settings for these scenes: the Gauss-Seidel stop (``Scene.solver_tolerance``, ``solver_iterations``;
 sweeps stop once they change the impulses by less than 1e-4 of their sum, after 32 at most) and
