@@ -498,8 +498,8 @@ def gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction,
 @jit_stage
 def penalty_sweeps(contacts, ids, listed, n_listed, pseudo, inv_mass, inv_inertia, iterations, tolerance):
     """``gauss_seidel`` on the penalty's pseudo-velocities (column PSEUDO_IMPULSE, no friction) over the contacts
-    ``listed[:n_listed]`` alone (the deep islands': a pile's penalty usually acts on one column, and sweeping a
-    mask of every contact cost more than the column's sweeps)."""
+    ``listed[:n_listed]`` alone: the deep islands', about 40 of the wide pile of 1,000's thousands of contacts when
+    its penalty runs (counted), so a sweep no longer steps through a mask of every contact."""
     for _ in range(iterations):
         change = 0.0
         total = 0.0
