@@ -17,8 +17,6 @@ ALLOWED = {
     # what is left is the allocation of its work arrays and the grid step's bookkeeping)
     "box_toss_env/physics/colliding_step.py:make_colliding_robust_kernel": 151,
     "box_toss_env/physics/colliding_step.py:make_colliding_robust_kernel.run": 142,
-    "box_toss_env/physics/colliding_reference.py:make_colliding_reference_kernel": 132,
-    "box_toss_env/physics/colliding_reference.py:make_colliding_reference_kernel.run": 123,
 }
 """``file:function`` (``Class.method``, ``outer.inner``) -> its length in lines."""
 
