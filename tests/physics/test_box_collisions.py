@@ -371,8 +371,10 @@ def test_boxes_collide_false_is_todays_kernel():
 NOT_COMPILED_PROBE = textwrap.dedent("""
     import json
     from numba.core.registry import CPUDispatcher
-    from box_toss_env.physics import (box_collision, broadphase, colliding_reference, colliding_solver, colliding_step,
-                                      islands, scenes, simulate)
+    from box_toss_env.physics import scenes, simulate
+    from box_toss_env.physics.colliding import (box_collision, broadphase, colliding_solver, colliding_step,
+                                                islands)
+    from box_toss_env.physics.reference import colliding_reference
     for solver in ("robust", "seed"):
         simulate(scenes.toss(solver=solver), duration=2.0, until_rest=True)
     colliding_only = (box_collision, broadphase, colliding_reference, colliding_solver, colliding_step, islands)

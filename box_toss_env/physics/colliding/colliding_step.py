@@ -88,7 +88,11 @@ import math
 
 import numpy as np
 
-from . import layout
+from .. import layout
+from ..compile.compilation import jit_kernel, jit_stage
+from ..kernel_support import read_settings, record_event, store_state, write_stats
+from ..robust.contact_solver import CORNER_ROWS, MAX_CORNERS
+from ..robust.robust_solver import MEMORY_SIZE, energy_limit_scale
 from .box_collision import (
     APPROACH,
     BODY1,
@@ -125,11 +129,7 @@ from .colliding_solver import (
     substeps,
     warm_start,
 )
-from .compilation import jit_kernel, jit_stage
-from .contact_solver import CORNER_ROWS, MAX_CORNERS
 from .islands import fall_asleep, keep_sleeping, restore_sleeping, sleep_placed, sleeps_through, wake_touched
-from .kernel_support import read_settings, record_event, store_state, write_stats
-from .robust_solver import MEMORY_SIZE, energy_limit_scale
 
 
 # -- 1. broadphase and narrowphase -------------------------------------------------------------------

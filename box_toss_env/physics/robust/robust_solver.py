@@ -47,8 +47,10 @@ import math
 
 import numpy as np
 
-from . import layout
-from .compilation import jit_kernel, jit_stage
+from .. import layout
+from ..compile.compilation import jit_kernel, jit_stage
+from ..geometry import lowest_face, lowest_pair, vertex_offset
+from ..kernel_support import lies_still, read_settings, record_event, store_state, write_stats
 from .contact_solver import (
     APPROACH,
     COMPRESSION,
@@ -69,8 +71,6 @@ from .contact_solver import (
     solve_normal_block,
 )
 from .flight import flight_state, time_to_contact
-from .geometry import lowest_face, lowest_pair, vertex_offset
-from .kernel_support import lies_still, read_settings, record_event, store_state, write_stats
 
 MAX_ROTATION_PER_STEP = 0.05  # [rad] a contact step turning the box further is split
 MAX_SUBSTEPS = 64

@@ -24,7 +24,25 @@ import math
 
 import numpy as np
 
-from . import layout
+from .. import layout
+from ..compile.compilation import jit_stage
+from ..kernel_support import store_state
+from ..robust.contact_solver import penalty_correction_share
+from ..robust.flight import time_to_contact
+from ..robust.robust_solver import (
+    FIRST_CONTACT,
+    IN_FLIGHT,
+    MAX_PENETRATION,
+    MAX_ROTATION_PER_STEP,
+    N_IMPACTS,
+    N_STEPS,
+    PENALTY_TRIGGER,
+    REST_TIME,
+    STATUS,
+    STILL_FOR,
+    advance_box,
+    start_memory,
+)
 from .box_collision import (
     APPROACH,
     BODY1,
@@ -48,26 +66,8 @@ from .box_collision import (
     TARGET,
 )
 from .broadphase import box_bound, time_apart
-from .compilation import jit_stage
-from .contact_solver import penalty_correction_share
-from .flight import time_to_contact
 from .islands import islands_deeper_than
 from .joint_contact_solve import JOINT_LIMIT, delassus_entry, full_delassus, joint_impulses
-from .kernel_support import store_state
-from .robust_solver import (
-    FIRST_CONTACT,
-    IN_FLIGHT,
-    MAX_PENETRATION,
-    MAX_ROTATION_PER_STEP,
-    N_IMPACTS,
-    N_STEPS,
-    PENALTY_TRIGGER,
-    REST_TIME,
-    STATUS,
-    STILL_FOR,
-    advance_box,
-    start_memory,
-)
 
 TUNNEL_FRACTION = 0.5  # [-] of the smallest half extent: the most any point moves in one substep
 MAX_SUBSTEPS = 256

@@ -27,9 +27,9 @@ import math
 
 import numpy as np
 
-from . import layout
-from .compilation import jit_kernel, jit_stage
-from .kernel_support import is_lying_still, read_settings, record_event, store_state, write_stats
+from .. import layout
+from ..compile.compilation import jit_kernel, jit_stage
+from ..kernel_support import is_lying_still, read_settings, record_event, store_state, write_stats
 from .reference_solver import TANGENT_NORMALISE_MIN
 
 
