@@ -10,7 +10,7 @@ stage recompiles its callers.
 
 ``boxes_collide`` picks a different kernel, not a branch in one: with it False (every scene that does
 not ask for box-box contact) ``make_kernel`` returns the very kernel it returned before box-box contact
-existed, and nothing of ``box_collision``, ``colliding_solver`` or ``colliding_reference`` is compiled; with
+existed, and nothing of ``narrowphase``, ``colliding_solver`` or ``colliding_reference`` is compiled; with
 it True the bodies of the scene are stepped together (``colliding_solver``, ``colliding_reference``).
 """
 
@@ -21,7 +21,7 @@ import hashlib
 from dataclasses import dataclass
 from pathlib import Path
 
-from .colliding.colliding_step import make_colliding_robust_kernel
+from .colliding.step import make_colliding_robust_kernel
 from .reference.colliding_reference import make_colliding_reference_kernel
 from .reference.reference_solver import make_reference_kernel
 from .robust.robust_solver import make_robust_kernel

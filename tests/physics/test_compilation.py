@@ -111,11 +111,11 @@ def test_stages_have_no_python_wrapper_and_kernels_release_the_gil():
     # and no reference counting: a stage allocates nothing, so the counts of its caller's arrays need no upkeep
     # (only the stages that sort, once a run or in the broadphase's pair search, and those that allocate their work
     # arrays once a run, when the penalty runs or when the contacts outgrow theirs, keep it)
-    from box_toss_env.physics.colliding import broadphase, colliding_solver, colliding_step
+    from box_toss_env.physics.colliding import broadphase, colliding_solver, step
 
     stages = [
         value
-        for module in (*STAGE_MODULES, broadphase, colliding_solver, colliding_step)
+        for module in (*STAGE_MODULES, broadphase, colliding_solver, step)
         for value in vars(module).values()
         if isinstance(value, EngineDispatcher)
         and value.py_func.__module__ == module.__name__

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from box_toss_env.physics.colliding import colliding_solver
-from box_toss_env.physics.colliding.box_collision import (
+from box_toss_env.physics.colliding.narrowphase import (
     BODY1,
     BODY2,
     CONTACT_COLUMNS,

@@ -28,8 +28,8 @@ import numpy as np
 from .. import layout
 from ..compile.compilation import jit_stage
 from ..kernel_support import is_lying_still, write_stats
-from .box_collision import BODY1, BODY2, GAP
 from .broadphase import candidate_pairs
+from .narrowphase import BODY1, BODY2, GAP
 
 
 @jit_stage

@@ -26,7 +26,7 @@ caller solves by alternation instead.
 """
 
 from ..compile.compilation import jit_stage
-from .box_collision import BODY1, FRICTION, FRICTION_IMPULSE, IMPULSE, NX, NY, R1X, R1Y, R2X, R2Y
+from .narrowphase import BODY1, FRICTION, FRICTION_IMPULSE, IMPULSE, NX, NY, R1X, R1Y, R2X, R2Y
 
 JOINT_LIMIT = 8  # contacts at most solved jointly (16 unknowns); more go to the alternation
 JOINT_ROUNDS = 24  # state changes at most before giving up

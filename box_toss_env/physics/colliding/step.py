@@ -2,7 +2,7 @@
 ``make_colliding_robust_kernel`` builds the kernel, which sets up the work arrays and runs the grid steps
 (``advance_steps``: 0. wake, alone, the substeps, 8. sleep), each substep being stage 1
 (``find_substep_contacts``) then stages 2.-7. (``solve_substep``), one stage a line; the contact formulas,
-the impulse solves and the penalty are in ``colliding_solver``, the geometry of contacts in ``box_collision``,
+the impulse solves and the penalty are in ``colliding_solver``, the geometry of contacts in ``narrowphase``,
 pairs in ``broadphase``, sleeping in ``islands``. The steps allocate nothing and count no references (several
 times faster for stages handed arrays, ``compilation.jit_stage``): where the pairs or contacts outgrow their
 arrays, ``advance_steps`` returns with its progress, and the kernel grows them and calls it again.
@@ -10,7 +10,7 @@ arrays, ``advance_steps`` returns with its progress, and the kernel grows them a
 The stage script of one substep of length h:
   1. find contacts: every box-box point whose gap the two bodies could close within h, every box-floor
      corner within the box's reach plus the scene's largest (a struck box moves further than its own
-     speed says) (speculative contacts, ``box_collision.find_contacts``); each starts from its impulse of
+     speed says) (speculative contacts, ``narrowphase.find_contacts``); each starts from its impulse of
      the last substep when the same feature touched (warm starting), so a stack's load is carried from
      step to step rather than rebuilt by the iterations; and from run to run when the caller keeps the
      ``warm`` array (``load_warm_start``, ``store_warm_start``: in chunks as in one run); a cold start of
@@ -93,23 +93,6 @@ from ..compile.compilation import jit_kernel, jit_stage
 from ..kernel_support import read_settings, record_event, store_state, write_stats
 from ..robust.contact_solver import CORNER_ROWS, MAX_CORNERS
 from ..robust.robust_solver import MEMORY_SIZE, energy_limit_scale
-from .box_collision import (
-    APPROACH,
-    BODY1,
-    BODY2,
-    CONTACT_COLUMNS,
-    FRICTION_IMPULSE,
-    GAP,
-    ID_COLUMNS,
-    IMPULSE,
-    KEY,
-    NX,
-    NY,
-    RESTITUTION,
-    TARGET,
-    find_contacts,
-    update_geometry,
-)
 from .broadphase import candidate_pairs, sweep_axis
 from .colliding_solver import (
     ALONE_LIMIT,
@@ -130,6 +113,23 @@ from .colliding_solver import (
     warm_start,
 )
 from .islands import fall_asleep, keep_sleeping, restore_sleeping, sleep_placed, sleeps_through, wake_touched
+from .narrowphase import (
+    APPROACH,
+    BODY1,
+    BODY2,
+    CONTACT_COLUMNS,
+    FRICTION_IMPULSE,
+    GAP,
+    ID_COLUMNS,
+    IMPULSE,
+    KEY,
+    NX,
+    NY,
+    RESTITUTION,
+    TARGET,
+    find_contacts,
+    update_geometry,
+)
 
 
 # -- 1. broadphase and narrowphase -------------------------------------------------------------------
@@ -402,7 +402,7 @@ DONE, MORE_PAIRS, MORE_CONTACTS = 0, 1, 2  # what the kernel is to do when ``adv
 def find_substep_contacts(pose, half, vel, radius, awake, h, gravity, tolerance, trig, bound, reach, floor_reach,
                           axis, order, low, pair_keys, contacts, ids):
     """1. broadphase and narrowphase: the contacts within what the bodies can travel in the substep
-    (``contact_reach``, ``broadphase.candidate_pairs``, ``box_collision.find_contacts``); returns how many, or
+    (``contact_reach``, ``broadphase.candidate_pairs``, ``narrowphase.find_contacts``); returns how many, or
     -MORE_PAIRS / -MORE_CONTACTS when ``pair_keys`` / ``contacts`` is full (each search is repeated as it was:
     the sweep order it repairs is sorted already)."""
     contact_reach(pose, half, vel, radius, awake, h, gravity, tolerance, trig, bound, reach, floor_reach)
