@@ -2,7 +2,7 @@
 print measured figures (``python -m benchmarks.<name>``).
 
 Timed runs measure the compiled engine: an env's first throws on a cold cache would otherwise run the
-kernel's interpreted copy while it compiles (``box_toss_env.physics.background_compile``);
+kernel's interpreted copy while it compiles (``box_toss_env.physics.compile.background_compile``);
 ``benchmarks.cold_start`` measures exactly that, with it switched back on in its probes.
 """
 

@@ -17,7 +17,7 @@ directory: the cold run, then the warm run in the same directory. Times are wall
   (each starts and imports SB3 and torch).
 
 On a cold cache the envs throw with the kernel's interpreted copy while a worker process compiles it
-(``box_toss_env.physics.background_compile``); each case then throws on until every env runs the
+(``box_toss_env.physics.compile.background_compile``); each case then throws on until every env runs the
 compiled kernel, and that moment is reported too ("compiled after"). The warm run starts once the
 cold run's compile workers are done.
 
@@ -49,7 +49,7 @@ PROBE = textwrap.dedent("""
     import gymnasium as gym
     import box_toss_env
     try:
-        from box_toss_env.physics.background_compile import wait_for_workers
+        from box_toss_env.physics.compile.background_compile import wait_for_workers
     except ImportError:  # a checkout from before the interpreted start
         def wait_for_workers():
             pass

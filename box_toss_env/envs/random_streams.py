@@ -19,8 +19,8 @@ import os
 import numpy as np
 from gymnasium.utils import seeding
 
-from box_toss_env.physics.background_compile import InterpretedStart
-from box_toss_env.physics.compilation import ensure_compiled, jit_kernel, jit_stage
+from box_toss_env.physics.compile.background_compile import InterpretedStart
+from box_toss_env.physics.compile.compilation import ensure_compiled, jit_kernel, jit_stage
 
 MULTIPLIER_HI = np.uint64(2549297995355413924)  # PCG_DEFAULT_MULTIPLIER_128, high and low 64 bits
 MULTIPLIER_LO = np.uint64(4865540595714422341)

@@ -2,7 +2,7 @@
 
 import math
 
-from .compilation import jit_stage
+from .compile.compilation import jit_stage
 from .layout import SIGN_X, SIGN_Y
 
 

@@ -22,8 +22,9 @@ import types
 import numba
 import numpy as np
 
-from . import background_compile, layout
-from .compilation import ensure_compiled, jit_kernel
+from . import layout
+from .compile import background_compile
+from .compile.compilation import ensure_compiled, jit_kernel
 from .kernels import KernelFlags, make_kernel, source_digest
 from .simulate import Simulator, check_threads, thread_pool
 from .validation import check_integer

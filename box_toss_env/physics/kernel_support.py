@@ -5,7 +5,7 @@ import math
 import numpy as np
 
 from . import layout
-from .compilation import cache_location, jit_stage
+from .compile.compilation import cache_location, jit_stage
 from .geometry import lowest_face, vertex_offset
 
 FLAT_TOLERANCE = 1e-3  # [rad] a face this close to level counts as lying on the floor

@@ -10,7 +10,7 @@ stage recompiles its callers.
 
 ``boxes_collide`` picks a different kernel, not a branch in one: with it False (every scene that does
 not ask for box-box contact) ``make_kernel`` returns the very kernel it returned before box-box contact
-existed, and nothing of ``box_collision``, ``colliding_solver`` or ``colliding_reference`` is compiled; with
+existed, and nothing of ``narrowphase``, ``colliding_solver`` or ``colliding_reference`` is compiled; with
 it True the bodies of the scene are stepped together (``colliding_solver``, ``colliding_reference``).
 """
 
@@ -21,10 +21,10 @@ import hashlib
 from dataclasses import dataclass
 from pathlib import Path
 
-from .colliding_reference import make_colliding_reference_kernel
-from .colliding_step import make_colliding_robust_kernel
-from .reference_solver import make_reference_kernel
-from .robust_solver import make_robust_kernel
+from .colliding.step import make_colliding_robust_kernel
+from .reference.colliding_reference import make_colliding_reference_kernel
+from .reference.reference_solver import make_reference_kernel
+from .robust.robust_solver import make_robust_kernel
 
 
 @dataclass(frozen=True)
@@ -46,7 +46,7 @@ class KernelFlags:
 def source_digest() -> int:
     """A 56-bit digest of every engine source file."""
     sha = hashlib.sha256()
-    for path in sorted(Path(__file__).parent.glob("*.py")):
+    for path in sorted(Path(__file__).parent.rglob("*.py")):
         sha.update(path.read_bytes())
     return int.from_bytes(sha.digest()[:7], "little")
 

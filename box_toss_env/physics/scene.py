@@ -10,7 +10,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from . import layout
-from .box_collision import overlapping_boxes
+from .colliding.narrowphase import overlapping_boxes
 from .ranges import ENGINE_RANGES
 from .validation import check_bool, check_choice, check_finite, check_integer, check_vector
 

@@ -10,8 +10,9 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from . import background_compile, layout
-from .compilation import ensure_compiled
+from . import layout
+from .compile import background_compile
+from .compile.compilation import ensure_compiled
 from .kernels import KernelFlags, make_kernel
 from .ranges import MAX_STEPS, check_step_count
 from .scene import Scene

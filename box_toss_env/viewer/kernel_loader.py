@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from box_toss_env.physics import layout, warm_start_memory
-from box_toss_env.physics.compilation import cached_on_disk, compiled_in_process, ensure_compiled
+from box_toss_env.physics.compile.compilation import cached_on_disk, compiled_in_process, ensure_compiled
 
 COMPILING_NOTICE = "compiling the {name} kernel... (first use only)"
 LOADING_NOTICE = "loading the {name} kernel from numba's cache..."

@@ -20,9 +20,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from box_toss_env.physics.compilation import jit_kernel
-from box_toss_env.physics.contact_solver import CORNER_ROWS, MAX_CORNERS, RX, RY, TARGET, solve_one_corner
-from box_toss_env.physics.robust_solver import impact_impulses
+from box_toss_env.physics.compile.compilation import jit_kernel
+from box_toss_env.physics.robust.contact_solver import CORNER_ROWS, MAX_CORNERS, RX, RY, TARGET, solve_one_corner
+from box_toss_env.physics.robust.robust_solver import impact_impulses
 from box_toss_env.physics.scene import Scene
 
 LAWS = ("ours", "newton")

@@ -17,9 +17,10 @@ import pytest
 
 import box_toss_env
 from box_toss_env.envs.random_streams import RandomStreams, fill_uniform
-from box_toss_env.physics import background_compile, grouped
-from box_toss_env.physics.background_compile import MAX_INTERPRETED_BODIES, InterpretedStart, interpreted_copy
-from box_toss_env.physics.compilation import jit_kernel
+from box_toss_env.physics import grouped
+from box_toss_env.physics.compile import background_compile
+from box_toss_env.physics.compile.background_compile import MAX_INTERPRETED_BODIES, InterpretedStart, interpreted_copy
+from box_toss_env.physics.compile.compilation import jit_kernel
 
 PACKAGE = Path(box_toss_env.__file__).parent
 
@@ -152,8 +153,8 @@ PROBE = textwrap.dedent("""
     import gymnasium as gym
     import numpy as np
     import box_toss_env
-    from box_toss_env.physics.background_compile import wait_for_workers
-    from box_toss_env.physics.compilation import cached_on_disk
+    from box_toss_env.physics.compile.background_compile import wait_for_workers
+    from box_toss_env.physics.compile.compilation import cached_on_disk
     action = np.array([0.5, 0.2, -0.3], dtype=np.float32)
     env = gym.make("BoxToss-v0")
     batch = gym.make_vec("BoxToss-v0", num_envs=3)

@@ -371,17 +371,19 @@ def test_boxes_collide_false_is_todays_kernel():
 NOT_COMPILED_PROBE = textwrap.dedent("""
     import json
     from numba.core.registry import CPUDispatcher
-    from box_toss_env.physics import (box_collision, broadphase, colliding_reference, colliding_solver, colliding_step,
-                                      islands, scenes, simulate)
+    from box_toss_env.physics import scenes, simulate
+    from box_toss_env.physics.colliding import (narrowphase, broadphase, colliding_solver, step,
+                                                islands)
+    from box_toss_env.physics.reference import colliding_reference
     for solver in ("robust", "seed"):
         simulate(scenes.toss(solver=solver), duration=2.0, until_rest=True)
-    colliding_only = (box_collision, broadphase, colliding_reference, colliding_solver, colliding_step, islands)
+    colliding_only = (narrowphase, broadphase, colliding_reference, colliding_solver, step, islands)
     compiled = [f"{module.__name__}.{name}" for module in colliding_only
                 for name, function in vars(module).items()
                 if isinstance(function, CPUDispatcher) and function.py_func.__module__ == module.__name__
                 and function.overloads]
     simulate(scenes.drop_on_box(), duration=0.1)
-    after = [name for name, function in vars(box_collision).items()
+    after = [name for name, function in vars(narrowphase).items()
              if isinstance(function, CPUDispatcher) and function.overloads]
     print(json.dumps([compiled, after]))
 """)

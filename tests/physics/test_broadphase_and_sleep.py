@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from box_toss_env.physics import Box, Scene, Simulator, layout, make_settings, scenes, simulate, warm_start_memory
-from box_toss_env.physics.broadphase import candidate_pairs, sweep_axis
-from box_toss_env.physics.flight import time_to_contact
+from box_toss_env.physics.colliding.broadphase import candidate_pairs, sweep_axis
+from box_toss_env.physics.robust.flight import time_to_contact
 
 
 @numba.njit

@@ -20,17 +20,10 @@ import pytest
 from numba.core import event
 
 import box_toss_env
-from box_toss_env.physics import (
-    KernelFlags,
-    contact_solver,
-    flight,
-    geometry,
-    kernel_support,
-    make_kernel,
-    reference_solver,
-    robust_solver,
-)
-from box_toss_env.physics.compilation import EngineDispatcher
+from box_toss_env.physics import KernelFlags, geometry, kernel_support, make_kernel
+from box_toss_env.physics.compile.compilation import EngineDispatcher
+from box_toss_env.physics.reference import reference_solver
+from box_toss_env.physics.robust import contact_solver, flight, robust_solver
 
 PACKAGE = Path(box_toss_env.__file__).parent
 STAGE_MODULES = (contact_solver, flight, geometry, kernel_support, robust_solver, reference_solver)
@@ -108,8 +101,8 @@ def test_every_stage_is_compiled_once_for_plain_argument_types(tmp_path):
     variants = {name: count for name, count in counts.items() if "_kernel.<locals>.run_v" in name}
     assert set(variants.values()) == {1}  # each variant compiled once, under a name of its own
     assert collections.Counter(name.rsplit("_v", 1)[0] for name in variants) == {
-        "box_toss_env.physics.robust_solver.make_robust_kernel.<locals>.run": 4,
-        "box_toss_env.physics.reference_solver.make_reference_kernel.<locals>.run": 4,
+        "box_toss_env.physics.robust.robust_solver.make_robust_kernel.<locals>.run": 4,
+        "box_toss_env.physics.reference.reference_solver.make_reference_kernel.<locals>.run": 4,
     }
 
 
@@ -117,19 +110,25 @@ def test_stages_have_no_python_wrapper_and_kernels_release_the_gil():
     assert robust_solver.resolve_impact.targetoptions["no_cpython_wrapper"]
     # and no reference counting: a stage allocates nothing, so the counts of its caller's arrays need no upkeep
     # (only the stages that sort, once a run or in the broadphase's pair search, and those that allocate their work
-    # arrays once a run or when the penalty runs, keep it)
-    from box_toss_env.physics import broadphase, colliding_solver, colliding_step
+    # arrays once a run, when the penalty runs or when the contacts outgrow theirs, keep it)
+    from box_toss_env.physics.colliding import broadphase, colliding_solver, step
 
     stages = [
         value
-        for module in (*STAGE_MODULES, broadphase, colliding_solver, colliding_step)
+        for module in (*STAGE_MODULES, broadphase, colliding_solver, step)
         for value in vars(module).values()
         if isinstance(value, EngineDispatcher)
         and value.py_func.__module__ == module.__name__
         and value.targetoptions.get("no_cpython_wrapper")
     ]
     counted = sorted(stage.py_func.__name__ for stage in stages if stage.targetoptions["_nrt"])
-    assert len(stages) > 40 and counted == ["candidate_pairs", "correct_penetrations", "resting_loads", "start_sweep"]
+    assert len(stages) > 40 and counted == [
+        "candidate_pairs",
+        "correct_penetrations",
+        "grown_contacts",
+        "resting_loads",
+        "start_sweep",
+    ]
     assert make_kernel(KernelFlags()).targetoptions["nogil"]
     assert make_kernel(KernelFlags(parallel=True)) is make_kernel(KernelFlags())
 

@@ -10,7 +10,7 @@ import numba
 import numpy as np
 import pytest
 
-from box_toss_env.physics import contact_solver as cs
+from box_toss_env.physics.robust import contact_solver as cs
 
 # The stages have no Python wrapper (they are compiled to be called from compiled code only), so their
 # checks run in plain Python: this module again, in a subprocess with NUMBA_DISABLE_JIT=1 (same source).

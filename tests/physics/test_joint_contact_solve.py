@@ -6,8 +6,8 @@ import numba
 import numpy as np
 import pytest
 
-from box_toss_env.physics import colliding_solver
-from box_toss_env.physics.box_collision import (
+from box_toss_env.physics.colliding import colliding_solver
+from box_toss_env.physics.colliding.narrowphase import (
     BODY1,
     BODY2,
     CONTACT_COLUMNS,

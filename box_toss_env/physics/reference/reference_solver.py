@@ -20,9 +20,9 @@ e = 0, so restitution is not what drives it).
 
 import math
 
-from . import layout
-from .compilation import jit_kernel, jit_stage
-from .kernel_support import is_lying_still, read_settings, record_event, store_state, write_stats
+from .. import layout
+from ..compile.compilation import jit_kernel, jit_stage
+from ..kernel_support import is_lying_still, read_settings, record_event, store_state, write_stats
 
 TANGENT_NORMALISE_MIN = 1e-4  # the demo normalises u_t only above this length
 

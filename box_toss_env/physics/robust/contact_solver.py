@@ -20,7 +20,7 @@ Corners travel in a small work array ``corners[row, i]`` (rows below), the first
 
 import math
 
-from .compilation import jit_stage
+from ..compile.compilation import jit_stage
 
 # rows of the corner work array: lever arm, target normal velocity b_i, accumulated normal and friction
 # impulses, normal velocity before the step, depth below the floor, compression impulse (Poisson), and

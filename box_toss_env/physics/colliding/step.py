@@ -1,12 +1,16 @@
 """The step script of the robust solver for scenes whose boxes collide (``Scene(boxes_collide=True)``):
-``make_colliding_robust_kernel`` builds the kernel, whose loop reads as the method below, one stage a
-line; the contact formulas, the impulse solves and the penalty are in ``colliding_solver``, the
-geometry of contacts in ``box_collision``, pairs in ``broadphase``, sleeping in ``islands``.
+``make_colliding_robust_kernel`` builds the kernel, which sets up the work arrays and runs the grid steps
+(``advance_steps``: 0. wake, alone, the substeps, 8. sleep), each substep being stage 1
+(``find_substep_contacts``) then stages 2.-7. (``solve_substep``), one stage a line; the contact formulas,
+the impulse solves and the penalty are in ``colliding_solver``, the geometry of contacts in ``narrowphase``,
+pairs in ``broadphase``, sleeping in ``islands``. The steps allocate nothing and count no references (several
+times faster for stages handed arrays, ``compilation.jit_stage``): where the pairs or contacts outgrow their
+arrays, ``advance_steps`` returns with its progress, and the kernel grows them and calls it again.
 
 The stage script of one substep of length h:
   1. find contacts: every box-box point whose gap the two bodies could close within h, every box-floor
      corner within the box's reach plus the scene's largest (a struck box moves further than its own
-     speed says) (speculative contacts, ``box_collision.find_contacts``); each starts from its impulse of
+     speed says) (speculative contacts, ``narrowphase.find_contacts``); each starts from its impulse of
      the last substep when the same feature touched (warm starting), so a stack's load is carried from
      step to step rather than rebuilt by the iterations; and from run to run when the caller keeps the
      ``warm`` array (``load_warm_start``, ``store_warm_start``: in chunks as in one run); a cold start of
@@ -84,24 +88,11 @@ import math
 
 import numpy as np
 
-from . import layout
-from .box_collision import (
-    APPROACH,
-    BODY1,
-    BODY2,
-    CONTACT_COLUMNS,
-    FRICTION_IMPULSE,
-    GAP,
-    ID_COLUMNS,
-    IMPULSE,
-    KEY,
-    NX,
-    NY,
-    RESTITUTION,
-    TARGET,
-    find_contacts,
-    update_geometry,
-)
+from .. import layout
+from ..compile.compilation import jit_kernel, jit_stage
+from ..kernel_support import read_settings, record_event, store_state, write_stats
+from ..robust.contact_solver import CORNER_ROWS, MAX_CORNERS
+from ..robust.robust_solver import MEMORY_SIZE, energy_limit_scale
 from .broadphase import candidate_pairs, sweep_axis
 from .colliding_solver import (
     ALONE_LIMIT,
@@ -121,11 +112,24 @@ from .colliding_solver import (
     substeps,
     warm_start,
 )
-from .compilation import jit_kernel, jit_stage
-from .contact_solver import CORNER_ROWS, MAX_CORNERS
 from .islands import fall_asleep, keep_sleeping, restore_sleeping, sleep_placed, sleeps_through, wake_touched
-from .kernel_support import read_settings, record_event, store_state, write_stats
-from .robust_solver import MEMORY_SIZE, energy_limit_scale
+from .narrowphase import (
+    APPROACH,
+    BODY1,
+    BODY2,
+    CONTACT_COLUMNS,
+    FRICTION_IMPULSE,
+    GAP,
+    ID_COLUMNS,
+    IMPULSE,
+    KEY,
+    NX,
+    NY,
+    RESTITUTION,
+    TARGET,
+    find_contacts,
+    update_geometry,
+)
 
 
 # -- 1. broadphase and narrowphase -------------------------------------------------------------------
@@ -376,6 +380,145 @@ def write_back(state, stats, pose, vel, first_contact, n_impacts, n_stepped, max
                     n * dt, body_status, fail_step if body_status != layout.STATUS_OK else -1, n + 1)
 
 
+@jit_stage(nrt=True)  # it allocates the larger arrays (rarely: each doubling is kept for the rest of the run)
+def grown_contacts(contacts, ids, previous_keys, previous_impulses, n_previous):
+    """The contact arrays at twice their rows, the last substep's impulses kept (for the warm start)."""
+    capacity = 2 * contacts.shape[0]
+    keys = np.zeros(capacity, np.int64)
+    keys[:n_previous] = previous_keys[:n_previous]
+    impulses = np.zeros((capacity, 2))
+    impulses[:n_previous] = previous_impulses[:n_previous]
+    return np.zeros((capacity, CONTACT_COLUMNS)), np.zeros((capacity, ID_COLUMNS), np.int64), keys, impulses
+
+
+# a grid step's progress, for the kernel to resume ``advance_steps`` where it left off to make room
+NEW_STEP = 0  # a grid step starts: wake, alone, substeps
+WAKING = 1  # the wake's search ran out of room for pairs (the islands it woke stay awake; no new reach)
+IN_SUBSTEPS = 2  # a substep's contacts ran out of room: its stage 1 is redone (the same pairs and contacts)
+DONE, MORE_PAIRS, MORE_CONTACTS = 0, 1, 2  # what the kernel is to do when ``advance_steps`` returns
+
+
+@jit_stage(inline="always")  # into advance_steps
+def find_substep_contacts(pose, half, vel, radius, awake, h, gravity, tolerance, trig, bound, reach, floor_reach,
+                          axis, order, low, pair_keys, contacts, ids):
+    """1. broadphase and narrowphase: the contacts within what the bodies can travel in the substep
+    (``contact_reach``, ``broadphase.candidate_pairs``, ``narrowphase.find_contacts``); returns how many, or
+    -MORE_PAIRS / -MORE_CONTACTS when ``pair_keys`` / ``contacts`` is full (each search is repeated as it was:
+    the sweep order it repairs is sorted already)."""
+    contact_reach(pose, half, vel, radius, awake, h, gravity, tolerance, trig, bound, reach, floor_reach)
+    n_pairs = candidate_pairs(pose, bound, reach, awake, awake, axis, order, low, pair_keys)
+    if n_pairs < 0:
+        return -MORE_PAIRS
+    count = find_contacts(pose, trig, half, reach, floor_reach, pair_keys, n_pairs, awake, contacts, ids)
+    return count if count >= 0 else -MORE_CONTACTS
+
+
+@jit_stage(inline="always")  # into advance_steps, which counts no references
+def solve_substep(contacts, ids, count, pose, vel, pseudo, params, settings, inv_mass, inv_inertia, awake, h, t,
+                  tolerance, previous_keys, previous_impulses, n_previous, h_previous, kinetic_before, max_penetration,
+                  touched, impacted, supported, first_contact, n_impacts, use_penalty, use_friction, record, events,
+                  exact):
+    """Stages 2.-7. of a substep of length h starting at time t, over the ``count`` contacts found (stage 1);
+    returns how many impulses it keeps for the next substep's warm start. ``exact``: the exact solves' work
+    arrays (``normal_lcp``, ``joint_contact_solve``). (At most 30 arguments: numba inlines no call of more.)"""
+    gravity, threshold = settings[layout.GRAVITY], settings[layout.RESTITUTION_THRESHOLD]
+    w, factor, free, x, active, index, lcp_y, contact_state = exact
+    prepare_contacts(contacts, ids, count, params, inv_mass, inv_inertia)
+    note_penetration(contacts, ids, count, max_penetration)
+    # 2. relax: split-impulse correction of penetrations deeper than the slop
+    if use_penalty and count > 0:
+        correct_penetrations(contacts, ids, count, pose, vel, pseudo, inv_mass, inv_inertia, h, settings, tolerance,
+                             gravity, params, w, factor, free, x, active, index, lcp_y)
+    approach_speeds(contacts, ids, count, vel, params, kinetic_before)
+    # 3. integrate velocities
+    integrate_velocities(vel, awake, h, gravity)
+    # 4. warm start, solve (speculative targets), store impulses for the next substep
+    speculative_targets(contacts, count, h)
+    warm_start(contacts, ids, count, previous_keys, previous_impulses, n_previous, h / h_previous, vel, inv_mass,
+               inv_inertia, pose, h, gravity)
+    solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, w, factor, free, x, active,
+                     index, lcp_y, contact_state, settings)
+    n_stored = store_impulses(contacts, ids, count, previous_keys, previous_impulses)
+    # 5. restitution for impacts only: solved with every contact and friction, then polished
+    impacts = restitution_targets(contacts, count, threshold)
+    if impacts > 0:
+        solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, w, factor, free, x, active,
+                         index, lcp_y, contact_state, settings)
+        apply_restitution(contacts, ids, count, vel, inv_mass, inv_inertia, threshold)
+    # 6. no energy gained by the bodies that took an impulse
+    mark_touched(contacts, ids, count, impacts, threshold, touched, impacted)
+    limit_energy(contacts, ids, count, vel, params, kinetic_before, touched, impacted, supported, first_contact,
+                 n_impacts, h, t, gravity, record, events)
+    # 7. integrate positions
+    integrate_positions(pose, vel, awake, touched, h, gravity)
+    return n_stored
+
+
+@jit_stage
+def advance_steps(progress, pose, vel, half, params, settings, inv_mass, inv_inertia, radius, tolerance, axis, trig,
+                  bound, reach, floor_reach, pseudo, work, kinetic_before, max_penetration, touched, supported,
+                  impacted, n_impacts, n_stepped, first_contact, everyone, awake, island, still_for, rest_time,
+                  parent, ready, low, order, pair_keys, memory, alone, corners, corner_delassus, corner_ids, contacts,
+                  ids, previous_keys, previous_impulses, exact, use_penalty, use_friction, record, trajectory, events):
+    """The grid steps while a body is awake (this module's step script: 0. wake, alone, the substeps 1.-7., 8.
+    sleep), from ``progress`` = (step n, awake bodies, impulses kept, their substep length, NEW_STEP / WAKING /
+    IN_SUBSTEPS, substeps, substep). It allocates nothing (and counts no references): when the pairs or the
+    contacts outgrow their arrays it returns, the kernel grows them and calls again with the progress returned.
+    Returns (progress, status, failing step, DONE / MORE_PAIRS / MORE_CONTACTS)."""
+    dt, gravity, max_steps, until_rest, threshold, sleep_speed, sleep_time, slop = read_settings(settings)
+    n, n_awake, n_previous, h_previous, phase, n_sub, first_sub = progress
+    nb, count, smallest_half = pose.shape[0], 0, half.min()
+    while n < max_steps and n_awake > 0:
+        if phase != IN_SUBSTEPS:
+            if n_awake < nb:  # 0. wake the sleeping islands an awake body can reach in this step
+                if phase != WAKING:
+                    update_geometry(pose, half, awake, trig, bound)
+                    body_reach(vel, radius, awake, dt, gravity, tolerance, reach)
+                if wake_touched(pose, bound, reach, everyone, awake, island, still_for, rest_time, axis, order, low,
+                                pair_keys) < 0:
+                    return (n, n_awake, n_previous, h_previous, WAKING, n_sub, 0), layout.STATUS_OK, -1, MORE_PAIRS
+                n_awake = count_awake(awake)
+            phase = NEW_STEP
+            # alone: whole steps of each awake body against the floor alone while no two boxes can meet
+            k = steps_alone(pose, vel, half, radius, awake, params, gravity, tolerance, dt, max_steps - n) \
+                if n_awake <= ALONE_LIMIT else 0
+            if k > 0:
+                n, slept, failed = advance_alone(
+                    k, n, pose, vel, params, awake, supported, alone, memory, n_stepped, n_impacts, first_contact,
+                    max_penetration, still_for, island, rest_time, work, dt, gravity, until_rest, threshold,
+                    sleep_speed, sleep_time, slop, use_penalty, use_friction, record, corners, corner_delassus,
+                    corner_ids, trajectory, events)
+                n_previous = 0  # the contacts of the substeps before are gone
+                if failed >= 0:
+                    return (n, n_awake, n_previous, h_previous, phase, n_sub, 0), layout.STATUS_NONFINITE, n, DONE
+                n_awake -= slept
+                continue
+            n_sub, first_sub = substeps(vel, radius, smallest_half, dt, gravity), 0
+            supported[:] = False
+            alone[:] = False
+        h = dt / n_sub
+        for sub in range(first_sub, n_sub):
+            count = find_substep_contacts(pose, half, vel, radius, awake, h, gravity, tolerance, trig, bound, reach,
+                                          floor_reach, axis, order, low, pair_keys, contacts, ids)
+            if count < 0:
+                return (n, n_awake, n_previous, h_previous, IN_SUBSTEPS, n_sub, sub), layout.STATUS_OK, -1, -count
+            # 2.-7. relax, integrate velocities, warm start, solve, restitution, no energy gained, integrate positions
+            n_previous = solve_substep(
+                contacts, ids, count, pose, vel, pseudo, params, settings, inv_mass, inv_inertia, awake, h,
+                n * dt + sub * h, tolerance, previous_keys, previous_impulses, n_previous, h_previous, kinetic_before,
+                max_penetration, touched, impacted, supported, first_contact, n_impacts, use_penalty, use_friction,
+                record, events, exact)
+            h_previous = h
+        phase = NEW_STEP
+        n += 1
+        if not end_step(pose, vel, awake, n_stepped, n, record, trajectory):
+            return (n, n_awake, n_previous, h_previous, phase, n_sub, 0), layout.STATUS_NONFINITE, n, DONE
+        if until_rest:  # 8. sleep
+            n_awake -= sleep_islands(ids, count, pose, vel, radius, awake, supported, still_for, sleep_speed,
+                                     sleep_time, parent, ready, island, rest_time, n, dt, record, trajectory)
+    return (n, n_awake, n_previous, h_previous, phase, n_sub, 0), layout.STATUS_OK, -1, DONE
+
+
 def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, source_digest: int):
     """Build the robust kernel for scenes whose boxes collide (flags are compile-time, as
     ``robust_solver.make_robust_kernel``'s): ``run(state, params, settings, stats, trajectory, events)``
@@ -395,7 +538,6 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
         inv_mass = 1.0 / params[:, layout.MASS]
         inv_inertia = 1.0 / params[:, layout.INERTIA]
         radius = np.sqrt(half[:, 0] ** 2 + half[:, 1] ** 2)
-        smallest_half = half.min()
         tolerance = CONTACT_TOLERANCE * (1.0 + radius.max())
         trig, bound, pseudo, work = np.zeros((nb, 2)), np.zeros((nb, 2)), np.zeros((nb, 3)), np.zeros((nb, 6))
         reach, floor_reach, kinetic_before, max_penetration = np.zeros(nb), np.zeros(nb), np.zeros(nb), np.zeros(nb)
@@ -405,11 +547,9 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
         capacity = max(8 * nb, MIN_CAPACITY)  # contact rows, each written before it is read: left unzeroed
         contacts, ids = np.empty((capacity, CONTACT_COLUMNS)), np.empty((capacity, ID_COLUMNS), np.int64)
         previous_keys, previous_impulses = np.empty(capacity, np.int64), np.empty((capacity, 2))
-        # the exact solves' work arrays (normal_lcp, joint_contact_solve)
-        w, factor = np.zeros((DIRECT_LIMIT, DIRECT_LIMIT)), np.zeros((DIRECT_LIMIT, DIRECT_LIMIT))
-        free, x, lcp_y = np.zeros(DIRECT_LIMIT), np.zeros(DIRECT_LIMIT), np.zeros(DIRECT_LIMIT)
-        active, index = np.zeros(DIRECT_LIMIT, np.bool_), np.zeros(DIRECT_LIMIT, np.int64)
-        contact_state = np.zeros(DIRECT_LIMIT, np.int64)
+        exact = (np.zeros((DIRECT_LIMIT, DIRECT_LIMIT)), np.zeros((DIRECT_LIMIT, DIRECT_LIMIT)), np.zeros(DIRECT_LIMIT),
+                 np.zeros(DIRECT_LIMIT), np.zeros(DIRECT_LIMIT, np.bool_), np.zeros(DIRECT_LIMIT, np.int64),
+                 np.zeros(DIRECT_LIMIT), np.zeros(DIRECT_LIMIT, np.int64))  # the exact solves' (solve_substep)
         # broadphase (sort and sweep) and islands (sleeping; island: a sleeping body's root body, -1 while awake)
         everyone, awake, island = np.ones(nb, np.bool_), np.ones(nb, np.bool_), np.full(nb, -1, np.int64)
         still_for = np.zeros(nb)  # [s] how long each awake body has been supported and still
@@ -420,7 +560,7 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
         alone = np.zeros(nb, np.bool_)  # whether a body's memory row holds on (advanced alone since the substeps)
         corners, corner_delassus = np.zeros((CORNER_ROWS, MAX_CORNERS)), np.zeros((MAX_CORNERS, MAX_CORNERS))
         corner_ids = np.zeros(MAX_CORNERS, np.int64)
-        count, n, n_awake, status, fail_step = 0, 0, nb, layout.STATUS_OK, -1
+        n_awake = nb
         n_previous, h_previous = load_warm_start(warm, nb, previous_keys, previous_impulses, dt)  # from the last call
         if RECORD:
             record_states(trajectory, 0, pose, vel)
@@ -435,93 +575,20 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
                 if slept < 0:
                     pair_keys = np.zeros(2 * pair_keys.shape[0], np.int64)
             n_awake -= slept
-        while n < max_steps and n_awake > 0:
-            if n_awake < nb:  # 0. wake the sleeping islands an awake body can reach in this step
-                update_geometry(pose, half, awake, trig, bound)
-                body_reach(vel, radius, awake, dt, gravity, tolerance, reach)
-                while wake_touched(pose, bound, reach, everyone, awake, island, still_for, rest_time, axis, order,
-                                   low, pair_keys) < 0:
-                    pair_keys = np.zeros(2 * pair_keys.shape[0], np.int64)
-                n_awake = count_awake(awake)
-            if n_awake <= ALONE_LIMIT:
-                # alone: whole steps of each awake body against the floor alone while no two boxes can meet
-                k = steps_alone(pose, vel, half, radius, awake, params, gravity, tolerance, dt, max_steps - n)
-                if k > 0:
-                    n, slept, failed = advance_alone(
-                        k, n, pose, vel, params, awake, supported, alone, memory, n_stepped, n_impacts, first_contact,
-                        max_penetration, still_for, island, rest_time, work, dt, gravity, until_rest, threshold,
-                        sleep_speed, sleep_time, slop, PENALTY, FRICTION_ON, RECORD, corners, corner_delassus,
-                        corner_ids, trajectory, events)
-                    n_previous = 0  # the contacts of the substeps before are gone
-                    if failed >= 0:
-                        status, fail_step = layout.STATUS_NONFINITE, n
-                        break
-                    n_awake -= slept
-                    if n_awake == 0:
-                        break
-                    continue
-            n_sub = substeps(vel, radius, smallest_half, dt, gravity)
-            h = dt / n_sub
-            supported[:] = False
-            alone[:] = False
-            for sub in range(n_sub):
-                t = n * dt + sub * h
-                # 1. broadphase and narrowphase: contacts within what the bodies can travel in the substep
-                contact_reach(pose, half, vel, radius, awake, h, gravity, tolerance, trig, bound, reach, floor_reach)
-                n_pairs = candidate_pairs(pose, bound, reach, awake, awake, axis, order, low, pair_keys)
-                while n_pairs < 0:
-                    pair_keys = np.zeros(2 * pair_keys.shape[0], np.int64)
-                    n_pairs = candidate_pairs(pose, bound, reach, awake, awake, axis, order, low, pair_keys)
-                count = find_contacts(pose, trig, half, reach, floor_reach, pair_keys, n_pairs, awake, contacts, ids)
-                while count < 0:  # more contacts than room: grow, keeping the warm start
-                    capacity *= 2
-                    contacts = np.zeros((capacity, CONTACT_COLUMNS))
-                    ids = np.zeros((capacity, ID_COLUMNS), np.int64)
-                    keys = np.zeros(capacity, np.int64)
-                    keys[:n_previous] = previous_keys[:n_previous]
-                    impulses = np.zeros((capacity, 2))
-                    impulses[:n_previous] = previous_impulses[:n_previous]
-                    previous_keys, previous_impulses = keys, impulses
-                    count = find_contacts(pose, trig, half, reach, floor_reach, pair_keys, n_pairs, awake, contacts,
-                                          ids)
-                prepare_contacts(contacts, ids, count, params, inv_mass, inv_inertia)
-                note_penetration(contacts, ids, count, max_penetration)
-                # 2. relax: split-impulse correction of penetrations deeper than the slop
-                if PENALTY and count > 0:
-                    correct_penetrations(contacts, ids, count, pose, vel, pseudo, inv_mass, inv_inertia, h, settings,
-                                         tolerance, gravity, params, w, factor, free, x, active, index, lcp_y)
-                approach_speeds(contacts, ids, count, vel, params, kinetic_before)
-                # 3. integrate velocities
-                integrate_velocities(vel, awake, h, gravity)
-                # 4. warm start, solve (speculative targets), store impulses for the next substep
-                speculative_targets(contacts, count, h)
-                warm_start(contacts, ids, count, previous_keys, previous_impulses, n_previous, h / h_previous, vel,
-                           inv_mass, inv_inertia, pose, h, gravity)
-                solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, FRICTION_ON, w, factor, free, x,
-                                 active, index, lcp_y, contact_state, settings)
-                n_previous = store_impulses(contacts, ids, count, previous_keys, previous_impulses)
-                h_previous = h
-                # 5. restitution for impacts only: solved with every contact and friction, then polished
-                impacts = restitution_targets(contacts, count, threshold)
-                if impacts > 0:
-                    solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, FRICTION_ON, w, factor, free, x,
-                                     active, index, lcp_y, contact_state, settings)
-                    apply_restitution(contacts, ids, count, vel, inv_mass, inv_inertia, threshold)
-                # 6. no energy gained by the bodies that took an impulse
-                mark_touched(contacts, ids, count, impacts, threshold, touched, impacted)
-                limit_energy(contacts, ids, count, vel, params, kinetic_before, touched, impacted, supported,
-                             first_contact, n_impacts, h, t, gravity, RECORD, events)
-                # 7. integrate positions
-                integrate_positions(pose, vel, awake, touched, h, gravity)
-            n += 1
-            if not end_step(pose, vel, awake, n_stepped, n, RECORD, trajectory):
-                status, fail_step = layout.STATUS_NONFINITE, n
-                break
-            if until_rest:  # 8. sleep
-                n_awake -= sleep_islands(ids, count, pose, vel, radius, awake, supported, still_for, sleep_speed,
-                                         sleep_time, parent, ready, island, rest_time, n, dt, RECORD, trajectory)
-                if n_awake == 0:
-                    break
+        progress, need = (0, n_awake, n_previous, h_previous, NEW_STEP, 1, 0), MORE_PAIRS
+        while need != DONE:  # the steps, each time their pairs or contacts outgrow their arrays grown
+            progress, status, fail_step, need = advance_steps(
+                progress, pose, vel, half, params, settings, inv_mass, inv_inertia, radius, tolerance, axis, trig,
+                bound, reach, floor_reach, pseudo, work, kinetic_before, max_penetration, touched, supported,
+                impacted, n_impacts, n_stepped, first_contact, everyone, awake, island, still_for, rest_time, parent,
+                ready, low, order, pair_keys, memory, alone, corners, corner_delassus, corner_ids, contacts, ids,
+                previous_keys, previous_impulses, exact, PENALTY, FRICTION_ON, RECORD, trajectory, events)
+            if need == MORE_PAIRS:
+                pair_keys = np.zeros(2 * pair_keys.shape[0], np.int64)
+            elif need == MORE_CONTACTS:
+                contacts, ids, previous_keys, previous_impulses = grown_contacts(contacts, ids, previous_keys,
+                                                                                 previous_impulses, progress[2])
+        n, n_previous, h_previous = progress[0], progress[2], progress[3]
         write_back(state, stats, pose, vel, first_contact, n_impacts, n_stepped, max_penetration, rest_time, n, dt,
                    status, fail_step, warm, previous_keys, previous_impulses, n_previous, h_previous, awake, island,
                    still_for, params)

@@ -25,8 +25,8 @@ A state that does not settle within JOINT_ROUNDS solves, or a singular system, r
 caller solves by alternation instead.
 """
 
-from .box_collision import BODY1, FRICTION, FRICTION_IMPULSE, IMPULSE, NX, NY, R1X, R1Y, R2X, R2Y
-from .compilation import jit_stage
+from ..compile.compilation import jit_stage
+from .narrowphase import BODY1, FRICTION, FRICTION_IMPULSE, IMPULSE, NX, NY, R1X, R1Y, R2X, R2Y
 
 JOINT_LIMIT = 8  # contacts at most solved jointly (16 unknowns); more go to the alternation
 JOINT_ROUNDS = 24  # state changes at most before giving up

@@ -34,8 +34,8 @@ import math
 
 import numpy as np
 
-from .compilation import jit_stage
-from .geometry import vertex_offset
+from ..compile.compilation import jit_stage
+from ..geometry import vertex_offset
 
 # columns of the contact array (one row per contact point)
 (NX, NY, R1X, R1Y, R2X, R2Y, GAP, NORMAL_MASS, TANGENT_MASS, IMPULSE, FRICTION_IMPULSE, APPROACH, TARGET,

@@ -25,11 +25,11 @@ import math
 
 import numpy as np
 
-from . import layout
-from .box_collision import BODY1, BODY2, GAP
+from .. import layout
+from ..compile.compilation import jit_stage
+from ..kernel_support import is_lying_still, write_stats
 from .broadphase import candidate_pairs
-from .compilation import jit_stage
-from .kernel_support import is_lying_still, write_stats
+from .narrowphase import BODY1, BODY2, GAP
 
 
 @jit_stage

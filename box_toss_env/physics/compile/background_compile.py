@@ -4,7 +4,7 @@ the kernel's interpreted copy, which gives the same results bit for bit.
 A cold compile of the robust kernel takes several seconds (measured by ``benchmarks.cold_start``),
 while one throw of its plain-Python source takes a few milliseconds. So an env's first throws need
 not wait: ``Simulator(..., start_interpreted=True)`` (what the envs use) asks a worker process
-(``python -m box_toss_env.physics.background_compile``) to compile the kernel into numba's on-disk
+(``python -m box_toss_env.physics.compile.background_compile``) to compile the kernel into numba's on-disk
 cache, runs ``interpreted_copy(kernel)`` meanwhile, and switches to the compiled kernel (loaded from
 the cache) at the first run after the worker is done. The worker takes the engine's compile lock
 (``compilation.compile_locked``), so processes starting together (``SubprocVecEnv``) compile once.
@@ -84,7 +84,7 @@ class Compilation:
         env = dict(os.environ)
         env["PYTHONPATH"] = os.pathsep.join(p for p in (package_root, env.get("PYTHONPATH")) if p)
         self.process = subprocess.Popen(
-            [sys.executable, "-m", "box_toss_env.physics.background_compile"], stdin=subprocess.PIPE,
+            [sys.executable, "-m", "box_toss_env.physics.compile.background_compile"], stdin=subprocess.PIPE,
             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env, start_new_session=True)
         try:
             self.process.stdin.write(pickle.dumps((recipe, signature)))

@@ -8,8 +8,8 @@ reaches y = 0 and jumps there.
 
 import math
 
-from .compilation import jit_stage
-from .geometry import vertex_offset
+from ..compile.compilation import jit_stage
+from ..geometry import vertex_offset
 
 MAX_ADVANCE_ITERATIONS = 100_000  # a grazing approach past this many steps is handed to stepping
 

@@ -47,8 +47,10 @@ import math
 
 import numpy as np
 
-from . import layout
-from .compilation import jit_kernel, jit_stage
+from .. import layout
+from ..compile.compilation import jit_kernel, jit_stage
+from ..geometry import lowest_face, lowest_pair, vertex_offset
+from ..kernel_support import lies_still, read_settings, record_event, store_state, write_stats
 from .contact_solver import (
     APPROACH,
     COMPRESSION,
@@ -69,8 +71,6 @@ from .contact_solver import (
     solve_normal_block,
 )
 from .flight import flight_state, time_to_contact
-from .geometry import lowest_face, lowest_pair, vertex_offset
-from .kernel_support import lies_still, read_settings, record_event, store_state, write_stats
 
 MAX_ROTATION_PER_STEP = 0.05  # [rad] a contact step turning the box further is split
 MAX_SUBSTEPS = 64
@@ -398,6 +398,118 @@ def penalty_step(y, angle, vx, vy, spin, first, cos_a, sin_a, hx, hy, slop, stif
     return y, angle, vx, vy, spin
 
 
+@jit_stage(inline="always")
+def fly_to_impact(i, x, y, angle, vx, vy, spin, box, gravity, t, n, n_end, dt, tolerance, simultaneous, threshold,
+                  first_contact, n_impacts, record, trajectory, events, corners, k):
+    """Flight in closed form from time t (grid step n) to the first contact (``fly``) and the impact there
+    (``resolve_impact``), or to grid step ``n_end``. Returns (x, y, angle, vx, vy, spin, cos, sin, t, n, first
+    contact, impacts, in flight, whether to go on, status, failed step): a box that leaves the floor flies on; one
+    that stays is brought back onto the grid, its contact step of (n + 1) dt - t next (unless ``n_end`` is
+    reached); ``box``: (hx, hy, 1/m, 1/I, e, mu, k, radius)."""
+    hx, hy, inv_mass, inv_inertia, restitution, friction, _, _ = box
+    x, y, angle, vx, vy, spin, tau, touched, last = fly(i, x, y, angle, vx, vy, spin, hx, hy, gravity, t, n, n_end,
+                                                        dt, tolerance, record, trajectory)
+    cos_a = math.cos(angle)
+    sin_a = math.sin(angle)
+    if not touched:
+        n = n_end
+        failed = not is_finite_state(x, y, angle, vx, vy, spin)
+        return (x, y, angle, vx, vy, spin, cos_a, sin_a, n_end * dt, n, first_contact, n_impacts, True, False,
+                layout.STATUS_NONFINITE if failed else layout.STATUS_OK, n if failed else -1)
+    t = t + tau
+    if math.isnan(first_contact):
+        first_contact = t
+    vx, vy, spin, touching, approach, leaves = resolve_impact(
+        y, cos_a, sin_a, vx, vy, spin, hx, hy, inv_mass, inv_inertia, restitution,
+        friction, threshold, simultaneous, corners, k)
+    if touching > 0 and approach > threshold:
+        if record:
+            record_event(events, i, n_impacts, t, approach, touching)
+        n_impacts += 1
+    if not is_finite_state(x, y, angle, vx, vy, spin):
+        return (x, y, angle, vx, vy, spin, cos_a, sin_a, t, n, first_contact, n_impacts, True, False,
+                layout.STATUS_NONFINITE, np.int64(math.floor(t / dt)))
+    n = max(n, last)  # rows up to n hold the flight
+    if not leaves:
+        if (n + 1) * dt <= t and n < n_end:  # the contact fell on grid point n + 1
+            n += 1
+            if record:
+                store_state(trajectory, n, i, x, y, angle, vx, vy, spin)
+        if n >= n_end:
+            t = n_end * dt
+    return (x, y, angle, vx, vy, spin, cos_a, sin_a, t, n, first_contact, n_impacts, leaves, leaves or n < n_end,
+            layout.STATUS_OK, -1)
+
+
+@jit_stage(inline="always")
+def contact_step(i, x, y, angle, vx, vy, spin, cos_a, sin_a, h, box, gravity, tolerance, threshold, slop, lift,
+                 located, loaded, use_penalty, t, n_impacts, max_penetration, record, events, corners, k, ids):
+    """One contact step of length h on the grid, split where the box turns fast and at impacts: stages 0.-6. of
+    this module's docstring, piece after piece (``solve_piece``). Returns (x, y, angle, vx, vy, spin, cos, sin,
+    located corner, loaded corners, lift, whether a corner held the box, impacts, max penetration)."""
+    hx, hy, inv_mass, inv_inertia, restitution, friction, stiffness, radius = box
+    n_sub = min(max(np.int64(math.ceil(abs(spin) * h / MAX_ROTATION_PER_STEP)), 1), MAX_SUBSTEPS)
+    h_sub = h / n_sub
+    held = False
+    located_impacts = 0
+    elapsed = 0.0  # time advanced in this step
+    for _ in range(n_sub):
+        left = h_sub
+        while left > 0.0:
+            # 0. impact at this instant: a touching corner approaching faster than the threshold
+            vx, vy, spin, touching, approach = contact_impact(
+                y, cos_a, sin_a, vx, vy, spin, hx, hy, inv_mass, inv_inertia, restitution,
+                friction, threshold, tolerance + lift, located, loaded, corners, k)
+            if approach > 0.0:
+                if record:
+                    record_event(events, i, n_impacts, t + elapsed, approach, touching)
+                n_impacts += 1
+            vx, vy, spin, piece, located, located_impacts, n_corners, kinetic_before = solve_piece(
+                y, cos_a, sin_a, vx, vy, spin, left, hx, hy, gravity, tolerance, radius, threshold,
+                friction, inv_mass, inv_inertia, located_impacts, corners, k, ids)
+            loaded = 0
+            for c in range(n_corners):
+                if corners[IMPULSE, c] > 0.0:
+                    loaded |= 1 << ids[c]
+            held = held or loaded != 0
+            # 4. no energy gained: the velocities scaled where the step would gain (energy_limit_scale)
+            scale = energy_limit_scale(kinetic_before, kinetic_energy(vx, vy, spin, inv_mass,
+                                                                      inv_inertia),
+                                       -gravity * piece * vy / inv_mass)
+            vx, vy, spin = scale * vx, scale * vy, scale * spin
+            # 5. integrate positions
+            x = x + piece * vx
+            y = y + piece * vy
+            angle = angle + piece * spin
+            cos_a = math.cos(angle)
+            sin_a = math.sin(angle)
+            first, second = lowest_face(cos_a, sin_a, hx, hy)
+            rx1, ry1 = vertex_offset(first, cos_a, sin_a, hx, hy)
+            penetration = -(y + ry1)
+            max_penetration = max(max_penetration, penetration)
+            # 6. penalty: implicit correction of what penetrates beyond the slop, at the lowest corner
+            # and its neighbours; the potential energy it returns is taken from the kinetic energy
+            if use_penalty and penetration > PENALTY_TRIGGER * slop + tolerance:
+                y, angle, vx, vy, spin = penalty_step(y, angle, vx, vy, spin, first, cos_a, sin_a, hx, hy, slop,
+                                                      stiffness, piece, gravity, inv_mass, inv_inertia, corners, k)
+                cos_a = math.cos(angle)
+                sin_a = math.sin(angle)
+            held = held or penetration > 0.0
+            lift = h_sub * h_sub * spin * spin * radius  # how far a rotating substep lifts a held corner
+            elapsed += piece
+            left = left - piece if piece < left else 0.0
+    return x, y, angle, vx, vy, spin, cos_a, sin_a, located, loaded, lift, held, n_impacts, max_penetration
+
+
+@jit_stage(inline="always")
+def lies_still_at(y, cos_a, sin_a, vx, vy, spin, hx, hy, sleep_speed):
+    """``kernel_support.lies_still`` for a box whose angle has cosine ``cos_a`` and sine ``sin_a``."""
+    first, second = lowest_face(cos_a, sin_a, hx, hy)
+    rx1, ry1 = vertex_offset(first, cos_a, sin_a, hx, hy)
+    rx2, ry2 = vertex_offset(second, cos_a, sin_a, hx, hy)
+    return lies_still(y, ry1, ry2, rx1, rx2, vx, vy, spin, hx, hy, sleep_speed)
+
+
 @jit_stage
 def advance_box(i, state, params, memory, n, n_end, dt, gravity, until_rest, threshold, sleep_speed, sleep_time,
                 slop, use_penalty, use_friction, record, corners, k, ids, trajectory, events):
@@ -411,15 +523,10 @@ def advance_box(i, state, params, memory, n, n_end, dt, gravity, until_rest, thr
                                  state[i, 3], state[i, 4], state[i, 5])
     hx = params[i, layout.HALF_LENGTH]
     hy = params[i, layout.HALF_WIDTH]
-    inv_mass = 1.0 / params[i, layout.MASS]
-    inv_inertia = 1.0 / params[i, layout.INERTIA]
-    restitution = params[i, layout.RESTITUTION]
-    friction = params[i, layout.FRICTION] if use_friction else 0.0
-    stiffness = params[i, layout.STIFFNESS]
     radius = math.sqrt(hx * hx + hy * hy)
+    box = (hx, hy, 1.0 / params[i, layout.MASS], 1.0 / params[i, layout.INERTIA], params[i, layout.RESTITUTION],
+           params[i, layout.FRICTION] if use_friction else 0.0, params[i, layout.STIFFNESS], radius)
     tolerance = CONTACT_TOLERANCE * (1.0 + radius)
-    simultaneous = SIMULTANEOUS_TOLERANCE * (1.0 + radius)
-    end_time = n_end * dt
     (in_flight, located, loaded, lift, still_for, first_contact, rest_time, max_penetration, n_impacts, n_steps,
      t) = read_memory(memory, i)
     status = layout.STATUS_OK
@@ -428,101 +535,23 @@ def advance_box(i, state, params, memory, n, n_end, dt, gravity, until_rest, thr
     sin_a = math.sin(angle)
     while n < n_end:
         if in_flight:
-            # ---- flight: closed form up to the first contact ----
-            x, y, angle, vx, vy, spin, tau, touched, last = fly(i, x, y, angle, vx, vy, spin, hx, hy, gravity, t, n,
-                                                                n_end, dt, tolerance, record, trajectory)
-            cos_a = math.cos(angle)
-            sin_a = math.sin(angle)
-            if not touched:
-                n = n_end
-                t = end_time
-                if not is_finite_state(x, y, angle, vx, vy, spin):
-                    status = layout.STATUS_NONFINITE
-                    fail_step = n
+            # ---- flight: closed form up to the first contact, the impact there ----
+            (x, y, angle, vx, vy, spin, cos_a, sin_a, t, n, first_contact, n_impacts, in_flight, going_on, status,
+             fail_step) = fly_to_impact(i, x, y, angle, vx, vy, spin, box, gravity, t, n, n_end, dt, tolerance,
+                                        SIMULTANEOUS_TOLERANCE * (1.0 + radius), threshold, first_contact,
+                                        n_impacts, record, trajectory, events, corners, k)
+            if not going_on:
                 break
-            t = t + tau
-            if math.isnan(first_contact):
-                first_contact = t
-            # ---- impact at the contact instant ----
-            vx, vy, spin, touching, approach, leaves = resolve_impact(
-                y, cos_a, sin_a, vx, vy, spin, hx, hy, inv_mass, inv_inertia, restitution,
-                friction, threshold, simultaneous, corners, k)
-            if touching > 0 and approach > threshold:
-                if record:
-                    record_event(events, i, n_impacts, t, approach, touching)
-                n_impacts += 1
-            if not is_finite_state(x, y, angle, vx, vy, spin):
-                status = layout.STATUS_NONFINITE
-                fail_step = np.int64(math.floor(t / dt))
-                break
-            n = max(n, last)  # rows up to n hold the flight
-            if leaves:
+            if in_flight:
                 continue
-            in_flight = False
-            if (n + 1) * dt <= t and n < n_end:  # the contact fell on grid point n + 1
-                n += 1
-                if record:
-                    store_state(trajectory, n, i, x, y, angle, vx, vy, spin)
-            if n >= n_end:
-                t = end_time
-                break
             h = (n + 1) * dt - t  # a partial step brings the box back onto the grid
         else:
             h = dt
         # ---- one contact step on the grid, split where the box turns fast and at impacts ----
-        n_sub = min(max(np.int64(math.ceil(abs(spin) * h / MAX_ROTATION_PER_STEP)), 1), MAX_SUBSTEPS)
-        h_sub = h / n_sub
-        held = False
-        located_impacts = 0
-        elapsed = 0.0  # time advanced in this step
-        for _ in range(n_sub):
-            left = h_sub
-            while left > 0.0:
-                # 0. impact at this instant: a touching corner approaching faster than the threshold
-                vx, vy, spin, touching, approach = contact_impact(
-                    y, cos_a, sin_a, vx, vy, spin, hx, hy, inv_mass, inv_inertia, restitution,
-                    friction, threshold, tolerance + lift, located, loaded, corners, k)
-                if approach > 0.0:
-                    if record:
-                        record_event(events, i, n_impacts, t + elapsed, approach, touching)
-                    n_impacts += 1
-                vx, vy, spin, piece, located, located_impacts, n_corners, kinetic_before = solve_piece(
-                    y, cos_a, sin_a, vx, vy, spin, left, hx, hy, gravity, tolerance, radius, threshold,
-                    friction, inv_mass, inv_inertia, located_impacts, corners, k, ids)
-                loaded = 0
-                for c in range(n_corners):
-                    if corners[IMPULSE, c] > 0.0:
-                        loaded |= 1 << ids[c]
-                held = held or loaded != 0
-                # 4. no energy gained: the velocities scaled where the step would gain (energy_limit_scale)
-                scale = energy_limit_scale(kinetic_before, kinetic_energy(vx, vy, spin, inv_mass,
-                                                                          inv_inertia),
-                                           -gravity * piece * vy / inv_mass)
-                vx, vy, spin = scale * vx, scale * vy, scale * spin
-                # 5. integrate positions
-                x = x + piece * vx
-                y = y + piece * vy
-                angle = angle + piece * spin
-                cos_a = math.cos(angle)
-                sin_a = math.sin(angle)
-                first, second = lowest_face(cos_a, sin_a, hx, hy)
-                rx1, ry1 = vertex_offset(first, cos_a, sin_a, hx, hy)
-                penetration = -(y + ry1)
-                max_penetration = max(max_penetration, penetration)
-                # 6. penalty: implicit correction of what penetrates beyond the slop, at the lowest corner
-                # and its neighbours; the potential energy it returns is taken from the kinetic energy
-                if use_penalty and penetration > PENALTY_TRIGGER * slop + tolerance:
-                    y, angle, vx, vy, spin = penalty_step(y, angle, vx, vy, spin, first, cos_a, sin_a, hx, hy, slop,
-                                                          stiffness, piece, gravity, inv_mass, inv_inertia, corners, k)
-                    cos_a = math.cos(angle)
-                    sin_a = math.sin(angle)
-                held = held or penetration > 0.0
-                lift = h_sub * h_sub * spin * spin * radius  # how far a rotating substep lifts a held corner
-                elapsed += piece
-                left = left - piece if piece < left else 0.0
-        first, second = lowest_face(cos_a, sin_a, hx, hy)
-        rx1, ry1 = vertex_offset(first, cos_a, sin_a, hx, hy)
-        rx2, ry2 = vertex_offset(second, cos_a, sin_a, hx, hy)
+        (x, y, angle, vx, vy, spin, cos_a, sin_a, located, loaded, lift, held, n_impacts,
+         max_penetration) = contact_step(i, x, y, angle, vx, vy, spin, cos_a, sin_a, h, box, gravity, tolerance,
+                                         threshold, slop, lift, located, loaded, use_penalty, t, n_impacts,
+                                         max_penetration, record, events, corners, k, ids)
         n_steps += 1
         n += 1
         t = n * dt
@@ -533,7 +562,7 @@ def advance_box(i, state, params, memory, n, n_end, dt, gravity, until_rest, thr
             fail_step = n
             break
         if until_rest:
-            if lies_still(y, ry1, ry2, rx1, rx2, vx, vy, spin, hx, hy, sleep_speed):
+            if lies_still_at(y, cos_a, sin_a, vx, vy, spin, hx, hy, sleep_speed):
                 still_for += h
                 if still_for >= sleep_time:
                     vx, vy, spin = 0.0, 0.0, 0.0

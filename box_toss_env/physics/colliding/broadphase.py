@@ -21,8 +21,8 @@ so that what follows (contact points, their warm-start keys, the solver's sweep 
 
 import math
 
-from .compilation import jit_stage
-from .flight import flight_state
+from ..compile.compilation import jit_stage
+from ..robust.flight import flight_state
 
 ROUNDING = 1e-9  # [m per m of coordinate + 1 m] intervals are padded by this, then pairs tested exactly
 

@@ -27,9 +27,9 @@ import math
 
 import numpy as np
 
-from . import layout
-from .compilation import jit_kernel, jit_stage
-from .kernel_support import is_lying_still, read_settings, record_event, store_state, write_stats
+from .. import layout
+from ..compile.compilation import jit_kernel, jit_stage
+from ..kernel_support import is_lying_still, read_settings, record_event, store_state, write_stats
 from .reference_solver import TANGENT_NORMALISE_MIN
 
 
@@ -135,6 +135,149 @@ def corners_inside(b1, b2, vel, force, params, restitution, friction, stiffness,
     return inside
 
 
+@jit_stage(inline="always")
+def floor_contacts(body, force, params, below_before, first_contact, n_impacts, max_penetration, n, dt,
+                   use_impulses, use_penalty, use_friction, record, events):
+    """1. Every box against the floor, corner after corner, as ``reference_solver.reference_step``; a corner newly
+    below the floor is an impact."""
+    for b in range(body.shape[0]):
+        cos_a, sin_a = math.cos(body[b, 5]), math.sin(body[b, 5])
+        below = 0
+        lowest = math.inf
+        for k in range(4):
+            bx = layout.SEED_SIGN_X[k] * params[b, layout.HALF_LENGTH]
+            by = layout.SEED_SIGN_Y[k] * params[b, layout.HALF_WIDTH]
+            cx = body[b, 3] + cos_a * bx - sin_a * by
+            cy = body[b, 4] + sin_a * bx + cos_a * by
+            lowest = min(lowest, cy)
+            if cy >= 0.0:
+                continue
+            below |= 1 << k
+            seed_contact(b, -1, cx, cy, 0.0, 1.0, -cy, body, force, params, params[b, layout.RESTITUTION],
+                         params[b, layout.FRICTION], params[b, layout.STIFFNESS], use_impulses, use_penalty,
+                         use_friction)
+        if below != 0:
+            if math.isnan(first_contact[b]):
+                first_contact[b] = n * dt
+            max_penetration[b] = max(max_penetration[b], -lowest)
+            if below & ~below_before[b]:
+                if record:
+                    record_event(events, b, n_impacts[b], n * dt, math.nan, 1)
+                n_impacts[b] += 1
+        below_before[b] = below
+
+
+@jit_stage(inline="always")
+def pair_contacts(body, force, params, inside_now, use_impulses, use_penalty, use_friction):
+    """2. Every pair i < j whose boxes can overlap: the corners of i inside j, then those of j inside i
+    (``corners_inside``), the pair's material mixed (e = max, mu = sqrt(mu_i mu_j), k = min); ``inside_now``
+    marks the boxes each box touches."""
+    nb = body.shape[0]
+    for i in range(nb):
+        xi, yi, ri = body[i, 3], body[i, 4], params[i, 0] + params[i, 1]  # the contacts change no position
+        for j in range(i + 1, nb):
+            reach = ri + params[j, 0] + params[j, 1]
+            if abs(xi - body[j, 3]) > reach or abs(yi - body[j, 4]) > reach:
+                continue
+            e = max(params[i, layout.RESTITUTION], params[j, layout.RESTITUTION])
+            mu = math.sqrt(params[i, layout.FRICTION] * params[j, layout.FRICTION])
+            k = min(params[i, layout.STIFFNESS], params[j, layout.STIFFNESS])
+            if corners_inside(i, j, body, force, params, e, mu, k, use_impulses, use_penalty, use_friction) != 0:
+                inside_now[i] |= 1 << (j % 62)
+                inside_now[j] |= 1 << (i % 62)
+            if corners_inside(j, i, body, force, params, e, mu, k, use_impulses, use_penalty, use_friction) != 0:
+                inside_now[i] |= 1 << (j % 62)
+                inside_now[j] |= 1 << (i % 62)
+
+
+@jit_stage(inline="always")
+def count_box_impacts(inside_now, inside_before, first_contact, n_impacts, n, dt, record, events):
+    """A box newly touching another is an impact."""
+    for b in range(inside_now.shape[0]):
+        if inside_now[b] & ~inside_before[b]:
+            if math.isnan(first_contact[b]):
+                first_contact[b] = n * dt
+            if record:
+                record_event(events, b, n_impacts[b], n * dt, math.nan, 1)
+            n_impacts[b] += 1
+        inside_before[b] = inside_now[b]
+
+
+@jit_stage(inline="always")
+def symplectic_euler(body, force, params, dt, gravity):
+    """3. v += dt (f / m + g), omega += dt tau / I, then x += dt v, angle += dt omega, as the demo."""
+    for b in range(body.shape[0]):
+        body[b, 0] += dt * force[b, 0] / params[b, layout.MASS]
+        body[b, 1] += dt * (force[b, 1] / params[b, layout.MASS] + gravity)
+        body[b, 2] += dt * force[b, 2] / params[b, layout.INERTIA]
+        body[b, 3] += dt * body[b, 0]
+        body[b, 4] += dt * body[b, 1]
+        body[b, 5] += dt * body[b, 2]
+
+
+@jit_stage
+def record_step(trajectory, row, body):
+    """Every body's state into row ``row`` of ``trajectory``."""
+    for b in range(body.shape[0]):
+        store_state(trajectory, row, b, body[b, 3], body[b, 4], body[b, 5], body[b, 0], body[b, 1], body[b, 2])
+
+
+@jit_stage(inline="always")
+def finite_and_still(body, params, inside_now, n, until_rest, sleep_speed, record, trajectory):
+    """After step n: record it, and say (whether every body is finite, whether every body is still: slower than
+    ``sleep_speed`` at every point and lying on a face or touching another box)."""
+    if record:
+        record_step(trajectory, n, body)
+    finite = True
+    still = True
+    for b in range(body.shape[0]):
+        for c in range(6):
+            finite = finite and math.isfinite(body[b, c])
+        if until_rest:
+            speed = (math.sqrt(body[b, 0] ** 2 + body[b, 1] ** 2)
+                     + abs(body[b, 2]) * math.sqrt(params[b, 0] ** 2 + params[b, 1] ** 2))
+            resting = is_lying_still(body[b, 4], body[b, 5], body[b, 0], body[b, 1], body[b, 2],
+                                     params[b, 0], params[b, 1], sleep_speed)
+            still = still and speed <= sleep_speed and (resting or inside_now[b] != 0)
+    return finite, still
+
+
+@jit_stage
+def advance_seed(body, force, params, settings, below_before, inside_before, inside_now, first_contact, n_impacts,
+                 max_penetration, use_impulses, use_penalty, use_friction, record, trajectory, events):
+    """The seed scheme's steps (this module's docstring, 1.-3.) until ``max_steps`` or, with ``until_rest``,
+    until every box has been still for ``sleep_time``; ``body``: (vx, vy, omega, x, y, angle) a row. Returns
+    (steps taken, status, failed step, rest time)."""
+    dt, gravity, max_steps, until_rest, _, sleep_speed, sleep_time, _ = read_settings(settings)
+    status, fail_step, rest_time, still_for, n = layout.STATUS_OK, -1, math.nan, 0.0, 0
+    while n < max_steps:
+        for b in range(body.shape[0]):
+            force[b, 0] = 0.0
+            force[b, 1] = 0.0
+            force[b, 2] = 0.0
+            inside_now[b] = 0
+        floor_contacts(body, force, params, below_before, first_contact, n_impacts, max_penetration, n, dt,
+                       use_impulses, use_penalty, use_friction, record, events)
+        pair_contacts(body, force, params, inside_now, use_impulses, use_penalty, use_friction)
+        count_box_impacts(inside_now, inside_before, first_contact, n_impacts, n, dt, record, events)
+        symplectic_euler(body, force, params, dt, gravity)
+        n += 1
+        finite, still = finite_and_still(body, params, inside_now, n, until_rest, sleep_speed, record, trajectory)
+        if not finite:
+            status = layout.STATUS_NONFINITE
+            fail_step = n
+            break
+        if until_rest:
+            if still:
+                still_for += dt
+                if still_for >= sleep_time:
+                    rest_time = n * dt
+                    break
+            else:
+                still_for = 0.0
+    return n, status, fail_step, rest_time
+
+
 def make_colliding_reference_kernel(use_impulses: bool, use_penalty: bool, use_friction: bool, record: bool,
                                source_digest: int):
     """Build the seed kernel for scenes whose boxes collide (flags compile-time, as ``reference_solver``'s; it
@@ -144,117 +287,22 @@ def make_colliding_reference_kernel(use_impulses: bool, use_penalty: bool, use_f
     @jit_kernel
     def run(state, params, settings, stats, trajectory, events, warm):
         _ = DIGEST  # the on-disk cache key includes every engine source (see reference_solver)
-        dt, gravity, max_steps, until_rest, _, sleep_speed, sleep_time, _ = read_settings(settings)
         nb = state.shape[0]
         # body work array: vx, vy, omega, x, y, angle (velocities first, as the contact code indexes them)
         body = np.empty((nb, 6))
         for b in range(nb):
             body[b, 0], body[b, 1], body[b, 2] = state[b, 3], state[b, 4], state[b, 5]
             body[b, 3], body[b, 4], body[b, 5] = state[b, 0], state[b, 1], state[b, 2]
-        force = np.zeros((nb, 3))
-        below_before = np.zeros(nb, np.int64)
-        inside_before = np.zeros(nb, np.int64)
-        inside_now = np.zeros(nb, np.int64)
         first_contact = np.full(nb, math.nan)
         n_impacts = np.zeros(nb, np.int64)
         max_penetration = np.zeros(nb)
-        status = layout.STATUS_OK
-        fail_step = -1
-        rest_time = math.nan
-        still_for = 0.0
         if RECORD:
-            for b in range(nb):
-                store_state(trajectory, 0, b, body[b, 3], body[b, 4], body[b, 5], body[b, 0], body[b, 1], body[b, 2])
-        n = 0
-        while n < max_steps:
-            for b in range(nb):
-                force[b, 0] = 0.0
-                force[b, 1] = 0.0
-                force[b, 2] = 0.0
-                inside_now[b] = 0
-            # 1. every box against the floor, corner after corner
-            for b in range(nb):
-                cos_a, sin_a = math.cos(body[b, 5]), math.sin(body[b, 5])
-                below = 0
-                lowest = math.inf
-                for k in range(4):
-                    bx = layout.SEED_SIGN_X[k] * params[b, layout.HALF_LENGTH]
-                    by = layout.SEED_SIGN_Y[k] * params[b, layout.HALF_WIDTH]
-                    cx = body[b, 3] + cos_a * bx - sin_a * by
-                    cy = body[b, 4] + sin_a * bx + cos_a * by
-                    lowest = min(lowest, cy)
-                    if cy >= 0.0:
-                        continue
-                    below |= 1 << k
-                    seed_contact(b, -1, cx, cy, 0.0, 1.0, -cy, body, force, params, params[b, layout.RESTITUTION],
-                                 params[b, layout.FRICTION], params[b, layout.STIFFNESS], IMPULSES, PENALTY, FRICTION)
-                if below != 0:
-                    if math.isnan(first_contact[b]):
-                        first_contact[b] = n * dt
-                    max_penetration[b] = max(max_penetration[b], -lowest)
-                    if below & ~below_before[b]:
-                        if RECORD:
-                            record_event(events, b, n_impacts[b], n * dt, math.nan, 1)
-                        n_impacts[b] += 1
-                below_before[b] = below
-            # 2. every pair: corners of i inside j, then corners of j inside i
-            for i in range(nb):
-                for j in range(i + 1, nb):
-                    reach = (params[i, 0] + params[i, 1] + params[j, 0] + params[j, 1])
-                    if abs(body[i, 3] - body[j, 3]) > reach or abs(body[i, 4] - body[j, 4]) > reach:
-                        continue
-                    e = max(params[i, layout.RESTITUTION], params[j, layout.RESTITUTION])
-                    mu = math.sqrt(params[i, layout.FRICTION] * params[j, layout.FRICTION])
-                    k = min(params[i, layout.STIFFNESS], params[j, layout.STIFFNESS])
-                    if corners_inside(i, j, body, force, params, e, mu, k, IMPULSES, PENALTY, FRICTION) != 0:
-                        inside_now[i] |= 1 << (j % 62)
-                        inside_now[j] |= 1 << (i % 62)
-                    if corners_inside(j, i, body, force, params, e, mu, k, IMPULSES, PENALTY, FRICTION) != 0:
-                        inside_now[i] |= 1 << (j % 62)
-                        inside_now[j] |= 1 << (i % 62)
-            for b in range(nb):
-                if inside_now[b] & ~inside_before[b]:  # a box newly touching another: an impact
-                    if math.isnan(first_contact[b]):
-                        first_contact[b] = n * dt
-                    if RECORD:
-                        record_event(events, b, n_impacts[b], n * dt, math.nan, 1)
-                    n_impacts[b] += 1
-                inside_before[b] = inside_now[b]
-            # 3. symplectic Euler, gravity in the velocity update
-            for b in range(nb):
-                body[b, 0] += dt * force[b, 0] / params[b, layout.MASS]
-                body[b, 1] += dt * (force[b, 1] / params[b, layout.MASS] + gravity)
-                body[b, 2] += dt * force[b, 2] / params[b, layout.INERTIA]
-                body[b, 3] += dt * body[b, 0]
-                body[b, 4] += dt * body[b, 1]
-                body[b, 5] += dt * body[b, 2]
-            n += 1
-            finite = True
-            still = True
-            for b in range(nb):
-                if RECORD:
-                    store_state(trajectory, n, b, body[b, 3], body[b, 4], body[b, 5], body[b, 0], body[b, 1],
-                                body[b, 2])
-                for c in range(6):
-                    finite = finite and math.isfinite(body[b, c])
-                if until_rest:
-                    speed = (math.sqrt(body[b, 0] ** 2 + body[b, 1] ** 2)
-                             + abs(body[b, 2]) * math.sqrt(params[b, 0] ** 2 + params[b, 1] ** 2))
-                    resting = is_lying_still(body[b, 4], body[b, 5], body[b, 0], body[b, 1], body[b, 2],
-                                             params[b, 0], params[b, 1], sleep_speed)
-                    still = still and speed <= sleep_speed and (resting or inside_now[b] != 0)
-            if not finite:
-                status = layout.STATUS_NONFINITE
-                fail_step = n
-                break
-            if until_rest:
-                if still:
-                    still_for += dt
-                    if still_for >= sleep_time:
-                        rest_time = n * dt
-                        break
-                else:
-                    still_for = 0.0
+            record_step(trajectory, 0, body)
+        n, status, fail_step, rest_time = advance_seed(
+            body, np.zeros((nb, 3)), params, settings, np.zeros(nb, np.int64), np.zeros(nb, np.int64),
+            np.zeros(nb, np.int64), first_contact, n_impacts, max_penetration, IMPULSES, PENALTY, FRICTION, RECORD,
+            trajectory, events)
+        dt = settings[layout.DT]
         for b in range(nb):
             state[b, 0], state[b, 1], state[b, 2] = body[b, 3], body[b, 4], body[b, 5]
             state[b, 3], state[b, 4], state[b, 5] = body[b, 0], body[b, 1], body[b, 2]

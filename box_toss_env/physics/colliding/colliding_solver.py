@@ -2,7 +2,7 @@
 scene is stepped together, since a contact between two boxes couples them. A scene whose boxes cannot
 meet runs ``robust_solver``'s kernel instead, which compiles none of this.
 
-Contacts (``box_collision``) push body 1 out of body 2 along n at a point with lever arms r1, r2. The
+Contacts (``narrowphase``) push body 1 out of body 2 along n at a point with lever arms r1, r2. The
 two-body formulas of the reference text: with u_rel = u1 - u2, u = v + omega x r, a normal impulse
 p n applied +p n to body 1 and -p n to body 2 changes u_rel . n by K_n p with the effective mass
 
@@ -12,7 +12,7 @@ and a tangential impulse q t changes u_rel . t by K_t q, K_t the same with t for
 that stops the approach is p = -u_rel . n / K_n, and an impact with restitution e gets
 p = -(1 + e) u_rel . n / K_n in total (the text's p = (1 + e) p' for two bodies).
 
-The stages below are called, in the order of the method, by the step script in ``colliding_step``
+The stages below are called, in the order of the method, by the step script in ``step``
 (whose docstring gives the script); this module holds the contact impulses, the penalty and the stages
 that advance bodies alone.
 
@@ -24,8 +24,29 @@ import math
 
 import numpy as np
 
-from . import layout
-from .box_collision import (
+from .. import layout
+from ..compile.compilation import jit_stage
+from ..kernel_support import store_state
+from ..robust.contact_solver import penalty_correction_share
+from ..robust.flight import time_to_contact
+from ..robust.robust_solver import (
+    FIRST_CONTACT,
+    IN_FLIGHT,
+    MAX_PENETRATION,
+    MAX_ROTATION_PER_STEP,
+    N_IMPACTS,
+    N_STEPS,
+    PENALTY_TRIGGER,
+    REST_TIME,
+    STATUS,
+    STILL_FOR,
+    advance_box,
+    start_memory,
+)
+from .broadphase import box_bound, time_apart
+from .islands import islands_deeper_than
+from .joint_contact_solve import JOINT_LIMIT, delassus_entry, full_delassus, joint_impulses
+from .narrowphase import (
     APPROACH,
     BODY1,
     BODY2,
@@ -46,27 +67,6 @@ from .box_collision import (
     STIFFNESS,
     TANGENT_MASS,
     TARGET,
-)
-from .broadphase import box_bound, time_apart
-from .compilation import jit_stage
-from .contact_solver import penalty_correction_share
-from .flight import time_to_contact
-from .islands import islands_deeper_than
-from .joint_contact_solve import JOINT_LIMIT, delassus_entry, full_delassus, joint_impulses
-from .kernel_support import store_state
-from .robust_solver import (
-    FIRST_CONTACT,
-    IN_FLIGHT,
-    MAX_PENETRATION,
-    MAX_ROTATION_PER_STEP,
-    N_IMPACTS,
-    N_STEPS,
-    PENALTY_TRIGGER,
-    REST_TIME,
-    STATUS,
-    STILL_FOR,
-    advance_box,
-    start_memory,
 )
 
 TUNNEL_FRACTION = 0.5  # [-] of the smallest half extent: the most any point moves in one substep
