@@ -110,8 +110,8 @@ LEAD_IN = {"awake": 0.5, "settled": 0.0, "asleep": 2.0}
 contacts' impulses and its sleep into the timed one): awake, so that every engine is timed with its contacts warm,
 as a scene that goes on is (ours pays its cold start once: from ``resting_loads``' guess the wide pile of 1,000's first
 15 steps cost about 3 times a warm step, thread CPU time; from the guess before it, which split each body's load
-equally among its supports, they cost 10 times, the sweeps at their cap); asleep, so that Box2D's islands (0.5 s still) and
-ours have fallen asleep; settled from a fresh start: what falling asleep costs."""
+equally among its supports, they cost 10 times, the sweeps at their cap); asleep, so that Box2D's islands (0.5 s
+still) and ours have fallen asleep; settled from a fresh start: what falling asleep costs."""
 ONBOX_THROWS, QUICK_ONBOX_THROWS = 400, 100
 BATCH, BATCHES, QUICK_BATCHES = 256, 3, 1  # make_vec(BATCH, threads=1), batch steps timed
 
