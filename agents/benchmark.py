@@ -661,17 +661,20 @@ def ratios(
                 best = max(rows, key=lambda row: np.mean([r["success_rate"] for r in row["results"]]))
                 share = np.mean([r["success_rate"] for r in best["results"]]) / top
                 parts.append(f"{label} {share:.0%} ({best['agent']})")
-            elif tier == "commands" and (old := previous_share(readme, env_id)):
+            elif old := previous_share(readme, label):
                 parts.append(old)
     return "Best learned agent's success as a share of the ceiling's: " + ", ".join(parts) + "."
 
 
-def previous_share(readme: Path, env_id: str) -> str | None:
-    """The README's share for ``env_id`` as it is (kept for a variant with no data here)."""
+def previous_share(readme: Path, label: str) -> str | None:
+    """The README's share for ``label`` (a variant, ``BoxToss-v0``, or a variant's tier, ``BoxToss-v0 (raw)``) as
+    it is (kept for one with no data here)."""
     if not readme.exists() or "share of the ceiling's: " not in readme.read_text():
         return None
     line = readme.read_text().split("share of the ceiling's: ", 1)[1].split("\n", 1)[0].rstrip(".")
-    return next((part for part in line.split(", ") if part.startswith(env_id + " ")), None)
+    return next(
+        (part for part in line.split(", ") if part.startswith(label + " ") and part[len(label) + 1].isdigit()), None
+    )
 
 
 def shown_variants(trained: list[str]) -> list[str]:

@@ -65,3 +65,18 @@ def test_the_raw_tier_trains_the_raw_recipe_where_there_is_one():
     assert benchmark.tier_hyperparams("ppo", "BoxToss-ThisSideUp-v0", "commands") == main
     assert benchmark.tier_hyperparams("ppo", "BoxToss-v0", "raw") == main  # no entry: ppo.yml's, unwrapped
     assert benchmark.tier_hyperparams("sac", "BoxToss-ThisSideUp-v0", "raw") == main
+
+
+def test_the_share_of_the_ceiling_keeps_every_tier_without_data_here(tmp_path):
+    """A variant or tier with no runs here keeps its share as the README has it: the raw tier's too, not only the
+    commands' (regenerating one variant's rows had dropped every raw share)."""
+    readme = tmp_path / "README.md"
+    readme.write_text(
+        "Best learned agent's success as a share of the ceiling's: BoxToss-v0 100% (PPO (3 seeds)), "
+        "BoxToss-v0 (raw) 97% (PPO (3 seeds)), BoxToss-LongSide-v0 99% (SAC (3 seeds)).\n"
+    )
+    line = benchmark.ratios(tmp_path / "runs", ["BoxToss-v0", "BoxToss-LongSide-v0"], ["ppo"], [0], {}, readme)
+    assert line == (
+        "Best learned agent's success as a share of the ceiling's: BoxToss-v0 100% (PPO (3 seeds)), "
+        "BoxToss-v0 (raw) 97% (PPO (3 seeds)), BoxToss-LongSide-v0 99% (SAC (3 seeds))."
+    )
