@@ -419,10 +419,11 @@ def solve_substep(contacts, ids, count, pose, vel, pseudo, params, settings, inv
                   touched, impacted, supported, first_contact, n_impacts, use_penalty, use_friction, record, events,
                   exact):
     """Stages 2.-7. of a substep of length h starting at time t, over the ``count`` contacts found (stage 1);
-    returns how many impulses it keeps for the next substep's warm start. ``exact``: the exact solves' work
-    arrays (``normal_lcp``, ``joint_contact_solve``). (At most 30 arguments: numba inlines no call of more.)"""
+    returns how many impulses it keeps for the next substep's warm start. ``exact``: the solves' work arrays
+    (``normal_lcp``, ``joint_contact_solve``, ``gauss_seidel``). (At most 30 arguments: numba inlines no call of
+    more.)"""
     gravity, threshold = settings[layout.GRAVITY], settings[layout.RESTITUTION_THRESHOLD]
-    w, factor, free, x, active, index, lcp_y, contact_state = exact
+    w, factor, free, x, active, index, lcp_y, contact_state, moved = exact
     prepare_contacts(contacts, ids, count, params, inv_mass, inv_inertia)
     note_penetration(contacts, ids, count, max_penetration)
     # 2. relax: split-impulse correction of penetrations deeper than the slop
@@ -437,13 +438,13 @@ def solve_substep(contacts, ids, count, pose, vel, pseudo, params, settings, inv
     warm_start(contacts, ids, count, previous_keys, previous_impulses, n_previous, h / h_previous, vel, inv_mass,
                inv_inertia, pose, h, gravity)
     solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, w, factor, free, x, active,
-                     index, lcp_y, contact_state, settings)
+                     index, lcp_y, contact_state, moved, settings)
     n_stored = store_impulses(contacts, ids, count, previous_keys, previous_impulses)
     # 5. restitution for impacts only: solved with every contact and friction, then polished
     impacts = restitution_targets(contacts, count, threshold)
     if impacts > 0:
         solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, w, factor, free, x, active,
-                         index, lcp_y, contact_state, settings)
+                         index, lcp_y, contact_state, moved, settings)
         apply_restitution(contacts, ids, count, vel, inv_mass, inv_inertia, threshold)
     # 6. no energy gained by the bodies that took an impulse
     mark_touched(contacts, ids, count, impacts, threshold, touched, impacted)
@@ -549,7 +550,8 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
         previous_keys, previous_impulses = np.empty(capacity, np.int64), np.empty((capacity, 2))
         exact = (np.zeros((DIRECT_LIMIT, DIRECT_LIMIT)), np.zeros((DIRECT_LIMIT, DIRECT_LIMIT)), np.zeros(DIRECT_LIMIT),
                  np.zeros(DIRECT_LIMIT), np.zeros(DIRECT_LIMIT, np.bool_), np.zeros(DIRECT_LIMIT, np.int64),
-                 np.zeros(DIRECT_LIMIT), np.zeros(DIRECT_LIMIT, np.int64))  # the exact solves' (solve_substep)
+                 np.zeros(DIRECT_LIMIT), np.zeros(DIRECT_LIMIT, np.int64),  # the exact solves' (solve_substep)
+                 np.zeros((2, nb), np.bool_))  # and the sweeps' (gauss_seidel's moved)
         # broadphase (sort and sweep) and islands (sleeping; island: a sleeping body's root body, -1 while awake)
         everyone, awake, island = np.ones(nb, np.bool_), np.ones(nb, np.bool_), np.full(nb, -1, np.int64)
         still_for = np.zeros(nb)  # [s] how long each awake body has been supported and still
