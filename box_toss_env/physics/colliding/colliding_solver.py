@@ -472,7 +472,7 @@ def gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction,
     for c in range(count):
         total += contacts[c, IMPULSE]
     for sweep in range(iterations):
-        quiet = tolerance * total / count  # [N s] of the last sweep's mean impulse (the warm start's, first)
+        quiet = tolerance * total / count  # [N s] tolerance x the last sweep's mean impulse (first the warm start's)
         before_sweep, this_sweep = moved[sweep % 2], moved[(sweep + 1) % 2]
         this_sweep[:] = False
         change = 0.0
