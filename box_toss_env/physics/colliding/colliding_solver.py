@@ -440,18 +440,40 @@ def friction_sweep(contacts, ids, count, vel, inv_mass, inv_inertia):
     for c in range(count):
         if contacts[c, FRICTION] <= 0.0:
             continue
-        nx, ny = contacts[c, NX], contacts[c, NY]
-        ux, uy = relative_velocity(c, contacts, ids, vel)
-        slip = -ux * ny + uy * nx  # u_rel . t, t = (-ny, nx)
-        before = contacts[c, FRICTION_IMPULSE]
-        limit = contacts[c, FRICTION] * contacts[c, IMPULSE]
-        after = min(max(before - slip * contacts[c, TANGENT_MASS], -limit), limit)
-        contacts[c, FRICTION_IMPULSE] = after
-        dq = after - before
-        if dq != 0.0:
-            apply_impulse(c, -dq * ny, dq * nx, contacts, ids, vel, inv_mass, inv_inertia)
-        change += abs(dq)
+        change += abs(friction_step(c, contacts, ids, vel, inv_mass, inv_inertia))
     return change
+
+
+@jit_stage(inline="always")
+def friction_step(c, contacts, ids, vel, inv_mass, inv_inertia):
+    """Contact c's friction: the tangential impulse that stops the slip, added to the accumulated one and clamped
+    to mu times the normal impulse, applied to ``vel``; returns the change dq."""
+    nx, ny = contacts[c, NX], contacts[c, NY]
+    ux, uy = relative_velocity(c, contacts, ids, vel)
+    slip = -ux * ny + uy * nx  # u_rel . t, t = (-ny, nx)
+    before = contacts[c, FRICTION_IMPULSE]
+    limit = contacts[c, FRICTION] * contacts[c, IMPULSE]
+    after = min(max(before - slip * contacts[c, TANGENT_MASS], -limit), limit)
+    contacts[c, FRICTION_IMPULSE] = after
+    dq = after - before
+    if dq != 0.0:
+        apply_impulse(c, -dq * ny, dq * nx, contacts, ids, vel, inv_mass, inv_inertia)
+    return dq
+
+
+@jit_stage(inline="always")
+def normal_step(c, column, contacts, ids, vel, inv_mass, inv_inertia):
+    """Contact c's normal impulse (accumulated in ``contacts[c, column]``): >= 0 with u_rel . n >= target, applied to
+    ``vel``; returns the change dp."""
+    nx, ny = contacts[c, NX], contacts[c, NY]
+    ux, uy = relative_velocity(c, contacts, ids, vel)
+    before = contacts[c, column]
+    after = max(before - (ux * nx + uy * ny - contacts[c, TARGET]) * contacts[c, NORMAL_MASS], 0.0)
+    contacts[c, column] = after
+    dp = after - before
+    if dp != 0.0:
+        apply_impulse(c, dp * nx, dp * ny, contacts, ids, vel, inv_mass, inv_inertia)
+    return dp
 
 
 @jit_stage
@@ -485,33 +507,18 @@ def gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction,
                                   or (b2 >= 0 and (before_sweep[b2] or this_sweep[b2]))):
                 total += contacts[c, IMPULSE]
                 continue
-            nx, ny = contacts[c, NX], contacts[c, NY]
             if use_friction and contacts[c, FRICTION] > 0.0:
-                ux, uy = relative_velocity(c, contacts, ids, vel)
-                slip = -ux * ny + uy * nx  # u_rel . t, t = (-ny, nx)
-                before = contacts[c, FRICTION_IMPULSE]
-                limit = contacts[c, FRICTION] * contacts[c, IMPULSE]
-                after = min(max(before - slip * contacts[c, TANGENT_MASS], -limit), limit)
-                contacts[c, FRICTION_IMPULSE] = after
-                dq = after - before
-                if dq != 0.0:
-                    apply_impulse(c, -dq * ny, dq * nx, contacts, ids, vel, inv_mass, inv_inertia)
+                dq = friction_step(c, contacts, ids, vel, inv_mass, inv_inertia)
                 change += abs(dq)
                 largest = max(largest, abs(dq))
                 if abs(dq) > quiet:
                     mark_moved(this_sweep, b1, b2)
-            ux, uy = relative_velocity(c, contacts, ids, vel)
-            before = contacts[c, IMPULSE]
-            after = max(before - (ux * nx + uy * ny - contacts[c, TARGET]) * contacts[c, NORMAL_MASS], 0.0)
-            contacts[c, IMPULSE] = after
-            dp = after - before
-            if dp != 0.0:
-                apply_impulse(c, dp * nx, dp * ny, contacts, ids, vel, inv_mass, inv_inertia)
+            dp = normal_step(c, IMPULSE, contacts, ids, vel, inv_mass, inv_inertia)
             change += abs(dp)
             largest = max(largest, abs(dp))
             if abs(dp) > quiet:
                 mark_moved(this_sweep, b1, b2)
-            total += after
+            total += contacts[c, IMPULSE]
         if change <= tolerance * total and largest * count <= SINGLE_CHANGE * tolerance * total:
             break
 
@@ -534,16 +541,8 @@ def penalty_sweeps(contacts, ids, listed, n_listed, pseudo, inv_mass, inv_inerti
         total = 0.0
         for i in range(n_listed):
             c = listed[i]
-            nx, ny = contacts[c, NX], contacts[c, NY]
-            ux, uy = relative_velocity(c, contacts, ids, pseudo)
-            before = contacts[c, PSEUDO_IMPULSE]
-            after = max(before - (ux * nx + uy * ny - contacts[c, TARGET]) * contacts[c, NORMAL_MASS], 0.0)
-            contacts[c, PSEUDO_IMPULSE] = after
-            dp = after - before
-            if dp != 0.0:
-                apply_impulse(c, dp * nx, dp * ny, contacts, ids, pseudo, inv_mass, inv_inertia)
-            change += abs(dp)
-            total += after
+            change += abs(normal_step(c, PSEUDO_IMPULSE, contacts, ids, pseudo, inv_mass, inv_inertia))
+            total += contacts[c, PSEUDO_IMPULSE]
         if change <= tolerance * total:
             break
 
