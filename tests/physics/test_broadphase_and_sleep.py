@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from box_toss_env.physics import Box, Scene, Simulator, layout, make_settings, scenes, simulate, warm_start_memory
-from box_toss_env.physics.colliding.broadphase import candidate_pairs, sweep_axis
+from box_toss_env.physics.colliding.broadphase import SMALL_SORT, candidate_pairs, sort_keys, sweep_axis
 from box_toss_env.physics.robust.flight import time_to_contact
 
 
@@ -18,6 +18,11 @@ from box_toss_env.physics.robust.flight import time_to_contact
 def compiled_pairs(pose, bound, reach, include, moving, axis, order, low, keys):
     """``candidate_pairs`` as the kernels call it (a stage has no Python wrapper of its own)."""
     return candidate_pairs(pose, bound, reach, include, moving, axis, order, low, keys)
+
+
+@numba.njit
+def compiled_sort(keys, count):
+    sort_keys(keys, count)
 
 
 @numba.njit
@@ -65,6 +70,15 @@ def test_sort_and_sweep_finds_the_pairs_of_the_all_pairs_test(seed):
         count = compiled_pairs(pose, bound, reach, include, moving, axis, order, np.zeros(n), keys)
         assert keys[:count].tolist() == all_pairs(pose, bound, reach, include, moving)
     assert compiled_pairs(pose, bound, reach, include, moving, 0, order, np.zeros(n), keys[:0]) in (-1, 0)
+
+
+@pytest.mark.parametrize("count", [0, 1, 2, SMALL_SORT, SMALL_SORT + 1, 1_000])
+def test_the_pair_keys_are_sorted_in_place_by_insertion_or_heapsort(count):
+    rng = np.random.default_rng(count)
+    keys = rng.permutation(10 * count + 5)[: count + 3].astype(np.int64)  # distinct, as pair keys are
+    expected = np.concatenate([np.sort(keys[:count]), keys[count:]])
+    compiled_sort(keys, count)
+    assert keys.tolist() == expected.tolist()  # the first count sorted, the rest untouched
 
 
 def test_a_pile_gives_the_same_states_whichever_order_the_sweep_starts_from():

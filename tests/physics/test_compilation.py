@@ -109,7 +109,7 @@ def test_every_stage_is_compiled_once_for_plain_argument_types(tmp_path):
 def test_stages_have_no_python_wrapper_and_kernels_release_the_gil():
     assert robust_solver.resolve_impact.targetoptions["no_cpython_wrapper"]
     # and no reference counting: a stage allocates nothing, so the counts of its caller's arrays need no upkeep
-    # (only the stages that sort, once a run or in the broadphase's pair search, and those that allocate their work
+    # (only the stage that sorts with numba's sort, once a run, and those that allocate their work
     # arrays once a run, when the penalty runs or when the contacts outgrow theirs, keep it)
     from box_toss_env.physics.colliding import broadphase, colliding_solver, step
 
@@ -123,7 +123,6 @@ def test_stages_have_no_python_wrapper_and_kernels_release_the_gil():
     ]
     counted = sorted(stage.py_func.__name__ for stage in stages if stage.targetoptions["_nrt"])
     assert len(stages) > 40 and counted == [
-        "candidate_pairs",
         "correct_penetrations",
         "grown_contacts",
         "resting_loads",

@@ -24,6 +24,7 @@ import math
 from ..compile.compilation import jit_stage
 from ..robust.flight import flight_state
 
+SMALL_SORT = 16  # keys: up to this many, ``sort_keys`` sorts by insertion
 ROUNDING = 1e-9  # [m per m of coordinate + 1 m] intervals are padded by this, then pairs tested exactly
 
 
@@ -55,6 +56,42 @@ def insertion_sort(order, keys):
         order[q + 1] = item
 
 
+@jit_stage
+def sort_keys(keys, count):
+    """Sort ``keys[:count]`` in place without allocating (numba's ``sort`` keeps a stack array, which needs
+    reference counting in every stage that calls it): insertion sort up to SMALL_SORT keys, heapsort beyond
+    (O(count log count), in place). The keys are distinct, so every sort gives the same order."""
+    if count <= SMALL_SORT:
+        for p in range(1, count):
+            item = keys[p]
+            q = p - 1
+            while q >= 0 and keys[q] > item:
+                keys[q + 1] = keys[q]
+                q -= 1
+            keys[q + 1] = item
+        return
+    for start in range(count // 2 - 1, -1, -1):
+        sift_down(keys, start, count)
+    for end in range(count - 1, 0, -1):
+        keys[0], keys[end] = keys[end], keys[0]
+        sift_down(keys, 0, end)
+
+
+@jit_stage(inline="always")
+def sift_down(keys, root, end):
+    """Heapsort's step: move ``keys[root]`` down the max-heap ``keys[:end]`` to its place."""
+    while True:
+        child = 2 * root + 1
+        if child >= end:
+            return
+        if child + 1 < end and keys[child + 1] > keys[child]:
+            child += 1
+        if keys[root] >= keys[child]:
+            return
+        keys[root], keys[child] = keys[child], keys[root]
+        root = child
+
+
 @jit_stage(inline="always")
 def overlaps(dx, dy, bound_x, bound_y, margin):
     """The exact test of the module docstring for two boxes whose centres are (dx, dy) apart, with summed
@@ -63,7 +100,7 @@ def overlaps(dx, dy, bound_x, bound_y, margin):
     return abs(dx) <= bound_x + margin and abs(dy) <= bound_y + margin
 
 
-@jit_stage(nrt=True)  # the sort of the keys allocates its stack
+@jit_stage
 def candidate_pairs(pose, bound, reach, include, moving, axis, order, low, keys):
     """The candidate pairs (module docstring) among the boxes with ``include`` set, of which at least one
     has ``moving`` set, as keys i n + j (i < j) in increasing order in ``keys``. ``order`` is the sweep order
@@ -93,7 +130,7 @@ def candidate_pairs(pose, bound, reach, include, moving, axis, order, low, keys)
                     return -1
                 keys[count] = a * n + b
                 count += 1
-    keys[:count].sort()
+    sort_keys(keys, count)
     return count
 
 
