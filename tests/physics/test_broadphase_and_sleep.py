@@ -11,6 +11,7 @@ import pytest
 
 from box_toss_env.physics import Box, Scene, Simulator, layout, make_settings, scenes, simulate, warm_start_memory
 from box_toss_env.physics.colliding.broadphase import SMALL_SORT, candidate_pairs, sort_keys, sweep_axis
+from box_toss_env.physics.colliding.colliding_solver import bounds_touch, steps_alone
 from box_toss_env.physics.robust.flight import time_to_contact
 
 
@@ -23,6 +24,11 @@ def compiled_pairs(pose, bound, reach, include, moving, axis, order, low, keys):
 @numba.njit
 def compiled_sort(keys, count):
     sort_keys(keys, count)
+
+
+@numba.njit
+def compiled_bounds_touch(pose, half, radius, awake):
+    return bounds_touch(pose, half, radius, awake)
 
 
 @numba.njit
@@ -217,6 +223,31 @@ def test_the_search_for_whole_steps_alone_stops_at_its_resolution():
     assert not touched and tau < 0.25 / 128
     tau, touched = floor_contact_time(0.7, 0.0, 0.25 / 128)  # half a metre up: the fall takes sqrt(2 h / g)
     assert touched and tau == pytest.approx(math.sqrt(2 * 0.5 / 9.81), abs=1e-9)
+
+
+@numba.njit
+def compiled_steps_alone(pose, vel, half, awake, params):
+    radius = np.sqrt(half[:, 0] ** 2 + half[:, 1] ** 2)
+    return steps_alone(pose, vel, half, radius, awake, params, -9.81, 1e-12, 1.0 / 128, 1_000)
+
+
+@pytest.mark.parametrize("gap", [-1e-9, 0.0, 1e-6, 0.3])
+def test_a_box_resting_on_another_gets_no_whole_steps_alone_and_one_clear_of_it_does(gap):
+    """Box 1 at rest (asleep) on the floor, box 0 above it, its bottom ``gap`` above box 1's top, falling at 1 m/s:
+    while their bounding boxes touch the search answers at once (``bounds_touch``), as the flight and energy
+    bounds would; with 30 cm between them the box flies whole steps alone."""
+    half = np.array([[0.2, 0.1], [0.3, 0.1]])
+    pose = np.array([[0.05, 0.3 + gap, 0.0], [0.0, 0.1, 0.0]])
+    vel = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, 0.0]])
+    params = np.zeros((2, layout.PARAM_SIZE))
+    params[:, layout.HALF_LENGTH], params[:, layout.HALF_WIDTH] = half[:, 0], half[:, 1]
+    params[:, layout.MASS], params[:, layout.INERTIA] = 1.0, (0.4 ** 2 + 0.2 ** 2) / 12
+    awake = np.array([True, False])
+    radius = np.hypot(half[:, 0], half[:, 1])
+    assert compiled_bounds_touch(pose, half, radius, awake) == (gap <= 0.0)
+    steps = compiled_steps_alone(pose, vel, half, awake, params)
+    assert steps == 0 if gap < 0.3 else steps > 10  # 1e-6 m apart: a step of 1 m/s closes it
+    assert not compiled_bounds_touch(pose, half, radius, np.array([False, False]))  # only an awake box asks
 
 
 def advance_in_runs(scene, runs: int, steps: int, warm_start: bool) -> np.ndarray:

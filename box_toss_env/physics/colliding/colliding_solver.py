@@ -45,7 +45,7 @@ from ..robust.robust_solver import (
 )
 from .broadphase import box_bound, time_apart
 from .islands import islands_deeper_than
-from .joint_contact_solve import JOINT_LIMIT, delassus_entry, full_delassus, joint_impulses
+from .joint_contact_solve import HISTORY, JOINT_LIMIT, JOINT_ROUNDS, delassus_entry, full_delassus, joint_impulses
 from .narrowphase import (
     APPROACH,
     BODY1,
@@ -79,6 +79,7 @@ SINGLE_CHANGE = 100.0  # [-] and none by more than this many times that share of
 CONTACT_TOLERANCE = 1e-12  # [m per m of size + 1 m] penetration below this is not corrected
 MIN_CAPACITY = 16
 DIRECT_LIMIT = 64  # contacts: up to this many, the normal impulses are solved exactly (``normal_lcp``)
+assert DIRECT_LIMIT >= HISTORY + JOINT_ROUNDS  # the solves' ``index`` also holds ``joint_impulses``'s rounds
 REGULARISATION = 1e-12  # share of W_cc added to the diagonal of the exact solve (redundant contacts)
 LCP_TOLERANCE = 1e-12  # share of the largest |free velocity|: a contact left free may approach by this much
 SUPPORT_SLOPE = 0.5  # [-] |n_y| above which a contact carries weight in a cold start's guess (``resting_loads``)
@@ -722,6 +723,27 @@ def energy_speed(vel, b, params, y, gravity):
 
 
 @jit_stage
+def bounds_touch(pose, half, radius, awake):
+    """Whether the bounding box of an awake box touches or overlaps another box's (``broadphase.time_apart``'s gap
+    max(|dx| - b_x - b'_x, |dy| - b_y - b'_y) <= 0 now; the boxes' circles first, which hold their bounds)."""
+    n = pose.shape[0]
+    for b in range(n):
+        if not awake[b]:
+            continue
+        bx, by = box_bound(math.cos(pose[b, 2]), math.sin(pose[b, 2]), half[b, 0], half[b, 1])
+        for o in range(n):
+            if o == b:
+                continue
+            dx, dy = abs(pose[o, 0] - pose[b, 0]), abs(pose[o, 1] - pose[b, 1])
+            if max(dx, dy) > radius[b] + radius[o]:
+                continue
+            ox, oy = box_bound(math.cos(pose[o, 2]), math.sin(pose[o, 2]), half[o, 0], half[o, 1])
+            if max(dx - bx - ox, dy - by - oy) <= 0.0:
+                return True
+    return False
+
+
+@jit_stage
 def steps_alone(pose, vel, half, radius, awake, params, gravity, tolerance, dt, steps_left):
     """How many whole time steps every awake body can be advanced alone against the floor
     (``robust_solver.advance_box``: flight in closed form, impacts located in time) before any two boxes could
@@ -731,7 +753,11 @@ def steps_alone(pose, vel, half, radius, awake, params, gravity, tolerance, dt, 
       - energy: every body stays within its circumscribed circle (radius R) of its centre, and no point moves
         faster than ``energy_speed``, so the gap max(|dx| - R - b'_x, |dy| - R - b'_y) between an awake box's
         circle and another box's bounds (its circle if awake, its box if asleep) closes no faster than the
-        sum of their speed bounds: a box bouncing or sliding on the floor far from the others."""
+        sum of their speed bounds: a box bouncing or sliding on the floor far from the others.
+    Both give none while an awake box's bounding box touches another's (``bounds_touch``), which is asked first:
+    a box resting on another costs no search."""
+    if bounds_touch(pose, half, radius, awake):
+        return 0
     horizon = steps_left * dt
     flight = horizon
     for b in range(pose.shape[0]):

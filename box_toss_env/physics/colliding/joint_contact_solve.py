@@ -30,6 +30,7 @@ from .narrowphase import BODY1, FRICTION, FRICTION_IMPULSE, IMPULSE, NX, NY, R1X
 
 JOINT_LIMIT = 8  # contacts at most solved jointly (16 unknowns); more go to the alternation
 JOINT_ROUNDS = 24  # state changes at most before giving up
+HISTORY = 2 * JOINT_LIMIT  # where ``joint_impulses`` keeps each round's states in ``index`` (after the unknowns')
 REGULARISATION = 1e-12  # share of W_ii added to the diagonal (redundant contacts)
 LCP_TOLERANCE = 1e-12  # share of the largest |u_0|: the speed by which a condition may be violated
 
@@ -194,7 +195,11 @@ def joint_impulses(contacts, count, w, u, state, a, index, x, impulse):
     the conditions of the module's docstring, from W (``full_delassus``, in w) and the contacts' speeds u
     (u_n less its target and u_t, rows as W's) with the impulses they hold (IMPULSE, FRICTION_IMPULSE; u is
     made the speeds without them), the first states guessed from those impulses. Returns False if the
-    states do not settle within JOINT_ROUNDS solves or a system is singular."""
+    states do not settle within JOINT_ROUNDS solves or a system is singular. A round's states are a function
+    of the states before it (W and u stay), so states that come round again cycle for good: the solve gives
+    up at once (a box rocking on another, whose two contacts' frictions are nearly redundant, cycled through
+    six states to the last round). ``index`` holds the unknowns' rows, then from HISTORY on each round's
+    states (``states_code``)."""
     scale = 0.0
     for i in range(2 * count):
         for c in range(count):
@@ -211,9 +216,23 @@ def joint_impulses(contacts, count, w, u, state, a, index, x, impulse):
             state[c] = SLIDE_PLUS if q > 0.0 else SLIDE_MINUS
         else:
             state[c] = STICK
-    for _ in range(JOINT_ROUNDS):
+    for r in range(JOINT_ROUNDS):
+        code = states_code(state, count)
+        for earlier in range(r):  # the states came round again: they cycle, and would to the last round
+            if index[HISTORY + earlier] == code:
+                return False
+        index[HISTORY + r] = code
         if not solve_states(contacts, count, w, u, state, a, index, x, impulse):
             return False
         if not change_state(contacts, count, w, u, state, impulse, tolerance):
             return True
     return False
+
+
+@jit_stage(inline="always")
+def states_code(state, count):
+    """The contacts' states as one number (digits in base 5, one a contact)."""
+    code = 0
+    for c in range(count):
+        code = 5 * code + state[c]
+    return code
