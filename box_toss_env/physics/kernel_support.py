@@ -52,8 +52,9 @@ def rest_timer(still, still_for, h, sleep_time):
     return still_for, still_for >= sleep_time
 
 
-@jit_stage
+@jit_stage(inline="always")
 def is_finite_state(x, y, angle, vx, vy, spin):
+    """Whether every coordinate of the state is finite."""
     return (math.isfinite(x) and math.isfinite(y) and math.isfinite(angle) and math.isfinite(vx)
             and math.isfinite(vy) and math.isfinite(spin))
 
