@@ -91,6 +91,17 @@ CONTACT_TOLERANCE = 1e-12  # [m per m of corner radius + 1 m] a corner this clos
 SIMULTANEOUS_TOLERANCE = 1e-9  # [same units] corners this close hit at the same instant
 
 
+@jit_stage(inline="always")
+def box_constants(params, i, use_friction):
+    """Box i's constants as the stages take them: (hx, hy, 1/m, 1/I, e, mu (0 without friction), k, the corner
+    radius R = sqrt(hx^2 + hy^2))."""
+    hx = params[i, layout.HALF_LENGTH]
+    hy = params[i, layout.HALF_WIDTH]
+    return (hx, hy, 1.0 / params[i, layout.MASS], 1.0 / params[i, layout.INERTIA], params[i, layout.RESTITUTION],
+            params[i, layout.FRICTION] if use_friction else 0.0, params[i, layout.STIFFNESS],
+            math.sqrt(hx * hx + hy * hy))
+
+
 @jit_stage
 def advance_box(i, state, params, memory, n, n_end, dt, gravity, until_rest, threshold, sleep_speed, sleep_time,
                 slop, use_penalty, use_friction, record, corners, k, ids, trajectory, events):
@@ -102,11 +113,8 @@ def advance_box(i, state, params, memory, n, n_end, dt, gravity, until_rest, thr
     ``corners``, ``k``, ``ids``: work arrays (``contact_solver``). Returns the grid step reached."""
     x, y, angle, vx, vy, spin = (state[i, 0], state[i, 1], state[i, 2],
                                  state[i, 3], state[i, 4], state[i, 5])
-    hx = params[i, layout.HALF_LENGTH]
-    hy = params[i, layout.HALF_WIDTH]
-    radius = math.sqrt(hx * hx + hy * hy)
-    box = (hx, hy, 1.0 / params[i, layout.MASS], 1.0 / params[i, layout.INERTIA], params[i, layout.RESTITUTION],
-           params[i, layout.FRICTION] if use_friction else 0.0, params[i, layout.STIFFNESS], radius)
+    box = box_constants(params, i, use_friction)
+    hx, hy, radius = box[0], box[1], box[7]
     tolerance = CONTACT_TOLERANCE * (1.0 + radius)
     (in_flight, located, loaded, lift, still_for, first_contact, rest_time, max_penetration, n_impacts, n_steps,
      t) = read_memory(memory, i)
