@@ -1,6 +1,7 @@
-"""Contact stages of the robust solver: impulses on the corners that can touch the floor (at most three:
-the lowest corner and its two neighbours), solved together, with clamped Coulomb friction and implicit
-penalty correction.
+"""Stage 2 of the robust solver's contact step, solve contacts (and the solves stages 0 and 6 reuse): impulses
+on the corners that can touch the floor (at most three: the lowest corner and its two neighbours), solved
+together, with clamped Coulomb friction (``solve_contact_velocities``), and the implicit penalty correction
+of stage 6 (``correct_penetration``).
 
 Notation for one box with inverse mass 1/m, inverse inertia 1/I, and a corner at lever arm
 r = (rx, ry) from the centre of mass; the floor normal is n = (0, 1), the tangent (1, 0):
