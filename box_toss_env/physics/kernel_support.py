@@ -1,4 +1,5 @@
-"""Small pieces every kernel shares: the rest test, and writing results into the output arrays."""
+"""Small pieces every kernel shares: the rest test and the sleep timer, the finite test, and writing results into
+the output arrays."""
 
 import math
 
@@ -26,15 +27,36 @@ def lies_still(y, ry1, ry2, rx1, rx2, vx, vy, spin, half_length, half_width, sle
     return abs(ry2 - ry1) <= FLAT_TOLERANCE * math.sqrt((rx2 - rx1) ** 2 + (ry2 - ry1) ** 2)
 
 
-@jit_stage
-def is_lying_still(y, angle, vx, vy, spin, half_length, half_width, sleep_speed):
-    """``lies_still`` for a box at ``angle``."""
-    cos_a = math.cos(angle)
-    sin_a = math.sin(angle)
+@jit_stage(inline="always")
+def lies_still_at(y, cos_a, sin_a, vx, vy, spin, half_length, half_width, sleep_speed):
+    """``lies_still`` for a box whose angle has cosine ``cos_a`` and sine ``sin_a``."""
     first, second = lowest_face(cos_a, sin_a, half_length, half_width)
     rx1, ry1 = vertex_offset(first, cos_a, sin_a, half_length, half_width)
     rx2, ry2 = vertex_offset(second, cos_a, sin_a, half_length, half_width)
     return lies_still(y, ry1, ry2, rx1, rx2, vx, vy, spin, half_length, half_width, sleep_speed)
+
+
+@jit_stage
+def is_lying_still(y, angle, vx, vy, spin, half_length, half_width, sleep_speed):
+    """``lies_still`` for a box at ``angle``."""
+    return lies_still_at(y, math.cos(angle), math.sin(angle), vx, vy, spin, half_length, half_width, sleep_speed)
+
+
+@jit_stage(inline="always")
+def rest_timer(still, still_for, h, sleep_time):
+    """The sleep timer of a step of length h: how long the body (or the scene) has been still, ``still_for`` + h
+    if ``still`` else 0, and whether that reaches ``sleep_time`` (it rests). Returns (still for, rests)."""
+    if not still:
+        return 0.0, False
+    still_for += h
+    return still_for, still_for >= sleep_time
+
+
+@jit_stage(inline="always")
+def is_finite_state(x, y, angle, vx, vy, spin):
+    """Whether every coordinate of the state is finite."""
+    return (math.isfinite(x) and math.isfinite(y) and math.isfinite(angle) and math.isfinite(vx)
+            and math.isfinite(vy) and math.isfinite(spin))
 
 
 @jit_stage

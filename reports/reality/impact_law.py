@@ -8,7 +8,7 @@ One contact point with lever arm (rx, ry) from the centre of mass, floor normal 
 
 - ``ours``: compression stops the approach (sticking, or sliding with the impulse on the friction cone), then
   restitution adds e times the compression impulse with friction clamped to mu times it (it can stop the slip,
-  never reverse it): ``robust_solver.impact_impulses`` with one corner, unchanged.
+  never reverse it): ``restitution.impact_impulses`` with one corner, unchanged.
 - ``newton``: u_n+ = -e u_n- and Coulomb friction on the whole impulse (sticking u_t+ = 0 if inside the cone,
   else sliding with |q| = mu lam): ``contact_solver.solve_one_corner`` with the target -e u_n-.
 
@@ -22,7 +22,7 @@ import numpy as np
 
 from box_toss_env.physics.compile.compilation import jit_kernel
 from box_toss_env.physics.robust.contact_solver import CORNER_ROWS, MAX_CORNERS, RX, RY, TARGET, solve_one_corner
-from box_toss_env.physics.robust.robust_solver import impact_impulses
+from box_toss_env.physics.robust.restitution import impact_impulses
 from box_toss_env.physics.scene import Scene
 
 LAWS = ("ours", "newton")

@@ -23,10 +23,31 @@ import box_toss_env
 from box_toss_env.physics import KernelFlags, geometry, kernel_support, make_kernel
 from box_toss_env.physics.compile.compilation import EngineDispatcher
 from box_toss_env.physics.reference import reference_solver
-from box_toss_env.physics.robust import contact_solver, flight, robust_solver
+from box_toss_env.physics.robust import (
+    contact_solver,
+    contact_step,
+    energy_limit,
+    flight,
+    memory,
+    penalty,
+    restitution,
+    robust_solver,
+)
 
 PACKAGE = Path(box_toss_env.__file__).parent
-STAGE_MODULES = (contact_solver, flight, geometry, kernel_support, robust_solver, reference_solver)
+STAGE_MODULES = (
+    contact_solver,
+    contact_step,
+    energy_limit,
+    flight,
+    geometry,
+    kernel_support,
+    memory,
+    penalty,
+    restitution,
+    robust_solver,
+    reference_solver,
+)
 
 
 def compile_events(function) -> list[str]:
@@ -107,7 +128,7 @@ def test_every_stage_is_compiled_once_for_plain_argument_types(tmp_path):
 
 
 def test_stages_have_no_python_wrapper_and_kernels_release_the_gil():
-    assert robust_solver.resolve_impact.targetoptions["no_cpython_wrapper"]
+    assert restitution.resolve_impact.targetoptions["no_cpython_wrapper"]
     # and no reference counting: a stage allocates nothing, so the counts of its caller's arrays need no upkeep
     # (only the stage that sorts with numba's sort, once a run, and those that allocate their work
     # arrays once a run, when the penalty runs or when the contacts outgrow theirs, keep it)

@@ -29,7 +29,7 @@ import numpy as np
 
 from .. import layout
 from ..compile.compilation import jit_kernel, jit_stage
-from ..kernel_support import is_lying_still, read_settings, record_event, store_state, write_stats
+from ..kernel_support import is_lying_still, read_settings, record_event, rest_timer, store_state, write_stats
 from .reference_solver import TANGENT_NORMALISE_MIN
 
 
@@ -268,13 +268,10 @@ def advance_seed(body, force, params, settings, below_before, inside_before, ins
             fail_step = n
             break
         if until_rest:
-            if still:
-                still_for += dt
-                if still_for >= sleep_time:
-                    rest_time = n * dt
-                    break
-            else:
-                still_for = 0.0
+            still_for, rests = rest_timer(still, still_for, dt, sleep_time)
+            if rests:
+                rest_time = n * dt
+                break
     return n, status, fail_step, rest_time
 
 

@@ -22,16 +22,63 @@ import math
 
 from .. import layout
 from ..compile.compilation import jit_kernel, jit_stage
-from ..kernel_support import is_lying_still, read_settings, record_event, store_state, write_stats
+from ..kernel_support import (
+    is_finite_state,
+    is_lying_still,
+    read_settings,
+    record_event,
+    rest_timer,
+    store_state,
+    write_stats,
+)
 
 TANGENT_NORMALISE_MIN = 1e-4  # the demo normalises u_t only above this length
 
 
 @jit_stage(inline="always")
+def corner_impulse(vx, vy, spin, rx, ry, nx, ny, un_x, un_y, tx, ty, mass, inertia, restitution, friction,
+                   use_friction):
+    """2.3-2.5 for a corner at lever arm r with normal velocity u_n and tangent t: the impulse
+    p = (1 + e) p', p' = -u_n / (1/m + (r x n)^2 / I), with the friction impulse -mu |p| t added, applied
+    at once (v += p/m, omega += (r x p)/I) if it pushes out of the floor (p . n > 0). Returns (vx, vy, spin)."""
+    # 2.3 p' = -u_n / (1/m + (r x n)^2 / I), p = (1 + e) p'
+    r_cross_n = rx * ny - ry * nx
+    inv_mass_eff = 1.0 / mass + r_cross_n * r_cross_n / inertia
+    px = (1.0 + restitution) * (-un_x / inv_mass_eff)
+    py = (1.0 + restitution) * (-un_y / inv_mass_eff)
+    if use_friction:
+        # 2.5 p_friction = -mu |p| t, added before the test of 2.4
+        p_len = math.sqrt(px * px + py * py)
+        px = px - friction * p_len * tx
+        py = py - friction * p_len * ty
+    # 2.4 apply only if the impulse pushes out of the floor
+    if px * nx + py * ny > 0.0:
+        vx = vx + px / mass
+        vy = vy + py / mass
+        spin = spin + (rx * py - ry * px) / inertia
+    return vx, vy, spin
+
+
+@jit_stage(inline="always")
+def penalty_force(depth, rx, ry, nx, ny, tx, ty, stiffness, friction, use_friction):
+    """3. The penalty force of a corner ``depth`` below the floor, f_n = k d n, with its friction
+    f_friction = -mu |f_n| t. Returns (f_x, f_y, its torque r x f)."""
+    fn_x = stiffness * depth * nx
+    fn_y = stiffness * depth * ny
+    f_x = fn_x
+    f_y = fn_y
+    if use_friction:
+        fn_len = math.sqrt(fn_x * fn_x + fn_y * fn_y)
+        f_x = fn_x - friction * fn_len * tx
+        f_y = fn_y - friction * fn_len * ty
+    return f_x, f_y, rx * f_y - ry * f_x
+
+
+@jit_stage(inline="always")
 def reference_step(x, y, angle, vx, vy, spin, half_length, half_width, mass, inertia, restitution,
               friction, stiffness, dt, gravity, use_impulses, use_penalty, use_friction):
-    """One step of the seed scheme for one box. Returns the new state, the lowest corner height
-    before the step and a bit mask of the corners that were below the floor."""
+    """One step of the seed scheme for one box (this module's docstring, 1.-4.). Returns the new state,
+    the lowest corner height before the step and a bit mask of the corners that were below the floor."""
     nx, ny = 0.0, 1.0  # floor normal
     cos_a = math.cos(angle)
     sin_a = math.sin(angle)
@@ -41,6 +88,7 @@ def reference_step(x, y, angle, vx, vy, spin, half_length, half_width, mass, ine
     lowest_y = math.inf
     below = 0
     for k in range(4):
+        # 1. detect contacts: the corner b_global = R b_local + x below the floor
         bx = layout.SEED_SIGN_X[k] * half_length
         by = layout.SEED_SIGN_Y[k] * half_width
         rx = cos_a * bx - sin_a * by  # r_k = R(alpha) b_k
@@ -67,35 +115,16 @@ def reference_step(x, y, angle, vx, vy, spin, half_length, half_width, mass, ine
                 tx = ut_x / ut_len
                 ty = ut_y / ut_len
         if use_impulses:
-            # 2.3 p' = -u_n / (1/m + (r x n)^2 / I), p = (1 + e) p'
-            r_cross_n = rx * ny - ry * nx
-            inv_mass_eff = 1.0 / mass + r_cross_n * r_cross_n / inertia
-            px = (1.0 + restitution) * (-un_x / inv_mass_eff)
-            py = (1.0 + restitution) * (-un_y / inv_mass_eff)
-            if use_friction:
-                # 2.5 p_friction = -mu |p| t, added before the test of 2.4
-                p_len = math.sqrt(px * px + py * py)
-                px = px - friction * p_len * tx
-                py = py - friction * p_len * ty
-            # 2.4 apply only if the impulse pushes out of the floor
-            if px * nx + py * ny > 0.0:
-                vx = vx + px / mass
-                vy = vy + py / mass
-                spin = spin + (rx * py - ry * px) / inertia
+            # 2.3-2.5 the corner's impulse, applied at once
+            vx, vy, spin = corner_impulse(vx, vy, spin, rx, ry, nx, ny, un_x, un_y, tx, ty, mass, inertia,
+                                          restitution, friction, use_friction)
         if use_penalty:
             # 3. f_n = k d n, f_friction = -mu |f_n| t, tau += r x (f_n + f_friction)
-            depth = -corner_y
-            fn_x = stiffness * depth * nx
-            fn_y = stiffness * depth * ny
-            f_x = fn_x
-            f_y = fn_y
-            if use_friction:
-                fn_len = math.sqrt(fn_x * fn_x + fn_y * fn_y)
-                f_x = fn_x - friction * fn_len * tx
-                f_y = fn_y - friction * fn_len * ty
+            f_x, f_y, corner_torque = penalty_force(-corner_y, rx, ry, nx, ny, tx, ty, stiffness, friction,
+                                                    use_friction)
             force_x = force_x + f_x
             force_y = force_y + f_y
-            torque = torque + (rx * f_y - ry * f_x)
+            torque = torque + corner_torque
     # 4. symplectic Euler, gravity in the velocity update
     vx = vx + dt * (force_x / mass)
     vy = vy + dt * (force_y / mass + gravity)
@@ -104,6 +133,62 @@ def reference_step(x, y, angle, vx, vy, spin, half_length, half_width, mass, ine
     y = y + dt * vy
     angle = angle + dt * spin
     return x, y, angle, vx, vy, spin, lowest_y, below
+
+
+@jit_stage(inline="always")
+def advance_seed_box(i, state, params, stats, dt, gravity, max_steps, until_rest, sleep_speed, sleep_time,
+                     use_impulses, use_penalty, use_friction, record, trajectory, events):
+    """Box i by the seed scheme (``reference_step``) for ``max_steps`` steps, or until it has lain still on a face
+    for ``sleep_time`` when ``until_rest``, or until its state stops being finite; its state and stats written
+    back. A corner newly below the floor is an impact."""
+    x, y, angle, vx, vy, spin = (state[i, 0], state[i, 1], state[i, 2],
+                                 state[i, 3], state[i, 4], state[i, 5])
+    hx = params[i, layout.HALF_LENGTH]
+    hy = params[i, layout.HALF_WIDTH]
+    mass = params[i, layout.MASS]
+    inertia = params[i, layout.INERTIA]
+    first_contact = math.nan
+    rest_time = math.nan
+    max_penetration = 0.0
+    n_impacts = 0
+    status = layout.STATUS_OK
+    fail_step = -1
+    still_for = 0.0
+    below_before = 0
+    if record:
+        store_state(trajectory, 0, i, x, y, angle, vx, vy, spin)
+    n = 0
+    while n < max_steps:
+        x, y, angle, vx, vy, spin, lowest_y, below = reference_step(
+            x, y, angle, vx, vy, spin, hx, hy, mass, inertia,
+            params[i, layout.RESTITUTION], params[i, layout.FRICTION], params[i, layout.STIFFNESS],
+            dt, gravity, use_impulses, use_penalty, use_friction)
+        if below != 0:
+            if math.isnan(first_contact):
+                first_contact = n * dt
+            max_penetration = max(max_penetration, -lowest_y)
+            if below & ~below_before:  # a corner newly below the floor: an impact
+                if record:
+                    record_event(events, i, n_impacts, n * dt, math.nan, 1)
+                n_impacts += 1
+        below_before = below
+        n += 1
+        if record:
+            store_state(trajectory, n, i, x, y, angle, vx, vy, spin)
+        if not is_finite_state(x, y, angle, vx, vy, spin):
+            status = layout.STATUS_NONFINITE
+            fail_step = n
+            break
+        if until_rest:
+            still_for, rests = rest_timer(is_lying_still(y, angle, vx, vy, spin, hx, hy, sleep_speed), still_for,
+                                          dt, sleep_time)
+            if rests:
+                rest_time = n * dt
+                break
+    state[i, 0], state[i, 1], state[i, 2] = x, y, angle
+    state[i, 3], state[i, 4], state[i, 5] = vx, vy, spin
+    write_stats(stats, i, first_contact, n_impacts, n, max_penetration, rest_time, n * dt,
+                status, fail_step, n + 1)
 
 
 def make_reference_kernel(use_impulses: bool, use_penalty: bool, use_friction: bool, record: bool,
@@ -122,56 +207,7 @@ def make_reference_kernel(use_impulses: bool, use_penalty: bool, use_friction: b
         _ = DIGEST
         dt, gravity, max_steps, until_rest, _, sleep_speed, sleep_time, _ = read_settings(settings)
         for i in range(state.shape[0]):
-            x, y, angle, vx, vy, spin = (state[i, 0], state[i, 1], state[i, 2],
-                                         state[i, 3], state[i, 4], state[i, 5])
-            hx = params[i, layout.HALF_LENGTH]
-            hy = params[i, layout.HALF_WIDTH]
-            mass = params[i, layout.MASS]
-            inertia = params[i, layout.INERTIA]
-            first_contact = math.nan
-            rest_time = math.nan
-            max_penetration = 0.0
-            n_impacts = 0
-            status = layout.STATUS_OK
-            fail_step = -1
-            still_for = 0.0
-            below_before = 0
-            if RECORD:
-                store_state(trajectory, 0, i, x, y, angle, vx, vy, spin)
-            n = 0
-            while n < max_steps:
-                x, y, angle, vx, vy, spin, lowest_y, below = reference_step(
-                    x, y, angle, vx, vy, spin, hx, hy, mass, inertia,
-                    params[i, layout.RESTITUTION], params[i, layout.FRICTION], params[i, layout.STIFFNESS],
-                    dt, gravity, IMPULSES, PENALTY, FRICTION)
-                if below != 0:
-                    if math.isnan(first_contact):
-                        first_contact = n * dt
-                    max_penetration = max(max_penetration, -lowest_y)
-                    if below & ~below_before:  # a corner newly below the floor: an impact
-                        if RECORD:
-                            record_event(events, i, n_impacts, n * dt, math.nan, 1)
-                        n_impacts += 1
-                below_before = below
-                n += 1
-                if RECORD:
-                    store_state(trajectory, n, i, x, y, angle, vx, vy, spin)
-                if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(angle)
-                        and math.isfinite(vx) and math.isfinite(vy) and math.isfinite(spin)):
-                    status = layout.STATUS_NONFINITE
-                    fail_step = n
-                    break
-                if until_rest:
-                    if is_lying_still(y, angle, vx, vy, spin, hx, hy, sleep_speed):
-                        still_for += dt
-                        if still_for >= sleep_time:
-                            rest_time = n * dt
-                            break
-                    else:
-                        still_for = 0.0
-            state[i, 0], state[i, 1], state[i, 2] = x, y, angle
-            state[i, 3], state[i, 4], state[i, 5] = vx, vy, spin
-            write_stats(stats, i, first_contact, n_impacts, n, max_penetration, rest_time, n * dt,
-                        status, fail_step, n + 1)
+            advance_seed_box(i, state, params, stats, dt, gravity, max_steps, until_rest, sleep_speed, sleep_time,
+                             IMPULSES, PENALTY, FRICTION, RECORD, trajectory, events)
 
     return run

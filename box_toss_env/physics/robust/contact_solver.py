@@ -1,6 +1,7 @@
-"""Contact stages of the robust solver: impulses on the corners that can touch the floor (at most three:
-the lowest corner and its two neighbours), solved together, with clamped Coulomb friction and implicit
-penalty correction.
+"""Stage 2 of the robust solver's contact step, solve contacts (and the solves stages 0 and 6 reuse): impulses
+on the corners that can touch the floor (at most three: the lowest corner and its two neighbours), solved
+together, with clamped Coulomb friction (``solve_contact_velocities``), and the implicit penalty correction
+of stage 6 (``correct_penetration``).
 
 Notation for one box with inverse mass 1/m, inverse inertia 1/I, and a corner at lever arm
 r = (rx, ry) from the centre of mass; the floor normal is n = (0, 1), the tangent (1, 0):
@@ -21,6 +22,7 @@ Corners travel in a small work array ``corners[row, i]`` (rows below), the first
 import math
 
 from ..compile.compilation import jit_stage
+from ..geometry import vertex_offset
 
 # rows of the corner work array: lever arm, target normal velocity b_i, accumulated normal and friction
 # impulses, normal velocity before the step, depth below the floor, compression impulse (Poisson), and
@@ -35,6 +37,13 @@ LCP_TOLERANCE = 1e-12  # a corner left free may approach its target by this shar
 LCP_SWEEPS = 64  # Gauss-Seidel sweeps of the fallback, for rows parallel to rounding
 CONVERGED = 1e-12  # Gauss-Seidel stops when the impulses change by less than this share
 PENALTY_DAMPING_RATIO = 1.0  # zeta of the penalty spring: critically damped
+FRICTION_ITERATIONS = 8  # at most this many Gauss-Seidel sweeps over friction and the normal block
+
+
+@jit_stage
+def place_corner(corners, i, k, cos_a, sin_a, half_length, half_width):
+    """Corner k of the box as column i of the corner work array (its lever arm)."""
+    corners[RX, i], corners[RY, i] = vertex_offset(k, cos_a, sin_a, half_length, half_width)
 
 
 @jit_stage
