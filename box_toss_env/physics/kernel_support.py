@@ -63,7 +63,7 @@ def is_finite_state(x, y, angle, vx, vy, spin):
 def read_settings(settings):
     """The scene-wide settings array as (dt, gravity, max_steps, until_rest, restitution_threshold,
     sleep_speed, sleep_time, penetration_slop); the colliding solver reads its two more itself
-    (``colliding_solver.solver_settings``)."""
+    (``colliding.solve.solver_settings``)."""
     return (settings[layout.DT], settings[layout.GRAVITY], np.int64(settings[layout.MAX_STEPS]),
             settings[layout.UNTIL_REST] != 0.0, settings[layout.RESTITUTION_THRESHOLD], settings[layout.SLEEP_SPEED],
             settings[layout.SLEEP_TIME], settings[layout.PENETRATION_SLOP])

@@ -372,12 +372,14 @@ NOT_COMPILED_PROBE = textwrap.dedent("""
     import json
     from numba.core.registry import CPUDispatcher
     from box_toss_env.physics import scenes, simulate
-    from box_toss_env.physics.colliding import (narrowphase, broadphase, colliding_solver, step,
-                                                islands)
+    import importlib, pkgutil
+    from box_toss_env.physics import colliding
+    from box_toss_env.physics.colliding import narrowphase
     from box_toss_env.physics.reference import colliding_reference
     for solver in ("robust", "seed"):
         simulate(scenes.toss(solver=solver), duration=2.0, until_rest=True)
-    colliding_only = (narrowphase, broadphase, colliding_reference, colliding_solver, step, islands)
+    colliding_only = [colliding_reference] + [importlib.import_module(f"{colliding.__name__}.{info.name}")
+                                              for info in pkgutil.iter_modules(colliding.__path__)]
     compiled = [f"{module.__name__}.{name}" for module in colliding_only
                 for name, function in vars(module).items()
                 if isinstance(function, CPUDispatcher) and function.py_func.__module__ == module.__name__

@@ -241,7 +241,7 @@ def test_a_box_resting_on_another_gets_no_whole_steps_alone_and_one_clear_of_it_
     vel = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, 0.0]])
     params = np.zeros((2, layout.PARAM_SIZE))
     params[:, layout.HALF_LENGTH], params[:, layout.HALF_WIDTH] = half[:, 0], half[:, 1]
-    params[:, layout.MASS], params[:, layout.INERTIA] = 1.0, (0.4 ** 2 + 0.2 ** 2) / 12
+    params[:, layout.MASS], params[:, layout.INERTIA] = 1.0, (0.4**2 + 0.2**2) / 12
     awake = np.array([True, False])
     radius = np.hypot(half[:, 0], half[:, 1])
     assert compiled_bounds_touch(pose, half, radius, awake) == (gap <= 0.0)

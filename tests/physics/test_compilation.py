@@ -4,8 +4,10 @@ one compilation for processes that need the same kernel at once. Structure, not 
 numba's dispatchers, compile events and cache statistics."""
 
 import collections
+import importlib
 import json
 import os
+import pkgutil
 import shutil
 import stat
 import subprocess
@@ -132,11 +134,15 @@ def test_stages_have_no_python_wrapper_and_kernels_release_the_gil():
     # and no reference counting: a stage allocates nothing, so the counts of its caller's arrays need no upkeep
     # (only the stage that sorts with numba's sort, once a run, and those that allocate their work
     # arrays once a run, when the penalty runs or when the contacts outgrow theirs, keep it)
-    from box_toss_env.physics.colliding import broadphase, colliding_solver, step
+    from box_toss_env.physics import colliding
 
+    colliding_modules = [
+        importlib.import_module(f"{colliding.__name__}.{info.name}")
+        for info in pkgutil.iter_modules(colliding.__path__)
+    ]
     stages = [
         value
-        for module in (*STAGE_MODULES, broadphase, colliding_solver, step)
+        for module in (*STAGE_MODULES, *colliding_modules)
         for value in vars(module).values()
         if isinstance(value, EngineDispatcher)
         and value.py_func.__module__ == module.__name__

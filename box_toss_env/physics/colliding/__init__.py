@@ -1,4 +1,5 @@
 """The robust solver for boxes that collide, a module a stage: the step script (``step``), pairs
-(``broadphase``), contacts (``narrowphase``), the contact solve, warm start and penalty
-(``colliding_solver``, with the exact Coulomb solve ``joint_contact_solve``) and sleeping islands
-(``islands``)."""
+(``broadphase``), contacts (``narrowphase``), ``prepare``, the penalty (``relax``), ``warm_start``, the
+contact solve (``solve``, with the exact Coulomb solve ``joint_contact_solve``, ``normal_lcp`` and ``sweeps``),
+``restitution``, bodies alone against the floor (``alone``) and sleeping islands (``islands``); ``limits``
+their limits, ``colliding_solver`` every stage's name."""

@@ -49,7 +49,7 @@ def direction(contacts, c, row):
 @jit_stage(inline="always")
 def delassus_entry(contacts, ids, c, dcx, dcy, d, ddx, ddy, inv_mass, inv_inertia):
     """W_ij for direction (dcx, dcy) at contact c and (ddx, ddy) at contact d: the module docstring's sum over
-    the bodies they share (``colliding_solver.delassus_matrix`` takes it on the normals alone)."""
+    the bodies they share (``normal_lcp.delassus_matrix`` takes it on the normals alone)."""
     value = 0.0
     for side_c in range(2):
         b = ids[c, BODY1 + side_c]

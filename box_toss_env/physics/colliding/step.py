@@ -1,11 +1,13 @@
 """The step script of the robust solver for scenes whose boxes collide (``Scene(boxes_collide=True)``):
 ``make_colliding_robust_kernel`` builds the kernel, which sets up the work arrays and runs the grid steps
 (``advance_steps``: 0. wake, alone, the substeps, 8. sleep), each substep being stage 1
-(``find_substep_contacts``) then stages 2.-7. (``solve_substep``), one stage a line; the contact formulas,
-the impulse solves and the penalty are in ``colliding_solver``, the geometry of contacts in ``narrowphase``,
-pairs in ``broadphase``, sleeping in ``islands``. The steps allocate nothing and count no references (several
-times faster for stages handed arrays, ``compilation.jit_stage``): where the pairs or contacts outgrow their
-arrays, ``advance_steps`` returns with its progress, and the kernel grows them and calls it again.
+(``find_substep_contacts``) then stages 2.-7. (``solve_substep``), one stage a line; the contact formulas in
+``prepare``, the penalty in ``relax``, the warm start, the impulse solves and restitution in ``warm_start``,
+``solve`` and ``restitution`` (``colliding_solver`` names them all), bodies alone in ``alone``, the geometry of
+contacts in ``narrowphase``, pairs in ``broadphase``, sleeping in ``islands``. The steps allocate nothing and
+count no references (several times faster for stages handed arrays, ``compilation.jit_stage``): where the
+pairs or contacts outgrow their arrays, ``advance_steps`` returns with its progress, and the kernel grows them
+and calls it again.
 
 The stage script of one substep of length h:
   1. find contacts: every box-box point whose gap the two bodies could close within h, every box-floor
@@ -93,26 +95,11 @@ from ..compile.compilation import jit_kernel, jit_stage
 from ..kernel_support import read_settings, record_event, store_state, write_stats
 from ..robust.contact_solver import CORNER_ROWS, MAX_CORNERS
 from ..robust.robust_solver import MEMORY_SIZE, energy_limit_scale
+from .alone import advance_alone, count_awake, steps_alone
 from .broadphase import candidate_pairs, sweep_axis
-from .colliding_solver import (
-    ALONE_LIMIT,
-    CONTACT_TOLERANCE,
-    DIRECT_LIMIT,
-    MIN_CAPACITY,
-    advance_alone,
-    apply_restitution,
-    body_kinetic_energy,
-    body_reach,
-    correct_penetrations,
-    count_awake,
-    prepare_contacts,
-    relative_velocity,
-    solve_velocities,
-    steps_alone,
-    substeps,
-    warm_start,
-)
+from .colliding_solver import body_reach, substeps
 from .islands import fall_asleep, keep_sleeping, restore_sleeping, sleep_placed, sleeps_through, wake_touched
+from .limits import ALONE_LIMIT, CONTACT_TOLERANCE, DIRECT_LIMIT, MIN_CAPACITY
 from .narrowphase import (
     APPROACH,
     BODY1,
@@ -130,6 +117,11 @@ from .narrowphase import (
     find_contacts,
     update_geometry,
 )
+from .prepare import body_kinetic_energy, prepare_contacts, relative_velocity
+from .relax import correct_penetrations
+from .restitution import apply_restitution
+from .solve import solve_velocities
+from .warm_start import warm_start
 
 
 # -- 1. broadphase and narrowphase -------------------------------------------------------------------

@@ -1,0 +1,94 @@
+"""Stage prepare of the colliding solver: each contact's effective masses and material, and the two-body
+impulse formulas every later stage uses (``relative_velocity``, ``apply_impulse``).
+
+Contacts (``narrowphase``) push body 1 out of body 2 along n at a point with lever arms r1, r2. The
+two-body formulas of the reference text: with u_rel = u1 - u2, u = v + omega x r, a normal impulse
+p n applied +p n to body 1 and -p n to body 2 changes u_rel . n by K_n p with the effective mass
+
+    K_n = 1/m1 + 1/m2 + (r1 x n)^2 / I1 + (r2 x n)^2 / I2       (the floor: 1/m2 = 1/I2 = 0),
+
+and a tangential impulse q t changes u_rel . t by K_t q, K_t the same with t for n. So the impulse
+that stops the approach is p = -u_rel . n / K_n, and an impact with restitution e gets
+p = -(1 + e) u_rel . n / K_n in total (the text's p = (1 + e) p' for two bodies).
+
+Material of a box-box contact (Box2D's mixing rules): restitution max(e1, e2), friction sqrt(mu1 mu2),
+penalty stiffness min(k1, k2); box-floor contacts use the box's own.
+"""
+
+import math
+
+from .. import layout
+from ..compile.compilation import jit_stage
+from .narrowphase import (
+    BODY1,
+    BODY2,
+    FRICTION,
+    NORMAL_MASS,
+    NX,
+    NY,
+    R1X,
+    R1Y,
+    R2X,
+    R2Y,
+    RESTITUTION,
+    STIFFNESS,
+    TANGENT_MASS,
+)
+
+
+@jit_stage(inline="always")
+def relative_velocity(c, contacts, ids, vel):
+    """u_rel = u1 - u2 at contact c, u = v + omega x r = (vx - omega ry, vy + omega rx)."""
+    b1 = ids[c, BODY1]
+    b2 = ids[c, BODY2]
+    ux = vel[b1, 0] - vel[b1, 2] * contacts[c, R1Y]
+    uy = vel[b1, 1] + vel[b1, 2] * contacts[c, R1X]
+    if b2 >= 0:
+        ux -= vel[b2, 0] - vel[b2, 2] * contacts[c, R2Y]
+        uy -= vel[b2, 1] + vel[b2, 2] * contacts[c, R2X]
+    return ux, uy
+
+@jit_stage(inline="always")
+def apply_impulse(c, px, py, contacts, ids, vel, inv_mass, inv_inertia):
+    """The impulse P at contact c: +P on body 1 (v1 += P / m1, omega1 += (r1 x P) / I1), -P on body 2."""
+    b1 = ids[c, BODY1]
+    b2 = ids[c, BODY2]
+    vel[b1, 0] += px * inv_mass[b1]
+    vel[b1, 1] += py * inv_mass[b1]
+    vel[b1, 2] += (contacts[c, R1X] * py - contacts[c, R1Y] * px) * inv_inertia[b1]
+    if b2 >= 0:
+        vel[b2, 0] -= px * inv_mass[b2]
+        vel[b2, 1] -= py * inv_mass[b2]
+        vel[b2, 2] -= (contacts[c, R2X] * py - contacts[c, R2Y] * px) * inv_inertia[b2]
+
+@jit_stage
+def prepare_contacts(contacts, ids, count, params, inv_mass, inv_inertia):
+    """Effective masses 1 / K_n, 1 / K_t and the mixed material of each contact."""
+    for c in range(count):
+        b1 = ids[c, BODY1]
+        b2 = ids[c, BODY2]
+        nx, ny = contacts[c, NX], contacts[c, NY]
+        rn1 = contacts[c, R1X] * ny - contacts[c, R1Y] * nx
+        rt1 = contacts[c, R1X] * nx + contacts[c, R1Y] * ny  # r1 x t with t = (-ny, nx)
+        k_n = inv_mass[b1] + rn1 * rn1 * inv_inertia[b1]
+        k_t = inv_mass[b1] + rt1 * rt1 * inv_inertia[b1]
+        if b2 >= 0:
+            rn2 = contacts[c, R2X] * ny - contacts[c, R2Y] * nx
+            rt2 = contacts[c, R2X] * nx + contacts[c, R2Y] * ny
+            k_n += inv_mass[b2] + rn2 * rn2 * inv_inertia[b2]
+            k_t += inv_mass[b2] + rt2 * rt2 * inv_inertia[b2]
+            contacts[c, RESTITUTION] = max(params[b1, layout.RESTITUTION], params[b2, layout.RESTITUTION])
+            contacts[c, FRICTION] = math.sqrt(params[b1, layout.FRICTION] * params[b2, layout.FRICTION])
+            contacts[c, STIFFNESS] = min(params[b1, layout.STIFFNESS], params[b2, layout.STIFFNESS])
+        else:
+            contacts[c, RESTITUTION] = params[b1, layout.RESTITUTION]
+            contacts[c, FRICTION] = params[b1, layout.FRICTION]
+            contacts[c, STIFFNESS] = params[b1, layout.STIFFNESS]
+        contacts[c, NORMAL_MASS] = 1.0 / k_n
+        contacts[c, TANGENT_MASS] = 1.0 / k_t
+
+@jit_stage
+def body_kinetic_energy(vel, b, params):
+    """m |v|^2 / 2 + I omega^2 / 2 of body b [J]."""
+    return 0.5 * (params[b, layout.MASS] * (vel[b, 0] ** 2 + vel[b, 1] ** 2)
+                  + params[b, layout.INERTIA] * vel[b, 2] ** 2)
