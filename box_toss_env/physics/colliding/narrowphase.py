@@ -97,6 +97,19 @@ def add_contact(contacts, ids, count, body1, body2, key, nx, ny, px, py, x1, y1,
     return count + 1
 
 
+@jit_stage(inline="always")
+def clipped_end(d, d_other, length, px, py, ox, oy):
+    """End p of the incident segment from p to o, moved along it onto the reference face's span 0 <= d <= length
+    (d, d_other: the ends' distances along the face from its first corner)."""
+    if d < 0.0:
+        s = d / (d - d_other)
+        return px + s * (ox - px), py + s * (oy - py)
+    if d > length:
+        s = (d - length) / (d - d_other)
+        return px + s * (ox - px), py + s * (oy - py)
+    return px, py
+
+
 @jit_stage
 def clipped_contacts(ref, inc, face, reference_b, pose, trig, half, margin, code, contacts, ids, count):
     """Contact points of box ``inc`` against face ``face`` of box ``ref`` (step 2 and 3 above)."""
@@ -127,28 +140,15 @@ def clipped_contacts(ref, inc, face, reference_b, pose, trig, half, margin, code
     # clip the segment p1 p2 to 0 <= d <= length
     if (d1 < 0.0 and d2 < 0.0) or (d1 > length and d2 > length):
         return count
-    q1x, q1y, q2x, q2y = p1x, p1y, p2x, p2y
-    if d1 < 0.0:
-        s = d1 / (d1 - d2)
-        q1x, q1y = p1x + s * (p2x - p1x), p1y + s * (p2y - p1y)
-    elif d1 > length:
-        s = (d1 - length) / (d1 - d2)
-        q1x, q1y = p1x + s * (p2x - p1x), p1y + s * (p2y - p1y)
-    if d2 < 0.0:
-        s = d2 / (d2 - d1)
-        q2x, q2y = p2x + s * (p1x - p2x), p2y + s * (p1y - p2y)
-    elif d2 > length:
-        s = (d2 - length) / (d2 - d1)
-        q2x, q2y = p2x + s * (p1x - p2x), p2y + s * (p1y - p2y)
+    q1x, q1y = clipped_end(d1, d2, length, p1x, p1y, p2x, p2y)
+    q2x, q2y = clipped_end(d2, d1, length, p2x, p2y, p1x, p1y)
     base = code * FEATURES + ((reference_b * 4 + face) * 4 + incident) * 2
-    gap = nx * (q1x - ax) + ny * (q1y - ay)
-    if gap <= margin:
-        count = add_contact(contacts, ids, count, inc, ref, base, nx, ny, q1x, q1y, pose[inc, 0], pose[inc, 1],
-                            pose[ref, 0], pose[ref, 1], gap)
-    gap = nx * (q2x - ax) + ny * (q2y - ay)
-    if gap <= margin:
-        count = add_contact(contacts, ids, count, inc, ref, base + 1, nx, ny, q2x, q2y, pose[inc, 0],
-                            pose[inc, 1], pose[ref, 0], pose[ref, 1], gap)
+    for end in range(2):
+        qx, qy = (q1x, q1y) if end == 0 else (q2x, q2y)
+        gap = nx * (qx - ax) + ny * (qy - ay)
+        if gap <= margin:
+            count = add_contact(contacts, ids, count, inc, ref, base + end, nx, ny, qx, qy, pose[inc, 0],
+                                pose[inc, 1], pose[ref, 0], pose[ref, 1], gap)
     return count
 
 
