@@ -65,6 +65,8 @@ def test_the_raw_tier_trains_the_raw_recipe_where_there_is_one():
     assert benchmark.tier_hyperparams("ppo", "BoxToss-ThisSideUp-v0", "commands") == main
     assert benchmark.tier_hyperparams("ppo", "BoxToss-v0", "raw") == main  # no entry: ppo.yml's, unwrapped
     assert benchmark.tier_hyperparams("sac", "BoxToss-ThisSideUp-v0", "raw") == main
+    assert benchmark.tier_hyperparams("td3", "BoxToss-v0", "raw") == raw  # raw/td3.yml: the narrow action noise
+    assert benchmark.tier_hyperparams("td3", "BoxToss-ThisSideUp-v0", "raw") == main
 
 
 def test_the_share_of_the_ceiling_keeps_every_tier_without_data_here(tmp_path):
