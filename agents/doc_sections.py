@@ -30,6 +30,7 @@ SECTION_PAGES = {
     "rllib-sampling": DOCS / "rllib.md",  # python -m benchmarks.rllib_sampling --readme
     "reports": DOCS / "reports.md",  # python -m reports.precision / stability / collisions
     "raw-actions": DOCS / "agents.md",  # python -m agents.raw_actions --readme
+    "raw-faces": DOCS / "agents.md",  # python -m agents.raw_actions --by-face --envs BoxToss-ThisSideUp-v0 --readme
     "stack-ceiling": DOCS / "stack.md",  # python -m agents.stack_planner --readme
     "stack-ppo": DOCS / "stack.md",  # python -m agents.stack_planner --model RUN --readme
     "stack-throughput": DOCS / "stack.md",  # python -m benchmarks.stack_throughput --readme

@@ -10,6 +10,9 @@ action noise, SAC's stochastic policy). The width of the region that succeeds, i
 measure; the commands' region is the wider one where they succeed at a larger sigma.
 
     python -m agents.raw_actions --targets 64 --readme      # the table in docs/agents.md (section raw-actions)
+
+With ``--by-face`` (a variant that names one face a target, BoxToss-ThisSideUp-v0), per target face: where the
+throws that stand the box on it lie in the env's actions (``by_face``; section raw-faces).
 """
 
 from __future__ import annotations
@@ -83,6 +86,54 @@ def measure(env_id: str, n_targets: int, draws: int, sigmas=SIGMAS, seed: int = 
     return result
 
 
+def by_face(env_id: str, n_targets: int, draws: int, sigma: float = 0.01, seed: int = 0) -> list[dict]:
+    """Per target face of a face variant: where the throws that stand the box on it lie in the env's actions. The
+    oracle plans in ballistic commands (it solves every target there); each solution is mapped to the env's action
+    (speed, direction, spin in [-1, 1]); per face: how many targets, how many solved, each action dimension's range
+    over the solutions, and the success of ``draws`` throws per target at the solution plus N(0, sigma^2) noise in
+    the env's actions."""
+    env = gym.make(env_id)
+    _, infos = draw_targets(env, target_seeds(n_targets))
+    episodes = oracle.episodes_from_infos(infos)
+    base = oracle.ThrowSimulator(env, threads=1)
+    commands = CommandSimulator(base)
+    solutions = oracle.OraclePlanner(oracle.OracleSettings(threads=1, seed=seed)).plan(commands, episodes)
+    actions = commands.actions(episodes, solutions)
+    solved = base.rewards(episodes, actions)[1]
+    faces = np.array([int(np.argmax(info["target_faces"])) for info in infos])
+    rng = np.random.default_rng(seed)
+    rows = []
+    for face in range(4):
+        chosen = (faces == face) & solved
+        row = {"face": face, "targets": int((faces == face).sum()), "solved": int(chosen.sum())}
+        if chosen.any():
+            row["low"], row["high"] = actions[chosen].min(axis=0).tolist(), actions[chosen].max(axis=0).tolist()
+            kept = task.Episodes(episodes.data[chosen])
+            row["noisy"] = noisy_success(base, kept, actions[chosen], sigma, draws, rng)
+        rows.append(row)
+    env.close()
+    return rows
+
+
+def face_table(env_id: str, rows: list[dict], sigma: float, command: str) -> str:
+    lines = [
+        f"Measured by `{command}` on the first {sum(row['targets'] for row in rows)} of {env_id}'s test targets: "
+        "the oracle's solutions in ballistic commands mapped to the env's actions; per target face, each action "
+        f"dimension's range over them and the success of throws at them plus noise of sigma {sigma} in the env's "
+        "actions:",
+        "",
+        f"| target face | targets | solved | speed | direction | spin | sigma {sigma} |",
+        "|---|---:|---:|---|---|---|---:|",
+    ]
+    for row in rows:
+        if row["solved"] == 0:
+            lines.append(f"| face {row['face']} | {row['targets']} | 0 | - | - | - | - |")
+            continue
+        ranges = " | ".join(f"{lo:+.2f} to {hi:+.2f}" for lo, hi in zip(row["low"], row["high"], strict=True))
+        lines.append(f"| face {row['face']} | {row['targets']} | {row['solved']} | {ranges} | {row['noisy']:.1%} |")
+    return "\n".join(lines)
+
+
 def table(results: list[dict], command: str) -> str:
     sigmas = list(results[0]["spaces"]["env actions"]["noisy"])
     lines = [
@@ -109,12 +160,30 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--targets", type=int, default=64)
     parser.add_argument("--draws", type=int, default=32, help="noisy throws per target and sigma")
     parser.add_argument("--readme", action="store_true", help="write the table into docs/agents.md")
+    parser.add_argument(
+        "--by-face",
+        action="store_true",
+        help="instead: per target face, where the throws that stand the box on it lie in the env's actions (one "
+        "face variant in --envs)",
+    )
     args = parser.parse_args(argv)
     for env_id in args.envs:
         if env_id not in gym.registry or env_id.startswith("BoxToss-Stack"):
             parser.error(f"--envs: {env_id!r} is not a registered one-throw BoxToss variant")
     if args.targets < 1 or args.draws < 1:
         parser.error("--targets and --draws must be integers >= 1")
+    if args.by_face:
+        if len(args.envs) != 1 or gym.spec(args.envs[0]).kwargs.get("target_face") != "exact":
+            parser.error("--by-face: --envs takes one variant whose targets name one face (BoxToss-ThisSideUp-v0)")
+        command = (
+            f"python -m agents.raw_actions --by-face --envs {args.envs[0]} --targets {args.targets} --draws "
+            f"{args.draws} --readme"
+        )
+        text = face_table(args.envs[0], by_face(args.envs[0], args.targets, args.draws), 0.01, command)
+        print(text)
+        if args.readme:
+            replace_section("raw-faces", text)
+        return
     results = [measure(env_id, args.targets, args.draws) for env_id in args.envs]
     command = (
         f"python -m agents.raw_actions --envs {' '.join(args.envs)} --targets {args.targets} --draws "
