@@ -43,6 +43,7 @@ def energy_speed(vel, b, params, y, gravity):
     radius2 = params[b, layout.HALF_LENGTH] ** 2 + params[b, layout.HALF_WIDTH] ** 2
     return math.sqrt(2.0 * energy * (1.0 / mass + radius2 / params[b, layout.INERTIA]))
 
+
 @jit_stage
 def bounds_touch(pose, half, radius, awake):
     """Whether the bounding box of an awake box touches or overlaps another box's (``broadphase.time_apart``'s gap
@@ -62,6 +63,7 @@ def bounds_touch(pose, half, radius, awake):
             if max(dx - bx - ox, dy - by - oy) <= 0.0:
                 return True
     return False
+
 
 @jit_stage
 def steps_alone(pose, vel, half, radius, awake, params, gravity, tolerance, dt, steps_left):
@@ -111,6 +113,7 @@ def steps_alone(pose, vel, half, radius, awake, params, gravity, tolerance, dt, 
                 if speed > 0.0:
                     energy = min(energy, gap / speed)
     return min(np.int64(math.floor(max(flight, energy) / dt)), steps_left)
+
 
 @jit_stage
 def advance_alone(k, n, state_pose, vel, params, awake, supported, alone, memory, stepped, n_impacts, first_contact,
@@ -170,6 +173,7 @@ def advance_alone(k, n, state_pose, vel, params, awake, supported, alone, memory
             for row in range(first, n + k + 1):
                 store_state(trajectory, row, b, state_pose[b, 0], state_pose[b, 1], state_pose[b, 2], 0.0, 0.0, 0.0)
     return n + k, slept, -1
+
 
 @jit_stage
 def count_awake(awake):

@@ -70,6 +70,7 @@ def substeps(vel, radius, smallest_half, dt, gravity):
         return MAX_SUBSTEPS
     return max(max(np.int64(by_speed), np.int64(by_turn)), 1)
 
+
 @jit_stage
 def body_reach(vel, radius, awake, h, gravity, tolerance, reach):
     """What each awake body can travel in a time h, |v| h + |g| h^2 + |omega| R h (plus the contact

@@ -23,6 +23,7 @@ def delassus_matrix(contacts, ids, count, inv_mass, inv_inertia, w):
             w[c, d] = value
             w[d, c] = value
 
+
 @jit_stage
 def solve_active(w, free, active, count, x, factor, index, y):
     """x on the active contacts solving W_AA x_A = -free_A (Cholesky, with a relative regularisation
@@ -58,6 +59,7 @@ def solve_active(w, free, active, count, x, factor, index, y):
             value -= factor[r, p] * x[index[r]]
         x[index[p]] = value / factor[p, p]
     return True
+
 
 @jit_stage
 def normal_lcp(w, free, x, active, count, factor, index, y):

@@ -48,6 +48,7 @@ def relative_velocity(c, contacts, ids, vel):
         uy -= vel[b2, 1] + vel[b2, 2] * contacts[c, R2X]
     return ux, uy
 
+
 @jit_stage(inline="always")
 def apply_impulse(c, px, py, contacts, ids, vel, inv_mass, inv_inertia):
     """The impulse P at contact c: +P on body 1 (v1 += P / m1, omega1 += (r1 x P) / I1), -P on body 2."""
@@ -60,6 +61,7 @@ def apply_impulse(c, px, py, contacts, ids, vel, inv_mass, inv_inertia):
         vel[b2, 0] -= px * inv_mass[b2]
         vel[b2, 1] -= py * inv_mass[b2]
         vel[b2, 2] -= (contacts[c, R2X] * py - contacts[c, R2Y] * px) * inv_inertia[b2]
+
 
 @jit_stage
 def prepare_contacts(contacts, ids, count, params, inv_mass, inv_inertia):
@@ -86,6 +88,7 @@ def prepare_contacts(contacts, ids, count, params, inv_mass, inv_inertia):
             contacts[c, STIFFNESS] = params[b1, layout.STIFFNESS]
         contacts[c, NORMAL_MASS] = 1.0 / k_n
         contacts[c, TANGENT_MASS] = 1.0 / k_t
+
 
 @jit_stage
 def body_kinetic_energy(vel, b, params):

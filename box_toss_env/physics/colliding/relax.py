@@ -101,6 +101,7 @@ def correct_penetrations(contacts, ids, count, pose, vel, pseudo, inv_mass, inv_
                 vel[b, 2] *= scale
     return deepest
 
+
 @jit_stage
 def penalty_sweeps(contacts, ids, listed, n_listed, pseudo, inv_mass, inv_inertia, iterations, tolerance):
     """``gauss_seidel`` on the penalty's pseudo-velocities (column PSEUDO_IMPULSE, no friction) over the contacts

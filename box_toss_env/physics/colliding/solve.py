@@ -21,6 +21,7 @@ def solver_settings(settings):
     """(solver_tolerance, solver_iterations) of the scene: where the Gauss-Seidel sweeps stop."""
     return settings[layout.SOLVER_TOLERANCE], np.int64(settings[layout.SOLVER_ITERATIONS])
 
+
 @jit_stage
 def solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, w, factor, free, x, active,
                      index, y, state, moved, settings):
@@ -72,6 +73,7 @@ def solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, use_frict
         if solved:
             return
     gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, sweeps, sweep_tolerance, moved)
+
 
 @jit_stage
 def solve_jointly(contacts, ids, count, vel, inv_mass, inv_inertia, w, a, u, x, impulse, index, state):

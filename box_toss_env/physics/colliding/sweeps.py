@@ -21,6 +21,7 @@ def friction_sweep(contacts, ids, count, vel, inv_mass, inv_inertia):
         change += abs(friction_step(c, contacts, ids, vel, inv_mass, inv_inertia))
     return change
 
+
 @jit_stage(inline="always")
 def friction_step(c, contacts, ids, vel, inv_mass, inv_inertia):
     """Contact c's friction: the tangential impulse that stops the slip, added to the accumulated one and clamped
@@ -37,6 +38,7 @@ def friction_step(c, contacts, ids, vel, inv_mass, inv_inertia):
         apply_impulse(c, -dq * ny, dq * nx, contacts, ids, vel, inv_mass, inv_inertia)
     return dq
 
+
 @jit_stage(inline="always")
 def normal_step(c, column, contacts, ids, vel, inv_mass, inv_inertia):
     """Contact c's normal impulse (accumulated in ``contacts[c, column]``): >= 0 with u_rel . n >= target, applied to
@@ -50,6 +52,7 @@ def normal_step(c, column, contacts, ids, vel, inv_mass, inv_inertia):
     if dp != 0.0:
         apply_impulse(c, dp * nx, dp * ny, contacts, ids, vel, inv_mass, inv_inertia)
     return dp
+
 
 @jit_stage
 def gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, iterations, tolerance, moved):
@@ -96,6 +99,7 @@ def gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction,
             total += contacts[c, IMPULSE]
         if change <= tolerance * total and largest * count <= SINGLE_CHANGE * tolerance * total:
             break
+
 
 @jit_stage(inline="always")
 def mark_moved(moved, b1, b2):

@@ -72,6 +72,7 @@ def resting_loads(contacts, ids, count, pose, vel, inv_mass, inv_inertia, h, gra
                 moment[lower] += force * at_x[i]
     return first[n]
 
+
 @jit_stage(inline="always")
 def lever_shares(x, begin, end, centre, share):
     """Shares share[begin:end] of a vertical load along x = ``centre`` among supports at x[begin:end] that
@@ -106,6 +107,7 @@ def lever_shares(x, begin, end, centre, share):
         share[i] = 0.0
     share[high] = (centre - x[low]) / (x[high] - x[low])
     share[low] = 1.0 - share[high]
+
 
 @jit_stage
 def warm_start(contacts, ids, count, previous_keys, previous_impulses, n_previous, ratio, vel, inv_mass,
