@@ -34,6 +34,7 @@ from agents.policies import Policy
 from box_toss_env.envs import task
 from box_toss_env.envs.ballistic import ballistic_actions
 from box_toss_env.envs.task_columns import EP_TARGET_FACES, OBS_TARGET_FACES
+from box_toss_env.physics import layout
 
 SIGMAS = (0.01, 0.03, 0.1, 0.2, 0.3)
 REACH_SIGMAS = (0.01, 0.03, 0.08)  # 0.08: the raw recipes' starting spread (log_std_init -2.5)
@@ -134,12 +135,14 @@ def with_face(observations: np.ndarray, episodes: task.Episodes, face: int) -> t
 
 def reach(
     policy: Policy, env_id: str, n_targets: int, draws: int, sigmas=REACH_SIGMAS, seed: int = 0
-) -> dict[str, list[dict]]:
+) -> dict[str, list]:
     """How far a trained policy's throws are from standing the box on each short end, on the first ``n_targets``
     test targets of a face variant, each made a target of every face in turn (the same throw positions and
     release poses for every face).
 
-    ``own``: per target face f, the success of the policy's own action for face f and its mean spin action.
+    ``zero``: the share of targets whose throw at action 0 (an untrained SB3 policy's mean: its last layer starts
+    near 0) lands on each face. ``own``: per target face f, the success of the policy's own action for face f and
+    its mean spin action.
     ``reach``: per start face s (a long side: 0, 2) and short end e (1, 3), the success, for face-e targets, of
     ``draws`` throws per target at the policy's face-s action plus N(0, sigma^2) noise per action dimension
     (clipped to [-1, 1]): how often PPO's Gaussian, centred on a learned long-side throw, stands the box on that
@@ -157,6 +160,10 @@ def reach(
         actions[face] = np.asarray(policy.act(obs, infos, env), dtype=np.float64).reshape(n_targets, -1)
         success = simulator.rewards(relabelled[face], actions[face])[1]
         own.append({"face": face, "success": float(success.mean()), "spin": float(actions[face][:, 2].mean())})
+    core = simulator.core  # the throw at action 0, where an untrained policy's mean starts: the faces it lands on
+    batch = core.transition(core.for_episodes(episodes), np.zeros((n_targets, task.ACTION_SIZE)), simulator.simulator)
+    landed = task.faces_down(batch.thrown_state[:, layout.ANGLE])
+    zero = (np.bincount(landed, minlength=4) / n_targets).tolist()
     rng = np.random.default_rng(seed)
     rows = []
     for start in (0, 2):
@@ -179,10 +186,10 @@ def reach(
         row["distance"] = float(np.median(distance))
         line.append(row)
     env.close()
-    return {"own": own, "reach": rows, "line": line}
+    return {"own": own, "zero": zero, "reach": rows, "line": line}
 
 
-def reach_table(env_id: str, result: dict[str, list[dict]], n_targets: int, draws: int, command: str) -> str:
+def reach_table(env_id: str, result: dict[str, list], n_targets: int, draws: int, command: str) -> str:
     sigmas = list(result["reach"][0]["noisy"])
     lines = [
         f"Measured by `{command}` on the first {n_targets} of {env_id}'s test targets, each made a target of every "
@@ -192,6 +199,8 @@ def reach_table(env_id: str, result: dict[str, list[dict]], n_targets: int, draw
         "|---|---:|---:|",
     ]
     lines += [f"| face {row['face']} | {row['success']:.1%} | {row['spin']:+.3f} |" for row in result["own"]]
+    shares = ", ".join(f"face {face} {share:.1%}" for face, share in enumerate(result["zero"]))
+    lines += ["", f"The throw at action 0, where an untrained policy's mean starts, lands on {shares} of the targets."]
     lines += [
         "",
         f"From the policy's throw for a long side, {draws} throws per target with Gaussian noise of standard deviation "

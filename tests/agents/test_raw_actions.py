@@ -33,6 +33,7 @@ def test_reach_scores_noisy_throws_around_a_policys_long_side_throws_for_each_sh
     result = raw_actions.reach(policy, "BoxToss-ThisSideUp-v0", n_targets=6, draws=3, sigmas=(0.01, 0.3))
     assert [row["face"] for row in result["own"]] == [0, 1, 2, 3]
     assert all(row["spin"] == 0.0 and 0.0 <= row["success"] <= 1.0 for row in result["own"])
+    assert len(result["zero"]) == 4 and sum(result["zero"]) == pytest.approx(1.0)
     assert [(row["start"], row["end"]) for row in result["reach"]] == [(0, 1), (0, 3), (2, 1), (2, 3)]
     for row in result["reach"]:
         assert list(row["noisy"]) == ["0.01", "0.3"]
