@@ -20,6 +20,7 @@ the env's actions stands the box on each short end (``reach``; section raw-face-
 from __future__ import annotations
 
 import argparse
+import pickle
 import time
 from pathlib import Path
 
@@ -30,7 +31,7 @@ import box_toss_env  # noqa: F401  (registers the BoxToss envs)
 from agents import oracle
 from agents.doc_sections import replace_section
 from agents.evaluation import draw_targets, load_policy, target_seeds
-from agents.policies import Policy
+from agents.policies import Policy, TrainedPolicy, load_model
 from box_toss_env.envs import task
 from box_toss_env.envs.ballistic import ballistic_actions
 from box_toss_env.envs.task_columns import EP_TARGET_FACES, OBS_TARGET_FACES
@@ -189,6 +190,69 @@ def reach(
     return {"own": own, "zero": zero, "reach": rows, "line": line}
 
 
+def checkpoint_policy(run_dir: Path, algo: str, steps: int) -> tuple[TrainedPolicy, np.ndarray]:
+    """The policy a run saved after ``steps`` throws (``checkpoints/<algo>_<steps>_steps.zip`` and its
+    normalisation statistics) and the standard deviation of its Gaussian per action dimension."""
+    folder = Path(run_dir) / "checkpoints"
+    model = load_model(algo, folder / f"{algo}_{steps}_steps.zip")
+    stats = folder / f"{algo}_vecnormalize_{steps}_steps.pkl"
+    vec_normalize = None
+    if stats.exists():
+        with open(stats, "rb") as file:
+            vec_normalize = pickle.load(file)  # the statistics only, as TrainedPolicy.load reads them
+    std = np.exp(model.policy.log_std.detach().cpu().numpy())  # type: ignore[union-attr]  # PPO's Gaussian
+    return TrainedPolicy(model, vec_normalize), std
+
+
+def course(run_dir: Path, env_id: str, n_targets: int, steps: list[int], algo: str = "ppo") -> list[dict]:
+    """Per checkpoint of a run (after ``steps`` throws): its Gaussian's standard deviation per action dimension and,
+    per target face (the first ``n_targets`` test targets made targets of each face in turn), the success of its
+    deterministic throw, its mean spin action and the share of those throws that land on face 0."""
+    env = gym.make(env_id)
+    observations, infos = draw_targets(env, target_seeds(n_targets))
+    episodes = oracle.episodes_from_infos(infos)
+    simulator = oracle.ThrowSimulator(env, threads=1)
+    core = simulator.core
+    rows = []
+    for step in steps:
+        policy, std = checkpoint_policy(run_dir, algo, step)
+        row: dict = {"steps": step, "std": std.tolist(), "faces": []}
+        for face in range(4):
+            obs, relabelled = with_face(observations, episodes, face)
+            actions = np.asarray(policy.act(obs, infos, env), dtype=np.float64)
+            batch = core.transition(core.for_episodes(relabelled), actions, simulator.simulator)
+            success = core.landing(batch)[2]
+            landed = task.faces_down(batch.thrown_state[:, layout.ANGLE])
+            row["faces"].append(
+                {
+                    "success": float(success.mean()),
+                    "spin": float(actions[:, 2].mean()),
+                    "face 0": float((landed == 0).mean()),
+                }
+            )
+        rows.append(row)
+    env.close()
+    return rows
+
+
+def course_table(env_id: str, rows: list[dict], n_targets: int, command: str) -> str:
+    lines = [
+        f"The same run's checkpoints (`{command}`), on the first {n_targets} test targets made targets of each face in "
+        "turn: its Gaussian's standard deviation (speed, direction, spin) and per target face the success of its "
+        "throw, its mean spin action and (in brackets) the share of throws landing on face 0:",
+        "",
+        "| throws | std | face 0 | face 1 | face 2 | face 3 |",
+        "|---:|---|---|---|---|---|",
+    ]
+    for row in rows:
+        std = ", ".join(f"{value:.3f}" for value in row["std"])
+        cells = " | ".join(
+            f"{face['success']:.0%}, {face['spin']:+.3f} ({face['face 0']:.0%})" for face in row["faces"]
+        )
+        lines.append(f"| {row['steps']:,} | {std} | {cells} |")
+    return "\n".join(lines)
+
+
 def reach_table(env_id: str, result: dict[str, list], n_targets: int, draws: int, command: str) -> str:
     sigmas = list(result["reach"][0]["noisy"])
     lines = [
@@ -287,7 +351,16 @@ def main(argv: list[str] | None = None) -> None:
         help="instead: from RUN's trained throws for the long sides, how often Gaussian exploration stands the box "
         "on each short end (one face variant in --envs)",
     )
+    parser.add_argument(
+        "--steps",
+        type=int,
+        nargs="+",
+        metavar="N",
+        help="with --reach: also the same per-face throws of RUN's checkpoints after N throws (checkpoints/)",
+    )
     args = parser.parse_args(argv)
+    if args.steps and not args.reach:
+        parser.error("--steps goes with --reach RUN")
     for env_id in args.envs:
         if env_id not in gym.registry or env_id.startswith("BoxToss-Stack"):
             parser.error(f"--envs: {env_id!r} is not a registered one-throw BoxToss variant")
@@ -299,12 +372,21 @@ def main(argv: list[str] | None = None) -> None:
             parser.error(f"{option}: --envs takes one variant whose targets name one face (BoxToss-ThisSideUp-v0)")
     if args.reach:
         policy, _ = load_policy(args.reach, "final")
+        steps = f" --steps {' '.join(str(step) for step in args.steps)}" if args.steps else ""
         command = (
             f"python -m agents.raw_actions --reach {args.reach} --envs {args.envs[0]} --targets {args.targets} "
-            f"--draws {args.draws} --readme"
+            f"--draws {args.draws}{steps} --readme"
         )
         result = reach(policy, args.envs[0], args.targets, args.draws)
         text = reach_table(args.envs[0], result, args.targets, args.draws, command)
+        if args.steps:
+            steps = " ".join(str(step) for step in args.steps)
+            text += "\n\n" + course_table(
+                args.envs[0],
+                course(args.reach, args.envs[0], args.targets, args.steps),
+                args.targets,
+                f"--steps {steps}",
+            )
         print(text)
         if args.readme:
             replace_section("raw-face-reach", text)

@@ -61,3 +61,27 @@ def test_reach_takes_one_variant_whose_targets_name_one_face(capsys):
     with pytest.raises(SystemExit):
         raw_actions.main(["--reach", "runs/none", "--envs", "BoxToss-v0"])
     assert "--reach" in capsys.readouterr().err
+
+
+def test_course_gives_each_checkpoint_its_spread_and_per_face_throws(tmp_path):
+    import gymnasium as gym
+    from stable_baselines3 import PPO
+
+    (tmp_path / "checkpoints").mkdir()
+    env = gym.make("BoxToss-ThisSideUp-v0")
+    PPO("MlpPolicy", env, policy_kwargs={"log_std_init": -2.5}, seed=0).save(tmp_path / "checkpoints" / "ppo_0_steps")
+    env.close()
+    rows = raw_actions.course(tmp_path, "BoxToss-ThisSideUp-v0", n_targets=4, steps=[0])
+    assert [row["steps"] for row in rows] == [0]
+    assert rows[0]["std"] == pytest.approx([np.exp(-2.5)] * 3, rel=1e-5)
+    assert len(rows[0]["faces"]) == 4
+    for face in rows[0]["faces"]:  # an untrained policy's mean is near action 0, which lands face 0 (docs/agents.md)
+        assert abs(face["spin"]) < 0.05 and 0.0 <= face["success"] <= 1.0 and 0.0 <= face["face 0"] <= 1.0
+    text = raw_actions.course_table("BoxToss-ThisSideUp-v0", rows, 4, "--steps 0")
+    assert "| 0 | 0.082, 0.082, 0.082 |" in text
+
+
+def test_steps_goes_with_reach(capsys):
+    with pytest.raises(SystemExit):
+        raw_actions.main(["--steps", "100", "--envs", "BoxToss-ThisSideUp-v0"])
+    assert "--steps" in capsys.readouterr().err
