@@ -31,6 +31,8 @@ SECTION_PAGES = {
     "reports": DOCS / "reports.md",  # python -m reports.precision / stability / collisions
     "raw-actions": DOCS / "agents.md",  # python -m agents.raw_actions --readme
     "raw-faces": DOCS / "agents.md",  # python -m agents.raw_actions --by-face --envs BoxToss-ThisSideUp-v0 --readme
+    "raw-face-reach": DOCS
+    / "agents.md",  # python -m agents.raw_actions --reach RUN --envs BoxToss-ThisSideUp-v0 --readme
     "stack-ceiling": DOCS / "stack.md",  # python -m agents.stack_planner --readme
     "stack-ppo": DOCS / "stack.md",  # python -m agents.stack_planner --model RUN --readme
     "stack-throughput": DOCS / "stack.md",  # python -m benchmarks.stack_throughput --readme
