@@ -1,0 +1,142 @@
+"""Groups of the awake bodies for the substeps of a grid step: bodies that cannot touch one another within
+the step take their substeps apart, each group with its own substep count, so a box thrown fast far from a
+pile does not make the pile pay its substeps.
+
+Two awake bodies are in one group when a chain of candidate pairs joins them (the broadphase's test,
+``broadphase.candidate_pairs``), each body reaching what it travels in the step dt (``body_reach``) plus
+what the fastest body travels (a struck body moves further than its own speed says, as for the floor's
+contacts). Bodies in contact are so joined too (a contact's gap is within the reach of a substep). The
+groups are taken in the order of their smallest body; with one group the step is what it was without
+groups.
+
+Each group's first substep is warm-started from the impulses the last step kept (all groups' contacts, by
+key), its later substeps from its own; at its end a group's last impulses are kept with its substep length
+h (``keep_group``), and at the step's end all groups' are put in key order, each scaled to one substep length
+(``sort_kept``: p h_ref / h, the warm start scales them again by h / h_ref), for the next step's warm start.
+"""
+
+from ..compile.compilation import jit_stage
+from .broadphase import candidate_pairs
+from .colliding_solver import body_reach, point_speed, substep_count
+from .islands import find_root
+from .narrowphase import update_geometry
+
+
+@jit_stage
+def find_groups(pose, half, vel, radius, awake, smallest_half, dt, gravity, tolerance, trig, bound, reach, axis, order,
+                low, keys, group_of, work):
+    """The groups of the awake bodies (module docstring) into ``group_of``: each awake body's group, named by
+    its smallest body (-1 asleep). ``work``: (per body 2 floats, per body an int, per substep count an int).
+    Returns how many groups, or -1 if ``keys`` is too short (the caller grows it and calls again)."""
+    n = pose.shape[0]
+    update_geometry(pose, half, awake, trig, bound)
+    fastest = body_reach(vel, radius, awake, dt, gravity, tolerance, reach)
+    for b in range(n):
+        reach[b] += fastest
+    n_pairs = candidate_pairs(pose, bound, reach, awake, awake, axis, order, low, keys)
+    if n_pairs < 0:
+        return -1
+    for b in range(n):
+        group_of[b] = b
+    for p in range(n_pairs):
+        i = keys[p] // n
+        r1 = find_root(group_of, i)
+        r2 = find_root(group_of, keys[p] - i * n)
+        if r1 != r2:
+            group_of[max(r1, r2)] = min(r1, r2)
+    return group_by_substeps(vel, radius, awake, smallest_half, dt, gravity, group_of, work)
+
+
+@jit_stage
+def group_by_substeps(vel, radius, awake, smallest_half, dt, gravity, group_of, work):
+    """Join the sets of ``group_of`` (a union-find forest over the awake bodies) that need the same substep count
+    (``substep_count`` of each set's fastest point and turn) into one group, named by its smallest body, into
+    ``group_of`` (-1 asleep); returns how many groups."""
+    speed_turn, label, label_of_count = work
+    n = group_of.shape[0]
+    for b in range(n):
+        speed_turn[b, 0] = 0.0
+        speed_turn[b, 1] = 0.0
+    for b in range(n):  # a root is its set's smallest body: named before its other bodies
+        if awake[b]:
+            group_of[b] = find_root(group_of, b)
+            r = group_of[b]
+            speed_turn[r, 0] = max(speed_turn[r, 0], point_speed(vel, radius, b, dt, gravity))
+            speed_turn[r, 1] = max(speed_turn[r, 1], abs(vel[b, 2]))
+    label_of_count[:] = -1
+    groups = 0
+    for b in range(n):
+        if awake[b] and group_of[b] == b:
+            count = substep_count(speed_turn[b, 0], speed_turn[b, 1], smallest_half, dt)
+            if label_of_count[count] < 0:
+                label_of_count[count] = b
+                groups += 1
+            label[b] = label_of_count[count]
+    for b in range(n):
+        group_of[b] = label[group_of[b]] if awake[b] else -1
+    return groups
+
+
+@jit_stage
+def next_group(group_of, after):
+    """The group after group ``after`` in the order of their smallest bodies (that body), or the number of
+    bodies if there is none."""
+    for b in range(after + 1, group_of.shape[0]):
+        if group_of[b] == b:
+            return b
+    return group_of.shape[0]
+
+
+@jit_stage
+def keep_group(group_keys, group_impulses, n_group, h, kept_keys, kept_impulses, n_kept):
+    """Append a group's last impulses (key, normal and friction impulse) with its substep length h to the
+    step's ``kept`` rows after the first ``n_kept``; returns how many rows are kept then, or -1 if there is
+    no room (the caller grows them and calls again)."""
+    if n_kept + n_group > kept_keys.shape[0]:
+        return -1
+    for c in range(n_group):
+        kept_keys[n_kept + c] = group_keys[c]
+        kept_impulses[n_kept + c, 0] = group_impulses[c, 0]
+        kept_impulses[n_kept + c, 1] = group_impulses[c, 1]
+        kept_impulses[n_kept + c, 2] = h
+    return n_kept + n_group
+
+
+@jit_stage
+def sort_kept(kept_keys, kept_impulses, n_kept, previous_keys, previous_impulses, h_ref):
+    """The ``n_kept`` kept impulses in increasing key order into ``previous_keys`` / ``previous_impulses`` (the
+    warm start's order), each scaled from its substep length h to ``h_ref`` (p h_ref / h). Heapsort in place
+    on the kept rows (the keys are distinct)."""
+    for start in range(n_kept // 2 - 1, -1, -1):
+        sift_row(kept_keys, kept_impulses, start, n_kept)
+    for end in range(n_kept - 1, 0, -1):
+        swap_rows(kept_keys, kept_impulses, 0, end)
+        sift_row(kept_keys, kept_impulses, 0, end)
+    for c in range(n_kept):
+        scale = h_ref / kept_impulses[c, 2]
+        previous_keys[c] = kept_keys[c]
+        previous_impulses[c, 0] = scale * kept_impulses[c, 0]
+        previous_impulses[c, 1] = scale * kept_impulses[c, 1]
+
+
+@jit_stage(inline="always")
+def swap_rows(keys, rows, a, b):
+    """Swap entries a and b of ``keys`` and of the three columns of ``rows``."""
+    keys[a], keys[b] = keys[b], keys[a]
+    for k in range(3):
+        rows[a, k], rows[b, k] = rows[b, k], rows[a, k]
+
+
+@jit_stage(inline="always")
+def sift_row(keys, rows, root, end):
+    """Heapsort's step on rows by key: move row ``root`` down the max-heap of the first ``end`` to its place."""
+    while True:
+        child = 2 * root + 1
+        if child >= end:
+            return
+        if child + 1 < end and keys[child + 1] > keys[child]:
+            child += 1
+        if keys[root] >= keys[child]:
+            return
+        swap_rows(keys, rows, root, child)
+        root = child
