@@ -15,10 +15,13 @@ h (``keep_group``), and at the step's end all groups' are put in key order, each
 (``sort_kept``: p h_ref / h, the warm start scales them again by h / h_ref), for the next step's warm start.
 """
 
+import math
+
 from ..compile.compilation import jit_stage
 from .broadphase import candidate_pairs
 from .colliding_solver import body_reach, point_speed, substep_count
 from .islands import find_root
+from .limits import SOLVE_SHARE, SPLIT_SAVING
 from .narrowphase import update_geometry
 
 
@@ -29,6 +32,8 @@ def find_groups(pose, half, vel, radius, awake, smallest_half, dt, gravity, tole
     its smallest body (-1 asleep). ``work``: (per body 2 floats, per body an int, per substep count an int).
     Returns how many groups, or -1 if ``keys`` is too short (the caller grows it and calls again)."""
     n = pose.shape[0]
+    if one_count(vel, radius, awake, smallest_half, dt, gravity):
+        return 1  # no group can need fewer substeps than another: no pair is looked for
     update_geometry(pose, half, awake, trig, bound)
     fastest = body_reach(vel, radius, awake, dt, gravity, tolerance, reach)
     for b in range(n):
@@ -48,10 +53,27 @@ def find_groups(pose, half, vel, radius, awake, smallest_half, dt, gravity, tole
 
 
 @jit_stage
+def one_count(vel, radius, awake, smallest_half, dt, gravity):
+    """Whether every awake body alone needs the same substep count, so every group would: the slowest point speed
+    and turn rate need the count the fastest need (``substep_count`` grows with both)."""
+    low_speed, low_turn, high_speed, high_turn = math.inf, math.inf, 0.0, 0.0
+    for b in range(vel.shape[0]):
+        if awake[b]:
+            speed, turn = point_speed(vel, radius, b, dt, gravity), abs(vel[b, 2])
+            low_speed, low_turn = min(low_speed, speed), min(low_turn, turn)
+            high_speed, high_turn = max(high_speed, speed), max(high_turn, turn)
+    return substep_count(low_speed, low_turn, smallest_half, dt) == substep_count(high_speed, high_turn,
+                                                                                   smallest_half, dt)
+
+
+@jit_stage
 def group_by_substeps(vel, radius, awake, smallest_half, dt, gravity, group_of, work):
     """Join the sets of ``group_of`` (a union-find forest over the awake bodies) that need the same substep count
     (``substep_count`` of each set's fastest point and turn) into one group, named by its smallest body, into
-    ``group_of`` (-1 asleep); returns how many groups."""
+    ``group_of`` (-1 asleep); returns how many groups, or 1 where they would not pay: if they save fewer than
+    SPLIT_SAVING body-substeps in the step (each body's substeps fewer than the fastest group's, summed), or fewer
+    than 1 / SOLVE_SHARE of the passes over every body that their substeps add (each group's substeps pass over
+    every body, as the one count's do)."""
     speed_turn, label, label_of_count = work
     n = group_of.shape[0]
     for b in range(n):
@@ -64,17 +86,24 @@ def group_by_substeps(vel, radius, awake, smallest_half, dt, gravity, group_of, 
             speed_turn[r, 0] = max(speed_turn[r, 0], point_speed(vel, radius, b, dt, gravity))
             speed_turn[r, 1] = max(speed_turn[r, 1], abs(vel[b, 2]))
     label_of_count[:] = -1
-    groups = 0
+    groups, most, passes = 0, 0, 0
     for b in range(n):
         if awake[b] and group_of[b] == b:
             count = substep_count(speed_turn[b, 0], speed_turn[b, 1], smallest_half, dt)
             if label_of_count[count] < 0:
                 label_of_count[count] = b
                 groups += 1
-            label[b] = label_of_count[count]
+                passes += count
+            label[b, 0], label[b, 1], most = label_of_count[count], count, max(most, count)
+    saved = 0
     for b in range(n):
-        group_of[b] = label[group_of[b]] if awake[b] else -1
-    return groups
+        if awake[b]:
+            saved += most - label[group_of[b], 1]
+            group_of[b] = label[group_of[b], 0]
+        else:
+            group_of[b] = -1
+    added = (passes - most) * n
+    return groups if saved >= SPLIT_SAVING and SOLVE_SHARE * saved >= added else 1
 
 
 @jit_stage

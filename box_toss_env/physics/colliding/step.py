@@ -1,13 +1,13 @@
 """The step script of the robust solver for scenes whose boxes collide (``Scene(boxes_collide=True)``):
 ``make_colliding_robust_kernel`` builds the kernel, which sets up the work arrays and runs the grid steps
-(``advance_steps``: 0. wake, alone, the substeps, 8. sleep), each substep being stage 1
+(``advance_steps``: 0. wake, alone, groups, the substeps, 8. sleep), each substep being stage 1
 (``find_substep_contacts``) then stages 2.-7. (``solve_substep``), one stage a line; the contact formulas in
 ``prepare``, the penalty in ``relax``, the warm start, the impulse solves and restitution in ``warm_start``,
-``solve`` and ``restitution`` (``colliding_solver`` names them all), bodies alone in ``alone``, the geometry of
-contacts in ``narrowphase``, pairs in ``broadphase``, sleeping in ``islands``. The steps allocate nothing and
-count no references (several times faster for stages handed arrays, ``compilation.jit_stage``): where the
-pairs or contacts outgrow their arrays, ``advance_steps`` returns with its progress, and the kernel grows them
-and calls it again.
+``solve`` and ``restitution`` (``colliding_solver`` names them all), bodies alone in ``alone``, groups of their
+own substeps in ``groups``, the geometry of contacts in ``narrowphase``, pairs in ``broadphase``, sleeping in
+``islands``. The steps allocate nothing and count no references (several times faster for stages handed arrays,
+``compilation.jit_stage``): where the pairs or contacts outgrow their arrays, ``advance_steps`` returns with its
+progress, and the kernel grows them and calls it again.
 
 The stage script of one substep of length h:
   1. find contacts: every box-box point whose gap the two bodies could close within h, every box-floor
@@ -58,7 +58,8 @@ The stage script of one substep of length h:
 A grid step dt is split into substeps so that no point of any box moves further than
 TUNNEL_FRACTION / 2 of the scene's smallest half extent in one (the point speed bound
 |v| + |g| h + |omega| R), so two boxes move by at most TUNNEL_FRACTION of it relative to one another,
-and no box turns further than MAX_ROTATION_PER_STEP, up to MAX_SUBSTEPS. No tunnelling: within that
+and no box turns further than MAX_ROTATION_PER_STEP, up to MAX_SUBSTEPS: one count for all the awake bodies
+(the fastest decides), or one per group of bodies that cannot meet within the step (below). No tunnelling: within that
 bound two boxes cannot pass through one another in a substep (they move by less than half the
 thinnest box, and the speculative contacts stop the gap from closing past zero); the floor's
 speculative contacts hold at any speed. The bound holds up to a relative speed of
@@ -76,9 +77,15 @@ What a grid step does before and after the substeps, so that a scene pays only f
      taken by each awake body alone against the floor with the floor-only solver (``robust_solver.advance_box``:
      flight in closed form, impacts located in time, its own sleep), in one jump: a box thrown over a
      sleeping one, or settling on the floor beside it, costs what a floor throw costs until they get close;
-  1.-7. the substeps above, over the awake bodies only; contacts come from the sort-and-sweep broadphase
-     (``broadphase.candidate_pairs``), which visits the pairs in the order testing every pair did, so the
-     results are those of the all-pairs search;
+  groups: where the awake bodies need different substep counts (and the step has more than one), the bodies
+     that cannot meet within the step (chains of candidate pairs at each body's reach over dt plus the
+     fastest's, ``groups.find_groups``) are grouped by the count they need; where that saves at least
+     SPLIT_SAVING body-substeps and pays for the passes over every body that each group's substeps make, each
+     group takes its own substeps (``advance_groups``: a box thrown fast far from a pile leaves the pile its
+     own count), else all take the fastest's, as with one group;
+  1.-7. the substeps above, over the awake bodies (or a group's) only; contacts come from the sort-and-sweep
+     broadphase (``broadphase.candidate_pairs``), which visits the pairs in the order testing every pair did,
+     so the results are those of the all-pairs search;
   8. sleep: with ``until_rest``, an island (bodies joined by box-box contacts) whose bodies have all been
      supported and slower than ``sleep_speed`` at every point for ``sleep_time`` falls asleep
      (``islands.fall_asleep``: velocities zero, no cost until touched); the run stops once every body sleeps.
@@ -556,13 +563,15 @@ def advance_steps(progress, pose, vel, half, params, settings, inv_mass, inv_ine
                 n_awake -= slept
                 continue
             # the groups that cannot touch within the step (a redone wake after MORE_PAIRS wakes nothing more)
+            n_sub, first_sub = substeps(vel, radius, everyone, smallest_half, dt, gravity), 0
             n_groups = find_groups(pose, half, vel, radius, awake, smallest_half, dt, gravity, tolerance, trig, bound,
-                                   reach, axis, order, low, pair_keys, group_of, group_work) if n_awake > 1 else 1
+                                   reach, axis, order, low, pair_keys, group_of, group_work) \
+                if n_awake > 1 and n_sub > 1 else 1  # (with one substep, no group can take fewer)
             if n_groups < 0:
                 return (n, n_awake, n_previous, h_previous, NEW_STEP, n_sub, 0, -1, 0, 0), layout.STATUS_OK, -1, \
                     MORE_PAIRS
             group, n_group, n_kept = -1 if n_groups == 1 else next_group(group_of, -1), 0, 0
-            n_sub, first_sub = substeps(vel, radius, everyone, smallest_half, dt, gravity) if group < 0 else 0, 0
+            n_sub = n_sub if group < 0 else 0  # each group counts its own
             supported[:] = False
             alone[:] = False
             join_islands(ids, 0, parent)  # no island joined yet (the groups join theirs)
@@ -636,7 +645,7 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
         previous_keys, previous_impulses = np.empty(capacity, np.int64), np.empty((capacity, 2))
         # the groups of a step (``groups``): each body's, the one stepped, its impulses, every group's (with h)
         group_of, in_group = np.full(nb, -1, np.int64), np.zeros(nb, np.bool_)
-        group_work = (np.zeros((nb, 2)), np.zeros(nb, np.int64), np.zeros(MAX_SUBSTEPS + 1, np.int64))
+        group_work = (np.zeros((nb, 2)), np.zeros((nb, 2), np.int64), np.zeros(MAX_SUBSTEPS + 1, np.int64))
         group_kept = (np.empty(capacity, np.int64), np.empty((capacity, 2)))
         kept = (np.empty(capacity, np.int64), np.empty((capacity, 3)))
         exact = (np.zeros((DIRECT_LIMIT, DIRECT_LIMIT)), np.zeros((DIRECT_LIMIT, DIRECT_LIMIT)), np.zeros(DIRECT_LIMIT),
