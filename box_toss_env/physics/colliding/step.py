@@ -574,7 +574,8 @@ def advance_steps(progress, pose, vel, half, params, settings, inv_mass, inv_ine
             n_sub = n_sub if group < 0 else 0  # each group counts its own
             supported[:] = False
             alone[:] = False
-            join_islands(ids, 0, parent)  # no island joined yet (the groups join theirs)
+            if group >= 0:
+                join_islands(ids, 0, parent)  # no island joined yet (the groups join theirs)
         grouped = group >= 0
         if grouped:  # 1.-7. group by group, each with its own substeps
             group, n_sub, first_sub, n_group, n_kept, need = advance_groups(
