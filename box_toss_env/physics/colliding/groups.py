@@ -1,18 +1,24 @@
 """Groups of the awake bodies for the substeps of a grid step: bodies that cannot touch one another within
-the step take their substeps apart, each group with its own substep count, so a box thrown fast far from a
-pile does not make the pile pay its substeps.
+the step and need fewer substeps than the fastest take them apart, so a box thrown fast far from a pile does not
+make the pile pay its substeps.
 
-Two awake bodies are in one group when a chain of candidate pairs joins them (the broadphase's test,
-``broadphase.candidate_pairs``), each body reaching what it travels in the step dt (``body_reach``) plus
+Two awake bodies cannot be apart within the step when a chain of candidate pairs joins them (the broadphase's
+test, ``broadphase.candidate_pairs``), each body reaching what it travels in the step dt (``body_reach``) plus
 what the fastest body travels (a struck body moves further than its own speed says, as for the floor's
-contacts). Bodies in contact are so joined too (a contact's gap is within the reach of a substep). The
-groups are taken in the order of their smallest body; with one group the step is what it was without
-groups.
+contacts); bodies in contact are so joined too (a contact's gap is within the reach of a substep). Each such set
+needs the substep count of its fastest point and turn (``substep_count``); the sets that need the same count
+make one group, named by its smallest body, and the groups are taken in that order (``find_groups``). A split
+must pay (``group_by_substeps``): it saves each body the substeps its group takes fewer than the fastest group,
+and costs each group's substeps a pass over every body (their loops run over the scene's arrays); where it
+saves fewer than SPLIT_SAVING body-substeps, or fewer than 1 / SOLVE_SHARE of the passes it adds, there is one
+group, and the step is what it was without groups, bit for bit (as it is wherever every body needs one count,
+a resting pile's usual case: then no pair is looked for, ``one_count``).
 
 Each group's first substep is warm-started from the impulses the last step kept (all groups' contacts, by
 key), its later substeps from its own; at its end a group's last impulses are kept with its substep length
 h (``keep_group``), and at the step's end all groups' are put in key order, each scaled to one substep length
-(``sort_kept``: p h_ref / h, the warm start scales them again by h / h_ref), for the next step's warm start.
+(``sort_kept``: p h_ref / h with h_ref the first group's, the warm start scales them again by h' / h_ref), for
+the next step's warm start and, through it, the next run's.
 """
 
 import math
