@@ -71,4 +71,3 @@ def test_a_batch_of_scenes_with_groups_ends_as_each_scene_alone(threads):
         Simulator(KernelFlags(boxes_collide=True)).run(alone, scene.body_params(), settings, alone_stats)
         assert state[4 * i : 4 * i + 4].tobytes() == alone.tobytes()
         np.testing.assert_array_equal(stats[4 * i : 4 * i + 4], alone_stats)
-
