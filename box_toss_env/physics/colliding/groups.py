@@ -25,10 +25,30 @@ import math
 
 from ..compile.compilation import jit_stage
 from .broadphase import candidate_pairs
-from .colliding_solver import body_reach, point_speed, substep_count
+from .colliding_solver import body_reach, point_speed, substep_count, substeps
 from .islands import find_root
 from .limits import SOLVE_SHARE, SPLIT_SAVING
 from .narrowphase import update_geometry
+
+
+@jit_stage
+def step_groups(pose, half, vel, radius, everyone, awake, n_awake, smallest_half, dt, gravity, tolerance, trig, bound,
+                reach, axis, order, low, keys, group_of, work, parent):
+    """How a step takes its substeps, (n_sub, group): all awake bodies one count (``substeps``; group -1), or
+    group by group from the first (``find_groups``; n_sub 0: each group counts its own, and ``parent`` is reset for
+    the groups to join their islands in). (-1, -1) if ``keys`` is too short (the caller grows it and calls again)."""
+    n_sub = substeps(vel, radius, everyone, smallest_half, dt, gravity)
+    if n_awake < 2 or n_sub < 2:
+        return n_sub, -1  # with one substep no group can take fewer
+    groups = find_groups(pose, half, vel, radius, awake, smallest_half, dt, gravity, tolerance, trig, bound, reach,
+                         axis, order, low, keys, group_of, work)
+    if groups < 0:
+        return -1, -1
+    if groups == 1:
+        return n_sub, -1
+    for b in range(parent.shape[0]):
+        parent[b] = b
+    return 0, next_group(group_of, -1)
 
 
 @jit_stage
@@ -138,10 +158,11 @@ def keep_group(group_keys, group_impulses, n_group, h, kept_keys, kept_impulses,
 
 
 @jit_stage
-def sort_kept(kept_keys, kept_impulses, n_kept, previous_keys, previous_impulses, h_ref):
+def sort_kept(kept_keys, kept_impulses, n_kept, previous_keys, previous_impulses, dt):
     """The ``n_kept`` kept impulses in increasing key order into ``previous_keys`` / ``previous_impulses`` (the
-    warm start's order), each scaled from its substep length h to ``h_ref`` (p h_ref / h). Heapsort in place
-    on the kept rows (the keys are distinct)."""
+    warm start's order), each scaled from its substep length h to h_ref, the first group's (p h_ref / h); returns
+    h_ref (dt if none is kept). Heapsort in place on the kept rows (the keys are distinct)."""
+    h_ref = kept_impulses[0, 2] if n_kept > 0 else dt
     for start in range(n_kept // 2 - 1, -1, -1):
         sift_row(kept_keys, kept_impulses, start, n_kept)
     for end in range(n_kept - 1, 0, -1):
@@ -152,6 +173,7 @@ def sort_kept(kept_keys, kept_impulses, n_kept, previous_keys, previous_impulses
         previous_keys[c] = kept_keys[c]
         previous_impulses[c, 0] = scale * kept_impulses[c, 0]
         previous_impulses[c, 1] = scale * kept_impulses[c, 1]
+    return h_ref
 
 
 @jit_stage(inline="always")

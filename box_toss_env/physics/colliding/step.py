@@ -105,7 +105,7 @@ from ..robust.robust_solver import MEMORY_SIZE, energy_limit_scale
 from .alone import advance_alone, count_awake, steps_alone
 from .broadphase import candidate_pairs, sweep_axis
 from .colliding_solver import body_reach, substeps
-from .groups import find_groups, keep_group, next_group, sort_kept
+from .groups import keep_group, next_group, sort_kept, step_groups
 from .islands import (
     fall_asleep,
     join_contacts,
@@ -478,6 +478,34 @@ def solve_substep(contacts, ids, count, pose, vel, pseudo, params, settings, inv
 
 
 @jit_stage
+def advance_substeps(n, n_sub, first_sub, n_previous, h_previous, awake, pose, half, vel, radius, params, settings,
+                     inv_mass, inv_inertia, tolerance, axis, trig, bound, reach, floor_reach, pseudo, kinetic_before,
+                     max_penetration, touched, impacted, supported, first_contact, n_impacts, low, order, pair_keys,
+                     contacts, ids, previous_keys, previous_impulses, exact, use_penalty, use_friction, record,
+                     events):
+    """The substeps 1.-7. of grid step n over every awake body, from substep first_sub of n_sub, each warm-started
+    from the last (``previous_keys``, ``previous_impulses``: n_previous of substep length h_previous). Returns
+    (substep reached, its contacts, impulses kept, their substep length, DONE), or where it stopped and
+    MORE_PAIRS / MORE_CONTACTS when ``pair_keys`` / ``contacts`` is full (the kernel grows them and calls
+    again)."""
+    dt, gravity = settings[layout.DT], settings[layout.GRAVITY]
+    h, count = dt / n_sub, 0
+    for sub in range(first_sub, n_sub):
+        count = find_substep_contacts(pose, half, vel, radius, awake, h, gravity, tolerance, trig, bound, reach,
+                                      floor_reach, axis, order, low, pair_keys, contacts, ids)
+        if count < 0:
+            return sub, 0, n_previous, h_previous, -count
+        # 2.-7. relax, integrate velocities, warm start, solve, restitution, no energy gained, integrate positions
+        n_previous = solve_substep(
+            contacts, ids, count, pose, vel, pseudo, params, settings, inv_mass, inv_inertia, awake, h,
+            n * dt + sub * h, tolerance, (previous_keys, previous_impulses, n_previous, h_previous),
+            (previous_keys, previous_impulses), kinetic_before, max_penetration, touched, impacted, supported,
+            first_contact, n_impacts, use_penalty, use_friction, record, events, exact)
+        h_previous = h
+    return n_sub, count, n_previous, h_previous, DONE
+
+
+@jit_stage
 def advance_groups(n, group, n_sub, first_sub, n_group, n_kept, group_of, in_group, pose, half, vel, radius, params,
                    settings, inv_mass, inv_inertia, tolerance, axis, trig, bound, reach, floor_reach, pseudo,
                    kinetic_before, max_penetration, touched, impacted, supported, first_contact, n_impacts, parent, low,
@@ -562,20 +590,16 @@ def advance_steps(progress, pose, vel, half, params, settings, inv_mass, inv_ine
                         n, DONE
                 n_awake -= slept
                 continue
-            # the groups that cannot touch within the step (a redone wake after MORE_PAIRS wakes nothing more)
-            n_sub, first_sub = substeps(vel, radius, everyone, smallest_half, dt, gravity), 0
-            n_groups = find_groups(pose, half, vel, radius, awake, smallest_half, dt, gravity, tolerance, trig, bound,
-                                   reach, axis, order, low, pair_keys, group_of, group_work) \
-                if n_awake > 1 and n_sub > 1 else 1  # (with one substep, no group can take fewer)
-            if n_groups < 0:
-                return (n, n_awake, n_previous, h_previous, NEW_STEP, n_sub, 0, -1, 0, 0), layout.STATUS_OK, -1, \
+            # one substep count, or groups (a wake redone after MORE_PAIRS wakes nothing more)
+            n_sub, group = step_groups(pose, half, vel, radius, everyone, awake, n_awake, smallest_half, dt, gravity,
+                                       tolerance, trig, bound, reach, axis, order, low, pair_keys, group_of,
+                                       group_work, parent)
+            if n_sub < 0:
+                return (n, n_awake, n_previous, h_previous, NEW_STEP, 1, 0, -1, 0, 0), layout.STATUS_OK, -1, \
                     MORE_PAIRS
-            group, n_group, n_kept = -1 if n_groups == 1 else next_group(group_of, -1), 0, 0
-            n_sub = n_sub if group < 0 else 0  # each group counts its own
+            first_sub, n_group, n_kept = 0, 0, 0
             supported[:] = False
             alone[:] = False
-            if group >= 0:
-                join_islands(ids, 0, parent)  # no island joined yet (the groups join theirs)
         grouped = group >= 0
         if grouped:  # 1.-7. group by group, each with its own substeps
             group, n_sub, first_sub, n_group, n_kept, need = advance_groups(
@@ -584,26 +608,18 @@ def advance_steps(progress, pose, vel, half, params, settings, inv_mass, inv_ine
                 kinetic_before, max_penetration, touched, impacted, supported, first_contact, n_impacts, parent, low,
                 order, pair_keys, contacts, ids, (previous_keys, previous_impulses, n_previous, h_previous),
                 group_kept, kept, exact, use_penalty, use_friction, record, events)
-            if need != DONE:
-                return (n, n_awake, n_previous, h_previous, IN_SUBSTEPS, n_sub, first_sub, group, n_group, n_kept), \
-                    layout.STATUS_OK, -1, need
-            h_previous = kept[1][0, 2] if n_kept > 0 else dt  # the first group's substep length
-            sort_kept(kept[0], kept[1], n_kept, previous_keys, previous_impulses, h_previous)
+        else:  # 1.-7. over every awake body
+            first_sub, count, n_previous, h_previous, need = advance_substeps(
+                n, n_sub, first_sub, n_previous, h_previous, awake, pose, half, vel, radius, params, settings,
+                inv_mass, inv_inertia, tolerance, axis, trig, bound, reach, floor_reach, pseudo, kinetic_before,
+                max_penetration, touched, impacted, supported, first_contact, n_impacts, low, order, pair_keys,
+                contacts, ids, previous_keys, previous_impulses, exact, use_penalty, use_friction, record, events)
+        if need != DONE:
+            return (n, n_awake, n_previous, h_previous, IN_SUBSTEPS, n_sub, first_sub, group, n_group, n_kept), \
+                layout.STATUS_OK, -1, need
+        if grouped:  # every group's last impulses, in key order, for the next step's warm start
+            h_previous = sort_kept(kept[0], kept[1], n_kept, previous_keys, previous_impulses, dt)
             n_previous, group = n_kept, -1
-        h = dt / max(n_sub, 1)
-        for sub in range(first_sub, n_sub if not grouped else 0):  # 1.-7. over every awake body
-            count = find_substep_contacts(pose, half, vel, radius, awake, h, gravity, tolerance, trig, bound, reach,
-                                          floor_reach, axis, order, low, pair_keys, contacts, ids)
-            if count < 0:
-                return (n, n_awake, n_previous, h_previous, IN_SUBSTEPS, n_sub, sub, -1, 0, 0), layout.STATUS_OK, \
-                    -1, -count
-            # 2.-7. relax, integrate velocities, warm start, solve, restitution, no energy gained, integrate positions
-            n_previous = solve_substep(
-                contacts, ids, count, pose, vel, pseudo, params, settings, inv_mass, inv_inertia, awake, h,
-                n * dt + sub * h, tolerance, (previous_keys, previous_impulses, n_previous, h_previous),
-                (previous_keys, previous_impulses), kinetic_before, max_penetration, touched, impacted, supported,
-                first_contact, n_impacts, use_penalty, use_friction, record, events, exact)
-            h_previous = h
         phase = NEW_STEP
         n += 1
         if not end_step(pose, vel, awake, n_stepped, n, record, trajectory):
