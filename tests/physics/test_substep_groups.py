@@ -71,3 +71,28 @@ def test_a_batch_of_scenes_with_groups_ends_as_each_scene_alone(threads):
         Simulator(KernelFlags(boxes_collide=True)).run(alone, scene.body_params(), settings, alone_stats)
         assert state[4 * i : 4 * i + 4].tobytes() == alone.tobytes()
         np.testing.assert_array_equal(stats[4 * i : 4 * i + 4], alone_stats)
+
+
+def sliding_pair_and_far_boxes(far: bool) -> Scene:
+    """``pair_and_far_boxes`` with the upper box resting on the lower one and sliding on it at 0.3 m/s (touching
+    from the start: no box is placed at rest, and no step is taken alone against the floor)."""
+    scene = pair_and_far_boxes(far)
+    pair = (Box(**SIZE, position=(0.0, 0.1)), Box(**SIZE, position=(0.0, 0.3), velocity=(0.3, 0.0)))
+    return scene.replace(boxes=(*pair, *scene.boxes[2:]))
+
+
+def test_a_pile_beside_fast_boxes_falls_asleep_as_alone():
+    """Sleep joins each group's islands (``islands.join_contacts`` group by group): the pair falls asleep at the
+    step it does without the far boxes, in the same state, while they fly and slide on."""
+    results = {}
+    for far in (True, False):
+        scene = sliding_pair_and_far_boxes(far)
+        state, stats = scene.initial_state(), np.zeros((scene.n_bodies, layout.STATS_SIZE))
+        settings = make_settings(scene, 150, until_rest=True)
+        Simulator.for_scene(scene, parallel=False).run(state, scene.body_params(), settings, stats)
+        results[far] = state, stats
+    (with_far, far_stats), (alone, alone_stats) = results[True], results[False]
+    assert np.isfinite(alone_stats[:, layout.REST_TIME]).all() and alone_stats[0, layout.N_STEPS] < 150
+    np.testing.assert_array_equal(far_stats[:2, layout.REST_TIME], alone_stats[:, layout.REST_TIME])
+    assert with_far[:2].tobytes() == alone.tobytes()
+    assert np.isnan(far_stats[2, layout.REST_TIME])  # the thrown box still flies
