@@ -629,7 +629,7 @@ def headline(
                     lines.append(previous[label])
                 continue
             rows = {row["algo"]: row for row in found}
-            top = ceiling_success(root, env_id)
+            top = ceiling_success(root, env_id) or stored_ceiling(readme, env_id)
             cells = [spread([r["success_rate"] for r in rows[a]["results"]]) if a in rows else "-" for a in algos]
             random = rows.get("random")
             line = (
@@ -657,13 +657,24 @@ def ratios(
             top = ceiling_success(root, env_id)
             rows = [row for row in table_rows(root, env_id, tier, algos, seeds, stored) if row["algo"] != "random"]
             label = env_id if tier == "commands" else f"{env_id} ({tier})"
+            old = previous_share(readme, label)
+            if top is None and old is None:  # a tier trained without the sweep: the variant's ceiling as written
+                top = stored_ceiling(readme, env_id)
             if rows and top:
                 best = max(rows, key=lambda row: np.mean([r["success_rate"] for r in row["results"]]))
                 share = np.mean([r["success_rate"] for r in best["results"]]) / top
                 parts.append(f"{label} {share:.0%} ({best['agent']})")
-            elif old := previous_share(readme, label):
+            elif old:
                 parts.append(old)
     return "Best learned agent's success as a share of the ceiling's: " + ", ".join(parts) + "."
+
+
+def stored_ceiling(readme: Path, env_id: str) -> float | None:
+    """The variant's ceiling as the README's table gives it (its own row, the ceiling of every tier), for a root
+    without the variant's ceiling sweep: a tier trained in another root gets the same ceiling."""
+    line = previous_headline(readme).get(env_id)
+    cell = None if line is None else line.rstrip(" |").rsplit("|", 1)[-1].strip()
+    return float(cell.rstrip("%")) / 100 if cell and cell.endswith("%") else None
 
 
 def previous_share(readme: Path, label: str) -> str | None:

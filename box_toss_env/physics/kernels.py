@@ -17,11 +17,10 @@ it True the bodies of the scene are stepped together (``colliding_solver``, ``co
 from __future__ import annotations
 
 import functools
-import hashlib
 from dataclasses import dataclass
-from pathlib import Path
 
 from .colliding.step import make_colliding_robust_kernel
+from .compile.compilation import engine_source_digest
 from .reference.colliding_reference import make_colliding_reference_kernel
 from .reference.reference_solver import make_reference_kernel
 from .robust.robust_solver import make_robust_kernel
@@ -42,13 +41,9 @@ class KernelFlags:
     boxes_collide: bool = False  # the bodies of a call are one scene whose boxes collide (stepped together)
 
 
-@functools.lru_cache(maxsize=1)
 def source_digest() -> int:
-    """A 56-bit digest of every engine source file."""
-    sha = hashlib.sha256()
-    for path in sorted(Path(__file__).parent.rglob("*.py")):
-        sha.update(path.read_bytes())
-    return int.from_bytes(sha.digest()[:7], "little")
+    """A 56-bit digest of every engine source file (``compilation.engine_source_digest``)."""
+    return engine_source_digest()
 
 
 def make_kernel(flags: KernelFlags):

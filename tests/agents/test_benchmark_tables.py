@@ -82,3 +82,20 @@ def test_the_share_of_the_ceiling_keeps_every_tier_without_data_here(tmp_path):
         "Best learned agent's success as a share of the ceiling's: BoxToss-v0 100% (PPO (3 seeds)), "
         "BoxToss-v0 (raw) 97% (PPO (3 seeds)), BoxToss-LongSide-v0 99% (SAC (3 seeds))."
     )
+
+
+def test_a_tier_trained_without_the_ceiling_sweep_takes_the_variants_ceiling_from_the_readme(tmp_path):
+    """The raw tier's rows were trained in roots without the variant's ceiling sweep: their ceiling cell stayed
+    ``-`` and their share was left out, though the ceiling is the variant's, in the README's row for it."""
+    readme = tmp_path / "README.md"
+    readme.write_text(
+        "<!-- benchmark:start -->\n| variant | random | PPO | ceiling |\n|---|---:|---:|---:|\n"
+        "| BoxToss-ShortEnd-v0 | 0.0% | 98.5% | 100.0% |\n<!-- benchmark:end -->\n"
+    )
+    assert benchmark.stored_ceiling(readme, "BoxToss-ShortEnd-v0") == 1.0
+    assert benchmark.stored_ceiling(readme, "BoxToss-Mixed-v0") is None
+    stored = {benchmark.section_key("BoxToss-ShortEnd-v0", "raw"): [stack_row("ppo", 0.4, 0)]}
+    summary = benchmark.headline(tmp_path / "runs", ["BoxToss-ShortEnd-v0"], ["ppo"], [0], stored, readme)
+    assert "| BoxToss-ShortEnd-v0, raw actions | - | 40.0% | 100.0% |" in summary
+    line = benchmark.ratios(tmp_path / "runs", ["BoxToss-ShortEnd-v0"], ["ppo"], [0], stored, readme)
+    assert "BoxToss-ShortEnd-v0 (raw) 40% (PPO (1 seed))" in line

@@ -334,3 +334,43 @@ def test_processes_throwing_at_once_compile_the_kernel_once(tmp_path):
         results.append(json.loads(out.strip().splitlines()[-1]))
     assert sorted(r["compiled"] for r in results) == [0, 0, 1]
     assert sorted(r["loaded"] for r in results) == [0, 1, 1]
+
+
+EDIT_PROBE = textwrap.dedent("""
+    import numba
+    import numpy as np
+    from box_toss_env.physics.colliding.alone import bounds_touch
+
+    @numba.njit
+    def touch(pose, half, radius, awake):
+        return bounds_touch(pose, half, radius, awake)
+
+    half = np.array([[0.2, 0.1], [0.2, 0.1]])
+    pose = np.array([[0.0, 0.1, 0.0], [0.41, 0.1, 0.0]])  # bounding boxes 1 cm apart
+    print(touch(pose, half, np.hypot(half[:, 0], half[:, 1]), np.array([True, False])))
+""")
+
+
+def test_an_edited_engine_file_reaches_the_cached_stages_that_call_it(tmp_path):
+    """numba keys a cached function by its own bytecode and its own file's time stamp, so ``alone.bounds_touch``
+    (file unchanged) was loaded from the cache with the ``broadphase.box_bound`` it was compiled with, after
+    ``broadphase.py`` was edited. The engine's cache keys carry a digest of every engine source
+    (``compilation.EngineCache``): the edit reaches it."""
+    site = tmp_path / "site"
+    shutil.copytree(PACKAGE, site / "box_toss_env", ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+    env = probe_env(PYTHONPATH=site, NUMBA_CACHE_DIR=tmp_path / "cache", BOX_TOSS_ENV_START_INTERPRETED=0)
+
+    def touch() -> str:
+        done = subprocess.run(
+            [sys.executable, "-c", EDIT_PROBE], env=env, cwd=tmp_path, capture_output=True, text=True, timeout=600
+        )
+        assert done.returncode == 0, done.stderr
+        return done.stdout.strip()
+
+    assert touch() == "False"
+    broadphase = site / "box_toss_env" / "physics" / "colliding" / "broadphase.py"
+    source = broadphase.read_text()
+    bound = "    return (abs(cos_a) * half_length + abs(sin_a) * half_width,"
+    assert bound in source
+    broadphase.write_text(source.replace(bound, bound.replace("(abs(cos_a)", "(0.01 + abs(cos_a)")))  # 1 cm wider
+    assert touch() == "True"

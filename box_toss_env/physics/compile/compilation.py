@@ -16,6 +16,8 @@ in ``NUMBA_CACHE_DIR`` if set; otherwise ``__pycache__`` next to the engine's so
 otherwise numba's user-wide cache directory (``~/.cache/numba`` on Linux). If none is writable,
 the engine compiles in memory in every process and warns once (``CacheWarning``) instead of
 failing to import, which is what numba alone does. ``kernel_support.engine_cache_location()`` says which applies.
+A cached function is found again only under the digest of every engine source (``EngineCache``): numba
+alone checks a function's own file, and served stages of unedited files with their edited callees' old code.
 
 ``ensure_compiled`` makes a kernel's first compilation for a set of argument types hold a file lock
 in the cache directory: processes started together (``SubprocVecEnv``, ``AsyncVectorEnv``) wait for
@@ -25,10 +27,12 @@ the first one's compilation and then load its result from the cache, instead of 
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import os
 import warnings
 from collections.abc import Callable
+from pathlib import Path
 
 import filelock
 from numba.core import config, types
@@ -44,6 +48,26 @@ class CacheWarning(UserWarning):
     """The engine's compiled code cannot be cached on disk: it is compiled in every process."""
 
 
+@functools.lru_cache(maxsize=1)
+def engine_source_digest() -> int:
+    """A 56-bit digest of every engine source file (the ``physics`` package)."""
+    sha = hashlib.sha256()
+    for path in sorted(Path(__file__).parent.parent.rglob("*.py")):
+        sha.update(path.read_bytes())
+    return int.from_bytes(sha.digest()[:7], "little")
+
+
+class EngineCache(FunctionCache):
+    """numba's on-disk cache of one engine function, its entries keyed also by ``engine_source_digest``. numba
+    keys an entry by the function's own bytecode and checks its own file's time stamp, so a stage in a file
+    left as it was, calling or inlining a stage of an edited file, was loaded with the old callee compiled in
+    (an edit of ``alone`` ran the old ``steps_alone`` inside ``step.advance_steps``); with the digest any edit
+    of the engine compiles every stage again, as a fresh install does."""
+
+    def _index_key(self, sig, codegen):
+        return super()._index_key(sig, codegen), engine_source_digest()
+
+
 class EngineDispatcher(CPUDispatcher):
     """numba's CPU dispatcher, compiling for the plain (non-literal) types of its arguments, and
     running without a disk cache (with a ``CacheWarning``) where numba would refuse to import."""
@@ -56,7 +80,7 @@ class EngineDispatcher(CPUDispatcher):
 
     def enable_caching(self):
         try:
-            self._cache = FunctionCache(self.py_func)
+            self._cache = EngineCache(self.py_func)
         except RuntimeError as error:  # numba: "cannot cache function ...: no locator available"
             warn_uncached(str(error))
 
