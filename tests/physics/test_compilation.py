@@ -152,6 +152,7 @@ def test_stages_have_no_python_wrapper_and_kernels_release_the_gil():
     assert len(stages) > 40 and counted == [
         "correct_penetrations",
         "grown_contacts",
+        "grown_rows",
         "resting_loads",
         "start_sweep",
     ]

@@ -50,20 +50,35 @@ __all__ = [
     "count_awake", "delassus_matrix", "energy_speed", "friction_step", "friction_sweep", "gauss_seidel",
     "lever_shares", "mark_moved", "normal_lcp", "normal_step", "penalty_sweeps", "prepare_contacts",
     "relative_velocity", "resting_loads", "solve_active", "solve_jointly", "solve_velocities",
-    "solver_settings", "steps_alone", "warm_start", "body_reach", "substeps"
+    "solver_settings", "steps_alone", "warm_start", "body_reach", "point_speed", "substep_count", "substeps"
 ]
 
 
 @jit_stage
-def substeps(vel, radius, smallest_half, dt, gravity):
-    """How many substeps a grid step needs: no point moves further than TUNNEL_FRACTION of the smallest
-    half extent, no box turns further than MAX_ROTATION_PER_STEP (at most MAX_SUBSTEPS)."""
+def substeps(vel, radius, include, smallest_half, dt, gravity):
+    """How many substeps a grid step needs for the included bodies (``substep_count`` for the fastest point
+    speed |v| + |g| dt + |omega| R and turn rate among them)."""
     speed = 0.0
     turn = 0.0
     for b in range(vel.shape[0]):
-        speed = max(speed, math.sqrt(vel[b, 0] ** 2 + vel[b, 1] ** 2) + abs(gravity) * dt
-                    + abs(vel[b, 2]) * radius[b])
+        if not include[b]:
+            continue
+        speed = max(speed, point_speed(vel, radius, b, dt, gravity))
         turn = max(turn, abs(vel[b, 2]))
+    return substep_count(speed, turn, smallest_half, dt)
+
+
+@jit_stage(inline="always")
+def point_speed(vel, radius, b, dt, gravity):
+    """A bound on the speed of body b's points over a step dt: |v| + |g| dt + |omega| R."""
+    return math.sqrt(vel[b, 0] ** 2 + vel[b, 1] ** 2) + abs(gravity) * dt + abs(vel[b, 2]) * radius[b]
+
+
+@jit_stage
+def substep_count(speed, turn, smallest_half, dt):
+    """How many substeps a grid step needs at point speed ``speed`` and turn rate ``turn``: no point moves further
+    than TUNNEL_FRACTION of the smallest half extent, no box turns further than MAX_ROTATION_PER_STEP (at most
+    MAX_SUBSTEPS)."""
     by_speed = math.ceil(2.0 * speed * dt / (TUNNEL_FRACTION * smallest_half))
     by_turn = math.ceil(turn * dt / MAX_ROTATION_PER_STEP)
     if not (by_speed < MAX_SUBSTEPS and by_turn < MAX_SUBSTEPS):  # also for a non-finite state

@@ -47,6 +47,13 @@ def join_islands(ids, count, parent):
     the first ``count`` rows of ``ids``) joins them; a body's root is the island's smallest body."""
     for b in range(parent.shape[0]):
         parent[b] = b
+    join_contacts(ids, count, parent)
+
+
+@jit_stage
+def join_contacts(ids, count, parent):
+    """Join in the union-find forest ``parent`` the two bodies of each box-box contact of the first ``count``
+    rows of ``ids`` (a root stays its island's smallest body)."""
     for c in range(count):
         b2 = ids[c, BODY2]
         if b2 < 0:
@@ -58,12 +65,11 @@ def join_islands(ids, count, parent):
 
 
 @jit_stage
-def fall_asleep(ids, count, awake, still_for, sleep_time, parent, ready, island, vel):
-    """Put to sleep every island (``join_islands``) whose awake bodies have all been still for ``sleep_time``
-    (``still_for``): velocities zero, ``awake`` False, ``island`` the island's root. Returns how many bodies
-    fell asleep."""
+def fall_asleep(awake, still_for, sleep_time, parent, ready, island, vel):
+    """Put to sleep every island (``parent``, joined by ``join_islands``) whose awake bodies have all been still
+    for ``sleep_time`` (``still_for``): velocities zero, ``awake`` False, ``island`` the island's root. Returns
+    how many bodies fell asleep."""
     n = awake.shape[0]
-    join_islands(ids, count, parent)
     for b in range(n):
         ready[b] = True
     for b in range(n):

@@ -18,4 +18,6 @@ REGULARISATION = 1e-12  # share of W_cc added to the diagonal of the exact solve
 LCP_TOLERANCE = 1e-12  # share of the largest |free velocity|: a contact left free may approach by this much
 SUPPORT_SLOPE = 0.5  # [-] |n_y| above which a contact carries weight in a cold start's guess (``resting_loads``)
 ALONE_LIMIT = 8  # awake bodies at most for which whole steps alone against the floor are looked for (steps_alone)
+SPLIT_SAVING = 64  # body-substeps a step at least that substeps per group must save, else one count (``groups``)
+SOLVE_SHARE = 4  # [-] a body's substep in a pile costs about this many times a pass of a substep's loops over it
 ALONE_LOWEST = 0.5  # [share of the smaller half extent] a box's centre is taken never to sink below this height

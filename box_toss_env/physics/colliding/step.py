@@ -1,13 +1,13 @@
 """The step script of the robust solver for scenes whose boxes collide (``Scene(boxes_collide=True)``):
 ``make_colliding_robust_kernel`` builds the kernel, which sets up the work arrays and runs the grid steps
-(``advance_steps``: 0. wake, alone, the substeps, 8. sleep), each substep being stage 1
+(``advance_steps``: 0. wake, alone, groups, the substeps, 8. sleep), each substep being stage 1
 (``find_substep_contacts``) then stages 2.-7. (``solve_substep``), one stage a line; the contact formulas in
 ``prepare``, the penalty in ``relax``, the warm start, the impulse solves and restitution in ``warm_start``,
-``solve`` and ``restitution`` (``colliding_solver`` names them all), bodies alone in ``alone``, the geometry of
-contacts in ``narrowphase``, pairs in ``broadphase``, sleeping in ``islands``. The steps allocate nothing and
-count no references (several times faster for stages handed arrays, ``compilation.jit_stage``): where the
-pairs or contacts outgrow their arrays, ``advance_steps`` returns with its progress, and the kernel grows them
-and calls it again.
+``solve`` and ``restitution`` (``colliding_solver`` names them all), bodies alone in ``alone``, groups of their
+own substeps in ``groups``, the geometry of contacts in ``narrowphase``, pairs in ``broadphase``, sleeping in
+``islands``. The steps allocate nothing and count no references (several times faster for stages handed arrays,
+``compilation.jit_stage``): where the pairs or contacts outgrow their arrays, ``advance_steps`` returns with its
+progress, and the kernel grows them and calls it again.
 
 The stage script of one substep of length h:
   1. find contacts: every box-box point whose gap the two bodies could close within h, every box-floor
@@ -58,7 +58,8 @@ The stage script of one substep of length h:
 A grid step dt is split into substeps so that no point of any box moves further than
 TUNNEL_FRACTION / 2 of the scene's smallest half extent in one (the point speed bound
 |v| + |g| h + |omega| R), so two boxes move by at most TUNNEL_FRACTION of it relative to one another,
-and no box turns further than MAX_ROTATION_PER_STEP, up to MAX_SUBSTEPS. No tunnelling: within that
+and no box turns further than MAX_ROTATION_PER_STEP, up to MAX_SUBSTEPS: one count for all the awake bodies
+(the fastest decides), or one per group of bodies that cannot meet within the step (below). No tunnelling: within that
 bound two boxes cannot pass through one another in a substep (they move by less than half the
 thinnest box, and the speculative contacts stop the gap from closing past zero); the floor's
 speculative contacts hold at any speed. The bound holds up to a relative speed of
@@ -76,9 +77,15 @@ What a grid step does before and after the substeps, so that a scene pays only f
      taken by each awake body alone against the floor with the floor-only solver (``robust_solver.advance_box``:
      flight in closed form, impacts located in time, its own sleep), in one jump: a box thrown over a
      sleeping one, or settling on the floor beside it, costs what a floor throw costs until they get close;
-  1.-7. the substeps above, over the awake bodies only; contacts come from the sort-and-sweep broadphase
-     (``broadphase.candidate_pairs``), which visits the pairs in the order testing every pair did, so the
-     results are those of the all-pairs search;
+  groups: where the awake bodies need different substep counts (and the step has more than one), the bodies
+     that cannot meet within the step (chains of candidate pairs at each body's reach over dt plus the
+     fastest's, ``groups.find_groups``) are grouped by the count they need; where that saves at least
+     SPLIT_SAVING body-substeps and pays for the passes over every body that each group's substeps make, each
+     group takes its own substeps (``advance_groups``: a box thrown fast far from a pile leaves the pile its
+     own count), else all take the fastest's, as with one group;
+  1.-7. the substeps above, over the awake bodies (or a group's) only; contacts come from the sort-and-sweep
+     broadphase (``broadphase.candidate_pairs``), which visits the pairs in the order testing every pair did,
+     so the results are those of the all-pairs search;
   8. sleep: with ``until_rest``, an island (bodies joined by box-box contacts) whose bodies have all been
      supported and slower than ``sleep_speed`` at every point for ``sleep_time`` falls asleep
      (``islands.fall_asleep``: velocities zero, no cost until touched); the run stops once every body sleeps.
@@ -98,8 +105,18 @@ from ..robust.robust_solver import MEMORY_SIZE, energy_limit_scale
 from .alone import advance_alone, count_awake, steps_alone
 from .broadphase import candidate_pairs, sweep_axis
 from .colliding_solver import body_reach, substeps
-from .islands import fall_asleep, keep_sleeping, restore_sleeping, sleep_placed, sleeps_through, wake_touched
-from .limits import ALONE_LIMIT, CONTACT_TOLERANCE, DIRECT_LIMIT, MIN_CAPACITY
+from .groups import keep_group, next_group, sort_kept, step_groups
+from .islands import (
+    fall_asleep,
+    join_contacts,
+    join_islands,
+    keep_sleeping,
+    restore_sleeping,
+    sleep_placed,
+    sleeps_through,
+    wake_touched,
+)
+from .limits import ALONE_LIMIT, CONTACT_TOLERANCE, DIRECT_LIMIT, MAX_SUBSTEPS, MIN_CAPACITY
 from .narrowphase import (
     APPROACH,
     BODY1,
@@ -298,15 +315,16 @@ def end_step(pose, vel, awake, n_stepped, n, record, trajectory):
 
 
 @jit_stage
-def sleep_islands(ids, count, pose, vel, radius, awake, supported, still_for, sleep_speed, sleep_time, parent, ready,
-                  island, rest_time, n, dt, record, trajectory):
-    """8. The islands whose bodies have all been supported and slower than ``sleep_speed`` at every point
-    for ``sleep_time`` fall asleep (``islands.fall_asleep``); returns how many bodies did."""
+def sleep_islands(pose, vel, radius, awake, supported, still_for, sleep_speed, sleep_time, parent, ready, island,
+                  rest_time, n, dt, record, trajectory):
+    """8. The islands (``parent``, joined by the last substep's box-box contacts) whose bodies have all been
+    supported and slower than ``sleep_speed`` at every point for ``sleep_time`` fall asleep
+    (``islands.fall_asleep``); returns how many bodies did."""
     for b in range(pose.shape[0]):
         if awake[b]:
             speed = math.sqrt(vel[b, 0] ** 2 + vel[b, 1] ** 2) + abs(vel[b, 2]) * radius[b]
             still_for[b] = still_for[b] + dt if supported[b] and speed <= sleep_speed else 0.0
-    slept = fall_asleep(ids, count, awake, still_for, sleep_time, parent, ready, island, vel)
+    slept = fall_asleep(awake, still_for, sleep_time, parent, ready, island, vel)
     if slept > 0:
         for b in range(pose.shape[0]):
             if not awake[b] and math.isnan(rest_time[b]):
@@ -383,6 +401,16 @@ def grown_contacts(contacts, ids, previous_keys, previous_impulses, n_previous):
     return np.zeros((capacity, CONTACT_COLUMNS)), np.zeros((capacity, ID_COLUMNS), np.int64), keys, impulses
 
 
+@jit_stage(nrt=True)  # as grown_contacts
+def grown_rows(keys, rows, count):
+    """``keys`` and ``rows`` at twice their rows, the first ``count`` kept."""
+    grown_keys = np.zeros(2 * keys.shape[0], np.int64)
+    grown_keys[:count] = keys[:count]
+    grown = np.zeros((2 * rows.shape[0], rows.shape[1]))
+    grown[:count] = rows[:count]
+    return grown_keys, grown
+
+
 # a grid step's progress, for the kernel to resume ``advance_steps`` where it left off to make room
 NEW_STEP = 0  # a grid step starts: wake, alone, substeps
 WAKING = 1  # the wake's search ran out of room for pairs (the islands it woke stay awake; no new reach)
@@ -407,14 +435,16 @@ def find_substep_contacts(pose, half, vel, radius, awake, h, gravity, tolerance,
 
 @jit_stage(inline="always")  # into advance_steps, which counts no references
 def solve_substep(contacts, ids, count, pose, vel, pseudo, params, settings, inv_mass, inv_inertia, awake, h, t,
-                  tolerance, previous_keys, previous_impulses, n_previous, h_previous, kinetic_before, max_penetration,
-                  touched, impacted, supported, first_contact, n_impacts, use_penalty, use_friction, record, events,
-                  exact):
-    """Stages 2.-7. of a substep of length h starting at time t, over the ``count`` contacts found (stage 1);
-    returns how many impulses it keeps for the next substep's warm start. ``exact``: the solves' work arrays
-    (``normal_lcp``, ``joint_contact_solve``, ``gauss_seidel``). (At most 30 arguments: numba inlines no call of
-    more.)"""
+                  tolerance, warm_from, store_into, kinetic_before, max_penetration, touched, impacted, supported,
+                  first_contact, n_impacts, use_penalty, use_friction, record, events, exact):
+    """Stages 2.-7. of a substep of length h starting at time t, over the ``count`` contacts found (stage 1),
+    warm-started from ``warm_from`` (keys, impulses, their count and substep length); returns how many impulses
+    it keeps, by key into ``store_into`` (keys, impulses; may be ``warm_from``'s arrays), for the next substep's
+    warm start. ``exact``: the solves' work arrays (``normal_lcp``, ``joint_contact_solve``, ``gauss_seidel``).
+    (At most 30 arguments: numba inlines no call of more.)"""
     gravity, threshold = settings[layout.GRAVITY], settings[layout.RESTITUTION_THRESHOLD]
+    previous_keys, previous_impulses, n_previous, h_previous = warm_from
+    kept_keys, kept_impulses = store_into
     w, factor, free, x, active, index, lcp_y, contact_state, moved = exact
     prepare_contacts(contacts, ids, count, params, inv_mass, inv_inertia)
     note_penetration(contacts, ids, count, max_penetration)
@@ -431,7 +461,7 @@ def solve_substep(contacts, ids, count, pose, vel, pseudo, params, settings, inv
                inv_inertia, pose, h, gravity)
     solve_velocities(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, w, factor, free, x, active,
                      index, lcp_y, contact_state, moved, settings)
-    n_stored = store_impulses(contacts, ids, count, previous_keys, previous_impulses)
+    n_stored = store_impulses(contacts, ids, count, kept_keys, kept_impulses)
     # 5. restitution for impacts only: solved with every contact and friction, then polished
     impacts = restitution_targets(contacts, count, threshold)
     if impacts > 0:
@@ -448,18 +478,90 @@ def solve_substep(contacts, ids, count, pose, vel, pseudo, params, settings, inv
 
 
 @jit_stage
+def advance_substeps(n, n_sub, first_sub, n_previous, h_previous, awake, pose, half, vel, radius, params, settings,
+                     inv_mass, inv_inertia, tolerance, axis, trig, bound, reach, floor_reach, pseudo, kinetic_before,
+                     max_penetration, touched, impacted, supported, first_contact, n_impacts, low, order, pair_keys,
+                     contacts, ids, previous_keys, previous_impulses, exact, use_penalty, use_friction, record,
+                     events):
+    """The substeps 1.-7. of grid step n over every awake body, from substep first_sub of n_sub, each warm-started
+    from the last (``previous_keys``, ``previous_impulses``: n_previous of substep length h_previous). Returns
+    (substep reached, its contacts, impulses kept, their substep length, DONE), or where it stopped and
+    MORE_PAIRS / MORE_CONTACTS when ``pair_keys`` / ``contacts`` is full (the kernel grows them and calls
+    again)."""
+    dt, gravity = settings[layout.DT], settings[layout.GRAVITY]
+    h, count = dt / n_sub, 0
+    for sub in range(first_sub, n_sub):
+        count = find_substep_contacts(pose, half, vel, radius, awake, h, gravity, tolerance, trig, bound, reach,
+                                      floor_reach, axis, order, low, pair_keys, contacts, ids)
+        if count < 0:
+            return sub, 0, n_previous, h_previous, -count
+        # 2.-7. relax, integrate velocities, warm start, solve, restitution, no energy gained, integrate positions
+        n_previous = solve_substep(
+            contacts, ids, count, pose, vel, pseudo, params, settings, inv_mass, inv_inertia, awake, h,
+            n * dt + sub * h, tolerance, (previous_keys, previous_impulses, n_previous, h_previous),
+            (previous_keys, previous_impulses), kinetic_before, max_penetration, touched, impacted, supported,
+            first_contact, n_impacts, use_penalty, use_friction, record, events, exact)
+        h_previous = h
+    return n_sub, count, n_previous, h_previous, DONE
+
+
+@jit_stage
+def advance_groups(n, group, n_sub, first_sub, n_group, n_kept, group_of, in_group, pose, half, vel, radius, params,
+                   settings, inv_mass, inv_inertia, tolerance, axis, trig, bound, reach, floor_reach, pseudo,
+                   kinetic_before, max_penetration, touched, impacted, supported, first_contact, n_impacts, parent, low,
+                   order, pair_keys, contacts, ids, previous, group_kept, kept, exact, use_penalty, use_friction,
+                   record, events):
+    """The substeps 1.-7. of grid step n group by group (``groups``), from group ``group`` (its smallest body) at
+    substep first_sub of its n_sub (0: not counted yet): each group's count is its own (``substeps`` over its
+    bodies); its first substep is warm-started from ``previous`` (the last step's keys, impulses, their count and
+    substep length), the next from its own (``group_kept``: keys, impulses; n_group kept); its last impulses are
+    appended to ``kept`` (keys, impulses with h; n_kept kept, ``keep_group``) and its box-box contacts joined in
+    ``parent`` (the islands to sleep). Returns (group, n_sub, first_sub, n_group, n_kept, DONE), or where it
+    stopped and MORE_CONTACTS when ``contacts`` or ``kept`` is full (the kernel grows them and calls again)."""
+    dt, gravity = settings[layout.DT], settings[layout.GRAVITY]
+    nb, smallest_half = pose.shape[0], half.min()
+    group_keys, group_impulses = group_kept
+    kept_keys, kept_impulses = kept
+    while group < nb:
+        for b in range(nb):
+            in_group[b] = group_of[b] == group
+        if n_sub == 0:
+            n_sub = substeps(vel, radius, in_group, smallest_half, dt, gravity)
+        h = dt / n_sub
+        count = 0
+        for sub in range(first_sub, n_sub):
+            count = find_substep_contacts(pose, half, vel, radius, in_group, h, gravity, tolerance, trig, bound,
+                                          reach, floor_reach, axis, order, low, pair_keys, contacts, ids)
+            if count < 0:
+                return group, n_sub, sub, n_group, n_kept, -count
+            warm_from = previous if sub == 0 else (group_keys, group_impulses, n_group, h)
+            n_group = solve_substep(
+                contacts, ids, count, pose, vel, pseudo, params, settings, inv_mass, inv_inertia, in_group, h,
+                n * dt + sub * h, tolerance, warm_from, group_kept, kinetic_before, max_penetration, touched,
+                impacted, supported, first_contact, n_impacts, use_penalty, use_friction, record, events, exact)
+        join_contacts(ids, count, parent)  # (none when resumed only to keep its impulses: joined already)
+        kept_now = keep_group(group_keys, group_impulses, n_group, h, kept_keys, kept_impulses, n_kept)
+        if kept_now < 0:
+            return group, n_sub, n_sub, n_group, n_kept, MORE_CONTACTS
+        group, n_sub, first_sub, n_group, n_kept = next_group(group_of, group), 0, 0, 0, kept_now
+    return group, n_sub, first_sub, n_group, n_kept, DONE
+
+
+@jit_stage
 def advance_steps(progress, pose, vel, half, params, settings, inv_mass, inv_inertia, radius, tolerance, axis, trig,
                   bound, reach, floor_reach, pseudo, work, kinetic_before, max_penetration, touched, supported,
                   impacted, n_impacts, n_stepped, first_contact, everyone, awake, island, still_for, rest_time,
                   parent, ready, low, order, pair_keys, memory, alone, corners, corner_delassus, corner_ids, contacts,
-                  ids, previous_keys, previous_impulses, exact, use_penalty, use_friction, record, trajectory, events):
-    """The grid steps while a body is awake (this module's step script: 0. wake, alone, the substeps 1.-7., 8.
-    sleep), from ``progress`` = (step n, awake bodies, impulses kept, their substep length, NEW_STEP / WAKING /
-    IN_SUBSTEPS, substeps, substep). It allocates nothing (and counts no references): when the pairs or the
-    contacts outgrow their arrays it returns, the kernel grows them and calls again with the progress returned.
-    Returns (progress, status, failing step, DONE / MORE_PAIRS / MORE_CONTACTS)."""
+                  ids, previous_keys, previous_impulses, group_of, in_group, group_work, group_kept, kept, exact,
+                  use_penalty, use_friction, record, trajectory, events):
+    """The grid steps while a body is awake (this module's step script: 0. wake, alone, the substeps 1.-7. over
+    all awake bodies or group by group, ``advance_groups``, 8. sleep), from ``progress`` = (step n, awake bodies,
+    impulses kept, their substep length, NEW_STEP / WAKING / IN_SUBSTEPS, substeps, substep, group (-1: one),
+    impulses kept by the group, by the groups). It allocates nothing (and counts no references): when the pairs
+    or the contacts outgrow their arrays it returns, the kernel grows them and calls again with the progress
+    returned. Returns (progress, status, failing step, DONE / MORE_PAIRS / MORE_CONTACTS)."""
     dt, gravity, max_steps, until_rest, threshold, sleep_speed, sleep_time, slop = read_settings(settings)
-    n, n_awake, n_previous, h_previous, phase, n_sub, first_sub = progress
+    n, n_awake, n_previous, h_previous, phase, n_sub, first_sub, group, n_group, n_kept = progress
     nb, count, smallest_half = pose.shape[0], 0, half.min()
     while n < max_steps and n_awake > 0:
         if phase != IN_SUBSTEPS:
@@ -469,7 +571,8 @@ def advance_steps(progress, pose, vel, half, params, settings, inv_mass, inv_ine
                     body_reach(vel, radius, awake, dt, gravity, tolerance, reach)
                 if wake_touched(pose, bound, reach, everyone, awake, island, still_for, rest_time, axis, order, low,
                                 pair_keys) < 0:
-                    return (n, n_awake, n_previous, h_previous, WAKING, n_sub, 0), layout.STATUS_OK, -1, MORE_PAIRS
+                    return (n, n_awake, n_previous, h_previous, WAKING, n_sub, 0, -1, 0, 0), layout.STATUS_OK, -1, \
+                        MORE_PAIRS
                 n_awake = count_awake(awake)
             phase = NEW_STEP
             # alone: whole steps of each awake body against the floor alone while no two boxes can meet
@@ -483,33 +586,50 @@ def advance_steps(progress, pose, vel, half, params, settings, inv_mass, inv_ine
                     corner_ids, trajectory, events)
                 n_previous = 0  # the contacts of the substeps before are gone
                 if failed >= 0:
-                    return (n, n_awake, n_previous, h_previous, phase, n_sub, 0), layout.STATUS_NONFINITE, n, DONE
+                    return (n, n_awake, n_previous, h_previous, phase, n_sub, 0, -1, 0, 0), layout.STATUS_NONFINITE, \
+                        n, DONE
                 n_awake -= slept
                 continue
-            n_sub, first_sub = substeps(vel, radius, smallest_half, dt, gravity), 0
+            # one substep count, or groups (a wake redone after MORE_PAIRS wakes nothing more)
+            n_sub, group = step_groups(pose, half, vel, radius, everyone, awake, n_awake, smallest_half, dt, gravity,
+                                       tolerance, trig, bound, reach, axis, order, low, pair_keys, group_of,
+                                       group_work, parent)
+            if n_sub < 0:
+                return (n, n_awake, n_previous, h_previous, NEW_STEP, 1, 0, -1, 0, 0), layout.STATUS_OK, -1, \
+                    MORE_PAIRS
+            first_sub, n_group, n_kept = 0, 0, 0
             supported[:] = False
             alone[:] = False
-        h = dt / n_sub
-        for sub in range(first_sub, n_sub):
-            count = find_substep_contacts(pose, half, vel, radius, awake, h, gravity, tolerance, trig, bound, reach,
-                                          floor_reach, axis, order, low, pair_keys, contacts, ids)
-            if count < 0:
-                return (n, n_awake, n_previous, h_previous, IN_SUBSTEPS, n_sub, sub), layout.STATUS_OK, -1, -count
-            # 2.-7. relax, integrate velocities, warm start, solve, restitution, no energy gained, integrate positions
-            n_previous = solve_substep(
-                contacts, ids, count, pose, vel, pseudo, params, settings, inv_mass, inv_inertia, awake, h,
-                n * dt + sub * h, tolerance, previous_keys, previous_impulses, n_previous, h_previous, kinetic_before,
-                max_penetration, touched, impacted, supported, first_contact, n_impacts, use_penalty, use_friction,
-                record, events, exact)
-            h_previous = h
+        grouped = group >= 0
+        if grouped:  # 1.-7. group by group, each with its own substeps
+            group, n_sub, first_sub, n_group, n_kept, need = advance_groups(
+                n, group, n_sub, first_sub, n_group, n_kept, group_of, in_group, pose, half, vel, radius, params,
+                settings, inv_mass, inv_inertia, tolerance, axis, trig, bound, reach, floor_reach, pseudo,
+                kinetic_before, max_penetration, touched, impacted, supported, first_contact, n_impacts, parent, low,
+                order, pair_keys, contacts, ids, (previous_keys, previous_impulses, n_previous, h_previous),
+                group_kept, kept, exact, use_penalty, use_friction, record, events)
+        else:  # 1.-7. over every awake body
+            first_sub, count, n_previous, h_previous, need = advance_substeps(
+                n, n_sub, first_sub, n_previous, h_previous, awake, pose, half, vel, radius, params, settings,
+                inv_mass, inv_inertia, tolerance, axis, trig, bound, reach, floor_reach, pseudo, kinetic_before,
+                max_penetration, touched, impacted, supported, first_contact, n_impacts, low, order, pair_keys,
+                contacts, ids, previous_keys, previous_impulses, exact, use_penalty, use_friction, record, events)
+        if need != DONE:
+            return (n, n_awake, n_previous, h_previous, IN_SUBSTEPS, n_sub, first_sub, group, n_group, n_kept), \
+                layout.STATUS_OK, -1, need
+        if grouped:  # every group's last impulses, in key order, for the next step's warm start
+            h_previous = sort_kept(kept[0], kept[1], n_kept, previous_keys, previous_impulses, dt)
+            n_previous, group = n_kept, -1
         phase = NEW_STEP
         n += 1
         if not end_step(pose, vel, awake, n_stepped, n, record, trajectory):
-            return (n, n_awake, n_previous, h_previous, phase, n_sub, 0), layout.STATUS_NONFINITE, n, DONE
+            return (n, n_awake, n_previous, h_previous, phase, n_sub, 0, -1, 0, 0), layout.STATUS_NONFINITE, n, DONE
         if until_rest:  # 8. sleep
-            n_awake -= sleep_islands(ids, count, pose, vel, radius, awake, supported, still_for, sleep_speed,
-                                     sleep_time, parent, ready, island, rest_time, n, dt, record, trajectory)
-    return (n, n_awake, n_previous, h_previous, phase, n_sub, 0), layout.STATUS_OK, -1, DONE
+            if not grouped:
+                join_islands(ids, count, parent)
+            n_awake -= sleep_islands(pose, vel, radius, awake, supported, still_for, sleep_speed, sleep_time, parent,
+                                     ready, island, rest_time, n, dt, record, trajectory)
+    return (n, n_awake, n_previous, h_previous, phase, n_sub, 0, -1, 0, 0), layout.STATUS_OK, -1, DONE
 
 
 def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, source_digest: int):
@@ -540,6 +660,11 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
         capacity = max(8 * nb, MIN_CAPACITY)  # contact rows, each written before it is read: left unzeroed
         contacts, ids = np.empty((capacity, CONTACT_COLUMNS)), np.empty((capacity, ID_COLUMNS), np.int64)
         previous_keys, previous_impulses = np.empty(capacity, np.int64), np.empty((capacity, 2))
+        # the groups of a step (``groups``): each body's, the one stepped, its impulses, every group's (with h)
+        group_of, in_group = np.full(nb, -1, np.int64), np.zeros(nb, np.bool_)
+        group_work = (np.zeros((nb, 2)), np.zeros((nb, 2), np.int64), np.zeros(MAX_SUBSTEPS + 1, np.int64))
+        group_kept = (np.empty(capacity, np.int64), np.empty((capacity, 2)))
+        kept = (np.empty(capacity, np.int64), np.empty((capacity, 3)))
         exact = (np.zeros((DIRECT_LIMIT, DIRECT_LIMIT)), np.zeros((DIRECT_LIMIT, DIRECT_LIMIT)), np.zeros(DIRECT_LIMIT),
                  np.zeros(DIRECT_LIMIT), np.zeros(DIRECT_LIMIT, np.bool_), np.zeros(DIRECT_LIMIT, np.int64),
                  np.zeros(DIRECT_LIMIT), np.zeros(DIRECT_LIMIT, np.int64),  # the exact solves' (solve_substep)
@@ -569,19 +694,22 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
                 if slept < 0:
                     pair_keys = np.zeros(2 * pair_keys.shape[0], np.int64)
             n_awake -= slept
-        progress, need = (0, n_awake, n_previous, h_previous, NEW_STEP, 1, 0), MORE_PAIRS
+        progress, need = (0, n_awake, n_previous, h_previous, NEW_STEP, 1, 0, -1, 0, 0), MORE_PAIRS
         while need != DONE:  # the steps, each time their pairs or contacts outgrow their arrays grown
             progress, status, fail_step, need = advance_steps(
                 progress, pose, vel, half, params, settings, inv_mass, inv_inertia, radius, tolerance, axis, trig,
                 bound, reach, floor_reach, pseudo, work, kinetic_before, max_penetration, touched, supported,
                 impacted, n_impacts, n_stepped, first_contact, everyone, awake, island, still_for, rest_time, parent,
                 ready, low, order, pair_keys, memory, alone, corners, corner_delassus, corner_ids, contacts, ids,
-                previous_keys, previous_impulses, exact, PENALTY, FRICTION_ON, RECORD, trajectory, events)
+                previous_keys, previous_impulses, group_of, in_group, group_work, group_kept, kept, exact, PENALTY,
+                FRICTION_ON, RECORD, trajectory, events)
             if need == MORE_PAIRS:
                 pair_keys = np.zeros(2 * pair_keys.shape[0], np.int64)
             elif need == MORE_CONTACTS:
                 contacts, ids, previous_keys, previous_impulses = grown_contacts(contacts, ids, previous_keys,
                                                                                  previous_impulses, progress[2])
+                group_kept = grown_rows(group_kept[0], group_kept[1], progress[8])
+                kept = grown_rows(kept[0], kept[1], progress[9])
         n, n_previous, h_previous = progress[0], progress[2], progress[3]
         write_back(state, stats, pose, vel, first_contact, n_impacts, n_stepped, max_penetration, rest_time, n, dt,
                    status, fail_step, warm, previous_keys, previous_impulses, n_previous, h_previous, awake, island,

@@ -1,0 +1,199 @@
+"""Groups of the awake bodies for the substeps of a grid step: bodies that cannot touch one another within
+the step and need fewer substeps than the fastest take them apart, so a box thrown fast far from a pile does not
+make the pile pay its substeps.
+
+Two awake bodies cannot be apart within the step when a chain of candidate pairs joins them (the broadphase's
+test, ``broadphase.candidate_pairs``), each body reaching what it travels in the step dt (``body_reach``) plus
+what the fastest body travels (a struck body moves further than its own speed says, as for the floor's
+contacts); bodies in contact are so joined too (a contact's gap is within the reach of a substep). Each such set
+needs the substep count of its fastest point and turn (``substep_count``); the sets that need the same count
+make one group, named by its smallest body, and the groups are taken in that order (``find_groups``). A split
+must pay (``group_by_substeps``): it saves each body the substeps its group takes fewer than the fastest group,
+and costs each group's substeps a pass over every body (their loops run over the scene's arrays); where it
+saves fewer than SPLIT_SAVING body-substeps, or fewer than 1 / SOLVE_SHARE of the passes it adds, there is one
+group, and the step is what it was without groups, bit for bit (as it is wherever every body needs one count,
+a resting pile's usual case: then no pair is looked for, ``one_count``).
+
+Each group's first substep is warm-started from the impulses the last step kept (all groups' contacts, by
+key), its later substeps from its own; at its end a group's last impulses are kept with its substep length
+h (``keep_group``), and at the step's end all groups' are put in key order, each scaled to one substep length
+(``sort_kept``: p h_ref / h with h_ref the first group's, the warm start scales them again by h' / h_ref), for
+the next step's warm start and, through it, the next run's.
+"""
+
+import math
+
+from ..compile.compilation import jit_stage
+from .broadphase import candidate_pairs
+from .colliding_solver import body_reach, point_speed, substep_count, substeps
+from .islands import find_root
+from .limits import SOLVE_SHARE, SPLIT_SAVING
+from .narrowphase import update_geometry
+
+
+@jit_stage
+def step_groups(pose, half, vel, radius, everyone, awake, n_awake, smallest_half, dt, gravity, tolerance, trig, bound,
+                reach, axis, order, low, keys, group_of, work, parent):
+    """How a step takes its substeps, (n_sub, group): all awake bodies one count (``substeps``; group -1), or
+    group by group from the first (``find_groups``; n_sub 0: each group counts its own, and ``parent`` is reset for
+    the groups to join their islands in). (-1, -1) if ``keys`` is too short (the caller grows it and calls again)."""
+    n_sub = substeps(vel, radius, everyone, smallest_half, dt, gravity)
+    if n_awake < 2 or n_sub < 2:
+        return n_sub, -1  # with one substep no group can take fewer
+    groups = find_groups(pose, half, vel, radius, awake, smallest_half, dt, gravity, tolerance, trig, bound, reach,
+                         axis, order, low, keys, group_of, work)
+    if groups < 0:
+        return -1, -1
+    if groups == 1:
+        return n_sub, -1
+    for b in range(parent.shape[0]):
+        parent[b] = b
+    return 0, next_group(group_of, -1)
+
+
+@jit_stage
+def find_groups(pose, half, vel, radius, awake, smallest_half, dt, gravity, tolerance, trig, bound, reach, axis, order,
+                low, keys, group_of, work):
+    """The groups of the awake bodies (module docstring) into ``group_of``: each awake body's group, named by
+    its smallest body (-1 asleep). ``work``: (per body 2 floats, per body an int, per substep count an int).
+    Returns how many groups, or -1 if ``keys`` is too short (the caller grows it and calls again)."""
+    n = pose.shape[0]
+    if one_count(vel, radius, awake, smallest_half, dt, gravity):
+        return 1  # no group can need fewer substeps than another: no pair is looked for
+    update_geometry(pose, half, awake, trig, bound)
+    fastest = body_reach(vel, radius, awake, dt, gravity, tolerance, reach)
+    for b in range(n):
+        reach[b] += fastest
+    n_pairs = candidate_pairs(pose, bound, reach, awake, awake, axis, order, low, keys)
+    if n_pairs < 0:
+        return -1
+    for b in range(n):
+        group_of[b] = b
+    for p in range(n_pairs):
+        i = keys[p] // n
+        r1 = find_root(group_of, i)
+        r2 = find_root(group_of, keys[p] - i * n)
+        if r1 != r2:
+            group_of[max(r1, r2)] = min(r1, r2)
+    return group_by_substeps(vel, radius, awake, smallest_half, dt, gravity, group_of, work)
+
+
+@jit_stage
+def one_count(vel, radius, awake, smallest_half, dt, gravity):
+    """Whether every awake body alone needs the same substep count, so every group would: the slowest point speed
+    and turn rate need the count the fastest need (``substep_count`` grows with both)."""
+    low_speed, low_turn, high_speed, high_turn = math.inf, math.inf, 0.0, 0.0
+    for b in range(vel.shape[0]):
+        if awake[b]:
+            speed, turn = point_speed(vel, radius, b, dt, gravity), abs(vel[b, 2])
+            low_speed, low_turn = min(low_speed, speed), min(low_turn, turn)
+            high_speed, high_turn = max(high_speed, speed), max(high_turn, turn)
+    return substep_count(low_speed, low_turn, smallest_half, dt) == substep_count(high_speed, high_turn,
+                                                                                   smallest_half, dt)
+
+
+@jit_stage
+def group_by_substeps(vel, radius, awake, smallest_half, dt, gravity, group_of, work):
+    """Join the sets of ``group_of`` (a union-find forest over the awake bodies) that need the same substep count
+    (``substep_count`` of each set's fastest point and turn) into one group, named by its smallest body, into
+    ``group_of`` (-1 asleep); returns how many groups, or 1 where they would not pay: if they save fewer than
+    SPLIT_SAVING body-substeps in the step (each body's substeps fewer than the fastest group's, summed), or fewer
+    than 1 / SOLVE_SHARE of the passes over every body that their substeps add (each group's substeps pass over
+    every body, as the one count's do)."""
+    speed_turn, label, label_of_count = work
+    n = group_of.shape[0]
+    for b in range(n):
+        speed_turn[b, 0] = 0.0
+        speed_turn[b, 1] = 0.0
+    for b in range(n):  # a root is its set's smallest body: named before its other bodies
+        if awake[b]:
+            group_of[b] = find_root(group_of, b)
+            r = group_of[b]
+            speed_turn[r, 0] = max(speed_turn[r, 0], point_speed(vel, radius, b, dt, gravity))
+            speed_turn[r, 1] = max(speed_turn[r, 1], abs(vel[b, 2]))
+    label_of_count[:] = -1
+    groups, most, passes = 0, 0, 0
+    for b in range(n):
+        if awake[b] and group_of[b] == b:
+            count = substep_count(speed_turn[b, 0], speed_turn[b, 1], smallest_half, dt)
+            if label_of_count[count] < 0:
+                label_of_count[count] = b
+                groups += 1
+                passes += count
+            label[b, 0], label[b, 1], most = label_of_count[count], count, max(most, count)
+    saved = 0
+    for b in range(n):
+        if awake[b]:
+            saved += most - label[group_of[b], 1]
+            group_of[b] = label[group_of[b], 0]
+        else:
+            group_of[b] = -1
+    added = (passes - most) * n
+    return groups if saved >= SPLIT_SAVING and SOLVE_SHARE * saved >= added else 1
+
+
+@jit_stage
+def next_group(group_of, after):
+    """The group after group ``after`` in the order of their smallest bodies (that body), or the number of
+    bodies if there is none."""
+    for b in range(after + 1, group_of.shape[0]):
+        if group_of[b] == b:
+            return b
+    return group_of.shape[0]
+
+
+@jit_stage
+def keep_group(group_keys, group_impulses, n_group, h, kept_keys, kept_impulses, n_kept):
+    """Append a group's last impulses (key, normal and friction impulse) with its substep length h to the
+    step's ``kept`` rows after the first ``n_kept``; returns how many rows are kept then, or -1 if there is
+    no room (the caller grows them and calls again)."""
+    if n_kept + n_group > kept_keys.shape[0]:
+        return -1
+    for c in range(n_group):
+        kept_keys[n_kept + c] = group_keys[c]
+        kept_impulses[n_kept + c, 0] = group_impulses[c, 0]
+        kept_impulses[n_kept + c, 1] = group_impulses[c, 1]
+        kept_impulses[n_kept + c, 2] = h
+    return n_kept + n_group
+
+
+@jit_stage
+def sort_kept(kept_keys, kept_impulses, n_kept, previous_keys, previous_impulses, dt):
+    """The ``n_kept`` kept impulses in increasing key order into ``previous_keys`` / ``previous_impulses`` (the
+    warm start's order), each scaled from its substep length h to h_ref, the first group's (p h_ref / h); returns
+    h_ref (dt if none is kept). Heapsort in place on the kept rows (the keys are distinct)."""
+    h_ref = kept_impulses[0, 2] if n_kept > 0 else dt
+    for start in range(n_kept // 2 - 1, -1, -1):
+        sift_row(kept_keys, kept_impulses, start, n_kept)
+    for end in range(n_kept - 1, 0, -1):
+        swap_rows(kept_keys, kept_impulses, 0, end)
+        sift_row(kept_keys, kept_impulses, 0, end)
+    for c in range(n_kept):
+        scale = h_ref / kept_impulses[c, 2]
+        previous_keys[c] = kept_keys[c]
+        previous_impulses[c, 0] = scale * kept_impulses[c, 0]
+        previous_impulses[c, 1] = scale * kept_impulses[c, 1]
+    return h_ref
+
+
+@jit_stage(inline="always")
+def swap_rows(keys, rows, a, b):
+    """Swap entries a and b of ``keys`` and of the three columns of ``rows``."""
+    keys[a], keys[b] = keys[b], keys[a]
+    for k in range(3):
+        rows[a, k], rows[b, k] = rows[b, k], rows[a, k]
+
+
+@jit_stage(inline="always")
+def sift_row(keys, rows, root, end):
+    """Heapsort's step on rows by key: move row ``root`` down the max-heap of the first ``end`` to its place."""
+    while True:
+        child = 2 * root + 1
+        if child >= end:
+            return
+        if child + 1 < end and keys[child + 1] > keys[child]:
+            child += 1
+        if keys[root] >= keys[child]:
+            return
+        swap_rows(keys, rows, root, child)
+        root = child
