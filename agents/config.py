@@ -265,7 +265,7 @@ def check_config(config: dict[str, Any], algo: str = "ppo") -> None:
     for key in ("n_timesteps", "n_envs"):
         if not isinstance(config.get(key), int) or isinstance(config.get(key), bool) or config[key] < 1:
             raise ConfigError(f"{key} must be an integer >= 1, got {config.get(key)!r}")
-    check_schema(config)
+    check_schema(config, algo)
     policy_kwargs = config.get("policy_kwargs", {})
     if not isinstance(policy_kwargs, dict):
         raise ConfigError(f"policy_kwargs must be a mapping, got {policy_kwargs!r}")
@@ -423,12 +423,15 @@ def check_value(key: str, value: Any, rule: Rule) -> None:
         raise ConfigError(f"{key} must be {allowed}, got {value!r}")
 
 
-def check_schema(config: dict[str, Any]) -> None:
-    """A ConfigError naming the first key (dotted into mappings) whose value is out of its range."""
+def check_schema(config: dict[str, Any], algo: str = "ppo") -> None:
+    """A ConfigError naming the first key (dotted into mappings) whose value is out of its range. An on-policy
+    rollout (``n_steps`` x ``n_envs``) must hold a ``batch_size``; an off-policy ``n_steps`` is the n-step return's
+    length, which the batch does not depend on."""
     for key, rule in SCHEMA.items():
         if key in config and not (config[key] is None and key in ("policy_kwargs", "vec_env_kwargs")):
             check_value(key, config[key], rule)
-    if "batch_size" in config and "n_steps" in config and config.get("n_envs"):
+    on_policy = not algorithms.is_off_policy(algo)
+    if on_policy and "batch_size" in config and "n_steps" in config and config.get("n_envs"):
         if config["batch_size"] > config["n_steps"] * config["n_envs"]:
             raise ConfigError(
                 f"batch_size must be <= n_steps x n_envs = {config['n_steps'] * config['n_envs']} "

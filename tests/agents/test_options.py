@@ -59,6 +59,15 @@ def test_every_key_of_the_schema_refuses_values_out_of_its_range(key, value):
     assert key in message and repr(value) in message and "\n" not in message
 
 
+def test_batch_size_is_bounded_by_the_rollout_on_policy_only():
+    """PPO's n_steps is its rollout (a batch must fit in it); SAC's and TD3's is the n-step return's length."""
+    ppo = load_hyperparams("ppo", "BoxToss-Stack-v0")
+    with pytest.raises(ConfigError, match="batch_size must be <= n_steps x n_envs"):
+        check_config({**ppo, "n_steps": 4, "batch_size": 256}, "ppo")
+    for algo in ("sac", "td3"):
+        check_config({**load_hyperparams(algo, "BoxToss-Stack-v0"), "n_steps": 4, "batch_size": 256}, algo)
+
+
 def exits_with_one_line(capsys, main, argv, message):
     with pytest.raises(SystemExit) as done:
         main(argv)

@@ -59,8 +59,10 @@ def test_train_and_evaluate_a_tiny_run_on_the_stack(tmp_path, algo):
         *TINY[algo],
     ).stdout
     run_dir = tmp_path / "tiny"
-    for name in ("model.zip", "vecnormalize.pkl", "best_model.zip", "evaluations.csv", "timing.json"):
+    for name in ("model.zip", "best_model.zip", "evaluations.csv", "timing.json"):
         assert (run_dir / name).exists(), name
+    # PPO's recipe normalises the observations; SAC's and TD3's read them raw (their untrained actors throw near c = 0)
+    assert (run_dir / "vecnormalize.pkl").exists() == (algo == "ppo")
     saved = yaml.safe_load((run_dir / "config.yml").read_text())
     assert saved["hyperparams"]["env_wrapper"] == "box_toss_env.envs.stack_commands.StackCommands"
     assert load_policy(run_dir)[0].commands_to_actions is not None
