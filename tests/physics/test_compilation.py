@@ -151,6 +151,8 @@ def test_stages_have_no_python_wrapper_and_kernels_release_the_gil():
     counted = sorted(stage.py_func.__name__ for stage in stages if stage.targetoptions["_nrt"])
     assert len(stages) > 40 and counted == [
         "correct_penetrations",
+        "exact_work",
+        "group_arrays",
         "grown_contacts",
         "grown_rows",
         "resting_loads",

@@ -38,8 +38,8 @@ def step_groups(pose, half, vel, radius, everyone, awake, n_awake, smallest_half
     group by group from the first (``find_groups``; n_sub 0: each group counts its own, and ``parent`` is reset for
     the groups to join their islands in). (-1, -1) if ``keys`` is too short (the caller grows it and calls again)."""
     n_sub = substeps(vel, radius, everyone, smallest_half, dt, gravity)
-    if n_awake < 2 or n_sub < 2:
-        return n_sub, -1  # with one substep no group can take fewer
+    if (n_awake - 1) * (n_sub - 1) < SPLIT_SAVING:
+        return n_sub, -1  # no split saves SPLIT_SAVING: at most n_sub - 1 for each body but one (two boxes never)
     groups = find_groups(pose, half, vel, radius, awake, smallest_half, dt, gravity, tolerance, trig, bound, reach,
                          axis, order, low, keys, group_of, work)
     if groups < 0:

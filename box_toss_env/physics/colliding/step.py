@@ -411,6 +411,25 @@ def grown_rows(keys, rows, count):
     return grown_keys, grown
 
 
+@jit_stage(nrt=True)  # it allocates (once a run)
+def group_arrays(nb, capacity):
+    """The groups' arrays of a step (``groups``): each body's group, the mask of the one stepped, their work, its
+    impulses (keys, impulses) and every group's (keys, impulses with h), for ``capacity`` contacts."""
+    group_work = (np.zeros((nb, 2)), np.zeros((nb, 2), np.int64), np.zeros(MAX_SUBSTEPS + 1, np.int64))
+    group_kept = (np.empty(capacity, np.int64), np.empty((capacity, 2)))
+    kept = (np.empty(capacity, np.int64), np.empty((capacity, 3)))
+    return np.full(nb, -1, np.int64), np.zeros(nb, np.bool_), group_work, group_kept, kept
+
+
+@jit_stage(nrt=True)  # it allocates (once a run)
+def exact_work(nb):
+    """The exact solves' work arrays (``solve_substep``'s ``exact``: W, its factor, free velocities, x, the active
+    set, index, y, the contacts' states) and the sweeps' (``gauss_seidel``'s moved)."""
+    return (np.zeros((DIRECT_LIMIT, DIRECT_LIMIT)), np.zeros((DIRECT_LIMIT, DIRECT_LIMIT)), np.zeros(DIRECT_LIMIT),
+            np.zeros(DIRECT_LIMIT), np.zeros(DIRECT_LIMIT, np.bool_), np.zeros(DIRECT_LIMIT, np.int64),
+            np.zeros(DIRECT_LIMIT), np.zeros(DIRECT_LIMIT, np.int64), np.zeros((2, nb), np.bool_))
+
+
 # a grid step's progress, for the kernel to resume ``advance_steps`` where it left off to make room
 NEW_STEP = 0  # a grid step starts: wake, alone, substeps
 WAKING = 1  # the wake's search ran out of room for pairs (the islands it woke stay awake; no new reach)
@@ -477,17 +496,20 @@ def solve_substep(contacts, ids, count, pose, vel, pseudo, params, settings, inv
     return n_stored
 
 
-@jit_stage
+@jit_stage(inline="always")  # into advance_steps, as the substeps were before groups (a call cost 4% of an OnBox throw)
 def advance_substeps(n, n_sub, first_sub, n_previous, h_previous, awake, pose, half, vel, radius, params, settings,
-                     inv_mass, inv_inertia, tolerance, axis, trig, bound, reach, floor_reach, pseudo, kinetic_before,
-                     max_penetration, touched, impacted, supported, first_contact, n_impacts, low, order, pair_keys,
-                     contacts, ids, previous_keys, previous_impulses, exact, use_penalty, use_friction, record,
-                     events):
+                     inv_mass, inv_inertia, tolerance, sweep, body_work, pair_keys, contacts, ids, previous_keys,
+                     previous_impulses, exact, flags, events):
     """The substeps 1.-7. of grid step n over every awake body, from substep first_sub of n_sub, each warm-started
-    from the last (``previous_keys``, ``previous_impulses``: n_previous of substep length h_previous). Returns
-    (substep reached, its contacts, impulses kept, their substep length, DONE), or where it stopped and
-    MORE_PAIRS / MORE_CONTACTS when ``pair_keys`` / ``contacts`` is full (the kernel grows them and calls
-    again)."""
+    from the last (``previous_keys``, ``previous_impulses``: n_previous of substep length h_previous). ``sweep``:
+    (axis, trig, bound, reach, floor_reach, low, order), ``body_work``: (pseudo, kinetic_before, max_penetration,
+    touched, impacted, supported, first_contact, n_impacts), ``flags``: (use_penalty, use_friction, record) (numba
+    inlines no call of more than 30 arguments). Returns (substep reached, its contacts, impulses kept, their substep
+    length, DONE), or where it stopped and MORE_PAIRS / MORE_CONTACTS when ``pair_keys`` / ``contacts`` is full (the
+    kernel grows them and calls again)."""
+    axis, trig, bound, reach, floor_reach, low, order = sweep
+    pseudo, kinetic_before, max_penetration, touched, impacted, supported, first_contact, n_impacts = body_work
+    use_penalty, use_friction, record = flags
     dt, gravity = settings[layout.DT], settings[layout.GRAVITY]
     h, count = dt / n_sub, 0
     for sub in range(first_sub, n_sub):
@@ -554,12 +576,11 @@ def advance_steps(progress, pose, vel, half, params, settings, inv_mass, inv_ine
                   parent, ready, low, order, pair_keys, memory, alone, corners, corner_delassus, corner_ids, contacts,
                   ids, previous_keys, previous_impulses, group_of, in_group, group_work, group_kept, kept, exact,
                   use_penalty, use_friction, record, trajectory, events):
-    """The grid steps while a body is awake (this module's step script: 0. wake, alone, the substeps 1.-7. over
-    all awake bodies or group by group, ``advance_groups``, 8. sleep), from ``progress`` = (step n, awake bodies,
-    impulses kept, their substep length, NEW_STEP / WAKING / IN_SUBSTEPS, substeps, substep, group (-1: one),
-    impulses kept by the group, by the groups). It allocates nothing (and counts no references): when the pairs
-    or the contacts outgrow their arrays it returns, the kernel grows them and calls again with the progress
-    returned. Returns (progress, status, failing step, DONE / MORE_PAIRS / MORE_CONTACTS)."""
+    """The grid steps while a body is awake (the step script: 0. wake, alone, the substeps 1.-7. over all awake
+    bodies or group by group, 8. sleep), from ``progress`` = (step n, awake bodies, impulses kept, their substep
+    length, NEW_STEP / WAKING / IN_SUBSTEPS, substeps, substep, group (-1: one), impulses kept by the group, by the
+    groups). It allocates nothing (nor counts references): when the pairs or contacts outgrow their arrays it returns,
+    and the kernel grows them and calls again. Returns (progress, status, failing step, DONE / MORE_*)."""
     dt, gravity, max_steps, until_rest, threshold, sleep_speed, sleep_time, slop = read_settings(settings)
     n, n_awake, n_previous, h_previous, phase, n_sub, first_sub, group, n_group, n_kept = progress
     nb, count, smallest_half = pose.shape[0], 0, half.min()
@@ -610,18 +631,17 @@ def advance_steps(progress, pose, vel, half, params, settings, inv_mass, inv_ine
                 group_kept, kept, exact, use_penalty, use_friction, record, events)
         else:  # 1.-7. over every awake body
             first_sub, count, n_previous, h_previous, need = advance_substeps(
-                n, n_sub, first_sub, n_previous, h_previous, awake, pose, half, vel, radius, params, settings,
-                inv_mass, inv_inertia, tolerance, axis, trig, bound, reach, floor_reach, pseudo, kinetic_before,
-                max_penetration, touched, impacted, supported, first_contact, n_impacts, low, order, pair_keys,
-                contacts, ids, previous_keys, previous_impulses, exact, use_penalty, use_friction, record, events)
+                n, n_sub, first_sub, n_previous, h_previous, awake, pose, half, vel, radius, params, settings, inv_mass,
+                inv_inertia, tolerance, (axis, trig, bound, reach, floor_reach, low, order), (pseudo, kinetic_before,
+                max_penetration, touched, impacted, supported, first_contact, n_impacts), pair_keys, contacts, ids,
+                previous_keys, previous_impulses, exact, (use_penalty, use_friction, record), events)
         if need != DONE:
             return (n, n_awake, n_previous, h_previous, IN_SUBSTEPS, n_sub, first_sub, group, n_group, n_kept), \
                 layout.STATUS_OK, -1, need
         if grouped:  # every group's last impulses, in key order, for the next step's warm start
             h_previous = sort_kept(kept[0], kept[1], n_kept, previous_keys, previous_impulses, dt)
             n_previous, group = n_kept, -1
-        phase = NEW_STEP
-        n += 1
+        phase, n = NEW_STEP, n + 1
         if not end_step(pose, vel, awake, n_stepped, n, record, trajectory):
             return (n, n_awake, n_previous, h_previous, phase, n_sub, 0, -1, 0, 0), layout.STATUS_NONFINITE, n, DONE
         if until_rest:  # 8. sleep
@@ -660,15 +680,8 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
         capacity = max(8 * nb, MIN_CAPACITY)  # contact rows, each written before it is read: left unzeroed
         contacts, ids = np.empty((capacity, CONTACT_COLUMNS)), np.empty((capacity, ID_COLUMNS), np.int64)
         previous_keys, previous_impulses = np.empty(capacity, np.int64), np.empty((capacity, 2))
-        # the groups of a step (``groups``): each body's, the one stepped, its impulses, every group's (with h)
-        group_of, in_group = np.full(nb, -1, np.int64), np.zeros(nb, np.bool_)
-        group_work = (np.zeros((nb, 2)), np.zeros((nb, 2), np.int64), np.zeros(MAX_SUBSTEPS + 1, np.int64))
-        group_kept = (np.empty(capacity, np.int64), np.empty((capacity, 2)))
-        kept = (np.empty(capacity, np.int64), np.empty((capacity, 3)))
-        exact = (np.zeros((DIRECT_LIMIT, DIRECT_LIMIT)), np.zeros((DIRECT_LIMIT, DIRECT_LIMIT)), np.zeros(DIRECT_LIMIT),
-                 np.zeros(DIRECT_LIMIT), np.zeros(DIRECT_LIMIT, np.bool_), np.zeros(DIRECT_LIMIT, np.int64),
-                 np.zeros(DIRECT_LIMIT), np.zeros(DIRECT_LIMIT, np.int64),  # the exact solves' (solve_substep)
-                 np.zeros((2, nb), np.bool_))  # and the sweeps' (gauss_seidel's moved)
+        group_of, in_group, group_work, group_kept, kept = group_arrays(nb, capacity)
+        exact = exact_work(nb)
         # broadphase (sort and sweep) and islands (sleeping; island: a sleeping body's root body, -1 while awake)
         everyone, awake, island = np.ones(nb, np.bool_), np.ones(nb, np.bool_), np.full(nb, -1, np.int64)
         still_for = np.zeros(nb)  # [s] how long each awake body has been supported and still
