@@ -347,7 +347,7 @@ def onbox_rows(throws: int, batches: int) -> list[tuple[str, float, float, float
     """(env id, bodies, engine kernel us per throw, us per body per simulated second, us per throw of a
     ``make_vec(256, threads=1)`` batch, env included) for BoxToss-v0 and BoxToss-OnBox-v0 at their defaults,
     random actions, until rest (``env_throughput.kernel_seconds_per_throw``, the best of REPEATS runs over the same
-    throws: one run's wall time ranged from 67 to 79 us on an idle machine; ``batches`` batch steps timed)."""
+    throws, as the scenes' timings; ``batches`` batch steps timed)."""
     import gymnasium as gym
 
     from benchmarks.env_throughput import kernel_seconds_per_throw
@@ -358,7 +358,7 @@ def onbox_rows(throws: int, batches: int) -> list[tuple[str, float, float, float
         env = gym.make(env_id)
         env.reset(seed=0)
         kernel_seconds_per_throw(env, actions[:20])  # compile / load, untimed
-        seconds = min(kernel_seconds_per_throw(env, actions[:throws]) for _ in range(REPEATS))  # as the scenes: best of
+        seconds = min(kernel_seconds_per_throw(env, actions[:throws]) for _ in range(REPEATS))
         simulated = simulated_seconds_per_throw(env, actions[:throws])
         bodies = env.unwrapped._state.shape[0]
         env.close()

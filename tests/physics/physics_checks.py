@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from box_toss_env.physics import Scene, Trajectory
+from box_toss_env.physics import Scene, Simulator, Trajectory, layout, make_settings, warm_start_memory
 
 
 def energy(scene: Scene, trajectory: Trajectory, body: int = 0) -> np.ndarray:
@@ -21,3 +21,15 @@ def lowest_corner_height(scene: Scene, trajectory: Trajectory, body: int = 0) ->
     angle = trajectory.angle[:, body]
     reach = 0.5 * box.length * np.abs(np.sin(angle)) + 0.5 * box.width * np.abs(np.cos(angle))
     return trajectory.position[:, body, 1] - reach
+
+
+def advance_in_runs(scene: Scene, runs: int, steps: int, warm_start: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """(state, stats) of the scene after ``runs`` calls of ``steps`` steps each, with one warm start carried through
+    the calls or none."""
+    simulator = Simulator.for_scene(scene, parallel=False)
+    state, params = scene.initial_state(), scene.body_params()
+    stats = np.zeros((scene.n_bodies, layout.STATS_SIZE))
+    warm = warm_start_memory(scene.n_bodies) if warm_start else None
+    for _ in range(runs):
+        simulator.run(state, params, make_settings(scene, steps, until_rest=False), stats, warm_start=warm)
+    return state, stats

@@ -4,8 +4,9 @@ were: the pile ends bit for bit as it does without the box, in chunks as in one 
 
 import numpy as np
 import pytest
+from physics_checks import advance_in_runs
 
-from box_toss_env.physics import Box, KernelFlags, Scene, Simulator, layout, make_settings, warm_start_memory
+from box_toss_env.physics import Box, KernelFlags, Scene, Simulator, layout, make_settings
 from box_toss_env.physics.grouped import GroupedSimulator
 
 SIZE = dict(length=0.4, width=0.2, mass=1.0)
@@ -22,22 +23,11 @@ def pair_and_far_boxes(far: bool) -> Scene:
     return Scene(boxes=tuple(boxes), dt=1 / 60, restitution=0.3, friction=0.5, boxes_collide=True)
 
 
-def advance(scene: Scene, runs: int, steps: int, warm_start: bool = True) -> tuple[np.ndarray, np.ndarray]:
-    """(state, stats) after ``runs`` calls of ``steps`` steps each, one warm start carried through them."""
-    simulator = Simulator.for_scene(scene, parallel=False)
-    state, params = scene.initial_state(), scene.body_params()
-    stats = np.zeros((scene.n_bodies, layout.STATS_SIZE))
-    warm = warm_start_memory(scene.n_bodies) if warm_start else None
-    for _ in range(runs):
-        simulator.run(state, params, make_settings(scene, steps, until_rest=False), stats, warm_start=warm)
-    return state, stats
-
-
 def test_a_pile_far_from_fast_boxes_takes_its_own_substeps_bit_for_bit():
     """With one substep count for every awake body, the pair would take the thrown box's 39 and end
     elsewhere (by rounding at least); with its own it ends exactly as without the far boxes."""
-    with_far, far_stats = advance(pair_and_far_boxes(far=True), 1, 36)
-    alone, alone_stats = advance(pair_and_far_boxes(far=False), 1, 36)
+    with_far, far_stats = advance_in_runs(pair_and_far_boxes(far=True), 1, 36)
+    alone, alone_stats = advance_in_runs(pair_and_far_boxes(far=False), 1, 36)
     assert with_far[:2].tobytes() == alone.tobytes()
     np.testing.assert_array_equal(far_stats[:2, layout.N_IMPACTS], alone_stats[:, layout.N_IMPACTS])
     assert alone_stats[1, layout.N_IMPACTS] > 0  # the dropped box struck the lower one
@@ -48,10 +38,10 @@ def test_groups_run_in_chunks_with_their_warm_start_as_in_one_run():
     """Each group's impulses are kept for the next step's warm start (scaled to one substep length), and so in
     the warm start memory between runs: in chunks as in one run."""
     scene = pair_and_far_boxes(far=True)
-    once, _ = advance(scene, 1, 36)
-    chunked, _ = advance(scene, 6, 6)
+    once, _ = advance_in_runs(scene, 1, 36)
+    chunked, _ = advance_in_runs(scene, 6, 6)
     assert chunked.tobytes() == once.tobytes()
-    cold, _ = advance(scene, 6, 6, warm_start=False)
+    cold, _ = advance_in_runs(scene, 6, 6, warm_start=False)
     assert not np.array_equal(cold, once)  # the warm start carried something
 
 
