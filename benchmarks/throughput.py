@@ -1,7 +1,8 @@
-"""Throughput of BoxToss against the engines a user would pick instead. Prints measured figures,
-writes them to ``docs/throughput.md`` (and docs/batched.md with ``--readme``); asserts nothing.
+"""Throughput of BoxToss against the engines a user would pick instead. Prints measured figures, and writes
+them to ``docs/throughput.md`` with ``--write-docs`` (and docs/batched.md's section with ``--readme``); asserts
+nothing.
 
-    python -m benchmarks.throughput [--quick] [--readme]
+    python -m benchmarks.throughput [--quick] [--write-docs] [--readme]
 
 Measured on this machine in one run:
 - throws per second of one ``BoxToss-v0`` through ``gymnasium.make`` (its wrappers included);
@@ -146,7 +147,10 @@ def memory_per_env(small: int = 256, large: int = 4096) -> tuple[float, float]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="fewer repeats and throws")
-    parser.add_argument("--readme", action="store_true", help="also write the table into docs/batched.md")
+    parser.add_argument("--write-docs", action="store_true", help="write the figures into docs/throughput.md")
+    parser.add_argument(
+        "--readme", action="store_true", help="write them into docs/throughput.md and docs/batched.md's section"
+    )
     args = parser.parse_args()
     repeats = 2 if args.quick else 5
     import numba
@@ -203,8 +207,9 @@ def main() -> None:
     lines[0] = lines[0][:-1] + f"; load average {load} at the end (a shared machine: other jobs' load lowers these)."
     report = "\n".join(lines)
     print(report)
-    DOCS.parent.mkdir(exist_ok=True)
-    write_atomic(DOCS, "# Throughput\n\n" + report + "\n")
+    if args.write_docs or args.readme:
+        DOCS.parent.mkdir(exist_ok=True)
+        write_atomic(DOCS, "# Throughput\n\n" + report + "\n")
     if args.readme:
         replace_section("throughput", report)
 
