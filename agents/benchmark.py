@@ -42,7 +42,7 @@ import yaml
 from agents import algorithms, ceiling, report, section_merge, stack_planner, train
 from agents import config as configuration
 from agents.algorithms import ALGORITHMS
-from agents.command_line import SEED, OneLineParser, folder
+from agents.command_line import SEED, OneLineParser, folder, one_line_errors
 from agents.config import algorithm_kwargs, load_hyperparams
 from agents.doc_sections import README, read_section, replace_section
 from agents.envs import read_env_wrapper
@@ -785,6 +785,12 @@ def make_parser() -> OneLineParser:
 
 
 def main(argv: list[str] | None = None) -> None:
+    """The command; a damaged run file or a file-system error ends it in one line (``one_line_errors``)."""
+    with one_line_errors("python -m agents.benchmark"):
+        run(argv)
+
+
+def run(argv: list[str] | None = None) -> None:
     parser = make_parser()
     args = parser.parse_args(argv)
     variants = [env_id for env_id in args.envs if env_id != GOAL_ENV]
