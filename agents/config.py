@@ -243,8 +243,8 @@ def expression(value: Any) -> str:
         return "dict(" + ", ".join(f"{key}={expression(item)}" for key, item in value.items()) + ")"
     if isinstance(value, (list, tuple)):
         return "[" + ", ".join(expression(item) for item in value) + "]"
-    if isinstance(value, str) and value.startswith("nn."):
-        return value
+    if isinstance(value, str) and value.split(".")[0] in CLASS_ROOTS and "." in value:
+        return value  # a class name: nn.Tanh, th.optim.Adam
     return repr(value)
 
 

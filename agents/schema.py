@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import collections.abc
 import enum
+import functools
 import inspect
 import math
 import types
@@ -95,7 +96,7 @@ RANGES: dict[str, Bounds] = {
     # the policies' constructors
     "net_arch": Bounds(1, keys=("pi", "vf", "qf")),
     "log_std_init": UNBOUNDED,
-    "clip_mean": POSITIVE,
+    "clip_mean": AT_LEAST_0,  # 0: the mean is not clipped (SB3 clips it only for clip_mean > 0)
     "n_critics": AT_LEAST_1,
     # the buffers', the optimiser's and VecNormalize's
     "n_sampled_goal": AT_LEAST_1,
@@ -267,7 +268,12 @@ def _add_sequence(rule: Rule, origin: Any, args: tuple, name: str) -> None:
 def signature_rules(target: Any, supplied: set[str]) -> tuple[dict[str, Rule], bool]:
     """The rules of the keyword arguments of ``target`` (a class or a function) that a configuration may set:
     every parameter but ``self``, those in ``supplied`` and those no configuration can write; and whether
-    ``target`` takes ``**kwargs`` too (then other keys pass)."""
+    ``target`` takes ``**kwargs`` too (then other keys pass). Read once per target (the rules are not changed)."""
+    return _signature_rules(target, frozenset(supplied))
+
+
+@functools.cache
+def _signature_rules(target: Any, supplied: frozenset[str]) -> tuple[dict[str, Rule], bool]:
     function = target.__init__ if isinstance(target, type) else target
     rules, open_ = {}, False
     for name, parameter in inspect.signature(function).parameters.items():
@@ -348,8 +354,10 @@ def zoo_rules() -> dict[str, Rule]:
     }
 
 
+@functools.cache
 def algorithm_rules(algo: str) -> dict[str, Rule]:
-    """Every key a configuration of ``algo`` may hold: ``zoo_rules`` and the constructor's arguments."""
+    """Every key a configuration of ``algo`` may hold: ``zoo_rules`` and the constructor's arguments (read once:
+    the rules are not changed)."""
     rules = zoo_rules()
     for name, parameter in algorithms.constructor_parameters(algo).items():
         rule = rule_for(parameter.annotation, parameter.default, name)

@@ -268,3 +268,21 @@ def exits_with_one_line(capsys, command, argv: list[str], message: str) -> None:
     assert done.value.code not in (0, None)
     err = capsys.readouterr().err.strip()
     assert message in err and len(err.splitlines()) == 1 and "Traceback" not in err, (argv, err)
+
+
+def recipes():
+    import yaml
+
+    from agents.config import HYPERPARAMS, RAW_HYPERPARAMS
+
+    for directory in (HYPERPARAMS, RAW_HYPERPARAMS):
+        for path in sorted(directory.glob("*.yml")):
+            if path.stem in algorithms.ALGORITHMS:
+                for env_id in yaml.safe_load(path.read_text()):
+                    yield pytest.param(path.stem, env_id, directory, id=f"{directory.name}/{path.stem}/{env_id}")
+
+
+@pytest.mark.parametrize("algo, env_id, directory", list(recipes()))
+def test_every_recipe_passes_the_schema(algo, env_id, directory):
+    """The schema refuses what SB3 would refuse or misread, and nothing a recipe of ours holds."""
+    check_config(load_hyperparams(algo, env_id, directory), algo)
