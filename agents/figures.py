@@ -76,7 +76,7 @@ def headline(figures: dict[str, Any]) -> str:
     return (
         f"`python -m agents.main` trains PPO on `{main['env_id']}` for {main['throws']} throws and scores it on "
         f"{main['test_targets']} fixed test targets: {main['success']} success (random throws: "
-        f"{main['random_success']}). Training takes {main['train_cpu']} of CPU time and the whole command "
-        f"{main['command_cpu']}; the wall time was {main['train_wall']} and {main['command_wall']} on "
+        f"{main['random_success']}). Its training run takes {main['train_cpu']} of CPU time and the whole "
+        f"command {main['command_cpu']}; their wall time was {main['train_wall']} and {main['command_wall']} on "
         f"{main['machine']} ([how it was measured](docs/methodology/main-command.md))."
     )

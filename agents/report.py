@@ -284,9 +284,7 @@ def record_video(
 
 
 # -- the README section --------------------------------------------------------------------------
-INTRO = """Written by `python -m agents.main --full --readme` from the runs it trains and evaluates.
-
-**Targets.** Every agent is scored on the same {targets} test targets: target i is what
+INTRO = """**Targets.** Every agent is scored on the same {targets} test targets: target i is what
 `gymnasium.make("{env_id}").reset(seed={first} + i)` draws ({first} to {last}), thrown once with the
 deterministic policy. During training the policy is evaluated on {validation_targets} other fixed targets (seeds
 {validation}...).
@@ -393,8 +391,9 @@ def readme_section(
     if times is not None:
         lines.append(
             f"The main command took {format_seconds(times['command']['wall'])} of wall time and "
-            f"{format_seconds(times['command']['cpu'])} of CPU time, its short run's training "
-            f"{format_seconds(times['training']['wall'])} and {format_seconds(times['training']['cpu'])}."
+            f"{format_seconds(times['command']['cpu'])} of CPU time (its process, every thread); its training run "
+            f"(the short run's training and test evaluation) took {format_seconds(times['training']['wall'])} and "
+            f"{format_seconds(times['training']['cpu'])}."
         )
     shares = [f"{AGENT_LABELS[row['name']]} {row['env_share']:.0%}" for row in rows if row.get("env_share")]
     if shares:
