@@ -33,7 +33,9 @@ import numpy as np
 import yaml
 
 import box_toss_env  # noqa: F401  (registers the BoxToss envs)
+from agents import evaluation, figures
 from agents.config import OneLineParser, load_yaml
+from agents.model_card import write_model_card
 from agents.policies import TrainedPolicy, UnreadableModelError, load_model
 from box_toss_env.files import write_atomic
 
@@ -137,8 +139,6 @@ def wilson_interval(successes: int, n: int, confidence: float = CONFIDENCE) -> t
 def evaluate_agent(agent: PretrainedAgent, seeds=None) -> dict[str, Any]:
     """The agent's scores on the test targets (test episodes for a stack), as ``agents.evaluate`` measures them,
     with the success rate's 95% interval and the reward's mean and standard deviation (the Hub's metric)."""
-    from agents import evaluation
-
     if evaluation.is_stack(agent.env_id):
         episodes, _ = evaluation.evaluate_stack(agent, agent.env_id, agent.config.get("env_kwargs"), seeds)
         results, success, rewards = evaluation.stack_scores(episodes), episodes["success"], episodes["ret"]
@@ -186,8 +186,6 @@ def export(run_dir: Path, models: Path = MODELS) -> Path:
     write_checksums(models)
     results.update(evaluate_agent(load_agent(config["env_id"], config["algo"], models)))
     write_atomic(folder / "results.json", json.dumps(results, indent=2) + "\n")
-    from agents.model_card import write_model_card
-
     write_model_card(folder, config, results)
     write_checksums(models)
     return folder
@@ -196,8 +194,6 @@ def export(run_dir: Path, models: Path = MODELS) -> Path:
 def headline_figures(models: Path = MODELS) -> list[dict[str, Any]]:
     """The ``pretrained`` group of the headline figures: each model's success and interval, in the order the ids
     are registered."""
-    from agents import figures
-
     order = {env_id: k for k, env_id in enumerate(gym.registry)}
     found = [json.loads(path.read_text()) for path in models.glob("*/results.json")]
     group = []
@@ -241,8 +237,6 @@ def main(argv: list[str] | None = None) -> None:
         low, high = results["success_interval"]
         print(f"{folder}: success {results['success_rate']:.1%} ({low:.1%}-{high:.1%}) on {results['n']:,}")
     if not args.no_figures:
-        from agents import figures
-
         figures.update("pretrained", headline_figures(args.models))
 
 
