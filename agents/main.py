@@ -1,8 +1,9 @@
 """Train PPO on a task where the landing face counts, evaluate it next to the baselines, print the table.
 
     box-toss main                   # short PPO run on BoxToss-ThisSideUp-v0 (runs/short), random and oracle
-    box-toss main --full --readme   # also the full run and the physics-fidelity evaluations,
-                                    # then rewrite the agents page (docs/agents.md) and docs/agents/ (a clone's)
+    box-toss main --full --readme   # also the full run and the physics-fidelity evaluations, then rewrite
+                                    # docs/methodology/main-command.md, docs/agents/ and the headline figures
+                                    # (docs/generated/figures.yml, the README's), in a clone
 
 Everything is evaluated on the same 1,024 fixed test targets (``agents.evaluate``). To train longer,
 change ``n_timesteps`` in ``agents/hyperparams/ppo.yml`` and run ``box-toss train``; for every
@@ -12,6 +13,7 @@ option, and the configuration of every training the command will run, is checked
 
 from __future__ import annotations
 
+import os
 import shlex
 import sys
 import time
@@ -49,6 +51,30 @@ def free_name(runs_dir: Path, name: str) -> str:
     )
 
 
+class Stopwatch:
+    """Wall and CPU time (this process's, every thread) over the spans between ``start`` and ``stop``."""
+
+    def __init__(self):
+        self.wall = self.cpu = 0.0
+        self.start()
+
+    def start(self) -> None:
+        self._wall, self._cpu = time.perf_counter(), time.process_time()
+
+    def stop(self) -> None:
+        self.wall += time.perf_counter() - self._wall
+        self.cpu += time.process_time() - self._cpu
+
+    def seconds(self) -> dict[str, float]:
+        return {"wall": self.wall, "cpu": self.cpu}
+
+
+def machine_note() -> str:
+    """Where the figures were measured: the date, the cores and the load at the end (a shared machine)."""
+    load = f"load {os.getloadavg()[0]:.1f} at the end, " if hasattr(os, "getloadavg") else ""
+    return f"a {os.cpu_count()}-core machine shared with other jobs ({load}{time.strftime('%Y-%m-%d')})"
+
+
 def baseline(algo: str, runs_dir: Path, *, replan: bool = True) -> Path:
     """Evaluate a baseline into ``runs_dir/algo`` (kept if already evaluated and not ``replan``)."""
     from agents import evaluation, report
@@ -84,8 +110,8 @@ def check_options(args, common: list[str]) -> None:
     if args.readme:
         if not args.full or args.no_oracle:
             raise CommandError("--readme needs --full and the oracle")
-        if not (DOCS / "agents.md").is_file():
-            raise CommandError(f"--readme rewrites the repository's pages ({DOCS}/agents.md): run it in a clone")
+        if not (DOCS / "index.md").is_file():
+            raise CommandError(f"--readme rewrites the repository's pages ({DOCS}): run it in a clone")
         taken = [
             str(args.runs_dir / name) for name in ("short", "full") if (args.runs_dir / name / "config.yml").exists()
         ]
@@ -107,19 +133,27 @@ def main(argv: list[str] | None = None) -> None:
     with one_line_errors(PROG):
         check_options(args, common)
     start = time.perf_counter()
+    # the main command's own time, wall and CPU: what runs without --full (random, the short run, the oracle)
+    command = Stopwatch()
     with one_line_errors(PROG):
         rows = {"random": baseline("random", runs_dir)}
     short = free_name(runs_dir, "short") if not args.readme else "short"
+    training = Stopwatch()
     rows["short"] = train.main([*common, "--name", short, "--set", f"n_timesteps={args.timesteps}"])
+    training.stop()
+    command.stop()
     if args.full:
         rows["full"] = train.main([*common, "--name", free_name(runs_dir, "full") if not args.readme else "full"])
     with one_line_errors(PROG):
         if not args.no_oracle:
+            command.start()
             rows["oracle"] = baseline("oracle", runs_dir, replan=args.readme)
-        report_results(args, rows, argv, start)
+            command.stop()
+        times = {"command": command.seconds(), "training": training.seconds()}
+        report_results(args, rows, argv, start, times)
 
 
-def report_results(args, rows: dict[str, Path], argv: list[str] | None, start: float) -> None:
+def report_results(args, rows: dict[str, Path], argv: list[str] | None, start: float, times: dict) -> None:
     """The physics-fidelity evaluations (``--full``), the table, and with ``--readme`` the agents page."""
     from agents import evaluation, report
 
@@ -149,7 +183,7 @@ def report_results(args, rows: dict[str, Path], argv: list[str] | None, start: f
         f"tensorboard --logdir {rows['short'] / 'logs'})"
     )
     if args.readme:
-        report.write_docs(rows, FIDELITY)
+        report.write_docs(rows, FIDELITY, times=times, machine=machine_note())
     print(
         f"total wall time {time.perf_counter() - start:.0f} s  "
         f"(command: box-toss main {shlex.join(argv if argv is not None else sys.argv[1:])})"

@@ -9,7 +9,7 @@ success of a Gaussian policy centred on a correct throw, as an off-policy learne
 action noise, SAC's stochastic policy). The width of the region that succeeds, in each space, is what those numbers
 measure; the commands' region is the wider one where they succeed at a larger sigma.
 
-    python -m agents.raw_actions --targets 64 --readme      # the table in docs/agents.md (section raw-actions)
+    python -m agents.raw_actions --targets 64 --readme      # the table in docs/methodology/raw-actions.md
 
 With ``--by-face`` (a variant that names one face a target, BoxToss-ThisSideUp-v0), per target face: where the
 throws that stand the box on it lie in the env's actions (``by_face``; section raw-faces). With ``--reach RUN`` (a
@@ -337,7 +337,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--envs", nargs="+", default=list(ENVS))
     parser.add_argument("--targets", type=int, default=64)
     parser.add_argument("--draws", type=int, default=32, help="noisy throws per target and sigma")
-    parser.add_argument("--readme", action="store_true", help="write the table into docs/agents.md")
+    parser.add_argument("--readme", action="store_true", help="write the table into docs/methodology/raw-actions.md")
     parser.add_argument(
         "--by-face",
         action="store_true",

@@ -19,7 +19,7 @@ ballistic commands where the recipe names ``BallisticThrows``. Two settings are 
 options, and both are set as SB3's here: RLlib adds an artificial (loss-masked) bootstrap timestep to every
 episode, so with one-throw episodes half its rows are artificial; it standardised the advantages over them too
 (``MaskedAdvantagePPOLearner`` standardises over the real throws of each minibatch) and cuts minibatches by rows
-(``ROWS_PER_THROW``). The first was why RLlib's PPO did not learn where SB3's did (docs/rllib.md has the
+(``ROWS_PER_THROW``). The first was why RLlib's PPO did not learn where SB3's did (docs/methodology/rllib.md has the
 figures). Each iteration prints the mean return and the success rate of the sampled (exploring) throws
 (``--diagnostics``: and the learner's figures, ``--eval-every``: and the mean action's success); at the end the
 policy's mean action is evaluated on ``--eval-episodes`` fresh throws.

@@ -131,8 +131,8 @@ def record_variant(
 def docs_section(rows: list[dict[str, Any]]) -> str:
     """The ``variant-gifs`` section: one figure per variant with its seed and result."""
     lines = [
-        "Written by `python -m agents.variant_gifs` (each variant's throw planned by the oracle at its third "
-        "search budget; 360 x 240 at 20 fps):",
+        "Written by `python -m agents.variant_gifs --write-docs` (each variant's throw planned by the oracle at its "
+        "third search budget; 360 x 240 at 20 fps):",
         "",
     ]
     for row in rows:

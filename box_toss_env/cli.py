@@ -36,7 +36,7 @@ EXTRAS = {
 }
 """The extra each subcommand needs, and the modules (with their packages' names) that tell whether it is there."""
 BENCHMARKS = {
-    "engine": "ns per body-step and us per throw of the engine (docs/engine.md)",
+    "engine": "ns per body-step and us per throw of the engine (docs/methodology/engine-benchmark.md)",
     "throughput": "throws per second of the env, single and batched, and of other engines (docs/throughput.md)",
     "cold_start": "the first throw in a fresh interpreter, cold and warm cache (docs/cold-start.md)",
     "env_throughput": "throws per second of one env id, single and batched",

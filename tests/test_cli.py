@@ -100,9 +100,10 @@ def test_bench_outside_a_clone_says_what_it_needs(tmp_path):
     assert "the benchmarks are the repository's" in done.stderr and "clone" in done.stderr
 
 
-def test_throughput_writes_the_docs_only_when_told(tmp_path, monkeypatch):
-    """``box-toss bench throughput --quick`` rewrote the tracked docs/throughput.md; now only --write-docs (or
-    --readme) does. The measurements are replaced by constants: what is tested is where the report goes."""
+def test_throughput_writes_the_docs_only_when_told(monkeypatch):
+    """``box-toss bench throughput --quick`` rewrote the tracked docs/throughput.md; now only --readme writes (its
+    section and the headline figures). The measurements are replaced by constants: what is tested is where the
+    report goes."""
     import benchmarks.throughput as throughput
 
     written = []
@@ -113,11 +114,11 @@ def test_throughput_writes_the_docs_only_when_told(tmp_path, monkeypatch):
     monkeypatch.setattr(throughput, "other_engine_rows", lambda *a: [])
     monkeypatch.setattr(throughput, "missing_engines", lambda: [])
     monkeypatch.setattr(throughput, "memory_per_env", lambda: (100.0, 50.0))
-    monkeypatch.setattr(throughput, "write_atomic", lambda path, text: written.append(path))
-    monkeypatch.setattr(throughput, "replace_section", lambda *a, **k: written.append("section"))
+    monkeypatch.setattr(throughput, "replace_section", lambda name, *a, **k: written.append(name))
+    monkeypatch.setattr(throughput.figures, "update", lambda name, *a, **k: written.append(name))
     monkeypatch.setattr(sys, "argv", ["box-toss bench throughput", "--quick"])
     throughput.main()
     assert written == []
-    monkeypatch.setattr(sys, "argv", ["box-toss bench throughput", "--quick", "--write-docs"])
+    monkeypatch.setattr(sys, "argv", ["box-toss bench throughput", "--quick", "--readme"])
     throughput.main()
-    assert written == [throughput.DOCS]
+    assert written == ["throughput", "throughput"]

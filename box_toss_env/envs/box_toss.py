@@ -213,15 +213,17 @@ class BoxTossEnv(gym.Env):
     returns an (H, W, 3) uint8 frame of the current state; ``"human"`` opens a pygame window and plays
     each throw in real time; ``"rgb_array_list"`` records each throw and ``render()`` returns the
     frames since the last call (the box in the hand, then the whole throw at ``render_fps``, then its
-    result held for a second), for videos of whole throws (``box_toss_env.envs.record_throws`` writes
-    them to a GIF or MP4; Gymnasium's ``RecordVideo`` keeps only one frame per step). A throw that
+    result held for a second). For videos of whole throws, wrap the env in
+    ``box_toss_env.wrappers.RecordThrowVideo`` (Gymnasium's ``RecordVideo`` keeping every frame; the plain
+    ``RecordVideo`` keeps one frame per step, two a throw) or write them to a GIF or MP4 with
+    ``box_toss_env.envs.record_throws``. A throw that
     leaves the home view (release points and targets) is zoomed out to keep the box in frame: one camera
     fitted to the whole throw in recordings, a following camera in the window (``envs.render``). Only
     the last two modes record trajectories, so training without them pays nothing for rendering.
 
     ## Version History
 
-    * v0: initial version.
+    * v0: initial version (``box_toss_env`` 0.1.0; the changelog lists what changed since).
     """
 
     metadata = {"render_modes": RenderModes(RENDER_MODES), "render_fps": 30}

@@ -75,7 +75,7 @@ def test_course_gives_each_checkpoint_its_spread_and_per_face_throws(tmp_path):
     assert [row["steps"] for row in rows] == [0]
     assert rows[0]["std"] == pytest.approx([np.exp(-2.5)] * 3, rel=1e-5)
     assert len(rows[0]["faces"]) == 4
-    for face in rows[0]["faces"]:  # an untrained policy's mean is near action 0, which lands face 0 (docs/agents.md)
+    for face in rows[0]["faces"]:  # an untrained mean is near action 0: face 0 (methodology/raw-actions.md)
         assert abs(face["spin"]) < 0.05 and 0.0 <= face["success"] <= 1.0 and 0.0 <= face["face 0"] <= 1.0
     text = raw_actions.course_table("BoxToss-ThisSideUp-v0", rows, 4, "--steps 0")
     assert "| 0 | 0.082, 0.082, 0.082 |" in text
