@@ -85,13 +85,13 @@ class StackPlanner:
         all_commands, all_scores = np.zeros((0, 3)), np.zeros(0)
         for round_ in range(settings.iterations + 1):
             actions = command_actions(observation, commands, config, settings)
-            outcomes = unwrapped.try_throws(actions, threads=settings.threads)
+            tried = unwrapped.try_throws(actions, threads=settings.threads)
             self.simulated += len(actions)
             centre = np.abs(unwrapped.last_tried[:, k, 0] - unwrapped.target_x)
             # a box lying flat is the best base for the next: height beyond its width is not credited
-            height = outcomes.terms["reward_height"]
+            height = tried.info["reward_height"]
             scores = (
-                outcomes.reward
+                tried.reward
                 - height
                 + np.minimum(height, config.height_weight * width)
                 - settings.centring_weight * centre
@@ -100,8 +100,8 @@ class StackPlanner:
             if scores[i] > best_score:
                 best_score, best_action = scores[i], actions[i]
             all_commands, all_scores = np.vstack((all_commands, commands)), np.concatenate((all_scores, scores))
-            flat_on_top = outcomes.terms["reward_height"][i] >= 0.95 * config.height_weight * width
-            if outcomes.success[i] or (flat_on_top and centre[i] < 0.03 and not outcomes.fell[i]):
+            flat_on_top = height[i] >= 0.95 * config.height_weight * width
+            if tried.info["success"][i] or (flat_on_top and centre[i] < 0.03 and not tried.info["fell"][i]):
                 break
             if round_ == settings.iterations:
                 break

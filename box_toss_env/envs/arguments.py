@@ -190,10 +190,10 @@ def _cell(text: str) -> str:
     return text.replace("|", "\\|")
 
 
-def arguments_table() -> str:
-    """The Markdown table of ``ENV_ARGUMENTS``: argument, type, default, allowed range, meaning."""
+def arguments_table(arguments: tuple[Argument, ...] = ENV_ARGUMENTS) -> str:
+    """The Markdown table of ``arguments`` (``ENV_ARGUMENTS``): argument, type, default, allowed range, meaning."""
     lines = ["| Argument | Type | Default | Range | Meaning |", "|---|---|---|---|---|"]
-    for a in ENV_ARGUMENTS:
+    for a in arguments:
         allowed = "" if a.allowed is None else f"{a.allowed}" + (" each end" if "float, float" in a.type else "")
         lines.append(f"| ``{a.name}`` | {_cell(a.type)} | {_cell(a.shown_default)} | {allowed} | {_cell(a.doc)} |")
     return "\n".join(lines)

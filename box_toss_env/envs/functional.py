@@ -37,11 +37,10 @@ import numpy as np
 
 from box_toss_env.envs import task
 from box_toss_env.envs.arguments import CORE_ARGUMENTS, with_defaults
-from box_toss_env.physics import Box, Scene, Simulator, check_finite_stats, layout, make_settings
+from box_toss_env.envs.engine import EngineConfig, make_engine
+from box_toss_env.physics import Simulator, check_finite_stats, layout
 from box_toss_env.physics.grouped import GroupedSimulator
 from box_toss_env.physics.grouped import make_simulator as make_grouped_simulator
-from box_toss_env.physics.kernels import KernelFlags
-from box_toss_env.physics.ranges import check_step_count
 
 
 # the columns the reset's and the step's info read
@@ -156,37 +155,26 @@ class BoxTossFunctional:
         self.arguments = args = with_defaults(kwargs, CORE_ARGUMENTS, type(self).__name__)
         task_names = [name for name in CORE_ARGUMENTS if name not in ("solver", "dt")]
         self.config = config = task.make_task_config(**{name: args[name] for name in task_names})
-        # the engine validates the solver settings (dt, solver, material) and names what is wrong
-        scene = Scene(
-            boxes=(
-                Box(
-                    length=args["box_length"],
-                    width=args["box_width"],
-                    mass=config.mass_range[1],
-                    position=(config.release_x_range[0], config.release_height_range[0]),
-                ),
-            ),
-            dt=args["dt"],
-            gravity=-config.gravity,
-            restitution=config.restitution_range[1],
-            friction=config.friction_range[1],
-            penalty_stiffness=config.penalty_stiffness,
-            solver=args["solver"],
+        # the engine validates the solver settings (dt, solver, material) and names what is wrong; with a base box
+        # the thrown box and the base are one scene of colliding boxes (the colliding kernel), without one the
+        # floor-only kernel
+        engine = make_engine(
+            EngineConfig(
+                box_size=(args["box_length"], args["box_width"]),
+                mass=config.mass_range[1],
+                release=(config.release_x_range[0], config.release_height_range[0]),
+                gravity=config.gravity,
+                restitution=config.restitution_range[1],
+                friction=config.friction_range[1],
+                penalty_stiffness=config.penalty_stiffness,
+                solver=args["solver"],
+                dt=args["dt"],
+                max_sim_time=config.max_sim_time,
+                boxes_collide=config.base_box,
+            )
         )
-        self.solver, self.dt = scene.solver, scene.dt
-        self.max_steps = max(1, check_step_count("max_sim_time", config.max_sim_time, scene.dt))
-        # with a base box the thrown box and the base are one scene of colliding boxes (the colliding kernel);
-        # without one, the floor-only kernel, which compiles no box-box contact at all
-        self.flags = KernelFlags(
-            solver=scene.solver,
-            use_impulses=True,
-            use_penalty=scene.has_penalty,
-            use_friction=config.friction_range[1] > 0.0,
-            record=False,
-            parallel=False,
-            boxes_collide=config.base_box,
-        )
-        self.settings = make_settings(scene, self.max_steps, until_rest=True)
+        self.solver, self.dt, self.max_steps = engine.solver, engine.dt, engine.max_steps
+        self.flags, self.settings = engine.flags, engine.settings
         self.observation_low, self.observation_high = task.observation_bounds(config, self.max_steps * self.dt)
 
     # -- the batch and the engine -------------------------------------------------------------------
