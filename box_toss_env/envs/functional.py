@@ -148,6 +148,7 @@ class BoxTossFunctional:
         max_steps: the most time steps of a throw (``max_sim_time`` in whole steps).
         flags: the compile-time switches of the engine kernel (``physics.KernelFlags``).
         settings: the engine's settings array (dt, gravity, sleep, ...; ``physics.layout``).
+        engine_config: what the task asks of the engine (``engine.make_engine`` made the four above from it).
         observation_low, observation_high: float32 bounds no observation leaves (``task.observation_bounds``).
     """
 
@@ -155,24 +156,9 @@ class BoxTossFunctional:
         self.arguments = args = with_defaults(kwargs, CORE_ARGUMENTS, type(self).__name__)
         task_names = [name for name in CORE_ARGUMENTS if name not in ("solver", "dt")]
         self.config = config = task.make_task_config(**{name: args[name] for name in task_names})
-        # the engine validates the solver settings (dt, solver, material) and names what is wrong; with a base box
-        # the thrown box and the base are one scene of colliding boxes (the colliding kernel), without one the
-        # floor-only kernel
-        engine = make_engine(
-            EngineConfig(
-                box_size=(args["box_length"], args["box_width"]),
-                mass=config.mass_range[1],
-                release=(config.release_x_range[0], config.release_height_range[0]),
-                gravity=config.gravity,
-                restitution=config.restitution_range[1],
-                friction=config.friction_range[1],
-                penalty_stiffness=config.penalty_stiffness,
-                solver=args["solver"],
-                dt=args["dt"],
-                max_sim_time=config.max_sim_time,
-                boxes_collide=config.base_box,
-            )
-        )
+        # the engine validates the solver settings (dt, solver, material) and names what is wrong
+        self.engine_config = engine_config(config, args["box_length"], args["box_width"], args["solver"], args["dt"])
+        engine = make_engine(self.engine_config)
         self.solver, self.dt, self.max_steps = engine.solver, engine.dt, engine.max_steps
         self.flags, self.settings = engine.flags, engine.settings
         self.observation_low, self.observation_high = task.observation_bounds(config, self.max_steps * self.dt)
@@ -392,6 +378,25 @@ class BoxTossFunctional:
             f"stiffness (dt={self.dt:g} s with penalty_stiffness={stiffness:g} N/m): use a smaller dt "
             "(e.g. 1/1024 s for 1e5 N/m), a softer penalty_stiffness, or solver='robust'"
         )
+
+
+def engine_config(config: task.TaskConfig, box_length: float, box_width: float, solver: str, dt: float) -> EngineConfig:
+    """What a one-throw task asks of the engine: its box, the largest mass, friction and restitution it draws,
+    the solver and step; with a base box the thrown box and the base are one scene of colliding boxes (the
+    colliding kernel), without one the floor-only kernel."""
+    return EngineConfig(
+        box_size=(box_length, box_width),
+        mass=config.mass_range[1],
+        release=(config.release_x_range[0], config.release_height_range[0]),
+        gravity=config.gravity,
+        restitution=config.restitution_range[1],
+        friction=config.friction_range[1],
+        penalty_stiffness=config.penalty_stiffness,
+        solver=solver,
+        dt=dt,
+        max_sim_time=config.max_sim_time,
+        boxes_collide=config.base_box,
+    )
 
 
 def base_landing_info(

@@ -112,6 +112,7 @@ class SceneBatch:
         warm: (n, rows, layout.WARM_START_SIZE) each scene's warm start (contacts and sleep), carried from throw to
             throw; (n, 0, ...) when bodies meet only the floor.
         before: (n, max_bodies, 6) the states before the last throw.
+        actions: (n, 3) the last throw's actions (checked and clipped; zero before the first).
         thrown: (n,) throws made in each episode.
         memory: (n, memory_size) what the task carries from throw to throw (the stack's height, ...).
         terminated: (n,) whether the last throw ended the episode.
@@ -123,6 +124,7 @@ class SceneBatch:
     stats: np.ndarray
     warm: np.ndarray
     before: np.ndarray
+    actions: np.ndarray
     thrown: np.ndarray
     memory: np.ndarray
     terminated: np.ndarray
@@ -211,6 +213,7 @@ class MultiThrowFunctional:
             stats=np.zeros((*bodies, layout.STATS_SIZE)),
             warm=np.zeros((n, warm_rows, layout.WARM_START_SIZE)),
             before=np.zeros((*bodies, layout.STATE_SIZE)),
+            actions=np.zeros((n, task.ACTION_SIZE)),
             thrown=np.zeros(n, dtype=np.int64),
             memory=np.zeros((n, t.memory_size)),
             terminated=np.zeros(n, dtype=bool),
@@ -236,7 +239,15 @@ class MultiThrowFunctional:
         episodes = self.task.draw(uniforms)
         batch.episodes[rows] = episodes
         batch.params[rows] = self.task.body_params(episodes)
-        for array in (batch.state, batch.warm, batch.before, batch.thrown, batch.memory, batch.terminated):
+        for array in (
+            batch.state,
+            batch.warm,
+            batch.before,
+            batch.actions,
+            batch.thrown,
+            batch.memory,
+            batch.terminated,
+        ):
             array[rows] = 0
         return batch
 
@@ -262,6 +273,7 @@ class MultiThrowFunctional:
     def launch(self, batch: SceneBatch, actions: np.ndarray) -> SceneBatch:
         """Each env throws its next body: it leaves its release pose with the checked ``actions`` (n, 3)."""
         batch.before[:] = batch.state
+        batch.actions[:] = actions
         rows = self.next_rows(batch)
         release = self.task.release(batch.episodes, batch.thrown)
         batch.state[np.arange(batch.n), rows] = self.task.throw_states(release, actions)
