@@ -37,8 +37,8 @@ HIDDEN_DEFAULTS: dict[str, Any] = {
 """Where ``BoxToss-HiddenPhysics-v0``'s defaults differ from ``BoxToss-v0``'s: the pose asked for (near the target,
 a long side down) and the dynamics, drawn wide per episode."""
 
-_LEFT_OUT = ("mass", "friction", "restitution", "observe_dynamics", "base_box", "base_length_range")
-_LEFT_OUT = (*_LEFT_OUT, "base_height_range", "base_mass", "render_fps")
+_LEFT_OUT: tuple[str, ...] = ("mass", "friction", "restitution", "observe_dynamics", "base_box")
+_LEFT_OUT += ("base_length_range", "base_height_range", "base_mass", "render_fps")
 
 
 def _argument(name: str) -> Argument:
