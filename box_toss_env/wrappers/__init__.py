@@ -2,6 +2,4 @@
 (``sb3_adapter``), next-step autoreset for RLlib (``next_step``), observation normalisation for same-step vector
 envs (``normalize``), and ballistic throw commands for vector envs (``ballistic``). The native vector env itself
 is ``box_toss_env.envs.box_toss_vector``.
-
-This package was ``box_toss_env.vector``; that import path still works (the same modules).
 """
