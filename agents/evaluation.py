@@ -31,7 +31,7 @@ from agents.config import load_yaml, parse_override
 from agents.policies import ConstantPolicy, GoalPolicy, Policy, RandomPolicy, TrainedPolicy, load_model
 from agents.run_folder import RunFolderError, check_component, write_atomic
 from box_toss_env.envs import task
-from box_toss_env.envs.box_toss import EnergyGainError
+from box_toss_env.envs.functional import EnergyGainError
 from box_toss_env.physics import NonFiniteStateError
 
 TEST_FIRST_SEED, TEST_TARGETS = 10_000, 1_024  # the report's targets

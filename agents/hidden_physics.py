@@ -40,7 +40,7 @@ import gymnasium as gym
 import numpy as np
 
 from agents.doc_sections import REPO, replace_section
-from box_toss_env.envs import task
+from box_toss_env.envs import task_columns
 from box_toss_env.files import write_atomic
 
 ENV_ID = "BoxToss-HiddenPhysics-v0"
@@ -124,7 +124,7 @@ def planned(oracle_settings, blind: bool = False, **env_kwargs) -> Act:
             if blind:
                 config = one_throw.unwrapped.config
                 middle = [0.5 * sum(r) for r in (config.mass_range, config.friction_range, config.restitution_range)]
-                episodes.data[:, task.EP_DYNAMICS] = middle
+                episodes.data[:, task_columns.EP_DYNAMICS] = middle
             plan.append(OraclePlanner(oracle_settings).plan(ThrowSimulator(one_throw, threads=1), episodes))
         return plan[0]
 

@@ -3,7 +3,7 @@
 ``ENV_ARGUMENTS`` is the one declaration. What reads it:
 
 - ``BoxTossEnv.__init__`` takes its defaults (``ENV_DEFAULTS``) and refuses a name it does not list;
-- the validation (``task.make_task_config``, ``task.ENV_RANGES``) takes the ranges;
+- the validation (``task_config.make_task_config``, ``task_config.ENV_RANGES``) takes the ranges;
 - the "Arguments" table of ``BoxTossEnv``'s docstring (the environment page and ``help()``) is
   ``arguments_table()``;
 - ``BoxTossFunctional`` (``envs.functional``) takes the same arguments, less the rendering ones.

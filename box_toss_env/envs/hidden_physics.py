@@ -6,7 +6,7 @@ from typing import Any, cast
 
 import numpy as np
 
-from box_toss_env.envs import task
+from box_toss_env.envs import task, task_columns
 from box_toss_env.envs.hidden_physics_task import HIDDEN_ARGUMENTS, HiddenPhysicsTask
 from box_toss_env.envs.multi_throw_env import MultiThrowEnv, MultiThrowVectorEnv, document_arguments
 from box_toss_env.physics import layout
@@ -117,7 +117,7 @@ class BoxTossHiddenPhysicsEnv(MultiThrowEnv):
         batch, config, last = self._batch, self.config, self._last_info
         state = batch.state[0, 0].copy()
         if self.thrown == 0:  # in the hand
-            state[: layout.ANGLE + 1] = batch.episodes[0, task.EP_RELEASE]
+            state[: layout.ANGLE + 1] = batch.episodes[0, task_columns.EP_RELEASE]
         half = np.array([[config.half_length, config.half_width]])
         bounds = bounds_of_boxes(box_vertices(state[None, :2], state[None, 2], half))[0]
         x_min = min(config.release_x_range[0], config.target_x_range[0], bounds[0]) - 0.6
@@ -132,9 +132,9 @@ class BoxTossHiddenPhysicsEnv(MultiThrowEnv):
             position=state[None, :2],
             angle=state[None, 2],
             half_extents=half,
-            target_x=float(batch.episodes[0, task.EP_TARGET_X]),
+            target_x=float(batch.episodes[0, task_columns.EP_TARGET_X]),
             target_tolerance_m=config.position_tolerance,
-            target_label=task.describe_target_faces(batch.episodes[0, task.EP_TARGET_FACES]),
+            target_label=task.describe_target_faces(batch.episodes[0, task_columns.EP_TARGET_FACES]),
             text_lines=(f"throw {self.thrown} of {self.task.max_throws}", f"score {self._score:+.2f}"),
             result_lines=result,
             result_success=bool(last["success"]) if last is not None and self._needs_reset else None,

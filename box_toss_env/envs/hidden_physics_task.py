@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from box_toss_env.envs import task
+from box_toss_env.envs import task, task_columns, task_config
 from box_toss_env.envs.arguments import ARGUMENTS, Argument
 from box_toss_env.envs.functional import BoxTossFunctional, ThrowBatch
 from box_toss_env.physics import layout
@@ -66,7 +66,7 @@ O_FACES, O_LANDING, O_AT_REST, O_ACTION, O_THROWS = 5, 9, 13, 14, 17
 
 class HiddenPhysicsTask:
     """``BoxToss-HiddenPhysics-v0`` for the multi-throw core (module docstring): ``episodes`` rows are one-throw
-    episodes (``task.Episodes``' columns); the scene is the one box, thrown again each time. Keyword arguments:
+    episodes (``task_config.Episodes``' columns); the scene is the one box, thrown again each time. Keyword arguments:
     ``HIDDEN_ARGUMENTS``' but the rendering ones."""
 
     carries_bodies = False
@@ -92,37 +92,37 @@ class HiddenPhysicsTask:
     def throw_batch(self, batch) -> ThrowBatch:
         """The batch's last throws as the one-throw core's batch (views of its arrays)."""
         arrays = (batch.params[:, 0], batch.state[:, 0], batch.stats[:, 0])
-        return ThrowBatch(task.Episodes(batch.episodes), *arrays, params_written=True)
+        return ThrowBatch(task_config.Episodes(batch.episodes), *arrays, params_written=True)
 
     def draw(self, uniforms: np.ndarray) -> np.ndarray:
-        episodes = task.Episodes.empty(len(uniforms), self.episode_size)
+        episodes = task_config.Episodes.empty(len(uniforms), self.episode_size)
         return task.episodes_from_uniforms(uniforms, self.config, episodes).data
 
     def body_params(self, episodes: np.ndarray) -> np.ndarray:
         params = np.zeros((len(episodes), layout.PARAM_SIZE))
-        return task.write_body_params(params, task.Episodes(episodes), self.config)[:, None]
+        return task.write_body_params(params, task_config.Episodes(episodes), self.config)[:, None]
 
     def release(self, episodes: np.ndarray, thrown: np.ndarray) -> np.ndarray:
-        return episodes[:, task.EP_RELEASE]
+        return episodes[:, task_columns.EP_RELEASE]
 
     def throw_states(self, release: np.ndarray, actions: np.ndarray) -> np.ndarray:
         """The one-throw core's launch (``task.write_initial_states``) from ``release``."""
-        episodes = task.Episodes.empty(len(release), self.episode_size)
-        episodes.data[:, task.EP_RELEASE] = release
+        episodes = task_config.Episodes.empty(len(release), self.episode_size)
+        episodes.data[:, task_columns.EP_RELEASE] = release
         states = np.empty((len(release), layout.STATE_SIZE))
         return task.write_initial_states(states, episodes, task.actions_to_throws(actions, self.config))
 
     def observe(self, batch) -> np.ndarray:
         landed = batch.thrown > 0
-        hand = batch.episodes[:, task.EP_RELEASE]
+        hand = batch.episodes[:, task_columns.EP_RELEASE]
         landing = batch.state[:, 0]
         at_rest = ~np.isnan(batch.stats[:, 0, layout.REST_TIME]) & landed
         parts = [
             hand[:, :2],
             np.cos(hand[:, 2:3]),
             np.sin(hand[:, 2:3]),
-            batch.episodes[:, task.EP_TARGET_X : task.EP_TARGET_X + 1],
-            batch.episodes[:, task.EP_TARGET_FACES],
+            batch.episodes[:, task_columns.EP_TARGET_X : task_columns.EP_TARGET_X + 1],
+            batch.episodes[:, task_columns.EP_TARGET_FACES],
             landing[:, layout.X : layout.Y + 1],
             np.where(landed, np.cos(landing[:, layout.ANGLE]), 0.0)[:, None],
             np.sin(landing[:, layout.ANGLE : layout.ANGLE + 1]),
@@ -143,7 +143,7 @@ class HiddenPhysicsTask:
         """The one-throw reset's info (target, faces, release pose and the hidden dynamics, for analysis and for
         planners told them)."""
         throw_batch = ThrowBatch(
-            task.Episodes(batch.episodes), batch.params[:, 0], batch.state[:, 0], batch.stats[:, 0]
+            task_config.Episodes(batch.episodes), batch.params[:, 0], batch.state[:, 0], batch.stats[:, 0]
         )
         return self.throw.reset_info(throw_batch)
 
@@ -152,8 +152,8 @@ class HiddenPhysicsTask:
         hold the zeros before the first throw."""
         config = self.config
         one_low, one_high = task.observation_bounds(config, horizon)
-        landing = slice(task.OBS_X, task.OBS_SIN + 1)
-        target = task.OBS_TARGET_X
+        landing = slice(task_columns.OBS_X, task_columns.OBS_SIN + 1)
+        target = task_columns.OBS_TARGET_X
         low = [config.release_x_range[0], config.release_height_range[0], -1.0, -1.0, one_low[target]]
         high = [config.release_x_range[1], config.release_height_range[1], 1.0, 1.0, one_high[target]]
         low += [0.0] * 4 + [min(v, 0.0) for v in one_low[landing]] + [0.0] + [-1.0] * 3 + [0.0]

@@ -37,7 +37,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from box_toss_env.envs import task
+from box_toss_env.envs import task, task_columns
 from box_toss_env.envs.engine import EngineConfig, make_engine
 from box_toss_env.envs.functional import EnergyGainError
 from box_toss_env.physics import Simulator, check_finite_stats, layout, warm_start_memory
@@ -213,7 +213,7 @@ class MultiThrowFunctional:
             stats=np.zeros((*bodies, layout.STATS_SIZE)),
             warm=np.zeros((n, warm_rows, layout.WARM_START_SIZE)),
             before=np.zeros((*bodies, layout.STATE_SIZE)),
-            actions=np.zeros((n, task.ACTION_SIZE)),
+            actions=np.zeros((n, task_columns.ACTION_SIZE)),
             thrown=np.zeros(n, dtype=np.int64),
             memory=np.zeros((n, t.memory_size)),
             terminated=np.zeros(n, dtype=bool),
@@ -299,7 +299,7 @@ class MultiThrowFunctional:
 
     def transition(self, batch: SceneBatch, actions, simulator: SceneSimulator) -> SceneBatch:
         """``launch`` then ``simulate``: actions (n, 3) in [-1, 1] (clipped; checked) to the scenes at rest."""
-        actions = self.check_actions(actions, (batch.n, task.ACTION_SIZE))
+        actions = self.check_actions(actions, (batch.n, task_columns.ACTION_SIZE))
         return self.simulate(self.launch(batch, actions), simulator)
 
     # -- observation, reward, the episode's end ------------------------------------------------------------

@@ -27,7 +27,7 @@ from gymnasium.error import ResetNeeded
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from box_toss_env.envs import task
+from box_toss_env.envs import task_columns
 from box_toss_env.envs.arguments import Argument, arguments_table
 from box_toss_env.envs.box_toss import check_render_mode_type
 from box_toss_env.envs.box_toss_vector import MAX_NUM_ENVS, with_masks
@@ -66,7 +66,7 @@ class MultiThrowEnv(gym.Env):
         )
         self.core = core = MultiThrowFunctional(self.task_class(**kwargs))
         self.config, self.dt, self.max_steps, self.flags = core.config, core.dt, core.max_steps, core.flags
-        self.action_space = spaces.Box(-1.0, 1.0, shape=(task.ACTION_SIZE,), dtype=np.float32)
+        self.action_space = spaces.Box(-1.0, 1.0, shape=(task_columns.ACTION_SIZE,), dtype=np.float32)
         self.observation_space = spaces.Box(core.observation_low, core.observation_high, dtype=np.float32)
         self._batch = core.empty(1)
         self._needs_reset = True

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from box_toss_env.envs import task
+from box_toss_env.envs import task_columns, task_config
 from box_toss_env.envs.arguments import ARGUMENTS, PAIR, Argument
 from box_toss_env.envs.engine import EngineConfig
 from box_toss_env.physics import layout
@@ -43,7 +43,7 @@ STACK_RANGES = {
     "fall_tolerance": Range(0.0, 1e3, "m", low_open=True),
     "success_fraction": Range(0.0, 1.0, low_open=True),
 }
-"""The stacking env's own arguments and their allowed ranges (the others are ``task.ENV_RANGES``')."""
+"""The stacking env's own arguments and their allowed ranges (the others are ``task_config.ENV_RANGES``')."""
 
 
 def _one_throw(name: str, default: Any, doc: str = "") -> Argument:
@@ -193,7 +193,7 @@ def make_stack_config(**kwargs) -> StackConfig:
     if unknown:
         raise TypeError(f"BoxTossStackEnv() got an unexpected keyword argument {unknown[0]!r}")
     kwargs = {a.name: kwargs.get(a.name, a.default) for a in STACK_ARGUMENTS if a.group != "render"}
-    ranges = {**task.ENV_RANGES, **STACK_RANGES}
+    ranges = {**task_config.ENV_RANGES, **STACK_RANGES}
     values = dict(kwargs)
     values["n_boxes"] = check_integer("n_boxes", kwargs["n_boxes"], 1, MAX_BOXES)
     for name in (
@@ -206,7 +206,7 @@ def make_stack_config(**kwargs) -> StackConfig:
         "target_x_range",
         "launch_angle_range",
     ):
-        values[name] = task.check_interval(name, kwargs[name], ranges[name])
+        values[name] = task_config.check_interval(name, kwargs[name], ranges[name])
     for name in (
         "friction",
         "restitution",
@@ -441,7 +441,7 @@ def observation_bounds(config: StackConfig, horizon: float) -> tuple[np.ndarray,
     + g y_release_max, and contacts never add any, so the scene never holds more than E = n m_max e. Every
     body's speed is then below sqrt(2 E / m_min), its spin below sqrt(2 E / I_min), its centre below
     E / (m_min g) above the floor plus its corner radius, and it travels less than that speed times the
-    whole episode's simulated time n * horizon from the hand. Each bound is ``task.ENERGY_MARGIN`` times that;
+    whole episode's simulated time n * horizon from the hand. Each bound is ``task_columns.ENERGY_MARGIN`` times that;
     a column whose value is fixed gets bounds one float32 step either side of it; columns that are zero
     before a box is thrown (or after the last) include 0.
     """
@@ -458,7 +458,7 @@ def observation_bounds(config: StackConfig, horizon: float) -> tuple[np.ndarray,
             + config.gravity * config.release_height_range[1]
         )
     )
-    margin = task.ENERGY_MARGIN
+    margin = task_columns.ENERGY_MARGIN
     speed = margin * math.sqrt(2.0 * energy / m_lo)
     spin = margin * math.sqrt(2.0 * energy / inertia_min)
     reach = speed * n * horizon

@@ -11,7 +11,7 @@ from gymnasium.error import ResetNeeded
 
 import box_toss_env  # noqa: F401  (registers the ids)
 from box_toss_env.envs import hidden_physics_task as hidden
-from box_toss_env.envs import task
+from box_toss_env.envs import task_columns
 from box_toss_env.envs.hidden_physics import BoxTossHiddenPhysicsEnv, BoxTossHiddenPhysicsVectorEnv
 from box_toss_env.envs.multi_throw import MultiThrowFunctional
 
@@ -59,7 +59,7 @@ def test_the_dynamics_are_drawn_but_not_observed():
     core = MultiThrowFunctional(hidden.HiddenPhysicsTask())
     uniforms = np.random.default_rng(1).random((64, core.task.episode_size))
     other = uniforms.copy()
-    other[:, task.EP_DYNAMICS] = np.random.default_rng(2).random((64, 3))
+    other[:, task_columns.EP_DYNAMICS] = np.random.default_rng(2).random((64, 3))
     first, second = (core.initial_from_uniforms(u, core.empty(64)) for u in (uniforms, other))
     assert core.observation(first).tobytes() == core.observation(second).tobytes()
     assert not np.array_equal(first.params, second.params)
