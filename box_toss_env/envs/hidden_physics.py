@@ -25,7 +25,7 @@ class BoxTossHiddenPhysicsEnv(MultiThrowEnv):
     (friction), how high it bounces (restitution). Mass changes little in a box-floor throw; it is drawn so that
     nothing about the box is given. A throw is exactly ``BoxToss-v0``'s throw of the same episode and action (the
     same core, engine and score, ``functional.BoxTossFunctional``; tested), so a planner told the dynamics is the
-    one-throw oracle: that is the task's ceiling (``agents.hidden_physics``, docs/hidden_physics.md).
+    one-throw oracle: that is the task's ceiling (``agents.hidden_physics_tier``, docs/hidden_physics.md).
 
     **Success**: a throw comes to rest within ``position_tolerance`` (0.1 m) of the target with a target face
     down (by default a long side: ``target_face="long_side"``), in as few throws as possible: the episode ends at

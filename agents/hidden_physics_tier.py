@@ -14,9 +14,9 @@ throws), the throws it took, success at the first throw, and the return.
   and PPO with stacked observations (SB3's ``VecFrameStack`` over the whole budget of throws, an MLP), both on
   the native batched env, observations normalised (``VecNormalize``), acting deterministically when tested.
 
-    python -m agents.hidden_physics ceiling                  # ceiling, blind planner and random rows
-    python -m agents.hidden_physics train                    # the 6 training runs, one after another
-    python -m agents.hidden_physics report --readme          # the table into docs/hidden_physics.md
+    python -m agents.hidden_physics_tier ceiling                  # ceiling, blind planner and random rows
+    python -m agents.hidden_physics_tier train                    # the 6 training runs, one after another
+    python -m agents.hidden_physics_tier report --readme          # the table into docs/hidden_physics.md
 
 Each command adds its rows to ``docs/agents/hidden_physics.json`` (written atomically; a run already there is
 skipped, so ``train`` resumes where a stopped session left it). Its layout, for other tables: ``{"env_id",
@@ -40,7 +40,9 @@ import gymnasium as gym
 import numpy as np
 
 from agents.doc_sections import REPO, replace_section
+from agents.oracle import OraclePlanner, OracleSettings, ThrowSimulator, episodes_from_infos
 from box_toss_env.envs import task_columns
+from box_toss_env.envs.hidden_physics_task import HiddenPhysicsTask
 from box_toss_env.files import write_atomic
 
 ENV_ID = "BoxToss-HiddenPhysics-v0"
@@ -112,9 +114,6 @@ def play(act: Act, n_episodes: int = TEST_EPISODES, first_seed: int = TEST_FIRST
 def planned(oracle_settings, blind: bool = False, **env_kwargs) -> Act:
     """The oracle's throw of each episode, planned once from the reset infos (the true dynamics, or with
     ``blind`` the middle of each range) and thrown every time."""
-    from agents.oracle import OraclePlanner, ThrowSimulator, episodes_from_infos
-    from box_toss_env.envs.hidden_physics_task import HiddenPhysicsTask
-
     one_throw = gym.make("BoxToss-v0", **HiddenPhysicsTask(**env_kwargs).one_throw_arguments())
     plan: list[np.ndarray] = []
 
@@ -133,8 +132,6 @@ def planned(oracle_settings, blind: bool = False, **env_kwargs) -> Act:
 
 def reference_rows(n_episodes: int = TEST_EPISODES) -> dict[str, dict]:
     """The ceiling (default and larger oracle), the blind planner and random, measured."""
-    from agents.oracle import OracleSettings
-
     rng = np.random.default_rng(0)
     agents: dict[str, tuple[str, Act]] = {
         "ceiling": ("ceiling", planned(OracleSettings(threads=1))),
@@ -296,7 +293,7 @@ def _cell(rows: list[dict], key: str) -> str:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(prog="python -m agents.hidden_physics", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(prog="python -m agents.hidden_physics_tier", description=__doc__.split("\n\n")[0])
     parser.add_argument("command", choices=("ceiling", "train", "report"))
     parser.add_argument("--episodes", type=int, default=TEST_EPISODES, help="test episodes (ceiling)")
     parser.add_argument("--algos", nargs="+", choices=ALGOS, default=list(ALGOS))
@@ -319,7 +316,7 @@ def main(argv: list[str] | None = None) -> None:
                 save_rows(results, algo, "baseline", [train_run(algo, seed, settings)], settings=asdict(settings))
     print(table(results))
     if args.readme:
-        command = "python -m agents.hidden_physics ceiling; python -m agents.hidden_physics train"
+        command = "python -m agents.hidden_physics_tier ceiling; python -m agents.hidden_physics_tier train"
         replace_section("hidden-physics", f"Measured by `{command}` (then `report --readme`):\n\n{table(results)}")
 
 

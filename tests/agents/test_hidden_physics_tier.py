@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from agents import hidden_physics
+from agents import hidden_physics_tier as hidden_physics
 from agents.oracle import OracleSettings
 
 SMALL = OracleSettings(initial=64, population=16, elite=4, iterations=4, threads=1)
