@@ -34,7 +34,7 @@ import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
@@ -121,7 +121,7 @@ def planned(oracle_settings, blind: bool = False, **env_kwargs) -> Act:
         if not plan:
             episodes = episodes_from_infos(reset_infos)
             if blind:
-                config = one_throw.unwrapped.config
+                config = cast(Any, one_throw.unwrapped).config
                 middle = [0.5 * sum(r) for r in (config.mass_range, config.friction_range, config.restitution_range)]
                 episodes.data[:, task_columns.EP_DYNAMICS] = middle
             plan.append(OraclePlanner(oracle_settings).plan(ThrowSimulator(one_throw, threads=1), episodes))
@@ -151,12 +151,12 @@ def reference_rows(n_episodes: int = TEST_EPISODES) -> dict[str, dict]:
 def training_env(algo: str, settings: TrainSettings, seed: int, n_envs: int | None = None):
     """The native batched env as SB3's VecEnv (``SB3VecEnvAdapter``, ``VecMonitor``), its observations stacked over
     the budget of throws for ``stacked_ppo``, normalised (``VecNormalize``, rewards left as they are)."""
-    from stable_baselines3.common.vec_env import VecFrameStack, VecMonitor, VecNormalize
+    from stable_baselines3.common.vec_env import VecEnv, VecFrameStack, VecMonitor, VecNormalize
 
     from box_toss_env.wrappers.sb3_adapter import SB3VecEnvAdapter
 
     n = n_envs or settings.n_envs
-    venv = VecMonitor(SB3VecEnvAdapter(gym.make_vec(ENV_ID, num_envs=n, threads=1)))
+    venv: VecEnv = VecMonitor(SB3VecEnvAdapter(gym.make_vec(ENV_ID, num_envs=n, threads=1)))
     venv.seed(seed)
     if algo == "stacked_ppo":
         venv = VecFrameStack(venv, n_stack=venv.unwrapped.get_attr("env")[0].task.max_throws)

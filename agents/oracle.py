@@ -10,7 +10,7 @@ every iteration simulates all candidates of all unsolved targets in one engine c
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
@@ -27,7 +27,7 @@ class ThrowSimulator:
     ``envs.functional.BoxTossFunctional``) over a batch of candidates, on its compiled kernel and settings."""
 
     def __init__(self, env: gym.Env, threads: int | None = None):
-        self.core: BoxTossFunctional = env.unwrapped.core
+        self.core: BoxTossFunctional = cast(Any, env.unwrapped).core
         self.config = self.core.config
         self.settings = self.core.settings  # the env's solver settings (dt, sleep, ...): throws as the env's
         self.simulator = self.core.make_simulator(parallel=True, threads=threads)

@@ -23,6 +23,7 @@ import argparse
 import pickle
 import time
 from pathlib import Path
+from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
@@ -76,11 +77,11 @@ def measure(env_id: str, n_targets: int, draws: int, sigmas=SIGMAS, seed: int = 
     _, infos = draw_targets(env, target_seeds(n_targets))
     episodes = oracle.episodes_from_infos(infos)
     base = oracle.ThrowSimulator(env, threads=1)
-    result = {"env_id": env_id, "targets": n_targets, "draws": draws, "spaces": {}}
+    result: dict[str, Any] = {"env_id": env_id, "targets": n_targets, "draws": draws, "spaces": {}}
     for name, simulator in (("env actions", base), ("ballistic commands", CommandSimulator(base))):
         start = time.perf_counter()
         planner = oracle.OraclePlanner(oracle.OracleSettings(threads=1, seed=seed))
-        solutions = planner.plan(simulator, episodes)
+        solutions = planner.plan(cast(oracle.ThrowSimulator, simulator), episodes)
         solved = simulator.rewards(episodes, solutions)[1]
         kept = task_config.Episodes(episodes.data[solved])
         rng = np.random.default_rng(seed)
@@ -106,7 +107,9 @@ def by_face(env_id: str, n_targets: int, draws: int, sigma: float = 0.01, seed: 
     episodes = oracle.episodes_from_infos(infos)
     base = oracle.ThrowSimulator(env, threads=1)
     commands = CommandSimulator(base)
-    solutions = oracle.OraclePlanner(oracle.OracleSettings(threads=1, seed=seed)).plan(commands, episodes)
+    solutions = oracle.OraclePlanner(oracle.OracleSettings(threads=1, seed=seed)).plan(
+        cast(oracle.ThrowSimulator, commands), episodes
+    )
     actions = commands.actions(episodes, solutions)
     solved = base.rewards(episodes, actions)[1]
     faces = np.array([int(np.argmax(info["target_faces"])) for info in infos])
@@ -114,7 +117,7 @@ def by_face(env_id: str, n_targets: int, draws: int, sigma: float = 0.01, seed: 
     rows = []
     for face in range(4):
         chosen = (faces == face) & solved
-        row = {"face": face, "targets": int((faces == face).sum()), "solved": int(chosen.sum())}
+        row: dict[str, Any] = {"face": face, "targets": int((faces == face).sum()), "solved": int(chosen.sum())}
         if chosen.any():
             row["low"], row["high"] = actions[chosen].min(axis=0).tolist(), actions[chosen].max(axis=0).tolist()
             kept = task_config.Episodes(episodes.data[chosen])
@@ -174,7 +177,7 @@ def reach(
     for start in (0, 2):
         for end in (1, 3):
             repeated = task_config.Episodes(np.repeat(relabelled[end].data, draws, axis=0))
-            row = {"start": start, "end": end, "noisy": {}, "targets": {}}
+            row: dict[str, Any] = {"start": start, "end": end, "noisy": {}, "targets": {}}
             for sigma in sigmas:
                 noise = sigma * rng.standard_normal((n_targets * draws, task_columns.ACTION_SIZE))
                 noisy = np.clip(np.repeat(actions[start], draws, axis=0) + noise, -1.0, 1.0)
@@ -184,12 +187,12 @@ def reach(
     line = []
     for alpha in LINE_STEPS:  # the segment from the policy's face-0 throw to its face-2 throw
         throws = (1.0 - alpha) * actions[0] + alpha * actions[2]
-        row = {"alpha": alpha}
+        point: dict[Any, Any] = {"alpha": alpha}
         for end in (1, 3):
             reward, success, distance = simulator.rewards(relabelled[end], throws)
-            row[end] = {"reward": float(reward.mean()), "success": float(success.mean())}
-        row["distance"] = float(np.median(distance))
-        line.append(row)
+            point[end] = {"reward": float(reward.mean()), "success": float(success.mean())}
+        point["distance"] = float(np.median(distance))
+        line.append(point)
     env.close()
     return {"own": own, "zero": zero, "reach": rows, "line": line}
 
@@ -204,7 +207,7 @@ def checkpoint_policy(run_dir: Path, algo: str, steps: int) -> tuple[TrainedPoli
     if stats.exists():
         with open(stats, "rb") as file:
             vec_normalize = pickle.load(file)  # the statistics only, as TrainedPolicy.load reads them
-    std = np.exp(model.policy.log_std.detach().cpu().numpy())  # type: ignore[union-attr]  # PPO's Gaussian
+    std = np.exp(model.policy.log_std.detach().cpu().numpy())  # type: ignore[union-attr, operator]  # PPO's Gaussian
     return TrainedPolicy(model, vec_normalize), std
 
 

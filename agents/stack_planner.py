@@ -22,12 +22,14 @@ import json
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import cast
 
 import gymnasium as gym
 import numpy as np
 
 from agents.doc_sections import REPO, replace_section
 from box_toss_env.envs import stack_commands, stack_task
+from box_toss_env.envs.stack import BoxTossStackEnv
 from box_toss_env.files import write_atomic
 
 TEST_FIRST_SEED = 10_000  # episodes are seeds 10000, 10001, ... (as the one-throw test targets)
@@ -73,7 +75,7 @@ class StackPlanner:
 
     def plan(self, env: gym.Env, observation: np.ndarray) -> np.ndarray:
         """The best action (3,) found for the box in the hand of ``env`` (which it leaves as it was)."""
-        unwrapped = env.unwrapped
+        unwrapped = cast(BoxTossStackEnv, env.unwrapped)
         config = unwrapped.config
         settings = self.settings
         k = unwrapped.thrown
@@ -87,7 +89,7 @@ class StackPlanner:
             actions = command_actions(observation, commands, config, settings)
             tried = unwrapped.try_throws(actions, threads=settings.threads)
             self.simulated += len(actions)
-            centre = np.abs(unwrapped.last_tried[:, k, 0] - unwrapped.target_x)
+            centre = np.abs(tried.states[:, k, 0] - unwrapped.target_x)
             # a box lying flat is the best base for the next: height beyond its width is not credited
             height = tried.info["reward_height"]
             scores = (
@@ -108,6 +110,7 @@ class StackPlanner:
             elite = all_commands[np.argsort(all_scores)[-settings.elite :]]
             mean, std = elite.mean(axis=0), np.maximum(elite.std(axis=0), 0.02)
             commands = np.clip(self.rng.normal(mean, std, (settings.population, 3)), -1.0, 1.0)
+        assert best_action is not None  # the first round scores its candidates
         return best_action
 
 
@@ -167,7 +170,9 @@ def zoo_policy(run_dir: Path):
     def act(env: gym.Env, observation: np.ndarray) -> np.ndarray:
         seen = normalize.normalize_obs(observation[None]) if normalize is not None else observation[None]
         command, _ = model.predict(seen, deterministic=True)
-        return stack_commands.command_actions(observation, command, env.unwrapped.config)[0].astype(np.float32)
+        return stack_commands.command_actions(observation, command, cast(BoxTossStackEnv, env.unwrapped).config)[
+            0
+        ].astype(np.float32)
 
     return act
 

@@ -41,10 +41,11 @@ from box_toss_env.physics.validation import check_integer
 @dataclass
 class TriedThrows:
     """What candidate throws would do (``MultiThrowEnv.try_throws``): the reward (m,) (-inf where the engine
-    diverged) and the step's info of each, as (m,) arrays."""
+    diverged), the step's info of each, as (m,) arrays, and the copies' scenes once at rest (m, k, 6)."""
 
     reward: np.ndarray
     info: dict[str, np.ndarray]
+    states: np.ndarray
 
 
 class MultiThrowEnv(gym.Env):
@@ -74,7 +75,6 @@ class MultiThrowEnv(gym.Env):
         self._renderer: Any = None
         self._score = 0.0  # the return so far
         self._last_info: dict[str, Any] | None = None
-        self.last_tried: np.ndarray | None = None
 
     @property
     def engine_settings(self) -> np.ndarray:
@@ -128,7 +128,7 @@ class MultiThrowEnv(gym.Env):
     def try_throws(self, actions: np.ndarray, threads: int | None = 1) -> TriedThrows:
         """What throwing the next body with each of ``actions`` (m, 3) would do, without doing it: m copies of the
         scene, each with one candidate throw, simulated in one engine call on ``threads`` threads (each copy's
-        result bit for bit what ``step`` gives). The copies' scenes once at rest are in ``last_tried`` (m, k, 6)."""
+        result bit for bit what ``step`` gives)."""
         if self._needs_reset:
             raise ResetNeeded("call reset() before try_throws()")
         core = self.core
@@ -138,8 +138,8 @@ class MultiThrowEnv(gym.Env):
         failed = core.failed(copies)
         with np.errstate(invalid="ignore"):
             reward, info = core.score(copies)
-        self.last_tried = copies.state[:, : int(core.scene_sizes(copies)[0])]
-        return TriedThrows(np.where(failed, -np.inf, reward), info)
+        states = copies.state[:, : int(core.scene_sizes(copies)[0])]
+        return TriedThrows(np.where(failed, -np.inf, reward), info, states)
 
     # -- rendering ------------------------------------------------------------------------------------------
     def drawn_scene(self) -> dict[str, Any]:

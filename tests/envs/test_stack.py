@@ -175,7 +175,7 @@ def test_candidate_throws_on_copies_of_the_scene_are_the_throw_made():
     actions = np.random.default_rng(0).uniform(-1, 1, (6, 3))
     actions[2] = lob(env, observation)
     tried_throws = unwrapped.try_throws(actions)
-    tried = unwrapped.last_tried.copy()
+    tried = tried_throws.states
     np.testing.assert_array_equal(unwrapped.scene[0], before)  # the env's own scene is untouched
     for i in (2, 4):
         copy = pickle.loads(pickle.dumps(unwrapped))
