@@ -241,6 +241,32 @@ def train_run(algo: str, seed: int, settings: TrainSettings, out: Path = RUNS, n
     return row
 
 
+def benchmark_rows(path: Path = RESULTS) -> dict[str, Any]:
+    """The tier's rows for the benchmark's tables (``agents.benchmark``): per agent its kind and its success rate on
+    the test episodes per seed (the scores rliable aggregates: one per training seed), and the ceiling's success
+    (the best ceiling row). Empty ``agents`` before ``ceiling`` and ``train`` have run."""
+    results = load_results(path)
+    agents = {
+        AGENT_NAMES.get(name, name): {
+            "kind": agent["kind"],
+            "seeds": [row["seed"] for row in agent["per_seed"]],
+            "success": [row["success_rate"] for row in agent["per_seed"]],
+            "first_throw_success": [row["first_throw_success"] for row in agent["per_seed"]],
+            "mean_throws": [row["mean_throws"] for row in agent["per_seed"]],
+        }
+        for name, agent in results["agents"].items()
+    }
+    ceilings = [max(a["success"]) for a in agents.values() if a["kind"] == "ceiling"]
+    return {
+        "tier": "hidden physics",
+        "env_id": results["env_id"],
+        "episodes": results["episodes"],
+        "first_seed": results["first_seed"],
+        "ceiling": max(ceilings) if ceilings else None,
+        "agents": agents,
+    }
+
+
 # -- the results file and the docs' table ---------------------------------------------------------------
 def load_results(path: Path = RESULTS) -> dict:
     if path.exists():

@@ -34,5 +34,8 @@ def test_a_tiny_run_trains_is_scored_and_saved(algo, tmp_path):
     hidden_physics.save_rows(results, "ceiling", "ceiling", [{**row, "success_rate": 1.0}], tmp_path / "results.json")
     saved = json.loads((tmp_path / "results.json").read_text())
     assert saved["agents"][algo]["per_seed"][0]["seed"] == 0 and saved["env_id"] == "BoxToss-HiddenPhysics-v0"
+    rows = hidden_physics.benchmark_rows(tmp_path / "results.json")
+    assert rows["ceiling"] == 1.0
+    assert rows["agents"][hidden_physics.AGENT_NAMES[algo]]["success"] == [row["success_rate"]]
     text = hidden_physics.table(saved)
     assert "| ceiling: oracle told the dynamics | 1 | 100.0% |" in text and "Gap: the best baseline reaches" in text
