@@ -302,6 +302,14 @@ def table(results: dict) -> str:
     if not baselines or ceiling is None:
         return "\n".join(lines)
     best = max(_mean("success_rate")(a) for a in baselines)
+    costs = [
+        f"{AGENT_NAMES.get(name, name)} {int(np.mean([r['timesteps'] for r in a['per_seed']])):,} throws a run, "
+        f"{np.mean([r['train_seconds'] for r in a['per_seed']]):,.0f} s wall "
+        f"({np.mean([r['train_cpu_seconds'] for r in a['per_seed']]):,.0f} s CPU) on average"
+        for name, a in agents.items()
+        if a["kind"] == "baseline"
+    ]
+    lines.append(f"\nTraining, one run at a time on the shared 2-core machine: {'; '.join(costs)}.")
     return "\n".join(lines) + (
         f"\n\nGap: the best baseline reaches {best:.1%} against the ceiling's {top:.1%}, "
         f"{100 * (top - best):.1f} points below it ({best / top:.0%} of the ceiling)."
