@@ -36,7 +36,8 @@ OUT = DOCS / "figures"
 MAX_BYTES = 300_000
 
 
-SEQUENTIAL = ("BoxToss-Stack-v0",)  # episodes of several throws, planned by agents.stack_planner (docs/stack.md)
+SEQUENTIAL = ("BoxToss-Stack-v0", "BoxToss-HiddenPhysics-v0")
+"""Ids whose episodes are several throws (docs/stack.md, docs/hidden_physics.md): no one-throw GIF."""
 
 
 def variant_ids() -> list[str]:
