@@ -32,6 +32,7 @@ LAYERS = {
     "rllib_ppo": 6,
     "variant_gifs": 6,
     "raw_actions": 6,
+    "hidden_physics_tier": 6,
     "benchmark": 7,
     "main": 7,
 }
