@@ -75,8 +75,8 @@ def checkpoints_of(run_dir: Path, algo: str) -> list[Checkpoint]:
             buffer = path.with_name(f"{algo}_replay_buffer_{steps}_steps.pkl")
             found.append((steps, 1, Checkpoint(path, stats, buffer, steps)))
     final = run_dir / "model.zip"
-    if not found and final.exists() and (steps := model_timesteps(final)) is not None:
-        found.append((steps, 0, Checkpoint(final, run_dir / "vecnormalize.pkl", run_dir / "no_replay_buffer", steps)))
+    if not found and final.exists() and (trained := model_timesteps(final)) is not None:
+        found.append((trained, 0, Checkpoint(final, run_dir / "vecnormalize.pkl", run_dir / "no_buffer", trained)))
     return [checkpoint for *_, checkpoint in sorted(found, key=lambda item: item[:2], reverse=True)]
 
 
@@ -123,13 +123,11 @@ def resume_point(
             f"--resume {run_dir}: no checkpoint to resume from (no {run_dir}/checkpoints/"
             f"{algo}_<steps>_steps.zip nor {run_dir}/model.zip); train it afresh"
         )
-    if from_steps is None:
-        chosen = found[0]
-    else:
-        chosen = next((c for c in found if c.steps == from_steps), None)
-        if chosen is None:
-            steps = sorted({c.steps for c in found})
-            raise ResumeError(f"--from-steps {from_steps}: {run_dir} has no checkpoint at it; it has {steps}")
+    asked = found[0] if from_steps is None else next((c for c in found if c.steps == from_steps), None)
+    if asked is None:
+        steps = sorted({c.steps for c in found})
+        raise ResumeError(f"--from-steps {from_steps}: {run_dir} has no checkpoint at it; it has {steps}")
+    chosen = asked
     newer = [c for c in found if c.steps > chosen.steps]
     for checkpoint in newer:
         if damage(checkpoint, normalized, observation_shape) is None:

@@ -139,7 +139,7 @@ def read_expression(text: str, key: str) -> Any:
         if isinstance(node, (ast.List, ast.Tuple)):
             return [value(item) for item in node.elts]
         if isinstance(node, ast.Dict) and all(k is not None for k in node.keys):
-            return {value(k): value(v) for k, v in zip(node.keys, node.values, strict=True)}
+            return {value(k): value(v) for k, v in zip(node.keys, node.values, strict=True) if k is not None}
         if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "dict" and not node.args:
             return {item.arg: value(item.value) for item in node.keywords}
         if isinstance(node, ast.Attribute) and (name := dotted_name(node)) and name.split(".")[0] in CLASS_ROOTS:
@@ -343,8 +343,8 @@ def algorithm_kwargs(config: dict[str, Any], algo: str, action_size: int = 3) ->
     for key, value in list(kwargs.items()):
         if isinstance(value, str) and "schedule" in rules[key].forms and value.startswith("lin_"):
             kwargs[key] = schedule(key, value)
-        elif isinstance(value, str) and "class" in rules[key].forms and rules[key].base is not None:
-            kwargs[key] = schema.resolve_class(value, rules[key].base)  # Zoo names the class: HerReplayBuffer
+        elif isinstance(value, str) and "class" in rules[key].forms and (base := rules[key].base) is not None:
+            kwargs[key] = schema.resolve_class(value, base)  # Zoo names the class: HerReplayBuffer
     if isinstance(kwargs.get("train_freq"), list):
         kwargs["train_freq"] = tuple(kwargs["train_freq"])
     if config.get("noise_type") == "normal":

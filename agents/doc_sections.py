@@ -39,6 +39,7 @@ SECTION_PAGES = {
     "stack-ceiling": DOCS / "stack.md",  # python -m agents.stack_planner --readme
     "stack-ppo": DOCS / "stack.md",  # python -m agents.stack_planner --model RUN --readme
     "stack-throughput": DOCS / "stack.md",  # python -m benchmarks.stack_throughput --readme
+    "hidden-physics": DOCS / "hidden_physics.md",  # python -m agents.hidden_physics_tier report --readme
     "reality-impacts": DOCS / "reality.md",  # python -m reports.reality.impacts --data DIR --ellipse FILE
 }
 

@@ -5,7 +5,7 @@ Each has a vector form and a ``command_map`` in ``agents.envs``.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 BALLISTIC = "box_toss_env.envs.ballistic.BallisticThrows"
 STACK_COMMANDS = "box_toss_env.envs.stack_commands.StackCommands"
@@ -21,7 +21,7 @@ def read_env_wrapper(spec: Any) -> tuple[str, dict[str, Any]] | None:
     a ValueError naming what is accepted otherwise."""
     if spec is None:
         return None
-    name, kwargs = spec, {}
+    name, kwargs = spec, cast(dict[str, Any], {})
     if isinstance(spec, dict) and len(spec) == 1:
         name, kwargs = next(iter(spec.items()))
         kwargs = {} if kwargs is None else kwargs

@@ -19,7 +19,7 @@ import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
@@ -33,7 +33,7 @@ from agents.run_files import read_run_config
 from agents.run_folder import RunFolderError, check_component, lock_run, unlock_run, write_atomic
 from agents.targets import STACK_TEST_EPISODES, TEST_FIRST_SEED, TEST_TARGETS, VALIDATION_FIRST_SEED  # noqa: F401
 from box_toss_env.envs import task
-from box_toss_env.envs.box_toss import EnergyGainError
+from box_toss_env.envs.functional import EnergyGainError
 from box_toss_env.files import DamagedFileError, file_action, remove_stale_temporaries
 from box_toss_env.physics import NonFiniteStateError
 
@@ -148,7 +148,7 @@ def evaluate(policy: Policy, env_id: str, env_kwargs: dict[str, Any] | None = No
     try:
         observations, infos = draw_targets(env, seeds)
         start = time.perf_counter()
-        actions = np.asarray(policy.act(observations, infos, env), dtype=np.float64).reshape(len(seeds), -1)
+        actions = np.asarray(policy.act(observations, infos, cast(Any, env)), dtype=np.float64).reshape(len(seeds), -1)
         act_seconds = time.perf_counter() - start
         return throw(env, seeds, actions, infos), act_seconds
     finally:
@@ -182,12 +182,12 @@ def evaluate_stack(
     }
     act_seconds = 0.0
     try:
-        observations, _ = env.reset(seed=[int(seed) for seed in seeds])
-        infos = [{} for _ in range(n)]
+        observations, _ = env.reset(seed=[int(seed) for seed in seeds])  # type: ignore[arg-type]  # one per env
+        infos: list[dict[str, Any]] = [{} for _ in range(n)]
         done = np.zeros(n, dtype=bool)
         while not done.all():
             start = time.perf_counter()
-            actions = np.asarray(policy.act(observations, infos, env), dtype=np.float32).reshape(n, -1)
+            actions = np.asarray(policy.act(observations, infos, cast(Any, env)), dtype=np.float32).reshape(n, -1)
             act_seconds += time.perf_counter() - start
             observations, reward, terminated, truncated, info = env.step(np.clip(actions, -1.0, 1.0))
             live = ~done
@@ -363,12 +363,12 @@ def load_policy(run_dir: Path, model: str = "final") -> tuple[Policy, dict[str, 
         except (TypeError, ValueError) as error:
             raise DamagedFileError(f"{run_dir / 'config.yml'} is damaged: baseline: {error}") from None
     if config.get("goal"):  # Dict observations (BoxToss-Goal-v0): HER's replay buffer is not needed to act
-        model = load_model(
+        trained = load_model(
             algo,
             run_dir / "model.zip",
             custom_objects={"replay_buffer_class": None, "replay_buffer_kwargs": {}, "buffer_size": 1},
         )
-        return GoalPolicy(model, config.get("hyperparams", {}).get("env_wrapper")), config
+        return GoalPolicy(trained, config.get("hyperparams", {}).get("env_wrapper")), config
     hyperparams = config.get("hyperparams", {})
     return TrainedPolicy.load(
         run_dir, algo, model, hyperparams.get("env_wrapper"), normalized=bool(hyperparams.get("normalize", True))
@@ -447,7 +447,7 @@ def evaluate_throws_run(run_dir, config, policy, model, env_id, kwargs, seeds, t
     (results.json, throws.npz)."""
     throws, act_seconds = evaluate(policy, env_id, kwargs, seeds)
     wall = time.perf_counter() - start
-    target_x_range = gym.make(env_id, **kwargs).unwrapped.config.target_x_range
+    target_x_range = cast(Any, gym.make(env_id, **kwargs).unwrapped).config.target_x_range
     summary = summarize(throws, target_x_range)
     results = {
         "run": run_dir.name,

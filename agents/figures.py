@@ -58,7 +58,9 @@ def count(n: float) -> str:
     return f"{n:,.0f}"
 
 
-def update(group: str, values: dict[str, Any], path: Path = FIGURES, readme: Path | None = README) -> None:
+def update(
+    group: str, values: dict[str, Any] | list[dict[str, Any]], path: Path = FIGURES, readme: Path | None = README
+) -> None:
     """Replace ``group`` in the figures file (the other groups kept), written atomically, then the README's
     ``headline`` section from the file (``readme=None`` leaves the README alone)."""
     figures = {**load(path), group: values}

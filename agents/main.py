@@ -18,6 +18,7 @@ import shlex
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 from agents import train
 from agents.command_line import COUNT, RUNS, CommandError, OneLineParser, folder, one_line_errors
@@ -30,7 +31,7 @@ ENV_ID = "BoxToss-ThisSideUp-v0"  # one face drawn per episode must end down: th
 SHORT_TIMESTEPS = 500_000  # the default run (about 2 min); the full run uses n_timesteps of agents/hyperparams/ppo.yml
 SEED_DT = 1 / 1024  # a step at which the seed scheme keeps its energy at the default stiffness
 # (run, tag, env kwargs, label) of the physics-fidelity evaluations
-FIDELITY_SETTINGS = [
+FIDELITY_SETTINGS: list[tuple[str, str, dict[str, Any], str]] = [
     ("full", "robust-dt1024", {"dt": SEED_DT}, "robust solver, dt = 1/1024 s"),
     ("full", "seed-default-dt", {"solver": "seed"}, "seed scheme, the default dt = 1/128 s"),
     ("full", "seed-dt1024", {"solver": "seed", "dt": SEED_DT}, "seed scheme, dt = 1/1024 s"),
@@ -177,6 +178,7 @@ def report_results(args, rows: dict[str, Path], argv: list[str] | None, start: f
         print("\nphysics fidelity (the same targets under another solver or step; failures: throws the env refused)")
         print(evaluation.format_table(fidelity))
     ppo = report.summary_row("short", rows["short"])
+    assert ppo is not None  # the run just trained
     print(
         f"\nPPO: the env took {ppo['env_share']:.0%} of the training loop's wall time; the run is in {rows['short']} "
         f"(box-toss evaluate {rows['short']} --video 4 for plots and a GIF; "

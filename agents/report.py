@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
@@ -246,7 +246,7 @@ def plot_run(run_dir: Path, eval_dir: Path) -> list[Path]:
     results = json.loads((eval_dir / "results.json").read_text())
     if not (eval_dir / "throws.npz").exists():  # a stacking env's episodes: no landing errors to draw
         return paths
-    config = gym.make(results["env_id"], **results["env_kwargs"]).unwrapped.config
+    config = cast(Any, gym.make(results["env_id"], **results["env_kwargs"]).unwrapped).config
     paths.append(
         plot_landing_errors(
             {run_dir.name: Throws.load(eval_dir / "throws.npz")},
@@ -279,7 +279,7 @@ def record_video(
         action = policy.act(obs[None], [info], env)[0]
         env.reset(seed=seed)  # a planner may have used the env; start the throw afresh
         env.step(action)
-        frames += env.render()
+        frames += cast(list[np.ndarray], env.render())
     env.close()
     return write_video(frames, path, env.metadata["render_fps"])
 
@@ -354,7 +354,7 @@ def readme_section(
     """The agents section (markdown) from evaluated runs: the results table, the breakdown by
     target distance, the physics-fidelity table and the figures (written to ``docs``)."""
     rows = [row for name, run in runs.items() if (row := summary_row(name, run)) is not None]
-    env = gym.make(rows[0]["env_id"], **rows[0]["env_kwargs"]).unwrapped
+    env = cast(Any, gym.make(rows[0]["env_id"], **rows[0]["env_kwargs"]).unwrapped)
     curves = {name: curve for name, run in runs.items() if (curve := read_evaluations(run)) is not None}
     levels = {row["name"]: row["success_rate"] for row in rows if row["name"] in ("random", "oracle")}
     plot_learning_curves(curves, docs / "learning_curve.png", levels)

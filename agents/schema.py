@@ -274,7 +274,7 @@ def signature_rules(target: Any, supplied: set[str]) -> tuple[dict[str, Rule], b
 
 @functools.cache
 def _signature_rules(target: Any, supplied: frozenset[str]) -> tuple[dict[str, Rule], bool]:
-    function = target.__init__ if isinstance(target, type) else target
+    function = target.__init__ if isinstance(target, type) else target  # type: ignore[misc]  # the class's own
     rules, open_ = {}, False
     for name, parameter in inspect.signature(function).parameters.items():
         if parameter.kind is inspect.Parameter.VAR_KEYWORD:
@@ -334,7 +334,7 @@ def zoo_rules() -> dict[str, Rule]:
     import numba
     from stable_baselines3.common.vec_env import VecNormalize
 
-    threads = Bounds(1, numba.config.NUMBA_NUM_THREADS)  # the engine's threads: at most the cores available
+    threads = Bounds(1, numba.config.NUMBA_NUM_THREADS)  # type: ignore[attr-defined]  # numba sets it at import  # the engine's threads: at most the cores available
     normalize = Rule({"bool", "mapping"})
     normalize.keys, normalize.open = signature_rules(VecNormalize, SUPPLIED["normalize"])
     integer = {"int"}

@@ -19,7 +19,7 @@ import shlex
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 from agents import algorithms
 from agents import config as configuration
@@ -170,7 +170,7 @@ def check_env_wrapper(env, env_id: str, config: dict[str, Any]) -> None:
 
     try:
         wrapper = read_env_wrapper(config.get("env_wrapper"))
-        stack = isinstance(env.unwrapped.config, StackConfig)
+        stack = isinstance(cast(Any, env.unwrapped).config, StackConfig)
         if wrapper is not None and (wrapper[0] == STACK_COMMANDS) != stack:
             raise ValueError(
                 f"{wrapper[0]} does not act on {env_id}; "
@@ -185,7 +185,7 @@ def check_env_wrapper(env, env_id: str, config: dict[str, Any]) -> None:
                 "offset_range": DEFAULT_OFFSET_RANGE,
                 "turn_range": DEFAULT_TURN_RANGE,
             }
-            check_command_settings(env.unwrapped.config, **{**defaults, **wrapper[1]})
+            check_command_settings(cast(Any, env.unwrapped).config, **{**defaults, **wrapper[1]})
     except (TypeError, ValueError) as error:
         raise configuration.ConfigError(f"env_wrapper: {error}") from None
 

@@ -23,7 +23,7 @@ import shutil
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import torch
@@ -106,7 +106,7 @@ class RunClock:
         return self.previous["wall_seconds"] + time.perf_counter() - self.start
 
     def timing(self, timesteps: int) -> dict[str, Any]:
-        timing = {
+        timing: dict[str, Any] = {
             "algo": self.algo,
             "timesteps": int(timesteps),
             "wall_seconds": self.wall(),  # everything in model.learn, every session (killed ones too)
@@ -365,7 +365,7 @@ def observation_shape(env_id: str, config: dict[str, Any]) -> tuple[int, ...]:
 
     env = gym.make(env_id, **(config.get("env_kwargs") or {}))
     try:
-        return tuple(env.observation_space.shape)
+        return tuple(env.observation_space.shape or ())
     finally:
         env.close()
 
@@ -375,7 +375,7 @@ def warm_up_engine(env_id: str, config: dict[str, Any]) -> None:
     loading from numba's cache) is not counted as env time."""
     venv = make_vector_env(env_id, 1, config["env_kwargs"], config.get("vec_env_kwargs"))
     venv.reset()
-    venv.step(np.zeros((1, *venv.action_space.shape), dtype=np.float32))
+    venv.step(np.zeros((1, *(venv.action_space.shape or ())), dtype=np.float32))
     venv.close()
 
 
@@ -388,7 +388,7 @@ def resume_model(run_dir: Path, algo: str, checkpoint: Checkpoint, venv, off_pol
             f"{checkpoint.model} holds a model of {model.num_timesteps} steps, not {checkpoint.steps}"
         )
     if off_policy and checkpoint.replay_buffer.exists():
-        model.load_replay_buffer(checkpoint.replay_buffer)
+        model.load_replay_buffer(checkpoint.replay_buffer)  # type: ignore[attr-defined]  # an off-policy algorithm's
     for folder in (run_dir, run_dir / "checkpoints", run_dir / "logs"):  # temporary files cut by a kill
         remove_stale_temporaries(folder)
     _, progress_dropped = truncate_csv(run_dir / "logs" / "progress.csv", "time/total_timesteps", checkpoint.steps)
@@ -449,7 +449,7 @@ def train(
             seed=seed,
             device="cpu",
             verbose=0,
-            **configuration.algorithm_kwargs(config, algo, venv.action_space.shape[0]),
+            **configuration.algorithm_kwargs(config, algo, cast(tuple[int, ...], venv.action_space.shape)[0]),
         )
     model.set_logger(
         Logger(
@@ -469,6 +469,7 @@ def train(
     save_checkpoint(model, run_dir, algo, replay_buffer=off_policy)  # where a later --resume starts
     save_model(model, normalizer_of(venv), run_dir)
     timing = clock.write(model.num_timesteps)
+    assert timing is not None  # written when not throttled (every=0)
     venv.close()
     if final_eval:
         evaluate_run(run_dir, quiet=True)

@@ -3,8 +3,6 @@
 envs (``normalize``), ballistic throw commands for vector envs (``ballistic``), and Gymnasium's ``RecordVideo``
 keeping every frame of a throw (``record_video.RecordThrowVideo``). The native vector env itself is
 ``box_toss_env.envs.box_toss_vector``.
-
-This package was ``box_toss_env.vector``; that import path still works (the same modules).
 """
 
 from box_toss_env.wrappers.record_video import RecordThrowVideo

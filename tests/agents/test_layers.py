@@ -38,6 +38,7 @@ LAYERS = {
     "rllib_ppo": 8,
     "variant_gifs": 8,
     "raw_actions": 8,
+    "hidden_physics_tier": 8,
     "benchmark": 9,
     "main": 9,
 }

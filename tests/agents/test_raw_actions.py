@@ -5,7 +5,7 @@ import pytest
 
 from agents import raw_actions
 from agents.policies import ConstantPolicy
-from box_toss_env.envs import task
+from box_toss_env.envs import task_columns, task_config
 
 
 def test_by_face_gives_each_target_face_the_range_of_its_solutions_in_env_actions():
@@ -51,10 +51,10 @@ def test_reach_scores_noisy_throws_around_a_policys_long_side_throws_for_each_sh
 def test_with_face_makes_every_target_one_of_the_given_face():
     observations = np.zeros((2, 12), dtype=np.float32)
     observations[:, 8] = 1.0
-    episodes = task.Episodes(np.zeros((2, task.EPISODE_SIZE)))
+    episodes = task_config.Episodes(np.zeros((2, task_columns.EPISODE_SIZE)))
     obs, relabelled = raw_actions.with_face(observations, episodes, 3)
     assert obs[:, 8:12].tolist() == [[0, 0, 0, 1]] * 2 and observations[0, 8] == 1.0
-    assert relabelled.data[:, task.EP_TARGET_FACES].tolist() == [[0, 0, 0, 1]] * 2
+    assert relabelled.data[:, task_columns.EP_TARGET_FACES].tolist() == [[0, 0, 0, 1]] * 2
 
 
 def test_reach_takes_one_variant_whose_targets_name_one_face(capsys):
