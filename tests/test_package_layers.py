@@ -35,11 +35,11 @@ def test_packages_import_only_the_packages_below_them(package):
 
 def test_the_tests_mirror_the_package_layout():
     """Each folder of tests/ is named after the package folder whose code it tests (``tests/wrappers`` tests
-    ``box_toss_env/wrappers``, ``tests/agents`` the ``agents`` package, ...)."""
+    ``box_toss_env/wrappers``, ``tests/agents`` the ``agents`` package, ``tests/docs`` the site, ...)."""
     tests = (REPO / "tests").iterdir()
     folders = {path.name for path in tests if path.is_dir() and not path.name.startswith((".", "_"))}
     packages = {path.name for path in (REPO / "box_toss_env").iterdir() if (path / "__init__.py").exists()}
-    packages |= {name for name in ("agents", "benchmarks", "reports", "examples") if (REPO / name).is_dir()}
+    packages |= {name for name in ("agents", "benchmarks", "reports", "examples", "docs") if (REPO / name).is_dir()}
     assert folders - packages == set()
 
 
