@@ -323,11 +323,48 @@ def check_config(config: dict[str, Any], algo: str = "ppo") -> None:
             raise ConfigError(
                 f"batch_size must be <= n_steps x n_envs = {rollout} (the rollout), got {config['batch_size']}"
             )
-    her = config.get("replay_buffer_class") == "HerReplayBuffer"
-    if her and config.get("policy") != "MultiInputPolicy":
+    check_policy_parts(config, algo)
+
+
+OBSERVATION_PARTS = {
+    # policy: (the observations it reads, the classes its buffers and features extractor must be)
+    "MlpPolicy": ("flat (Box)", {"ReplayBuffer", "RolloutBuffer", "FlattenExtractor"}),
+    "MultiInputPolicy": ("Dict", {"DictReplayBuffer", "DictRolloutBuffer", "HerReplayBuffer", "CombinedExtractor"}),
+}
+"""Which buffers and features extractors each policy's observations take (SB3 asserts or fails on the others,
+after the run folder exists); ``CnnPolicy`` reads images, which no BoxToss env observes."""
+
+
+def check_policy_parts(config: dict[str, Any], algo: str) -> None:
+    """A ConfigError if the policy, the buffer classes, the features extractor or ``net_arch``'s keys do not fit
+    together: SB3 checks them only when it builds the model, with an assertion or an AttributeError."""
+    policy = config["policy"]
+    if policy not in OBSERVATION_PARTS:
+        raise ConfigError(
+            f"policy must be one of {sorted(OBSERVATION_PARTS)} (BoxToss observations are flat or a Dict, "
+            f"never images), got {policy!r}"
+        )
+    observations, fitting = OBSERVATION_PARTS[policy]
+    policy_kwargs = config.get("policy_kwargs") or {}
+    named = [(key, config.get(key)) for key in ("replay_buffer_class", "rollout_buffer_class")]
+    named.append(("policy_kwargs.features_extractor_class", policy_kwargs.get("features_extractor_class")))
+    for key, value in named:
+        known = {name for parts in OBSERVATION_PARTS.values() for name in parts[1]} | {"NatureCNN"}
+        if value in known and value not in fitting:
+            raise ConfigError(f"{key} {value} does not take {policy}'s {observations} observations")
+    if config.get("replay_buffer_class") == "HerReplayBuffer" and policy != "MultiInputPolicy":
         raise ConfigError(
             "replay_buffer_class HerReplayBuffer needs policy: MultiInputPolicy (a goal env's Dict observations)"
         )
+    net_arch = policy_kwargs.get("net_arch")
+    if isinstance(net_arch, dict):
+        keys = ("pi", "qf") if algorithms.is_off_policy(algo) else ("pi", "vf")
+        if set(net_arch) - set(keys) or (algorithms.is_off_policy(algo) and set(net_arch) != set(keys)):
+            need = "both" if algorithms.is_off_policy(algo) else "only"
+            raise ConfigError(
+                f"policy_kwargs.net_arch of {algo} takes {need} the keys {list(keys)} (actor, critic), "
+                f"got {sorted(net_arch)}"
+            )
 
 
 # -- constructor arguments -------------------------------------------------------------------------

@@ -61,7 +61,7 @@ AT_LEAST_0, AT_LEAST_1 = Bounds(0), Bounds(1)
 
 RANGES: dict[str, Bounds] = {
     # RL Zoo's keys and ours
-    "n_timesteps": AT_LEAST_1,
+    "n_timesteps": Bounds(1, 2**63 - 1),  # SB3 counts timesteps in numpy's int64
     "n_envs": Bounds(1, MAX_NUM_ENVS),
     "noise_std": AT_LEAST_0,
     "torch_threads": AT_LEAST_1,

@@ -154,6 +154,10 @@ def resolve(args: argparse.Namespace) -> TrainingPlan:
                 f"--env {env_id}: its observations are a {type(env.observation_space).__name__}; this command "
                 "trains on flat ones (the goal env's agents: python -m agents.benchmark --envs BoxToss-Goal-v0)"
             )
+        if config["policy"] != "MlpPolicy":
+            raise configuration.ConfigError(
+                f"policy {config['policy']} does not read {env_id}'s flat (Box) observations: use MlpPolicy"
+            )
         check_env_wrapper(env, env_id, config)
         shape = tuple(env.observation_space.shape)
     finally:

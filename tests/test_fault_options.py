@@ -130,6 +130,13 @@ def test_the_schema_is_the_algorithms_signature_and_every_number_has_its_range_d
         ("batch_size=0", "batch_size must be an integer >= 2, got 0"),
         ("vec_env_kwargs.threads=999", "vec_env_kwargs.threads must be an integer >= 1 and <= "),
         ("n_timesteps=", "--set: n_timesteps: an empty value"),
+        ("n_timesteps=99999999999999999999", "n_timesteps must be an integer >= 1 and <= 9223372036854775807"),
+        # keys that must fit the observations: SB3 checked them only when building the model, in a made folder
+        ("policy=CnnPolicy", "policy must be one of ['MlpPolicy', 'MultiInputPolicy']"),
+        ("policy=MultiInputPolicy", "policy MultiInputPolicy does not read BoxToss-v0's flat (Box) observations"),
+        ("rollout_buffer_class=DictRolloutBuffer", "rollout_buffer_class DictRolloutBuffer does not take MlpPolicy"),
+        ("policy_kwargs.features_extractor_class=NatureCNN", "features_extractor_class NatureCNN does not take"),
+        ("policy_kwargs.net_arch={pi: [8], qf: [8]}", "net_arch of ppo takes only the keys ['pi', 'vf']"),
         ("=5", "--set: an override must look like key=value"),
     ],
 )
@@ -140,7 +147,15 @@ def test_bad_training_options_through_the_command_line_are_one_line_and_make_not
     assert not (tmp_path / "runs").exists()
 
 
-@pytest.mark.parametrize("algo, override", [("sac", "train_freq=[1, often]"), ("td3", "gradient_steps=0")])
+@pytest.mark.parametrize(
+    "algo, override",
+    [
+        ("sac", "train_freq=[1, often]"),
+        ("td3", "gradient_steps=0"),
+        ("sac", "replay_buffer_class=DictReplayBuffer"),  # an assertion in SB3's buffer, after the folder was made
+        ("td3", "policy_kwargs.net_arch={pi: [8]}"),  # SB3 asserts a qf key for the critics
+    ],
+)
 def test_the_off_policy_keys_are_checked_too(tmp_path, capsys, algo, override):
     key = override.split("=")[0]
     exits_with_one_line(capsys, train.main, ["--algo", algo, "--runs-dir", str(tmp_path), "--set", override], key)
