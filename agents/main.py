@@ -96,7 +96,11 @@ def make_parser() -> OneLineParser:
         "--timesteps", type=COUNT, default=SHORT_TIMESTEPS, help=f"budget of the short run, {COUNT.allowed}"
     )
     parser.add_argument("--full", action="store_true", help="also train the full run and evaluate physics fidelity")
-    parser.add_argument("--readme", action="store_true", help="write the results into docs/agents.md and docs/agents/")
+    parser.add_argument(
+        "--readme",
+        action="store_true",
+        help="with --full, in a clone: rewrite docs/methodology/main-command.md, docs/agents/ and the headline figures",
+    )
     parser.add_argument("--no-oracle", action="store_true", help="skip the oracle (it plans for ~20 s)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     return parser
