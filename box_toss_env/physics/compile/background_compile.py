@@ -203,6 +203,8 @@ def start(kernel, recipe: tuple[str, str, dict], args: tuple) -> BackgroundCompi
     started now, or the one this process watches already (the single and the batched env share a kernel);
     None where a worker's result could not be used here (no on-disk cache) or there is nothing to compile
     (already loaded or cached)."""
+    for worker in _workers:
+        worker.done()  # reaps a finished worker (no zombie left while this process runs)
     if cache_location(kernel) is None or compiled_in_process(kernel, args) or cached_on_disk(kernel, args):
         return None
     key = (kernel.py_func.__module__, kernel.py_func.__qualname__, argument_types(kernel, args))  # not the recipe

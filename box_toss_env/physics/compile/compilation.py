@@ -79,8 +79,12 @@ class EngineCache(FunctionCache):
         kernel loads in 0.01-0.07 s). What a loaded function needs at run time is numba's runtime (NRT: the arrays
         a kernel allocates), initialized here as the refresh would. A miss compiles, and numba's compiler
         refreshes the context itself."""
-        rtsys.initialize(target_context)
-        with self._guard_against_spurious_io_errors():
+        try:
+            rtsys.initialize(target_context)
+            guard = self._guard_against_spurious_io_errors()
+        except AttributeError:  # numba's internals changed: its own load, refresh included
+            return super().load_overload(sig, target_context)
+        with guard:
             return self._load_overload(sig, target_context)
 
 
