@@ -28,12 +28,11 @@ CONTRIBUTING = REPO / "CONTRIBUTING.md"
 GOAL_MINUTES = 15.0
 
 
-def clone(folder: Path) -> Path:
-    """A clone of this checkout's HEAD in ``folder``/repo, with ``folder``/shared linked to ours."""
+def clone(folder: Path, shared: Path) -> Path:
+    """A clone of this checkout's HEAD in ``folder``/repo, with ``folder``/shared linked to ``shared``."""
     subprocess.run(["git", "clone", "-q", str(REPO), str(folder / "repo")], check=True)
     head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=REPO, capture_output=True, text=True, check=True)
     subprocess.run(["git", "checkout", "-q", head.stdout.strip()], cwd=folder / "repo", check=True)
-    shared = REPO.parent / "shared"
     if shared.exists():
         (folder / "shared").symlink_to(shared.resolve())
     return folder / "repo"
@@ -97,12 +96,18 @@ def report(result: dict, commit: str) -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--write-docs", action="store_true", help="also write the figures into CONTRIBUTING.md")
+    parser.add_argument(
+        "--shared",
+        type=Path,
+        default=REPO.parent / "shared",
+        help="the data folder CI has beside the clone (default: ../shared; tests skip without it)",
+    )
     args = parser.parse_args()
     commit = subprocess.run(
         ["git", "rev-parse", "--short", "HEAD"], cwd=REPO, capture_output=True, text=True, check=True
     ).stdout.strip()
     with tempfile.TemporaryDirectory(prefix="box_toss_ci_time_") as folder:
-        result = run_ci(clone(Path(folder)))
+        result = run_ci(clone(Path(folder), args.shared))
     text = report(result, commit)
     print(f"$ python -m benchmarks.ci_time\n{text}")
     if result["returncode"] != 0:
