@@ -95,7 +95,8 @@ PROBE = textwrap.dedent("""
     result = {"first_throw": first - made, "import": imported, "cpu": time.process_time() - cpu_start,
               "compiled_here": sum(1 for _, e in recorder.buffer if e.is_start),
               "first_interpreted": interpreted["runs"] > 0, "package": box_toss_env.__file__}
-    windows, interpreted_windows, end, count, runs = [], [], first + window, 0, interpreted["runs"]
+    windows, cpu_windows, interpreted_windows = [], [], []
+    end, count, runs, cpu = first + window, 0, interpreted["runs"], time.process_time()
     while len(windows) < round(seconds / window):
         if not num_envs and np.any(terminated | truncated):
             env.reset()
@@ -104,10 +105,11 @@ PROBE = textwrap.dedent("""
         now = time.perf_counter()
         if now >= end:
             windows.append(count / (now - end + window))
+            cpu_windows.append(count / (time.process_time() - cpu))
             interpreted_windows.append(interpreted["runs"] > runs)
-            end, count, runs = now + window, 0, interpreted["runs"]
+            end, count, runs, cpu = now + window, 0, interpreted["runs"], time.process_time()
     last = interpreted["last"]
-    result.update(windows=windows, interpreted_windows=interpreted_windows,
+    result.update(windows=windows, cpu_windows=cpu_windows, interpreted_windows=interpreted_windows,
                   compiled_after=None if last is None else last - made, load=os.getloadavg()[0])
     background_compile.wait_for_workers()  # the worker's kernel in the cache before the warm run
     print(json.dumps(result))
@@ -143,7 +145,7 @@ def worker_compiles(cache: str) -> list[tuple[str, float]]:
     for log in sorted(Path(cache).rglob("box_toss_env-compile.log")):
         for line in log.read_text().splitlines():
             if ": compiled " in line and " s of CPU)" in line:
-                kernel = line.split(": compiled ", 1)[1].split("(", 1)[0]
+                kernel = line.split(": compiled ", 1)[1].rsplit(" in ", 1)[0]
                 found.append((kernel, float(line.rsplit("(", 1)[1].split(" s of CPU")[0])))
     return found
 
@@ -167,9 +169,10 @@ def measure(ids, pythonpath: str, seconds: float, window: float, log=print) -> l
     return cases
 
 
-def first_window_share(run: dict) -> float:
-    """The first window's throughput over the median window's (of the same run)."""
-    windows = run["windows"]
+def first_window_share(run: dict, key: str = "cpu_windows") -> float:
+    """The first window's throughput over the median window's (of the same run): per second of the process's
+    CPU (``cpu_windows``: what a busy machine does not change) or of wall time (``windows``)."""
+    windows = run[key]
     return windows[0] / statistics.median(windows) if windows else float("nan")
 
 
@@ -179,31 +182,39 @@ def report(cases: list[dict], seconds: float, window: float) -> str:
     lines = [
         f"numba {numba.__version__}, {os.cpu_count()} cores, a shared machine: load = the 1-minute load average "
         "before the case",
-        "first throw [s]: from gym.make to the end of the first step (the package imported), wall; cpu [s]: the "
-        "interpreter's CPU to that point, import included; interp: the first throw ran interpreted; compiled "
-        "after [s]: the last interpreted throw; worker [s]: CPU of the background compile (its log); first "
-        f"window: throughput of the first {window:g} s over the run's median {window:g}-s window; compiled "
-        "[throws/s]: the warm run's median window",
-        f"goals: empty first throw <= {FIRST_THROW_EMPTY:g} s, warm first throw <= {FIRST_THROW_WARM:g} s, warm "
-        f"first window >= {FIRST_WINDOW_SHARE:.0%}",
+        "first [s]: from gym.make to the end of the first step (the package imported), wall; cpu [s]: the "
+        "interpreter's CPU to that point, import included; interp: the first throw ran interpreted; compiled after "
+        "[s]: the end of the last interpreted throw; worker [s]: CPU of the background compile (its log); "
+        "compiles: numba compilations in the warm process; first window: the throughput of the first "
+        f"{window:g} s after the first throw over the run's median {window:g}-s window, per second of the "
+        "process's CPU (per second of wall time in brackets); compiled: the warm run's median window [throws "
+        "per second of wall time]",
+        f"goals: empty first <= {FIRST_THROW_EMPTY:g} s; warm first <= {FIRST_THROW_WARM:g} s, warm first window "
+        f">= {FIRST_WINDOW_SHARE:.0%}",
         "",
         f"{'id':22} {'envs':>4} | {'empty: first':>12} {'cpu':>5} {'interp':>6} {'compiled after':>14} "
-        f"{'worker':>6} | {'warm: first':>11} {'cpu':>5} {'compiles':>8} {'first window':>12} {'compiled':>9} | "
+        f"{'worker':>6} | {'warm: first':>11} {'cpu':>5} {'compiles':>8} {'first window':>13} {'compiled':>9} | "
         f"{'load':>4}",
     ]
     for case in cases:
         empty, warm = case["empty"], case["warm"]
         after = "-" if empty["compiled_after"] is None else f"{empty['compiled_after']:.1f}"
         compiled = statistics.median(warm["windows"]) if warm["windows"] else float("nan")
+        share = f"{first_window_share(warm):.0%} ({first_window_share(warm, 'windows'):.0%})"
         lines.append(
             f"{case['id']:22} {case['num_envs'] or 1:>4} | {empty['first_throw']:>12.2f} {empty['cpu']:>5.2f} "
             f"{'yes' if empty['first_interpreted'] else 'no':>6} {after:>14} "
             f"{sum(c for _, c in case['worker']):>6.1f} | {warm['first_throw']:>11.2f} {warm['cpu']:>5.2f} "
-            f"{warm['compiled_here']:>8} {first_window_share(warm):>12.0%} {compiled:>9.0f} | {case['load']:>4.1f}"
+            f"{warm['compiled_here']:>8} {share:>13} {compiled:>9.0f} | {case['load']:>4.1f}"
         )
-    lines += [
+    return "\n".join(lines + window_lines(cases, seconds, window) + compile_lines(cases))
+
+
+def window_lines(cases: list[dict], seconds: float, window: float) -> list[str]:
+    lines = [
         "",
-        f"throughput in each {window:g}-s window for {seconds:g} s [throws/s] (* : a window with interpreted throws)",
+        f"throughput in each {window:g}-s window for {seconds:g} s [throws per second of wall time] (*: a "
+        "window with interpreted throws)",
     ]
     for case in cases:
         for state in ("empty", "warm"):
@@ -212,16 +223,16 @@ def report(cases: list[dict], seconds: float, window: float) -> str:
                 f"{w:.0f}{'*' if i else ''}" for w, i in zip(run["windows"], run["interpreted_windows"], strict=True)
             )
             lines.append(f"{case['id']:22} {case['num_envs'] or 1:>4} {state:5}: {cells}")
+    return lines
+
+
+def compile_lines(cases: list[dict]) -> list[str]:
     kernels: dict[str, list[float]] = {}
     for case in cases:
         for kernel, cpu in case["worker"]:
             kernels.setdefault(kernel, []).append(cpu)
-    lines += [
-        "",
-        "background compiles [s of CPU]: "
-        + "; ".join(f"{kernel} {min(cpus):.1f}-{max(cpus):.1f} ({len(cpus)}x)" for kernel, cpus in kernels.items()),
-    ]
-    return "\n".join(lines)
+    lines = ["", "background compiles in the empty runs [s of CPU, min-max over the runs that compiled the kernel]"]
+    return lines + [f"{min(cpus):5.1f}-{max(cpus):5.1f} ({len(cpus)}x) {kernel}" for kernel, cpus in kernels.items()]
 
 
 def wheel_install(folder: Path) -> str:
