@@ -5,8 +5,8 @@ it, as CI has it), timed step by step. Prints measured figures; asserts nothing.
 
 The clone gets fresh virtual environments (``.ci/run`` makes them; pip's own cache is used as CI's is) and an
 empty numba cache (nothing is compiled in a fresh clone). Each line of ``.ci/run`` is timed by bash itself
-(``PS4`` stamps every command with ``EPOCHREALTIME``); the CPU time is that of every process ``.ci/run``
-waited for (``getrusage``). The load average before and after says how busy the machine was: the goal
+(``set -x``, ``PS4`` stamping every command with ``EPOCHREALTIME``); the CPU time is that of every process
+``.ci/run`` waited for (``getrusage``). The load average before and after says how busy the machine was: the goal
 (issue 42) is 15 minutes on an idle 2-core machine.
 """
 
@@ -26,6 +26,7 @@ from agents.doc_sections import replace_section
 REPO = Path(__file__).resolve().parent.parent
 CONTRIBUTING = REPO / "CONTRIBUTING.md"
 GOAL_MINUTES = 15.0
+TRACED = "PS4='+ ${EPOCHREALTIME} '; set -x; . .ci/run"  # (bash takes no PS4 from the environment as root)
 
 
 def clone(folder: Path, shared: Path) -> Path:
@@ -39,11 +40,12 @@ def clone(folder: Path, shared: Path) -> Path:
 
 
 def steps(trace: str, end: float) -> list[tuple[str, float]]:
-    """(command, seconds) of each top-level command in ``bash -x``'s trace (``+ STAMP command`` lines)."""
+    """(command, seconds) of each command of ``.ci/run`` in the trace of ``TRACED`` (it sources ``.ci/run``, whose
+    commands are traced as ``++ STAMP command``; what they expand in subshells as ``+++ ...``)."""
     starts = []
     for line in trace.splitlines():
-        if line.startswith("+ ") and not line.startswith("++"):
-            stamp, _, command = line[2:].partition(" ")
+        if line.startswith("++ "):
+            stamp, _, command = line[3:].partition(" ")
             try:
                 starts.append((float(stamp), command))
             except ValueError:
@@ -57,11 +59,12 @@ def steps(trace: str, end: float) -> list[tuple[str, float]]:
 def run_ci(repo: Path) -> dict:
     """Run ``.ci/run`` in ``repo``; its steps, wall and CPU time, exit code and the load before and after."""
     env = {key: value for key, value in os.environ.items() if key not in ("NUMBA_CACHE_DIR", "VIRTUAL_ENV")}
-    env["PS4"] = "+ ${EPOCHREALTIME} "
     load = os.getloadavg()
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.time()
-    done = subprocess.run(["bash", "-x", ".ci/run"], cwd=repo, env=env, capture_output=True, text=True, check=False)
+    done = subprocess.run(
+        ["bash", "-c", TRACED, ".ci/run"], cwd=repo, env=env, capture_output=True, text=True, check=False
+    )
     end = time.time()
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
