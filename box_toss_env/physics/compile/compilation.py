@@ -1,5 +1,5 @@
 """How the engine is compiled: the two numba decorators every compiled function uses, where the
-compiled code is cached on disk, and one compilation at a time across processes.
+compiled code is cached on disk and loaded from there, and one compilation of a kernel across processes.
 
 Compile cost is per compiled function, so the decorators keep the number of compilations down:
 
@@ -19,10 +19,13 @@ failing to import, which is what numba alone does. ``kernel_support.engine_cache
 A cached function is found again only under the digest of every engine source (``EngineCache``): numba
 alone checks a function's own file, and served stages of unedited files with their edited callees' old code.
 
-``ensure_compiled`` makes a kernel's first compilation for a set of argument types hold a file lock
-in the cache directory: processes started together (``SubprocVecEnv``, ``AsyncVectorEnv``) wait for
-the first one's compilation and then load its result from the cache, instead of each compiling
-(and racing to write the same cache files, numba issue #4807).
+A cached kernel loads without numba refreshing its compiler's context first (``EngineCache.load_overload``):
+loading needs none of it, and it was most of a warm process's first throw.
+
+``ensure_compiled`` makes a kernel's first compilation for a set of argument types hold that kernel's lock
+file in the cache directory (``compile_lock``): processes started together (``SubprocVecEnv``,
+``AsyncVectorEnv``) wait for the first one's compilation and then load its result from the cache, instead of
+each compiling (and racing to write the same cache files, numba issue #4807); different kernels compile at once.
 """
 
 from __future__ import annotations
