@@ -44,19 +44,14 @@ import tempfile
 import textwrap
 from pathlib import Path
 
+import gymnasium as gym
+
+import box_toss_env  # noqa: F401  (registers the ids)
 from agents.doc_sections import replace_section
 
 REPO = Path(__file__).resolve().parent.parent
-IDS = (
-    "BoxToss-v0",
-    "BoxToss-LongSide-v0",
-    "BoxToss-ShortEnd-v0",
-    "BoxToss-ThisSideUp-v0",
-    "BoxToss-Mixed-v0",
-    "BoxToss-OnBox-v0",
-    "BoxToss-Stack-v0",
-    "BoxToss-Goal-v0",
-)
+IDS = tuple(env_id for env_id in gym.registry if env_id.startswith("BoxToss-"))
+"""Every registered id, in the order the package registers them."""
 VECTOR_ENVS = {"BoxToss-OnBox-v0": 8, "BoxToss-Stack-v0": 8, "BoxToss-Goal-v0": 8}  # the others: 64
 """The batch ``make_vec`` is measured with: 64 envs, or 8 where a throw onto boxes runs interpreted at most
 8 at a time (``physics.grouped.MAX_INTERPRETED_GROUPED_BODIES``) and for the goal env (Gymnasium's
