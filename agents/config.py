@@ -36,7 +36,7 @@ import torch.nn
 import yaml
 from stable_baselines3.common.noise import NormalActionNoise
 
-from agents import algorithms
+from agents import algorithms, initial_mean
 from agents.envs import read_env_wrapper
 from box_toss_env.files import write_atomic
 
@@ -60,6 +60,8 @@ PROJECT_KEYS = {
     "eval_freq": "env steps between evaluations (0: never)",
     "eval_targets": "validation targets per evaluation",
     "checkpoint_freq": "env steps between checkpoints (0: never)",
+    "initial_mean": "where the untrained policy throws: [a0, a1, a2], 'ballistic' or {ballistic: [c0, c1, c2]} "
+    "(agents.initial_mean)",
 }
 EXPRESSION_KEYS = ("policy_kwargs", "normalize", "replay_buffer_kwargs")  # Zoo evaluates these strings
 
@@ -89,15 +91,17 @@ def load_hyperparams(algo: str, env_id: str, directory: str | Path = HYPERPARAMS
     if env_id not in table:
         raise ConfigError(f"{path} has no entry for {env_id!r}; it has {sorted(table)}")
     config = read_zoo_entry(table[env_id], f"{path}: {env_id}")
-    config.update(project_settings(algo, env_id, project_path(directory)))
+    for path in project_paths(directory):
+        config.update(project_settings(algo, env_id, path))
     return config
 
 
-def project_path(directory: str | Path) -> Path:
-    """``project.yml`` of ``directory``, or of its parent if it has none (``raw/`` shares the recipes' settings)."""
-    path = Path(directory) / PROJECT_FILE
-    parent = Path(directory).parent / PROJECT_FILE
-    return parent if not path.exists() and parent.exists() else path
+def project_paths(directory: str | Path) -> list[Path]:
+    """The ``project.yml`` files of ``directory``'s settings, applied in this order: its parent's where the parent
+    has one (``raw/`` shares the recipes' settings), then its own where it has one."""
+    own, parent = Path(directory) / PROJECT_FILE, Path(directory).parent / PROJECT_FILE
+    paths = [path for path in (parent, own) if path.exists()]
+    return paths or [own]
 
 
 def has_entry(algo: str, env_id: str, directory: str | Path) -> bool:
@@ -280,6 +284,10 @@ def check_config(config: dict[str, Any], algo: str = "ppo") -> None:
         )
     try:
         read_env_wrapper(config.get("env_wrapper"))
+    except ValueError as error:
+        raise ConfigError(str(error)) from None
+    try:
+        initial_mean.read_option(config.get("initial_mean"))
     except ValueError as error:
         raise ConfigError(str(error)) from None
     if config.get("noise_type") not in (None, "normal"):

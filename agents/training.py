@@ -33,7 +33,7 @@ import yaml
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.logger import Logger, TensorBoardOutputFormat
 
-from agents import algorithms
+from agents import algorithms, initial_mean
 from agents import config as configuration
 from agents.envs import TimedVecEnv, find_wrapper, make_training_env, make_vector_env, normalizer_of
 from agents.evaluation import (
@@ -439,6 +439,20 @@ def resume_model(run_dir: Path, algo: str, checkpoint, venv, off_policy: bool):
     return model
 
 
+def new_model(venv, config: dict[str, Any], env_id: str, seed: int, algo: str, run_dir: Path | None = None):
+    """The untrained model a run starts from: ``algo`` with the recipe's arguments on ``venv``, seeded, its starting
+    mean moved as the recipe's ``initial_mean`` says (``agents.initial_mean``; its fit reported in ``run_dir``)."""
+    model = algorithms.algorithm_class(algo)(
+        env=venv,
+        seed=seed,
+        device="cpu",
+        verbose=0,
+        **configuration.algorithm_kwargs(config, algo, venv.action_space.shape[0]),
+    )
+    initial_mean.apply(model, config, env_id, seed, run_dir)
+    return model
+
+
 def train(
     run_dir: Path,
     config: dict[str, Any],
@@ -468,19 +482,12 @@ def train(
         normalize_path=str(checkpoint[1]) if checkpoint and checkpoint[1] else None,
         env_wrapper=config.get("env_wrapper"),
     )
-    cls = algorithms.algorithm_class(algo)
     off_policy = algorithms.is_off_policy(algo)
     (run_dir / "logs").mkdir(exist_ok=True)
     if checkpoint:
         model = resume_model(run_dir, algo, checkpoint, venv, off_policy)
     else:
-        model = cls(
-            env=venv,
-            seed=seed,
-            device="cpu",
-            verbose=0,
-            **configuration.algorithm_kwargs(config, algo, venv.action_space.shape[0]),
-        )
+        model = new_model(venv, config, env_id, seed, algo, run_dir)
     model.set_logger(
         Logger(
             str(run_dir / "logs"),
