@@ -287,7 +287,7 @@ def check_config(config: dict[str, Any], algo: str = "ppo") -> None:
     except ValueError as error:
         raise ConfigError(str(error)) from None
     try:
-        initial_mean.read_option(config.get("initial_mean"))
+        initial_mean.check(config)
     except ValueError as error:
         raise ConfigError(str(error)) from None
     if config.get("noise_type") not in (None, "normal"):

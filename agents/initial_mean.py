@@ -14,8 +14,10 @@ For a ballistic start the policy's mean network is fitted by regression (mean sq
 actions of the command on ``SAMPLES`` first observations drawn from the training env's own episodes (seeded apart
 from training's), normalised as training normalises them: the ``VecNormalize`` statistics start from those
 observations. PPO fits its Gaussian's mean, SAC the tanh of its actor's mean, TD3 its actor (and the actor's
-target copy). The log standard deviation stays the recipe's ``log_std_init``. What the start scores is the
-benchmark's *prior* column (``agents.benchmark``): the untrained policy's deterministic throw.
+target copy). The log standard deviation stays the recipe's ``log_std_init``. PPO's critic is then fitted to the
+rewards of throws sampled from that start (``fit_value``). A ballistic start is for a policy acting in the env's
+own actions (a recipe without ``env_wrapper``). What the start scores is the benchmark's *prior* column
+(``agents.benchmark``): the untrained policy's deterministic throw.
 """
 
 from __future__ import annotations
@@ -62,13 +64,29 @@ def read_option(value: Any) -> tuple[str, np.ndarray] | None:
     return kind, np.asarray(vector, dtype=np.float64)
 
 
+def check(config: dict[str, Any]) -> None:
+    """A ValueError for an ``initial_mean`` that is malformed, or ballistic in a recipe acting through a wrapper."""
+    option = read_option(config.get("initial_mean"))
+    if option is not None and option[0] == "ballistic" and config.get("env_wrapper") is not None:
+        raise ValueError(
+            "initial_mean: a ballistic start is a throw in the env's own actions; this recipe acts through "
+            f"env_wrapper {config['env_wrapper']!r} (set env_wrapper=null, or give a constant action)"
+        )
+
+
 def first_observations(env_id: str, config: dict[str, Any], seed: int, n: int = SAMPLES) -> np.ndarray:
     """``n`` first observations (n, obs) of the training env's episodes, seeded with ``seed``."""
-    venv = make_vector_env(env_id, n, config.get("env_kwargs"), config.get("vec_env_kwargs"))
-    venv.seed(seed)
+    venv = episodes(env_id, config, seed, n)
     observations = np.asarray(venv.reset(), dtype=np.float64)
     venv.close()
     return observations
+
+
+def episodes(env_id: str, config: dict[str, Any], seed: int, n: int = SAMPLES):
+    """The training env's kind (env actions, no normaliser) over ``n`` episodes seeded with ``seed``: an SB3 VecEnv."""
+    venv = make_vector_env(env_id, n, config.get("env_kwargs"), config.get("vec_env_kwargs"))
+    venv.seed(seed)
+    return venv
 
 
 def ballistic_targets(env_id: str, config: dict[str, Any], observations: np.ndarray, command) -> np.ndarray:
@@ -151,6 +169,36 @@ def fit(model: BaseAlgorithm, observations: np.ndarray, targets: np.ndarray, see
     return {"mean_abs_error": float(error.mean()), "max_abs_error": float(error.max(dim=1).values.max())}
 
 
+def fit_value(model: BaseAlgorithm, venv, observations: np.ndarray, seed: int) -> dict[str, float]:
+    """An actor-critic's value function fitted to the rewards of its own (fitted) policy: one action sampled from
+    the policy per first observation of ``venv`` (``observations``, normalised), thrown, and V regressed on the
+    rewards (every episode is one throw: V(s) is the expected reward). Without it the first updates' advantages are
+    the raw rewards, whose noise moves a fitted mean by more than its narrow spread. Returns the share of the
+    rewards' variance V explains."""
+    policy: Any = model.policy
+    inputs = torch.as_tensor(observations, dtype=torch.float32)
+    with torch.no_grad():
+        actions = policy.get_distribution(inputs).sample().numpy()
+    low, high = model.action_space.low, model.action_space.high  # type: ignore[attr-defined]
+    _, rewards, _, _ = venv.step(np.clip(actions, low, high))
+    goal = torch.as_tensor(rewards, dtype=torch.float32)[:, None]
+    optimizer = torch.optim.Adam(policy.parameters(), lr=FIT_LEARNING_RATE)
+    decay = torch.optim.lr_scheduler.LambdaLR(optimizer, lambda step: 1.0 - step / FIT_STEPS)
+    generator = torch.Generator().manual_seed(seed + 1)
+    policy.set_training_mode(True)
+    for _ in range(FIT_STEPS):
+        batch = torch.randint(len(inputs), (FIT_BATCH,), generator=generator)
+        loss = torch.mean((policy.predict_values(inputs[batch]) - goal[batch]) ** 2)
+        optimizer.zero_grad()
+        loss.backward()
+        optimizer.step()
+        decay.step()
+    policy.set_training_mode(False)
+    with torch.no_grad():
+        residual = float(torch.var(policy.predict_values(inputs) - goal))
+    return {"value_explained_variance": 1.0 - residual / max(float(torch.var(goal)), 1e-12)}
+
+
 def apply(model: BaseAlgorithm, config: dict[str, Any], env_id: str, seed: int, run_dir: Path | None = None) -> None:
     """Move ``model``'s starting mean as ``config["initial_mean"]`` says (nothing without it); with ``run_dir``,
     what the fit reached is written to ``initial_mean.json`` there."""
@@ -163,7 +211,8 @@ def apply(model: BaseAlgorithm, config: dict[str, Any], env_id: str, seed: int, 
         set_constant(model, vector)
         report: dict[str, Any] = {"initial_mean": vector.tolist()}
     else:
-        observations = first_observations(env_id, config, seed + FIT_SEED_OFFSET)
+        venv = episodes(env_id, config, seed + FIT_SEED_OFFSET)
+        observations = np.asarray(venv.reset(), dtype=np.float64)
         targets = ballistic_targets(env_id, config, observations, vector)
         normalizer = model.get_vec_normalize_env()
         if normalizer is not None and normalizer.norm_obs:
@@ -171,5 +220,8 @@ def apply(model: BaseAlgorithm, config: dict[str, Any], env_id: str, seed: int, 
             observations = normalizer.normalize_obs(observations.astype(np.float32))
         report = {"initial_mean": {"ballistic": vector.tolist()}, "samples": len(targets)}
         report.update(fit(model, observations, targets, seed))
+        if hasattr(model.policy, "predict_values"):  # an actor-critic (PPO): its critic learns the start's rewards
+            report.update(fit_value(model, venv, observations, seed))
+        venv.close()
     if run_dir is not None:
         write_atomic(Path(run_dir) / "initial_mean.json", json.dumps(report, indent=2))
