@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from box_toss_env.envs import task
-from box_toss_env.envs.arguments import CORE_ARGUMENTS, with_defaults
+from box_toss_env.envs.arguments import CORE_ARGUMENTS, apply_split, with_defaults
 from box_toss_env.physics import Box, Scene, Simulator, check_finite_stats, layout, make_settings
 from box_toss_env.physics.grouped import GroupedSimulator
 from box_toss_env.physics.grouped import make_simulator as make_grouped_simulator
@@ -61,6 +61,7 @@ RESET_INFO = _columns(
 RESET_INFO_WITH_BASE = _columns(
     *zip(*RESET_INFO, strict=True), ("base_length", task.EP_BASE_LENGTH), ("base_height", task.EP_BASE_HEIGHT)
 )
+BOX_SIZE_INFO = ("box_length", "box_width")  # with a drawn box size: after all the others
 STEP_STATS = np.array(
     [layout.FIRST_CONTACT_TIME, layout.END_TIME, layout.MAX_PENETRATION, layout.N_IMPACTS, layout.N_STEPS],
     dtype=np.intp,
@@ -153,15 +154,15 @@ class BoxTossFunctional:
     """
 
     def __init__(self, **kwargs: Any):
-        self.arguments = args = with_defaults(kwargs, CORE_ARGUMENTS, type(self).__name__)
-        task_names = [name for name in CORE_ARGUMENTS if name not in ("solver", "dt")]
+        self.arguments = args = apply_split(with_defaults(kwargs, CORE_ARGUMENTS, type(self).__name__))
+        task_names = [name for name in CORE_ARGUMENTS if name not in ("solver", "dt", "split")]
         self.config = config = task.make_task_config(**{name: args[name] for name in task_names})
         # the engine validates the solver settings (dt, solver, material) and names what is wrong
         scene = Scene(
             boxes=(
                 Box(
-                    length=args["box_length"],
-                    width=args["box_width"],
+                    length=config.box_length_range[1],
+                    width=config.box_width_range[1],
                     mass=config.mass_range[1],
                     position=(config.release_x_range[0], config.release_height_range[0]),
                 ),
@@ -260,6 +261,8 @@ class BoxTossFunctional:
         """The reset's info as (n,) arrays (``target_faces`` (n, 4) int8): ``BoxTossEnv.reset``'s keys."""
         data = batch.episodes.data
         names, columns = RESET_INFO_WITH_BASE if self.config.base_box else RESET_INFO
+        if self.config.draws_box_size:
+            names, columns = (*names, *BOX_SIZE_INFO), np.concatenate([columns, self.config.box_size_columns])
         rows = data.take(columns, axis=1).T  # one copy, a row per key
         info = {"target_x": rows[0], "target_faces": data[:, task.EP_TARGET_FACES].astype(np.int8)}
         info.update(zip(names[1:], rows[1:], strict=True))
@@ -431,7 +434,11 @@ def episodes_from_reset_infos(reset_infos: list[dict[str, Any]]) -> task.Episode
     the inverse of ``BoxTossFunctional.reset_info``."""
     base_box = bool(reset_infos) and "base_length" in reset_infos[0]
     names, columns = RESET_INFO_WITH_BASE if base_box else RESET_INFO
-    episodes = task.Episodes.empty(len(reset_infos), task.EPISODE_SIZE_WITH_BASE if base_box else task.EPISODE_SIZE)
+    size = task.EPISODE_SIZE_WITH_BASE if base_box else task.EPISODE_SIZE
+    if reset_infos and "box_length" in reset_infos[0]:  # a drawn box size: its columns after all the others
+        names, columns = (*names, *BOX_SIZE_INFO), np.concatenate([columns, [size, size + 1]])
+        size += len(BOX_SIZE_INFO)
+    episodes = task.Episodes.empty(len(reset_infos), size)
     for row, info in zip(episodes.data, reset_infos, strict=True):
         row[columns] = [info[name] for name in names]
         row[task.EP_TARGET_FACES] = info["target_faces"]
