@@ -108,6 +108,40 @@ def tier_table(store: dict[str, Any], tier: Tier) -> list[str]:
     return lines
 
 
+def aggregate_text(store: dict[str, Any], tier: Tier) -> str:
+    """One sentence of a tier: each algorithm's IQM of success / ceiling over the variants, and the probability
+    that the first beats the others."""
+    parts = []
+    for agent in tier.algos:
+        variants, matrix = normalised(store, tier, agent)
+        if matrix is not None:
+            value = stats.iqm(matrix)
+            parts.append(f"{label(agent)} {value.value:.1%} [{100 * value.low:.1f}, {100 * value.high:.1f}]")
+    improvement = improvement_line(store, tier).split(": ", 1)[-1].rstrip(".")
+    text = "IQM of success / ceiling " + ", ".join(parts) if parts else "no runs"
+    return text + (f"; {improvement}." if improvement else ".")
+
+
+def heldout_line(store: dict[str, Any]) -> str:
+    """One sentence: per tier and variant, the train and test splits' success of the runs trained on the train split
+    (IQM over seeds)."""
+    parts = []
+    for tier in TIERS:
+        for env_id in tier.variants:
+            for agent in tier.algos:
+                found = store_module.records(store, env_id, tier.name, agent, "train")
+                pairs = [(store_module.success(r), store_module.success(r, TEST_TAG)) for r in found]
+                pairs = [(a, b) for a, b in pairs if a is not None and b is not None]
+                if pairs:
+                    train, test = (stats.iqm(np.array(side)).value for side in zip(*pairs, strict=True))
+                    parts.append(f"{env_id} {label(agent)} {tier.name} {train:.1%} -> {test:.1%}")
+    if not parts:
+        return ""
+    return '**Held-out split** (trained on `split="train"`; success on the train -> the test split): ' + (
+        "; ".join(parts) + "."
+    )
+
+
 def improvement_line(store: dict[str, Any], tier: Tier) -> str:
     """The probability that the tier's first algorithm beats each other one, over the variants both have runs on."""
     first, parts = tier.algos[0], []
