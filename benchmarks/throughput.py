@@ -9,7 +9,8 @@ Measured on this machine in one run:
   for N in {1, 16, 256, 4096} on 1 and 2 engine threads, and of Gymnasium's own sync vector env;
 - the same toss (the engine's named scene ``toss``, simulated until it rests) in pymunk, Box2D and
   MuJoCo at the same time step, per throw, with the ratio to ours (those missing are named);
-- memory per env of the batched env beyond its observation buffers.
+- memory per env of the batched env beyond its observation buffers;
+- the env cost per throw of pixel observations (``observation_mode="pixels"``) against the state's, batch of 256.
 Random actions are drawn before timing; every figure is the best of a few repeats after a warm-up.
 """
 
@@ -93,6 +94,29 @@ def toss_per_throw(repeats: int) -> tuple[float, float, float, int]:
     return per_throw, 1.0 / best_rate(run_batch, 256, repeats), rest, steps
 
 
+def pixel_cost(steps: int, repeats: int, n: int = 256) -> tuple[float, float]:
+    """Thread CPU seconds per throw of the batched env (``n`` envs, one engine thread) observing the state and
+    observing pixels (``observation_mode="pixels"``), the two stepped in turn on the same actions; the median
+    over ``repeats`` x ``steps`` steps of each."""
+    envs = {mode: gym.make_vec("BoxToss-v0", num_envs=n, threads=1, observation_mode=mode) for mode in PIXEL_MODES}
+    rng = np.random.default_rng(0)
+    times: dict[str, list[float]] = {mode: [] for mode in envs}
+    for env in envs.values():
+        env.reset(seed=0)
+        env.step(rng.uniform(-1, 1, (n, 3)).astype(np.float32))  # warm-up: kernels compiled or loaded
+    for _ in range(repeats * steps):
+        actions = rng.uniform(-1, 1, (n, 3)).astype(np.float32)
+        for mode, env in envs.items():
+            start = time.thread_time()
+            env.step(actions)
+            times[mode].append((time.thread_time() - start) / n)
+    state, pixels = (float(np.median(times[mode])) for mode in PIXEL_MODES)
+    return state, pixels
+
+
+PIXEL_MODES = ("state", "pixels")
+
+
 def other_engine_rows(duration: float, dt: float, repeats: int) -> list[tuple[str, float]]:
     """Seconds per throw of the same toss in each available engine, simulated for ``duration``."""
     box = scenes.toss().boxes[0]
@@ -171,6 +195,20 @@ def main() -> None:
     )
     sync_rate = vector_rate(sync, 32 if args.quick else 256, repeats)
     lines.append(f"| Gymnasium `SyncVectorEnv`, 16 envs | {sync_rate:,.0f} |")
+
+    state, pixels = pixel_cost(8 if args.quick else 40, repeats)
+    lines += [
+        "",
+        'Pixel observations (`observation_mode="pixels"`, 96 x 40 RGB, `envs.pixels`) against the state, '
+        '`make_vec("BoxToss-v0", num_envs=256)`, one engine thread, stepped in turn on the same random actions, '
+        "thread CPU time per throw (median):",
+        "",
+        "| observation | us per throw | against the state |",
+        "|---|---:|---:|",
+        f"| state (12 numbers) | {state * 1e6:.1f} | 1.00x |",
+        f"| pixels (the image before the throw and where the box came to rest) | {pixels * 1e6:.1f} | "
+        f"{pixels / state:.2f}x |",
+    ]
 
     ours_one, ours_batch, rest, steps = toss_per_throw(repeats)
     dt = scenes.toss().dt
