@@ -40,7 +40,7 @@ from agents import benchmark_store as store_module
 from agents import config as configuration
 from agents.algorithms import ALGORITHMS
 from agents.benchmark_goal import GOAL_ENV, GOAL_SECTION
-from agents.benchmark_tiers import STACK, TIER_NAMES, TIERS, VARIANTS, Tier, run_dir, tier_named
+from agents.benchmark_tiers import SAME_TASK, STACK, TIER_NAMES, TIERS, VARIANTS, Tier, run_dir, tier_named
 from agents.envs import make_training_env, normalizer_of
 from agents.evaluation import evaluate_run, make_baseline_run
 from agents.run_folder import read_csv
@@ -168,7 +168,7 @@ def ensure_prior(root: Path, env_id: str, tier: Tier, seed: int, overrides: list
 def ensure_ceiling(store: dict[str, Any], root: Path, env_id: str, tag: str = "default") -> None:
     """The variant's oracle sweep under ``tag`` (``default`` or a split's), run if the store lacks it; each finished
     budget is kept in ``<root>/<env id>/ceiling-<tag>.partial.json``, so a killed sweep resumes at its budget."""
-    if env_id == STACK or store["ceilings"].get(env_id, {}).get(tag):
+    if env_id == STACK or env_id in SAME_TASK or store["ceilings"].get(env_id, {}).get(tag):
         return
     partial = root / env_id / f"ceiling-{tag}.partial.json"
     done = json.loads(partial.read_text()) if partial.exists() else []
@@ -229,11 +229,13 @@ def train_variant(args: argparse.Namespace, store: dict[str, Any], env_id: str) 
             store_module.save(store, args.store)
     split = "train" if args.heldout else None
     for tier in map(tier_named, args.tiers):
-        if env_id not in tier.variants or (split and env_id == STACK):
+        if env_id not in tier.variants or (split and (env_id == STACK or env_id in SAME_TASK)):
             continue
         if not split:
             for seed in planned_seeds(args, tier, env_id, tier.prior_algo):
                 record(store, ensure_prior(args.root, env_id, tier, seed, args.overrides), args.store)
+        if args.baselines_only:
+            continue
         for algo in [a for a in tier.algos if a in args.algos]:
             for seed in planned_seeds(args, tier, env_id, algo):
                 path = ensure_trained(args.root, env_id, tier, algo, seed, args.overrides, split)
@@ -261,7 +263,9 @@ def collect(store: dict[str, Any], root: Path, path: Path) -> None:
 
 def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--envs", nargs="+", default=[*VARIANTS, GOAL_ENV])
+    p.add_argument(
+        "--envs", nargs="+", default=list(dict.fromkeys([*VARIANTS, *(v for t in TIERS for v in t.variants), GOAL_ENV]))
+    )
     p.add_argument("--tiers", nargs="+", default=list(TIER_NAMES), choices=TIER_NAMES, help="headline first")
     p.add_argument("--algos", nargs="+", default=sorted(ALGORITHMS), choices=sorted(ALGORITHMS))
     p.add_argument("--seeds", nargs="+", type=int, default=None, help="default: each tier's seeds per variant")
@@ -278,6 +282,7 @@ def parser() -> argparse.ArgumentParser:
         help="override the recipes' hyperparameters of every training, e.g. n_timesteps=16384",
     )
     p.add_argument("--no-ceiling", action="store_true", help="skip the oracle sweep")
+    p.add_argument("--baselines-only", action="store_true", help="random actions, the prior and the ceiling only")
     p.add_argument("--report-only", action="store_true", help="train nothing: tables from the stored runs")
     p.add_argument("--readme", action="store_true", help="write docs/agents/benchmark.md, its figures, the README")
     return p

@@ -15,7 +15,7 @@ import numpy as np
 from agents import benchmark_stats as stats
 from agents import benchmark_store as store_module
 from agents import ceiling, stack_planner
-from agents.benchmark_tiers import STACK, TIERS, Tier
+from agents.benchmark_tiers import SAME_TASK, STACK, TIERS, Tier
 from agents.report import format_seconds
 
 RANDOM, PRIOR = "random", "prior"
@@ -50,7 +50,7 @@ def ceiling_rate(store: dict[str, Any], env_id: str, tag: str = "default") -> fl
     if env_id == STACK:
         rows = stack_planner.saved_rows()
         return None if not rows or tag != "default" else float(rows[-1]["success_rate"])
-    sweep = store["ceilings"].get(env_id, {}).get(tag)
+    sweep = store["ceilings"].get(SAME_TASK.get(env_id, env_id), {}).get(tag)
     return None if not sweep else float(ceiling.ceiling_of(sweep)["success_rate"])
 
 

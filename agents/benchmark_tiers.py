@@ -28,7 +28,11 @@ ONE_THROW = (
     "BoxToss-OnBox-v0",
 )
 STACK = "BoxToss-Stack-v0"
+PIXELS = "BoxToss-Pixels-v0"
 VARIANTS = (*ONE_THROW, STACK)
+SAME_TASK = {PIXELS: "BoxToss-v0"}
+"""Variants that are another's task observed otherwise: their ceiling is that variant's (the oracle plans from the
+episode, not from the observation)."""
 FIVE_SEED_VARIANTS = ("BoxToss-ThisSideUp-v0", "BoxToss-ShortEnd-v0", STACK)
 """Where every algorithm of the headline tier gets five seeds (the rest three, PPO five everywhere)."""
 
@@ -66,7 +70,9 @@ class Tier:
 RAW = Tier(
     name="raw",
     title="Raw actions (headline)",
-    meaning="the env's own actions: launch speed, direction and spin",
+    meaning="the env's own actions: launch speed, direction and spin (`BoxToss-Pixels-v0`: `BoxToss-v0` observed as "
+    "an image, PPO with SB3's CnnPolicy)",
+    variants=(*ONE_THROW, PIXELS, STACK),
     folder="raw",
     overrides=("env_wrapper=null",),
     recipes=configuration.RAW_HYPERPARAMS,
