@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 from pathlib import Path
 from typing import Any
 
@@ -48,6 +49,7 @@ from agents.training import RUNS, latest_checkpoint, new_model, read_timing
 from box_toss_env.files import write_atomic
 
 ROOT = RUNS / "benchmark"
+TRIAL_NAME = re.compile(r"[a-z0-9][a-z0-9-]*")
 RANDOM_SEEDS = (0, 1, 2, 3, 4)
 TEST_SPLIT = {"split": "test"}
 SPLIT_TAGS = {"split=train": {"split": "train"}, "split=test": TEST_SPLIT}
@@ -71,12 +73,30 @@ def recipe(tier: Tier, algo: str, env_id: str, overrides: list[str], split: str 
     return config
 
 
+def stem(algo: str, trial: str | None) -> str:
+    """The run folder's name before ``-seed<k>``: the algorithm, and a trial's name after it."""
+    return algo if trial is None else f"{algo}-{trial}"
+
+
+def agent_name(algo: str, trial: str | None) -> str:
+    """A record's agent: the algorithm, or ``algo:trial`` for a trial of other settings (``--trial``)."""
+    return algo if trial is None else f"{algo}:{trial}"
+
+
 def ensure_trained(
-    root: Path, env_id: str, tier: Tier, algo: str, seed: int, overrides: list[str], split: str | None = None
+    root: Path,
+    env_id: str,
+    tier: Tier,
+    algo: str,
+    seed: int,
+    overrides: list[str],
+    split: str | None = None,
+    trial: str | None = None,
 ) -> Path:
-    """The run of ``algo`` on ``env_id`` with ``seed`` in ``tier`` (on the train split with ``split``), trained or
-    resumed unless it has results; a run on the train split is also scored on the test split."""
-    path = run_dir(root, env_id, tier, f"{algo}-seed{seed}", split)
+    """The run of ``algo`` on ``env_id`` with ``seed`` in ``tier`` (on the train split with ``split``; a ``trial`` of
+    the ``overrides`` in its own folder), trained or resumed unless it has results; a run on the train split is also
+    scored on the test split."""
+    path = run_dir(root, env_id, tier, f"{stem(algo, trial)}-seed{seed}", split)
     if report.read_results(path) is None:
         if (path / "config.yml").exists() and latest_checkpoint(path, algo) is not None:
             train.main(["--resume", str(path), "--no-progress"])
@@ -97,21 +117,25 @@ def training_return(path: Path) -> float | None:
     return float(values[-1]) if values else None
 
 
-def training_record(path: Path, env_id: str, tier: Tier, algo: str, seed: int, split=None) -> dict[str, Any] | None:
-    """The store's record of a finished training run (None if it has no results yet)."""
+def training_record(path: Path, env_id: str, tier: Tier, agent: str, seed: int, split=None) -> dict[str, Any] | None:
+    """The store's record of a finished training run (None if it has no results yet); a trial's keeps the command
+    that trained it."""
     results = {tag: r for tag in ("default", "split=test") if (r := report.read_results(path, tag)) is not None}
     if "default" not in results or (split is not None and "split=test" not in results):
         return None
-    return store_module.make_record(
+    record = store_module.make_record(
         env_id,
         tier.name,
-        algo,
+        agent,
         seed,
         results,
         split=split,
         timing=read_timing(path),
         training_return=training_return(path),
     )
+    if ":" in agent and (path / "command.txt").exists():
+        record["command"] = (path / "command.txt").read_text().splitlines()[0]
+    return record
 
 
 # -- baselines and the ceiling ---------------------------------------------------------------------
@@ -197,6 +221,8 @@ def check_options(parser: argparse.ArgumentParser, args: argparse.Namespace) -> 
             parser.error(f"--envs: {env_id!r} is not registered")
     if args.seeds is not None and any(seed < 0 for seed in args.seeds):
         parser.error(f"--seeds must be integers >= 0, got {args.seeds}")
+    if args.trial is not None and not TRIAL_NAME.fullmatch(args.trial):
+        parser.error(f"--trial must be lower-case letters, digits and dashes (a folder name), got {args.trial!r}")
     if args.report_only:
         return
     for env_id in args.envs:
@@ -238,8 +264,9 @@ def train_variant(args: argparse.Namespace, store: dict[str, Any], env_id: str) 
             continue
         for algo in [a for a in tier.algos if a in args.algos]:
             for seed in planned_seeds(args, tier, env_id, algo):
-                path = ensure_trained(args.root, env_id, tier, algo, seed, args.overrides, split)
-                record(store, training_record(path, env_id, tier, algo, seed, split), args.store)
+                path = ensure_trained(args.root, env_id, tier, algo, seed, args.overrides, split, args.trial)
+                found = training_record(path, env_id, tier, agent_name(algo, args.trial), seed, split)
+                record(store, found, args.store)
 
 
 def collect(store: dict[str, Any], root: Path, path: Path) -> None:
@@ -249,13 +276,14 @@ def collect(store: dict[str, Any], root: Path, path: Path) -> None:
         for env_id in tier.variants:
             for split in (None, "train"):
                 for algo in tier.algos:
-                    for folder in sorted(
-                        run_dir(root, env_id, tier, f"{algo}-seed0", split).parent.glob(f"{algo}-seed*")
-                    ):
-                        seed = folder.name.rsplit("seed", 1)[1]
-                        if seed.isdigit() and (found := training_record(folder, env_id, tier, algo, int(seed), split)):
-                            if store_module.key_of(found) not in {store_module.key_of(r) for r in store["runs"]}:
-                                store_module.add(store, found)
+                    for folder in sorted(run_dir(root, env_id, tier, "x", split).parent.glob(f"{algo}-*seed*")):
+                        name, _, seed = folder.name.rpartition("-seed")
+                        trial = name[len(algo) + 1 :] or None
+                        if not seed.isdigit() or (trial is not None and not TRIAL_NAME.fullmatch(trial)):
+                            continue
+                        found = training_record(folder, env_id, tier, agent_name(algo, trial), int(seed), split)
+                        if found and store_module.key_of(found) not in {store_module.key_of(r) for r in store["runs"]}:
+                            store_module.add(store, found)
     if len(store["runs"]) > before:
         store_module.save(store, path)
         print(f"added {len(store['runs']) - before} finished runs found in {root} to {path}")
@@ -280,6 +308,12 @@ def parser() -> argparse.ArgumentParser:
         metavar="KEY=VALUE",
         dest="overrides",
         help="override the recipes' hyperparameters of every training, e.g. n_timesteps=16384",
+    )
+    p.add_argument(
+        "--trial",
+        metavar="NAME",
+        help="train the --set overrides as a trial of each algorithm (ppo:NAME, folders ppo-NAME-seed<k>), a row "
+        "of its variant's details beside the recipe's",
     )
     p.add_argument("--no-ceiling", action="store_true", help="skip the oracle sweep")
     p.add_argument("--baselines-only", action="store_true", help="random actions, the prior and the ceiling only")

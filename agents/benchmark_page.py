@@ -114,7 +114,7 @@ def plot_curves(store: dict[str, Any], root: Path, env_id: str, tier: Tier, path
     for agent, curve in curves:
         assert curve is not None
         name = tables.label(agent)
-        kwargs = {"color": COLORS[name], "alpha": 0.8, "label": None if name in labelled else name}
+        kwargs = {"color": COLORS[name.split(",")[0]], "alpha": 0.8, "label": None if name in labelled else name}
         labelled.add(name)
         ax_steps.plot(curve["timesteps"], curve["success_rate"], **kwargs)
         ax_wall.plot(curve["wall_seconds"] / 60, curve["success_rate"], **kwargs)
@@ -143,6 +143,8 @@ def variant_section(store: dict[str, Any], root: Path, env_id: str, tier: Tier) 
     lines = [f"### {env_id}, {tier.title.lower()}", "", *detail, ""]
     if noted := tables.notes(store, env_id, tier):
         lines += [*noted, ""]
+    if tried := tables.trial_lines(store, env_id, tier):
+        lines += [*tried, ""]
     if breakdown := tables.breakdowns(store, env_id, tier):
         lines += [*breakdown, ""]
     sweep = store["ceilings"].get(env_id, {}).get("default")

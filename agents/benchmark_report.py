@@ -25,7 +25,10 @@ TEST_TAG = "split=test"
 
 
 def label(agent: str) -> str:
-    return {RANDOM: "random", PRIOR: "prior"}.get(agent, agent.upper())
+    """A column's or row's name: random, prior, PPO, or a trial's ``PPO, name``."""
+    algo, _, trial = agent.partition(":")
+    name = {RANDOM: "random", PRIOR: "prior"}.get(algo, algo.upper())
+    return f"{name}, {trial}" if trial else name
 
 
 def agents_of(tier: Tier) -> list[str]:
@@ -196,14 +199,31 @@ def heldout_table(store: dict[str, Any], tier: Tier) -> list[str]:
 
 
 # -- per variant -----------------------------------------------------------------------------------
+def trials(store: dict[str, Any], env_id: str, tier: Tier) -> list[str]:
+    """The trials (``algo:name``, ``agents.benchmark --trial``) with runs on ``env_id`` in ``tier``, by name."""
+    return sorted(
+        {r["agent"] for r in store["runs"] if r["env_id"] == env_id and r["tier"] == tier.name and ":" in r["agent"]}
+    )
+
+
 def detail_rows(store: dict[str, Any], env_id: str, tier: Tier) -> list[tuple[str, list[dict[str, Any]]]]:
-    """(label, records) of each agent with runs on ``env_id`` in ``tier``."""
+    """(label, records) of each agent with runs on ``env_id`` in ``tier``, then of each trial."""
     found = []
-    for agent in agents_of(tier):
+    for agent in [*agents_of(tier), *trials(store, env_id, tier)]:
         records = store_module.records(store, env_id, cell_tier(tier, agent), agent)
         if records:
             found.append((label(agent), records))
     return found
+
+
+def trial_lines(store: dict[str, Any], env_id: str, tier: Tier) -> list[str]:
+    """What each trial changed: the command of its first run."""
+    lines = []
+    for agent in trials(store, env_id, tier):
+        record = store_module.records(store, env_id, tier.name, agent)[0]
+        if command := record.get("command"):
+            lines.append(f"- {label(agent)}: `{command}`")
+    return ["Trials (the recipe with other settings, one row each above):", "", *lines] if lines else []
 
 
 def mean_of(records: list[dict[str, Any]], key: str) -> float:

@@ -150,3 +150,23 @@ def test_default_seeds_follow_the_plan_and_tiers_pick_their_recipes():
     assert tier_named("raw") is RAW
     with pytest.raises(ValueError, match="tier must be one of"):
         tier_named("commands")
+
+
+def test_a_trial_is_a_row_of_its_variant_found_in_its_folder(tmp_path):
+    import json
+
+    root = tmp_path / "runs"
+    folder = root / "BoxToss-ShortEnd-v0" / "raw" / "ppo-start-seed2"
+    (folder / "eval" / "default").mkdir(parents=True)
+    (folder / "eval" / "default" / "results.json").write_text(json.dumps(result(0.4)))
+    (folder / "command.txt").write_text("python -m agents.train --set initial_mean=ballistic\n")
+    store = make_store(STORE)
+    benchmark.collect(store, root, tmp_path / "runs.json")
+    records = benchmark_store.records(store, "BoxToss-ShortEnd-v0", "raw", "ppo:start")
+    assert [r["seed"] for r in records] == [2] and records[0]["command"].endswith("initial_mean=ballistic")
+    detail = tables.detail_table(store, "BoxToss-ShortEnd-v0", RAW)
+    assert any(line.startswith("| PPO, start | 40.0% [40.0, 40.0] (1) |") for line in detail)
+    assert tables.tier_table(store, RAW) == tables.tier_table(make_store(STORE), RAW)  # not a column of the table
+    assert "- PPO, start: `python -m agents.train --set initial_mean=ballistic`" in tables.trial_lines(
+        store, "BoxToss-ShortEnd-v0", RAW
+    )
