@@ -30,12 +30,15 @@ INTRO = (
     "{episodes} test episodes of 4 throws, success the whole hand stacked on the target); success is a throw at rest "
     "within the tolerance on a target face. A cell is the interquartile mean (IQM) of its seeds' success with its "
     "95% stratified-bootstrap confidence interval and, in brackets, the number of seeds, all by "
-    "[rliable](https://github.com/google-research/rliable) (with 3 seeds the IQM is their mean). *random*: uniform "
-    "env actions; *prior*: the tier's PPO recipe untrained, its mean action (what training starts from); the "
-    "ceiling: the oracle whose search grew until its success stopped rising (the stack's: its planner). The "
-    "aggregate row pools every variant's runs, success divided by the ceiling (runs per variant: as many as the "
-    "variant with the fewest). Trainings: `python -m agents.train` with each tier's recipe on this 2-core machine "
-    "shared with other work; budgets and wall times per variant are in the sections below."
+    "[rliable](https://github.com/google-research/rliable) (with 3 seeds the IQM is their mean). The planned seeds "
+    "are 5 for PPO on every variant of the headline tier and for every algorithm on ThisSideUp, ShortEnd and the "
+    "stack, 3 elsewhere; a cell with fewer was not trained further on this machine. *random*: uniform env actions; "
+    "*prior*: the tier's PPO recipe untrained, its mean action (what training starts from, with the recipe's "
+    "`initial_mean`); the ceiling: the oracle whose search grew until its success stopped rising (the stack's: its "
+    "planner). The aggregate row pools every variant's runs, success divided by the ceiling (runs per variant: as "
+    "many as the variant with the fewest). Trainings: `python -m agents.train` with each tier's recipe on this 2-core "
+    "machine shared with other work; budgets and wall times per variant are in the sections below, with the trials "
+    "(`--trial`: the recipe with other settings) beside the recipe's rows."
 )
 
 
@@ -44,6 +47,8 @@ def tier_section(store: dict[str, Any], tier: Tier, level: str = "###") -> list[
     lines = [f"{level} {tier.title}", "", f"Acting in {tier.meaning}.", "", *tables.tier_table(store, tier), ""]
     if line := tables.improvement_line(store, tier):
         lines += [line, ""]
+    if tier.headline and (goals := tables.goals_line(store, tier)):
+        lines += [goals, ""]
     heldout = tables.heldout_table(store, tier)
     if heldout:
         lines += [

@@ -125,6 +125,32 @@ def aggregate_text(store: dict[str, Any], tier: Tier) -> str:
     return text + (f"; {improvement}." if improvement else ".")
 
 
+RAW_GOALS = ("BoxToss-ThisSideUp-v0", "BoxToss-ShortEnd-v0", "BoxToss-Mixed-v0")
+GOAL_SHARE = 0.9
+
+
+def goals_line(store: dict[str, Any], tier: Tier) -> str:
+    """The headline tier's goals: per variant of ``RAW_GOALS``, the best agent or trial (by the IQM of its seeds)
+    as a share of the ceiling, against ``GOAL_SHARE``."""
+    parts = []
+    for env_id in RAW_GOALS:
+        top = ceiling_rate(store, env_id)
+        candidates = [
+            (estimate(scores(store, env_id, tier, agent)), agent)
+            for agent in [*tier.algos, *trials(store, env_id, tier)]
+        ]
+        found = [(value, agent) for value, agent in candidates if value is not None]
+        if not top or not found:
+            continue
+        value, agent = max(found, key=lambda item: item[0].value)
+        share = value.value / top
+        verdict = "reached" if share >= GOAL_SHARE else "missed"
+        parts.append(f"{env_id} {share:.0%} ({label(agent)}, {value.runs} seed{'s' * (value.runs > 1)}; {verdict})")
+    if not parts:
+        return ""
+    return f"Goals of this tier (the best agent at {GOAL_SHARE:.0%} of the ceiling or more): " + "; ".join(parts) + "."
+
+
 def heldout_line(store: dict[str, Any]) -> str:
     """One sentence: per tier and variant, the train and test splits' success of the runs trained on the train split
     (IQM over seeds)."""

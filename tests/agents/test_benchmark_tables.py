@@ -93,6 +93,8 @@ def test_the_probability_of_improvement_compares_runs_variant_by_variant():
     line = tables.improvement_line(store, RAW)
     assert "P(PPO > SAC) = 1.00 [1.00, 1.00] over 2 variants" in line  # every PPO run beats every SAC run
     assert benchmark_stats.probability_of_improvement(np.zeros((3, 1)), np.zeros((3, 1))).value == 0.5
+    goals = tables.goals_line(store, RAW)
+    assert f"BoxToss-ShortEnd-v0 {np.mean([0.25, 0.11, 0.09]):.0%} (PPO, 3 seeds; missed)" in goals
 
 
 def test_the_heldout_table_reports_train_test_and_their_gap():
