@@ -244,11 +244,14 @@ def record(store: dict[str, Any], entry: dict[str, Any] | None, path: Path) -> N
 
 
 def train_variant(args: argparse.Namespace, store: dict[str, Any], env_id: str) -> None:
-    """Everything the options ask for on one variant: random actions, the ceiling, per tier the prior and each
-    algorithm's seeds (on the train split with ``--heldout``, and the splits' ceilings)."""
+    """Everything the options ask for on one variant that the store lacks: random actions, the ceiling, per tier the
+    prior and each algorithm's seeds (on the train split with ``--heldout``, and the splits' ceilings). A record in
+    the store is never measured again (delete it to measure it anew)."""
+    stored = {store_module.key_of(r) for r in store["runs"]}  # measured before: kept, not trained again
     if not args.heldout:
         for seed in RANDOM_SEEDS:
-            record(store, ensure_random(args.root, env_id, seed), args.store)
+            if (env_id, None, "random", seed, None) not in stored:
+                record(store, ensure_random(args.root, env_id, seed), args.store)
     if not args.no_ceiling:
         for tag in ("split=train", "split=test") if args.heldout else ("default",):
             ensure_ceiling(store, args.root, env_id, tag)
@@ -259,11 +262,14 @@ def train_variant(args: argparse.Namespace, store: dict[str, Any], env_id: str) 
             continue
         if not split:
             for seed in planned_seeds(args, tier, env_id, tier.prior_algo):
-                record(store, ensure_prior(args.root, env_id, tier, seed, args.overrides), args.store)
+                if (env_id, tier.name, "prior", seed, None) not in stored:
+                    record(store, ensure_prior(args.root, env_id, tier, seed, args.overrides), args.store)
         if args.baselines_only:
             continue
         for algo in [a for a in tier.algos if a in args.algos]:
             for seed in planned_seeds(args, tier, env_id, algo):
+                if (env_id, tier.name, agent_name(algo, args.trial), seed, split) in stored:
+                    continue
                 path = ensure_trained(args.root, env_id, tier, algo, seed, args.overrides, split, args.trial)
                 found = training_record(path, env_id, tier, agent_name(algo, args.trial), seed, split)
                 record(store, found, args.store)

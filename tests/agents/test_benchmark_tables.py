@@ -172,3 +172,18 @@ def test_a_trial_is_a_row_of_its_variant_found_in_its_folder(tmp_path):
     assert "- PPO, start: `python -m agents.train --set initial_mean=ballistic`" in tables.trial_lines(
         store, "BoxToss-ShortEnd-v0", RAW
     )
+
+
+def test_what_the_store_holds_is_not_trained_again(tmp_path, monkeypatch):
+    store = make_store(STORE)  # BoxToss-v0: raw PPO seeds 0-4, SAC 0-2; random 0-4; prior 0-2
+    trained, evaluated = [], []
+    monkeypatch.setattr(
+        benchmark, "ensure_trained", lambda root, env, tier, algo, seed, *a: trained.append((algo, seed))
+    )
+    monkeypatch.setattr(benchmark, "training_record", lambda *a: None)
+    monkeypatch.setattr(benchmark, "ensure_prior", lambda root, env, tier, seed, o: evaluated.append(seed))
+    args = benchmark.parser().parse_args(["--envs", "BoxToss-v0", "--tiers", "raw", "--no-ceiling"])
+    args.store = tmp_path / "runs.json"
+    benchmark.train_variant(args, store, "BoxToss-v0")
+    assert trained == [("td3", seed) for seed in range(3)]  # TD3 had no run; PPO's 5 and SAC's 3 seeds are kept
+    assert evaluated == [3, 4]  # the prior's seeds 0-2 are there; the plan asks PPO's 5
