@@ -62,8 +62,10 @@ class Tier:
 
     def default_seeds(self, env_id: str, algo: str) -> tuple[int, ...]:
         """The seeds ``python -m agents.benchmark`` trains without ``--seeds``: five for the headline algorithm on
-        every variant of the headline tier and for every algorithm on ``FIVE_SEED_VARIANTS``, three elsewhere."""
-        five = (self.headline and algo == self.prior_algo) or env_id in FIVE_SEED_VARIANTS
+        every variant of the headline tier (but a variant observed otherwise, ``SAME_TASK``) and for every algorithm on
+        ``FIVE_SEED_VARIANTS``, three elsewhere."""
+        headline = self.headline and algo == self.prior_algo and env_id not in SAME_TASK
+        five = headline or env_id in FIVE_SEED_VARIANTS
         return tuple(range(5 if five else 3))
 
 
