@@ -63,15 +63,14 @@ def tier_section(store: dict[str, Any], tier: Tier, level: str = "###") -> list[
 
 def summary(store: dict[str, Any]) -> str:
     """The README's section (the README stays a front page): the headline tier's table, then a line per other
-    tier (its aggregates and probabilities of improvement) and one for the held-out split; the rest is on the page."""
+    tier (its aggregates and probabilities of improvement); the held-out split and the rest are on the page."""
     headline, others = TIERS[0], TIERS[1:]
     lines = [
         "### Benchmark: every variant, tier and algorithm against the ceiling",
         "",
         "`python -m agents.benchmark` (then `--report-only --readme`): success on the test targets, IQM [95% "
         "stratified-bootstrap CI] (seeds) by rliable; every tier's table, the held-out split, performance profiles, "
-        "budgets, breakdowns and learning curves in [docs/agents/benchmark.md](docs/agents/benchmark.md).",
-        "",
+        "budgets, breakdowns and learning curves in [docs/agents/benchmark.md](docs/agents/benchmark.md). "
         f"**{headline.title}**: {headline.meaning}.",
         "",
         *tables.tier_table(store, headline),
@@ -81,8 +80,6 @@ def summary(store: dict[str, Any]) -> str:
         lines += [line, ""]
     for tier in others:
         lines += [f"**{tier.title}**, over every variant: {tables.aggregate_text(store, tier)}", ""]
-    if heldout := tables.heldout_line(store):
-        lines += [heldout, ""]
     return "\n".join(lines).rstrip() + "\n"
 
 

@@ -151,26 +151,6 @@ def goals_line(store: dict[str, Any], tier: Tier) -> str:
     return f"Goals of this tier (the best agent at {GOAL_SHARE:.0%} of the ceiling or more): " + "; ".join(parts) + "."
 
 
-def heldout_line(store: dict[str, Any]) -> str:
-    """One sentence: per tier and variant, the train and test splits' success of the runs trained on the train split
-    (IQM over seeds)."""
-    parts = []
-    for tier in TIERS:
-        for env_id in tier.variants:
-            for agent in tier.algos:
-                found = store_module.records(store, env_id, tier.name, agent, "train")
-                pairs = [(store_module.success(r), store_module.success(r, TEST_TAG)) for r in found]
-                pairs = [(a, b) for a, b in pairs if a is not None and b is not None]
-                if pairs:
-                    train, test = (stats.iqm(np.array(side)).value for side in zip(*pairs, strict=True))
-                    parts.append(f"{env_id} {label(agent)} {tier.name} {train:.1%} -> {test:.1%}")
-    if not parts:
-        return ""
-    return '**Held-out split** (trained on `split="train"`; success on the train -> the test split): ' + (
-        "; ".join(parts) + "."
-    )
-
-
 def improvement_line(store: dict[str, Any], tier: Tier) -> str:
     """The probability that the tier's first algorithm beats each other one, over the variants both have runs on."""
     first, parts = tier.algos[0], []
