@@ -36,7 +36,7 @@ import torch.nn
 import yaml
 from stable_baselines3.common.noise import NormalActionNoise
 
-from agents import algorithms, initial_mean
+from agents import algorithms, curriculum, initial_mean
 from agents.envs import read_env_wrapper
 from box_toss_env.files import write_atomic
 
@@ -62,6 +62,7 @@ PROJECT_KEYS = {
     "checkpoint_freq": "env steps between checkpoints (0: never)",
     "initial_mean": "where the untrained policy throws: [a0, a1, a2], 'ballistic' or {ballistic: [c0, c1, c2]} "
     "(agents.initial_mean)",
+    "curriculum": "stages of env kwargs while training: [{until: throws, env_kwargs: {...}}, ...] (agents.curriculum)",
 }
 EXPRESSION_KEYS = ("policy_kwargs", "normalize", "replay_buffer_kwargs")  # Zoo evaluates these strings
 
@@ -288,6 +289,7 @@ def check_config(config: dict[str, Any], algo: str = "ppo") -> None:
         raise ConfigError(str(error)) from None
     try:
         initial_mean.check(config)
+        curriculum.read_stages(config.get("curriculum"), config.get("n_timesteps"))
     except ValueError as error:
         raise ConfigError(str(error)) from None
     if config.get("noise_type") not in (None, "normal"):

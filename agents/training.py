@@ -33,7 +33,7 @@ import yaml
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.logger import Logger, TensorBoardOutputFormat
 
-from agents import algorithms, initial_mean
+from agents import algorithms, curriculum, initial_mean
 from agents import config as configuration
 from agents.envs import TimedVecEnv, find_wrapper, make_training_env, make_vector_env, normalizer_of
 from agents.evaluation import (
@@ -476,7 +476,7 @@ def train(
         env_id,
         config["n_envs"],
         seed=env_seed,
-        env_kwargs=config["env_kwargs"],
+        env_kwargs=curriculum.env_kwargs_at(config, checkpoint[2] if checkpoint else 0),  # the recipe's, or a stage's
         vec_env_kwargs=config.get("vec_env_kwargs"),
         normalize=config.get("normalize", True),
         normalize_path=str(checkpoint[1]) if checkpoint and checkpoint[1] else None,
@@ -499,6 +499,8 @@ def train(
     clock.timed = find_wrapper(venv, TimedVecEnv)
     validation = ValidationCallback(run_dir, config, env_id, clock, on_validation)
     callbacks = [validation, ClockCallback(clock)]
+    if config.get("curriculum"):
+        callbacks.append(curriculum.CurriculumCallback(env_id, config, seed))
     if config.get("checkpoint_freq"):
         callbacks.insert(0, AtomicCheckpointCallback(int(config["checkpoint_freq"]), run_dir, algo, clock, off_policy))
     remaining = max(int(config["n_timesteps"]) - model.num_timesteps, 0)
