@@ -229,7 +229,8 @@ def check_options(parser: argparse.ArgumentParser, args: argparse.Namespace) -> 
         if env_id == GOAL_ENV:  # its agents' settings: GOAL_AGENTS and the goal recipes
             continue
         for tier in map(tier_named, args.tiers):
-            for algo in [a for a in args.algos if a in tier.algos] + [tier.prior_algo]:
+            algos = [a for a in args.algos if a in tier.algos and tier.has_recipe(a, env_id)]
+            for algo in algos + [tier.prior_algo] * (env_id in tier.variants):
                 try:
                     recipe(tier, algo, env_id, args.overrides, "train" if args.heldout else None)
                 except configuration.ConfigError as error:
@@ -266,7 +267,7 @@ def train_variant(args: argparse.Namespace, store: dict[str, Any], env_id: str) 
                     record(store, ensure_prior(args.root, env_id, tier, seed, args.overrides), args.store)
         if args.baselines_only:
             continue
-        for algo in [a for a in tier.algos if a in args.algos]:
+        for algo in [a for a in tier.algos if a in args.algos and tier.has_recipe(a, env_id)]:
             for seed in planned_seeds(args, tier, env_id, algo):
                 if (env_id, tier.name, agent_name(algo, args.trial), seed, split) in stored:
                     continue

@@ -60,6 +60,11 @@ class Tier:
         own = self.recipes is not None and configuration.has_entry(algo, env_id, self.recipes)
         return self.recipes if own and self.recipes is not None else configuration.HYPERPARAMS
 
+    def has_recipe(self, algo: str, env_id: str) -> bool:
+        """Whether ``algo`` has a recipe for ``env_id`` in this tier (``BoxToss-Pixels-v0`` has PPO's alone): the
+        others are not in the tier's plan for the variant."""
+        return configuration.has_entry(algo, env_id, self.hyperparams(algo, env_id))
+
     def default_seeds(self, env_id: str, algo: str) -> tuple[int, ...]:
         """The seeds ``python -m agents.benchmark`` trains without ``--seeds``: five for the headline algorithm on
         every variant of the headline tier (but a variant observed otherwise, ``SAME_TASK``) and for every algorithm on
