@@ -41,7 +41,16 @@ from agents import benchmark_store as store_module
 from agents import config as configuration
 from agents.algorithms import ALGORITHMS
 from agents.benchmark_goal import GOAL_ENV, GOAL_SECTION
-from agents.benchmark_tiers import SAME_TASK, STACK, TIER_NAMES, TIERS, VARIANTS, Tier, run_dir, tier_named
+from agents.benchmark_tiers import (
+    PLANNED_CEILINGS,
+    SAME_TASK,
+    TIER_NAMES,
+    TIERS,
+    VARIANTS,
+    Tier,
+    run_dir,
+    tier_named,
+)
 from agents.envs import make_training_env, normalizer_of
 from agents.evaluation import evaluate_run, make_baseline_run
 from agents.run_folder import read_csv
@@ -192,7 +201,7 @@ def ensure_prior(root: Path, env_id: str, tier: Tier, seed: int, overrides: list
 def ensure_ceiling(store: dict[str, Any], root: Path, env_id: str, tag: str = "default") -> None:
     """The variant's oracle sweep under ``tag`` (``default`` or a split's), run if the store lacks it; each finished
     budget is kept in ``<root>/<env id>/ceiling-<tag>.partial.json``, so a killed sweep resumes at its budget."""
-    if env_id == STACK or env_id in SAME_TASK or store["ceilings"].get(env_id, {}).get(tag):
+    if env_id in PLANNED_CEILINGS or env_id in SAME_TASK or store["ceilings"].get(env_id, {}).get(tag):
         return
     partial = root / env_id / f"ceiling-{tag}.partial.json"
     done = json.loads(partial.read_text()) if partial.exists() else []
@@ -259,7 +268,7 @@ def train_variant(args: argparse.Namespace, store: dict[str, Any], env_id: str) 
             store_module.save(store, args.store)
     split = "train" if args.heldout else None
     for tier in map(tier_named, args.tiers):
-        if env_id not in tier.variants or (split and (env_id == STACK or env_id in SAME_TASK)):
+        if env_id not in tier.variants or (split and (env_id in PLANNED_CEILINGS or env_id in SAME_TASK)):
             continue
         if not split:
             for seed in planned_seeds(args, tier, env_id, tier.prior_algo):

@@ -8,14 +8,15 @@ sweep, the learning curves).
 
 from __future__ import annotations
 
+import json
 from typing import Any
 
 import numpy as np
 
 from agents import benchmark_stats as stats
 from agents import benchmark_store as store_module
-from agents import ceiling, stack_planner
-from agents.benchmark_tiers import SAME_TASK, STACK, TIERS, Tier
+from agents import ceiling
+from agents.benchmark_tiers import PLANNED_CEILINGS, SAME_TASK, STACK, TIERS, Tier
 from agents.report import format_seconds
 
 RANDOM, PRIOR = "random", "prior"
@@ -48,10 +49,11 @@ def scores(store: dict[str, Any], env_id: str, tier: Tier, agent: str, split=Non
 
 
 def ceiling_rate(store: dict[str, Any], env_id: str, tag: str = "default") -> float | None:
-    """The ceiling's success on ``env_id`` (the stack planner's for the stack, else the oracle sweep's last budget
-    under ``tag``: ``default``, ``split=train`` or ``split=test``)."""
-    if env_id == STACK:
-        rows = stack_planner.saved_rows()
+    """The ceiling's success on ``env_id``: a planner's measured rows (``PLANNED_CEILINGS``: the stack's), else the
+    oracle sweep's last budget under ``tag`` (``default``, ``split=train`` or ``split=test``)."""
+    if env_id in PLANNED_CEILINGS:
+        path = PLANNED_CEILINGS[env_id]
+        rows = json.loads(path.read_text()) if path.exists() else []
         return None if not rows or tag != "default" else float(rows[-1]["success_rate"])
     sweep = store["ceilings"].get(SAME_TASK.get(env_id, env_id), {}).get(tag)
     return None if not sweep else float(ceiling.ceiling_of(sweep)["success_rate"])

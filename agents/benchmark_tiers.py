@@ -8,8 +8,10 @@ with which algorithms and seeds, and where their runs live.
   ``envs.ballistic``, or the stack's throw commands): a controller that already lands a face flat on the target.
 
 A tier of its own episodes and agents (the hidden-physics task of several throws, say) is one more ``Tier`` in
-``TIERS``: its variants, its algorithms (names of ``agents.algorithms.ALGORITHMS``), its run folder and overrides;
-every table, statistic and figure of ``agents.benchmark`` is made per tier from this list.
+``TIERS``: its variants, its algorithms (names of ``agents.algorithms.ALGORITHMS``, each with a recipe for the
+variant in ``agents/hyperparams/<algo>.yml`` or the tier's ``recipes`` folder), its run folder and overrides, and its
+variants' ceiling in ``PLANNED_CEILINGS`` where a planner gives it; every table, statistic and figure of
+``agents.benchmark`` is made per tier from this list.
 """
 
 from __future__ import annotations
@@ -33,6 +35,10 @@ VARIANTS = (*ONE_THROW, STACK)
 SAME_TASK = {PIXELS: "BoxToss-v0"}
 """Variants that are another's task observed otherwise: their ceiling is that variant's (the oracle plans from the
 episode, not from the observation)."""
+PLANNED_CEILINGS = {STACK: Path(__file__).resolve().parents[1] / "docs" / "agents" / "stack_ceiling.json"}
+"""Variants whose ceiling is a planner's measured rows (a JSON list, the largest budget last, each with its
+``success_rate``) rather than the oracle sweep: the stack's (``agents.stack_planner``). A task of several throws of
+its own (the hidden-physics tier's, whose ceiling is a planner told the true parameters) adds its file here."""
 FIVE_SEED_VARIANTS = ("BoxToss-ThisSideUp-v0", "BoxToss-ShortEnd-v0", STACK)
 """Where every algorithm of the headline tier gets five seeds (the rest three, PPO five everywhere)."""
 
