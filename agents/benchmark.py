@@ -32,7 +32,7 @@ import argparse
 import json
 import re
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import gymnasium as gym
 
@@ -52,7 +52,16 @@ from agents.benchmark_tiers import (
     tier_named,
 )
 from agents.envs import make_training_env, normalizer_of
-from agents.evaluation import evaluate_run, make_baseline_run
+from agents.evaluation import (
+    evaluate,
+    evaluate_run,
+    evaluate_stack,
+    is_stack,
+    make_baseline_run,
+    stack_scores,
+    summarize,
+)
+from agents.policies import TrainedPolicy
 from agents.run_folder import read_csv
 from agents.training import RUNS, latest_checkpoint, new_model, read_timing
 from box_toss_env.files import write_atomic
@@ -123,7 +132,7 @@ def training_return(path: Path) -> float | None:
     """The mean episode return of the last rollouts while training (SB3's ``rollout/ep_rew_mean``), or None."""
     rows = read_csv(path / "logs" / "progress.csv")[1] if (path / "logs" / "progress.csv").exists() else []
     values = [row.get("rollout/ep_rew_mean") for row in rows if row.get("rollout/ep_rew_mean")]
-    return float(values[-1]) if values else None
+    return float(cast(str, values[-1])) if values else None
 
 
 def training_record(path: Path, env_id: str, tier: Tier, agent: str, seed: int, split=None) -> dict[str, Any] | None:
@@ -155,16 +164,14 @@ def ensure_random(root: Path, env_id: str, seed: int) -> dict[str, Any]:
         command = f"python -m agents.baselines random --env {env_id} --set seed={seed}"
         make_baseline_run("random", path, env_id, settings={"seed": seed}, command=command)
         evaluate_run(path, quiet=True)
-    return store_module.make_record(env_id, None, "random", seed, {"default": report.read_results(path)})
+    results = cast(dict[str, Any], report.read_results(path))
+    return store_module.make_record(env_id, None, "random", seed, {"default": results})
 
 
 def prior_results(env_id: str, tier: Tier, seed: int, overrides: list[str]) -> dict[str, Any]:
     """The tier's prior recipe untrained (``training.new_model``: seeded, its ``initial_mean`` applied) after one
     reset of its training env (the observation statistics training starts with), scored deterministically."""
     import torch
-
-    from agents.evaluation import evaluate, evaluate_stack, is_stack, stack_scores, summarize
-    from agents.policies import TrainedPolicy
 
     config = recipe(tier, tier.prior_algo, env_id, overrides)
     torch.set_num_threads(int(config.get("torch_threads", 1)))

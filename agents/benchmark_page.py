@@ -17,7 +17,7 @@ from agents import benchmark_store as store_module
 from agents import report
 from agents.benchmark_goal import GOAL_SECTION
 from agents.benchmark_tiers import STACK, TIERS, Tier, run_dir
-from agents.doc_sections import read_section
+from agents.doc_sections import read_section, replace_section
 from agents.evaluation import STACK_TEST_EPISODES, TEST_TARGETS
 from box_toss_env.files import save_figure, write_atomic
 
@@ -195,8 +195,6 @@ def page(store: dict[str, Any], root: Path, goal_text: str) -> str:
 def write(store: dict[str, Any], root: Path, goal_text: str | None, only_goal: bool = False) -> None:
     """The page, the figures and the README's section; ``goal_text`` replaces the goal env's section (None keeps
     it as the page has it); ``only_goal`` writes that section alone."""
-    from agents.doc_sections import replace_section
-
     kept = goal_text if goal_text is not None else (read_section(GOAL_SECTION, PAGE) or "")
     if only_goal:
         replace_section(GOAL_SECTION, kept)

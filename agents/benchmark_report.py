@@ -188,9 +188,10 @@ def heldout_table(store: dict[str, Any], tier: Tier) -> list[str]:
         for agent in tier.algos:
             found = store_module.records(store, env_id, tier.name, agent, "train")
             pairs = [
-                (store_module.success(r), store_module.success(r, TEST_TAG))
+                (train_rate, test_rate)
                 for r in found
-                if store_module.success(r, TEST_TAG) is not None
+                if (train_rate := store_module.success(r)) is not None
+                and (test_rate := store_module.success(r, TEST_TAG)) is not None
             ]
             if not pairs:
                 continue
@@ -252,7 +253,7 @@ def budget(records: list[dict[str, Any]]) -> tuple[str, str]:
 
 def notes(store: dict[str, Any], env_id: str, tier: Tier) -> list[str]:
     """What a cell's records say of where they come from (``note``), once per note."""
-    found = {}
+    found: dict[str, str] = {}
     for name, records in detail_rows(store, env_id, tier):
         for r in records:
             if r.get("note"):

@@ -18,6 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
+from agents.report import pyplot
+
 REPS = 5_000
 """Bootstrap resamples of an interval (rliable's default is 50,000; 5,000 moves an interval's ends by well under
 a percent, and a table of some 70 cells is written in under a minute)."""
@@ -127,7 +129,6 @@ def plot_profiles(panels: dict[str, dict[str, np.ndarray]], path: Path, colors: 
     profile of each agent with its band (rliable's ``plot_performance_profiles``), written to ``path``."""
     from rliable import plot_utils
 
-    from agents.report import pyplot
     from box_toss_env.files import save_figure
 
     shown = {title: matrices for title, matrices in panels.items() if matrices}
@@ -160,7 +161,6 @@ def plot_profiles(panels: dict[str, dict[str, np.ndarray]], path: Path, colors: 
 
 def plot_aggregates(panels: dict[str, dict[str, Estimate]], path: Path, colors: dict[str, str]) -> Path | None:
     """One panel per tier: each agent's IQM of normalised scores over the variants, with its 95% interval."""
-    from agents.report import pyplot
     from box_toss_env.files import save_figure
 
     shown = {title: estimates for title, estimates in panels.items() if estimates}

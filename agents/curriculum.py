@@ -83,10 +83,12 @@ class CurriculumCallback(BaseCallback):
         adapter.vector_env.close()
         adapter.vector_env = wrap_vector_env(vector_env, self.config.get("env_wrapper"))
         env = self.model.get_env()
+        if env is None:
+            raise RuntimeError("curriculum: the model has no env to change")
         env.seed(self.seed + self.model.num_timesteps)
         self.model._last_obs = env.reset()  # type: ignore[assignment]  # the new stage's first observations
-        if hasattr(self.model, "_last_episode_starts"):
-            self.model._last_episode_starts[:] = True
+        if getattr(self.model, "_last_episode_starts", None) is not None:
+            self.model._last_episode_starts[:] = True  # type: ignore[index]
         if hasattr(self.model, "_last_original_obs") and hasattr(env, "get_original_obs"):
             self.model._last_original_obs = env.get_original_obs()
         self.current = wanted

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
@@ -77,7 +77,7 @@ def check(config: dict[str, Any]) -> None:
 def first_observations(env_id: str, config: dict[str, Any], seed: int, n: int = SAMPLES) -> np.ndarray:
     """``n`` first observations (n, obs) of the training env's episodes, seeded with ``seed``."""
     venv = episodes(env_id, config, seed, n)
-    observations = np.asarray(venv.reset(), dtype=np.float64)
+    observations = np.asarray(cast(np.ndarray, venv.reset()), dtype=np.float64)
     venv.close()
     return observations
 
@@ -217,7 +217,7 @@ def apply(model: BaseAlgorithm, config: dict[str, Any], env_id: str, seed: int, 
         normalizer = model.get_vec_normalize_env()
         if normalizer is not None and normalizer.norm_obs:
             normalizer.obs_rms.update(observations)  # training's statistics start from these observations
-            observations = normalizer.normalize_obs(observations.astype(np.float32))
+            observations = cast(np.ndarray, normalizer.normalize_obs(observations.astype(np.float32)))
         report = {"initial_mean": {"ballistic": vector.tolist()}, "samples": len(targets)}
         report.update(fit(model, observations, targets, seed))
         if hasattr(model.policy, "predict_values"):  # an actor-critic (PPO): its critic learns the start's rewards
