@@ -8,9 +8,12 @@ probability of improvement), with a held-out split of each variant.
     python -m agents.benchmark --envs BoxToss-v0 --tiers assisted --heldout --algos ppo   # the held-out split
     python -m agents.benchmark --envs BoxToss-Stack-v0 --set n_timesteps=16384           # a shorter budget
     python -m agents.benchmark --envs BoxToss-Goal-v0 --seeds 0 --readme                 # HER on the goal env
+    python -m agents.benchmark --envs BoxToss-HiddenPhysics-v0 --tiers hidden-physics    # its ceiling and baselines
 
 Tiers (``agents.benchmark_tiers``, headline first): ``raw``, the env's own actions, and ``assisted``, the recipes'
-ballistic or stack commands. Without ``--seeds`` each tier trains its default seeds (five for PPO on every variant of
+ballistic or stack commands; then ``hidden-physics`` (``agents.benchmark_hidden``), several throws of a box whose
+dynamics are unseen, whose ceiling and baselines ``agents.hidden_physics_tier`` measures and stores.
+Without ``--seeds`` each tier trains its default seeds (five for PPO on every variant of
 the headline tier and for every algorithm on ThisSideUp, ShortEnd and the stack; three elsewhere). Each training is
 ``python -m agents.train`` with the tier's recipe, in ``runs/benchmark/<env id>/[raw/]<algo>-seed<k>``; a finished
 run is kept and a killed one resumed, and every run is added to ``docs/agents/benchmark_runs.json`` as soon as it is
@@ -36,7 +39,7 @@ from typing import Any, cast
 
 import gymnasium as gym
 
-from agents import benchmark_goal, benchmark_page, ceiling, report, train
+from agents import benchmark_goal, benchmark_hidden, benchmark_page, ceiling, report, train
 from agents import benchmark_store as store_module
 from agents import config as configuration
 from agents.algorithms import ALGORITHMS
@@ -69,6 +72,9 @@ from box_toss_env.files import write_atomic
 ROOT = RUNS / "benchmark"
 TRIAL_NAME = re.compile(r"[a-z0-9][a-z0-9-]*")
 RANDOM_SEEDS = (0, 1, 2, 3, 4)
+ALL_TIERS = (*TIER_NAMES, benchmark_hidden.NAME)
+"""``--tiers``' choices: the SB3 tiers (``agents.benchmark_tiers``) and the hidden-physics tier (``benchmark_hidden``:
+its own episodes, ceiling and baselines, trained by ``agents.hidden_physics_tier``)."""
 TEST_SPLIT = {"split": "test"}
 SPLIT_TAGS = {"split=train": {"split": "train"}, "split=test": TEST_SPLIT}
 
@@ -229,6 +235,11 @@ def planned_seeds(args: argparse.Namespace, tier: Tier, env_id: str, algo: str) 
     return tuple(args.seeds) if args.seeds is not None else tier.default_seeds(env_id, algo)
 
 
+def sb3_tiers(args: argparse.Namespace) -> list[Tier]:
+    """The ``--tiers`` trained with SB3 recipes (all but the hidden-physics tier)."""
+    return [tier_named(name) for name in args.tiers if name != benchmark_hidden.NAME]
+
+
 def check_options(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     """Every env id registered, every training's recipe (with the tier's and ``--set`` overrides) valid: a one-line
     error before anything is created or trained."""
@@ -244,7 +255,7 @@ def check_options(parser: argparse.ArgumentParser, args: argparse.Namespace) -> 
     for env_id in args.envs:
         if env_id == GOAL_ENV:  # its agents' settings: GOAL_AGENTS and the goal recipes
             continue
-        for tier in map(tier_named, args.tiers):
+        for tier in sb3_tiers(args):
             algos = [a for a in args.algos if a in tier.algos and tier.has_recipe(a, env_id)]
             for algo in algos + [tier.prior_algo] * (env_id in tier.variants):
                 try:
@@ -274,7 +285,7 @@ def train_variant(args: argparse.Namespace, store: dict[str, Any], env_id: str) 
             ensure_ceiling(store, args.root, env_id, tag)
             store_module.save(store, args.store)
     split = "train" if args.heldout else None
-    for tier in map(tier_named, args.tiers):
+    for tier in sb3_tiers(args):
         if env_id not in tier.variants or (split and (env_id in PLANNED_CEILINGS or env_id in SAME_TASK)):
             continue
         if not split:
@@ -314,10 +325,9 @@ def collect(store: dict[str, Any], root: Path, path: Path) -> None:
 
 def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument(
-        "--envs", nargs="+", default=list(dict.fromkeys([*VARIANTS, *(v for t in TIERS for v in t.variants), GOAL_ENV]))
-    )
-    p.add_argument("--tiers", nargs="+", default=list(TIER_NAMES), choices=TIER_NAMES, help="headline first")
+    variants = [*VARIANTS, *(v for t in TIERS for v in t.variants), benchmark_hidden.ENV_ID, GOAL_ENV]
+    p.add_argument("--envs", nargs="+", default=list(dict.fromkeys(variants)))
+    p.add_argument("--tiers", nargs="+", default=list(ALL_TIERS), choices=ALL_TIERS, help="headline first")
     p.add_argument("--algos", nargs="+", default=sorted(ALGORITHMS), choices=sorted(ALGORITHMS))
     p.add_argument("--seeds", nargs="+", type=int, default=None, help="default: each tier's seeds per variant")
     p.add_argument("--root", type=Path, default=ROOT)
@@ -349,13 +359,16 @@ def main(argv: list[str] | None = None) -> None:
     command = parser()
     args = command.parse_args(argv)
     check_options(command, args)
-    variants = [env_id for env_id in args.envs if env_id != GOAL_ENV]
+    variants = [env_id for env_id in args.envs if env_id not in (GOAL_ENV, benchmark_hidden.ENV_ID)]
     goal = GOAL_ENV in args.envs
+    hidden = benchmark_hidden.NAME in args.tiers and benchmark_hidden.ENV_ID in args.envs
     store = store_module.load(args.store)
     collect(store, args.root, args.store)
     if not args.report_only:
         for env_id in variants:
             train_variant(args, store, env_id)
+        if hidden:
+            benchmark_hidden.train(args.seeds if args.seeds is not None else [0, 1, 2])
         if goal:
             benchmark_goal.ensure_goal_random(args.root)
             for seed in args.seeds if args.seeds is not None else (0, 1, 2):
@@ -364,7 +377,7 @@ def main(argv: list[str] | None = None) -> None:
                         benchmark_goal.ensure_goal_trained(args.root, agent, seed)
     goal_text = benchmark_goal.goal_document(args.root, args.algos, args.seeds or [0, 1, 2]) if goal else ""
     if variants:
-        print(benchmark_page.summary(store))
+        print(benchmark_page.summary(store, benchmark_hidden.rows()))
     if goal_text:
         print(goal_text)
     if args.readme:

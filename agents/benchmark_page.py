@@ -11,6 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from agents import benchmark_hidden as hidden
 from agents import benchmark_report as tables
 from agents import benchmark_stats as stats
 from agents import benchmark_store as store_module
@@ -23,7 +24,7 @@ from box_toss_env.files import save_figure, write_atomic
 
 DOCS = store_module.DOCS
 PAGE = DOCS / "benchmark.md"
-COLORS = {"random": "0.6", "prior": "0.3", "PPO": "C0", "SAC": "C1", "TD3": "C2"}
+COLORS = {"random": "0.6", "prior": "0.3", "PPO": "C0", "SAC": "C1", "TD3": "C2", "RecurrentPPO": "C3", "blind": "C4"}
 
 INTRO = (
     "Every agent is scored on the same {targets:,} test targets per variant (seeds 10000...; `BoxToss-Stack-v0`: "
@@ -61,9 +62,10 @@ def tier_section(store: dict[str, Any], tier: Tier, level: str = "###") -> list[
     return lines
 
 
-def summary(store: dict[str, Any]) -> str:
+def summary(store: dict[str, Any], hidden_rows: dict[str, Any]) -> str:
     """The README's section (the README stays a front page): the headline tier's table, then a line per other
-    tier (its aggregates and probabilities of improvement); the held-out split and the rest are on the page."""
+    tier (its aggregates and probabilities of improvement), the hidden-physics tier's gap (``hidden_rows``:
+    ``benchmark_hidden.rows()``); the held-out split and the rest are on the page."""
     headline, others = TIERS[0], TIERS[1:]
     lines = [
         "### Benchmark: every variant, tier and algorithm against the ceiling",
@@ -80,11 +82,16 @@ def summary(store: dict[str, Any]) -> str:
         lines += [line, ""]
     for tier in others:
         lines += [f"**{tier.title}**, over every variant: {tables.aggregate_text(store, tier)}", ""]
+    if line := hidden.summary_line(hidden_rows):
+        lines += [line, ""]
     return "\n".join(lines).rstrip() + "\n"
 
 
-def panels(store: dict[str, Any]) -> tuple[dict[str, dict[str, Any]], dict[str, dict[str, stats.Estimate]]]:
-    """Per tier: each agent's runs x variants matrix of normalised scores, and its aggregate IQM."""
+def panels(
+    store: dict[str, Any], hidden_rows: dict[str, Any]
+) -> tuple[dict[str, dict[str, Any]], dict[str, dict[str, stats.Estimate]]]:
+    """Per tier (the hidden-physics tier's from ``hidden_rows`` last): each agent's runs x variants matrix of
+    normalised scores, and its aggregate IQM."""
     profiles, aggregates = {}, {}
     for tier in TIERS:
         matrices = {}
@@ -94,6 +101,9 @@ def panels(store: dict[str, Any]) -> tuple[dict[str, dict[str, Any]], dict[str, 
                 matrices[f"{tables.label(agent)} ({len(variants)} of {len(tier.variants)})"] = matrix
         profiles[tier.title] = matrices
         aggregates[tier.title] = {name: stats.iqm(matrix) for name, matrix in matrices.items()}
+    if hidden_matrices := hidden.matrices(hidden_rows):
+        profiles[hidden.TITLE] = hidden_matrices
+        aggregates[hidden.TITLE] = {name: stats.iqm(matrix) for name, matrix in hidden_matrices.items()}
     return profiles, aggregates
 
 
@@ -158,7 +168,7 @@ def variant_section(store: dict[str, Any], root: Path, env_id: str, tier: Tier) 
     return lines
 
 
-def page(store: dict[str, Any], root: Path, goal_text: str) -> str:
+def page(store: dict[str, Any], root: Path, goal_text: str, hidden_rows: dict[str, Any]) -> str:
     lines = [
         "# BoxToss benchmark",
         "",
@@ -172,6 +182,7 @@ def page(store: dict[str, Any], root: Path, goal_text: str) -> str:
     ]
     for tier in TIERS:
         lines += tier_section(store, tier)
+    lines += hidden.section(hidden_rows)
     lines += [
         "## Performance profiles and aggregates",
         "",
@@ -200,9 +211,10 @@ def write(store: dict[str, Any], root: Path, goal_text: str | None, only_goal: b
         replace_section(GOAL_SECTION, kept)
         return
     DOCS.mkdir(parents=True, exist_ok=True)
-    profiles, aggregates = panels(store)
+    hidden_rows = hidden.rows()
+    profiles, aggregates = panels(store, hidden_rows)
     colors = {name: COLORS[name.split(" ")[0]] for matrices in profiles.values() for name in matrices}
     stats.plot_profiles(profiles, DOCS / "profiles.png", colors)
     stats.plot_aggregates(aggregates, DOCS / "aggregates.png", colors)
-    write_atomic(PAGE, page(store, root, kept))
-    report.write_readme(summary(store), "benchmark")
+    write_atomic(PAGE, page(store, root, kept, hidden_rows))
+    report.write_readme(summary(store, hidden_rows), "benchmark")

@@ -77,7 +77,7 @@ def test_a_cell_is_the_iqm_of_its_seeds_with_an_interval_and_its_count():
 
 def test_every_tier_has_a_table_headline_first_with_random_prior_algorithms_and_ceiling():
     store = make_store(STORE)
-    text = benchmark_page.summary(store)
+    text = benchmark_page.summary(store, {"agents": {}, "ceiling": None})
     assert [tier.headline for tier in TIERS][0] and text.index(RAW.title) < text.index(ASSISTED.title)
     raw = tables.tier_table(store, RAW)
     assert raw[0] == "| variant | random | prior | PPO | SAC | TD3 | ceiling |"

@@ -39,6 +39,7 @@ LAYERS = {
     "benchmark_stats": 6,
     "benchmark_goal": 6,
     "benchmark_report": 7,
+    "benchmark_hidden": 7,
     "benchmark_page": 8,
     "benchmark": 9,
     "main": 7,
