@@ -46,6 +46,7 @@ from agents.algorithms import ALGORITHMS
 from agents.benchmark_goal import GOAL_ENV, GOAL_SECTION
 from agents.benchmark_tiers import (
     PLANNED_CEILINGS,
+    RANDOM_SEEDS,
     SAME_TASK,
     TIER_NAMES,
     TIERS,
@@ -71,7 +72,6 @@ from box_toss_env.files import write_atomic
 
 ROOT = RUNS / "benchmark"
 TRIAL_NAME = re.compile(r"[a-z0-9][a-z0-9-]*")
-RANDOM_SEEDS = (0, 1, 2, 3, 4)
 ALL_TIERS = (*TIER_NAMES, benchmark_hidden.NAME)
 """``--tiers``' choices: the SB3 tiers (``agents.benchmark_tiers``) and the hidden-physics tier (``benchmark_hidden``:
 its own episodes, ceiling and baselines, trained by ``agents.hidden_physics_tier``)."""

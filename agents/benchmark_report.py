@@ -16,7 +16,7 @@ import numpy as np
 from agents import benchmark_stats as stats
 from agents import benchmark_store as store_module
 from agents import ceiling
-from agents.benchmark_tiers import PLANNED_CEILINGS, SAME_TASK, STACK, TIERS, Tier
+from agents.benchmark_tiers import PLANNED_CEILINGS, RANDOM_SEEDS, SAME_TASK, STACK, TIERS, Tier
 from agents.report import format_seconds
 
 RANDOM, PRIOR = "random", "prior"
@@ -63,8 +63,21 @@ def estimate(values: list[float]) -> stats.Estimate | None:
     return stats.iqm(np.array(values)) if values else None
 
 
-def cell_text(value: stats.Estimate | None) -> str:
-    return "-" if value is None else value.percent()
+def cell_text(value: stats.Estimate | None, planned: int | None = None) -> str:
+    """An estimate's cell; with fewer runs than the ``planned`` seeds, the count says so: ``(3 of 5)``."""
+    if value is None:
+        return "-"
+    short = planned is not None and value.runs < planned
+    count = f"{value.runs} of {planned}" if short else f"{value.runs}"
+    return f"{value.value:.1%} [{100 * value.low:.1f}, {100 * value.high:.1f}] ({count})"
+
+
+def planned_seeds(tier: Tier, env_id: str, agent: str) -> int:
+    """How many seeds the plan gives a cell (``Tier.default_seeds``; random actions ``RANDOM_SEEDS``, the prior its
+    algorithm's)."""
+    if agent == RANDOM:
+        return len(RANDOM_SEEDS)
+    return len(tier.default_seeds(env_id, tier.prior_algo if agent == PRIOR else agent))
 
 
 def normalised(store: dict[str, Any], tier: Tier, agent: str) -> tuple[list[str], np.ndarray | None]:
@@ -104,7 +117,10 @@ def tier_table(store: dict[str, Any], tier: Tier) -> list[str]:
         "|---|" + "---:|" * (len(agents) + 1),
     ]
     for env_id in tier.variants:
-        cells = [cell_text(estimate(scores(store, env_id, tier, agent))) for agent in agents]
+        cells = [
+            cell_text(estimate(scores(store, env_id, tier, agent)), planned_seeds(tier, env_id, agent))
+            for agent in agents
+        ]
         if all(cell == "-" for cell in cells[2:]):
             continue
         top = ceiling_rate(store, env_id)

@@ -39,6 +39,8 @@ PLANNED_CEILINGS = {STACK: Path(__file__).resolve().parents[1] / "docs" / "agent
 """Variants whose ceiling is a planner's measured rows (a JSON list, the largest budget last, each with its
 ``success_rate``) rather than the oracle sweep: the stack's (``agents.stack_planner``). A task of several throws of
 its own (the hidden-physics tier's, whose ceiling is a planner told the true parameters) adds its file here."""
+RANDOM_SEEDS = (0, 1, 2, 3, 4)
+"""The seeds of random actions on every variant (the same in every tier)."""
 FIVE_SEED_VARIANTS = ("BoxToss-ThisSideUp-v0", "BoxToss-ShortEnd-v0", STACK)
 """Where every algorithm of the headline tier gets five seeds (the rest three, PPO five everywhere)."""
 

@@ -83,6 +83,11 @@ def test_every_tier_has_a_table_headline_first_with_random_prior_algorithms_and_
     assert raw[0] == "| variant | random | prior | PPO | SAC | TD3 | ceiling |"
     row = next(line for line in raw if line.startswith("| BoxToss-v0 |"))
     assert "2.0% [2.0, 2.0] (5)" in row and "(3) | - | 100.0% |" in row  # random over 5 seeds; TD3 has none
+    assert "(3 of 5) |" in row  # the prior: PPO's plan on the headline tier is 5 seeds, 3 were measured
+    short_end = next(line for line in raw if line.startswith("| BoxToss-ShortEnd-v0 |"))
+    assert short_end.startswith("| BoxToss-ShortEnd-v0 | 0.0% [0.0, 0.0] (1 of 5) | - | 15.0% [")
+    assert short_end.endswith("(3 of 5) | - | 100.0% |")  # a five-seed variant: SAC's 3 seeds said short too
+    assert tables.cell_text(tables.estimate([0.5, 0.7]), 2).endswith("(2)")  # as planned: the count alone
     assert raw[-1].startswith("| **all variants** (success / ceiling) |")
     assert "(2 x 3)" in raw[-1]  # PPO on both variants, three runs each (the fewest)
 
