@@ -111,13 +111,19 @@ def pixel_cost(steps: int, repeats: int, n: int = 256) -> tuple[float, float]:
     return state, pixels
 
 
+def load_average() -> str:
+    """The machine's load averages (1, 5, 15 min), or n/a."""
+    return ", ".join(f"{value:.1f}" for value in os.getloadavg()) if hasattr(os, "getloadavg") else "n/a"
+
+
 def pixel_lines(state: float, pixels: float) -> list[str]:
     """The section of pixel observations' cost: ``state`` and ``pixels`` seconds per throw (``pixel_cost``)."""
     return [
         "",
-        'Pixel observations (`observation_mode="pixels"`, 96 x 40 RGB, `envs.pixels`) against the state, '
+        "Measured by `python -m benchmarks.throughput --pixels-only` (and every full run): pixel observations "
+        '(`observation_mode="pixels"`, 96 x 40 RGB, `envs.pixels`) against the state, '
         '`make_vec("BoxToss-v0", num_envs=256)`, one engine thread, stepped in turn on the same random actions, '
-        "thread CPU time per throw (median):",
+        f"thread CPU time per throw (median); load average {load_average()} at the end:",
         "",
         "| observation | us per throw | against the state |",
         "|---|---:|---:|",
@@ -184,10 +190,19 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="fewer repeats and throws")
     parser.add_argument(
+        "--pixels-only", action="store_true", help="only the pixel observations' cost against the state's"
+    )
+    parser.add_argument(
         "--readme", action="store_true", help="also write docs/throughput.md's section and the headline figures"
     )
     args = parser.parse_args()
     repeats = 2 if args.quick else 5
+    pixels = "\n".join(pixel_lines(*pixel_cost(8 if args.quick else 40, repeats))[1:])
+    print(pixels)
+    if args.readme:
+        replace_section("throughput-pixels", pixels)
+    if args.pixels_only:
+        return
     import numba
 
     lines = [
@@ -213,8 +228,6 @@ def main() -> None:
     )
     sync_rate = vector_rate(sync, 32 if args.quick else 256, repeats)
     lines.append(f"| Gymnasium `SyncVectorEnv`, 16 envs | {sync_rate:,.0f} |")
-
-    lines += pixel_lines(*pixel_cost(8 if args.quick else 40, repeats))
 
     ours_one, ours_batch, rest, steps = toss_per_throw(repeats)
     dt = scenes.toss().dt
@@ -243,8 +256,9 @@ def main() -> None:
         f"Memory of the batched env: {per_env:,.0f} bytes per env, {beyond_obs:,.0f} beyond the "
         "observation buffers (growth from 256 to 4,096 envs, measured with tracemalloc).",
     ]
-    load = ", ".join(f"{value:.1f}" for value in os.getloadavg()) if hasattr(os, "getloadavg") else "n/a"
-    lines[0] = lines[0][:-1] + f"; load average {load} at the end (a shared machine: other jobs' load lowers these)."
+    lines[0] = (
+        lines[0][:-1] + f"; load average {load_average()} at the end (a shared machine: other jobs' load lowers these)."
+    )
     report = "\n".join(lines)
     print(report)
     if args.readme:
