@@ -116,6 +116,14 @@ def load_average() -> str:
     return ", ".join(f"{value:.1f}" for value in os.getloadavg()) if hasattr(os, "getloadavg") else "n/a"
 
 
+def pixel_section(steps: int, repeats: int, readme: bool) -> None:
+    """Measure the pixel observations' cost (``pixel_cost``), print it and, with ``readme``, write its section."""
+    text = "\n".join(pixel_lines(*pixel_cost(steps, repeats))[1:])
+    print(text)
+    if readme:
+        replace_section("throughput-pixels", text)
+
+
 def pixel_lines(state: float, pixels: float) -> list[str]:
     """The section of pixel observations' cost: ``state`` and ``pixels`` seconds per throw (``pixel_cost``)."""
     return [
@@ -197,10 +205,7 @@ def main() -> None:
     )
     args = parser.parse_args()
     repeats = 2 if args.quick else 5
-    pixels = "\n".join(pixel_lines(*pixel_cost(8 if args.quick else 40, repeats))[1:])
-    print(pixels)
-    if args.readme:
-        replace_section("throughput-pixels", pixels)
+    pixel_section(8 if args.quick else 40, repeats, args.readme)
     if args.pixels_only:
         return
     import numba
