@@ -111,6 +111,17 @@ def pixel_cost(steps: int, repeats: int, n: int = 256) -> tuple[float, float]:
     return state, pixels
 
 
+def batched_rates(quick: bool, repeats: int) -> dict[tuple[int, int], float]:
+    """Throws per second of the batched env per (envs, engine threads)."""
+    batched = {}
+    for n in (1, 16, 256, 4096):
+        steps = max(2, 4096 // n) if not quick else max(1, 512 // n)
+        for threads in (1, 2):
+            env = gym.make_vec("BoxToss-v0", num_envs=n, threads=threads)
+            batched[n, threads] = vector_rate(env, steps, repeats)
+    return batched
+
+
 def load_average() -> str:
     """The machine's load averages (1, 5, 15 min), or n/a."""
     return ", ".join(f"{value:.1f}" for value in os.getloadavg()) if hasattr(os, "getloadavg") else "n/a"
@@ -218,16 +229,9 @@ def main() -> None:
     lines += ["| setting | throws/s |", "|---|---:|"]
     single = single_env_rate(1000 if args.quick else 5000, repeats)
     lines.append(f"| one `BoxToss-v0` via `gymnasium.make` | {single:,.0f} |")
-    batched = {}
-    for n in (1, 16, 256, 4096):
-        steps = max(2, 4096 // n) if not args.quick else max(1, 512 // n)
-        for threads in (1, 2):
-            rate = batched[n, threads] = vector_rate(
-                gym.make_vec("BoxToss-v0", num_envs=n, threads=threads), steps, repeats
-            )
-            lines.append(
-                f'| `make_vec("BoxToss-v0", num_envs={n})`, {threads} thread{"s" * (threads > 1)} | {rate:,.0f} |'
-            )
+    batched = batched_rates(args.quick, repeats)
+    for (n, threads), rate in batched.items():
+        lines.append(f'| `make_vec("BoxToss-v0", num_envs={n})`, {threads} thread{"s" * (threads > 1)} | {rate:,.0f} |')
     sync = gym.make_vec(
         "BoxToss-v0", num_envs=16, vectorization_mode="sync", vector_kwargs={"autoreset_mode": AutoresetMode.SAME_STEP}
     )
