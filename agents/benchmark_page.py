@@ -66,7 +66,7 @@ def tier_section(store: dict[str, Any], tier: Tier, level: str = "###") -> list[
 def summary(store: dict[str, Any], hidden_rows: dict[str, Any]) -> str:
     """The README's section (the README stays a front page): the headline tier's table, then a line per other
     tier (its aggregates and probabilities of improvement), the hidden-physics tier's gap (``hidden_rows``:
-    ``benchmark_hidden.rows()``); the held-out split and the rest are on the page."""
+    ``benchmark_hidden.rows()``) and the held-out split's table of each tier that has one; the rest is on the page."""
     headline, others = TIERS[0], TIERS[1:]
     lines = [
         "### Benchmark: every variant, tier and algorithm against the ceiling",
@@ -85,6 +85,14 @@ def summary(store: dict[str, Any], hidden_rows: dict[str, Any]) -> str:
         lines += [f"**{tier.title}**, over every variant: {tables.aggregate_text(store, tier)}", ""]
     if line := hidden.summary_line(hidden_rows):
         lines += [line, ""]
+    for tier in TIERS:
+        if heldout := tables.heldout_table(store, tier):
+            lines += [
+                f'Held-out split, {tier.title.lower()}: trained on `split="train"`, scored on both:',
+                "",
+                *heldout,
+                "",
+            ]
     return "\n".join(lines).rstrip() + "\n"
 
 
