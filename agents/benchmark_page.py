@@ -66,7 +66,8 @@ def tier_section(store: dict[str, Any], tier: Tier, level: str = "###") -> list[
 def summary(store: dict[str, Any], hidden_rows: dict[str, Any]) -> str:
     """The README's section (the README stays a front page): the headline tier's table, then a line per other
     tier (its aggregates and probabilities of improvement), the hidden-physics tier's gap (``hidden_rows``:
-    ``benchmark_hidden.rows()``) and the held-out split's table of each tier that has one; the rest is on the page."""
+    ``benchmark_hidden.rows()``) and the held-out split of each tier that has one, a line each; the rest is on
+    the page."""
     headline, others = TIERS[0], TIERS[1:]
     lines = [
         "### Benchmark: every variant, tier and algorithm against the ceiling",
@@ -80,20 +81,24 @@ def summary(store: dict[str, Any], hidden_rows: dict[str, Any]) -> str:
         "",
     ]
     if line := tables.improvement_line(store, headline):
-        lines += [line, ""]
+        lines += [f"- {line}"]
     for tier in others:
-        lines += [f"**{tier.title}**, over every variant: {tables.aggregate_text(store, tier)}", ""]
+        lines += [f"- **{tier.title}**, over every variant: {tables.aggregate_text(store, tier)}"]
     if line := hidden.summary_line(hidden_rows):
-        lines += [line, ""]
-    for tier in TIERS:
-        if heldout := tables.heldout_table(store, tier):
-            lines += [
-                f'Held-out split, {tier.title.lower()}: trained on `split="train"`, scored on both:',
-                "",
-                *heldout,
-                "",
-            ]
+        lines += [f"- {line}"]
+    heldout = [f"{tier.title.lower()}: {text}" for tier in TIERS if (text := heldout_text(store, tier))]
+    if heldout:
+        lines += ['- **Held-out split** (trained on `split="train"`), ' + "; ".join(heldout) + "."]
     return "\n".join(lines).rstrip() + "\n"
+
+
+def heldout_text(store: dict[str, Any], tier: Tier) -> str:
+    """The held-out table's rows of ``tier`` in a sentence: per variant and agent, train and test success, the gap."""
+    parts = []
+    for row in tables.heldout_table(store, tier)[2:]:
+        env_id, agent, train, test, gap = (cell.strip() for cell in row.strip("|").split("|")[:5])
+        parts.append(f"{env_id} {agent}: train split {train}, test split {test}, gap {gap}")
+    return "; ".join(parts)
 
 
 def panels(

@@ -137,7 +137,8 @@ def test_report_only_writes_the_page_figures_and_readme_from_the_store(tmp_path,
     )
     text = readme.read_text()
     assert "old" not in text and text.index("Raw actions (headline)") < text.index("Assisted")
-    assert "Held-out split, assisted: ballistic commands" in text and "| BoxToss-ShortEnd-v0 | PPO | 90.0% [" in text
+    assert '- **Held-out split** (trained on `split="train"`), assisted: ballistic commands: ' in text
+    assert "BoxToss-ShortEnd-v0 PPO: train split 90.0% [" in text and ", test split 65.0% [" in text
     assert (docs / "profiles.png").exists() and (docs / "aggregates.png").exists()
     page = (docs / "benchmark.md").read_text()
     assert "### BoxToss-ShortEnd-v0, assisted: ballistic commands" in page and "Held-out split" in page
