@@ -43,7 +43,7 @@ from agents import benchmark_goal, benchmark_hidden, benchmark_page, ceiling, re
 from agents import benchmark_store as store_module
 from agents import config as configuration
 from agents.algorithms import ALGORITHMS
-from agents.benchmark_goal import GOAL_ENV, GOAL_SECTION
+from agents.benchmark_goal import GOAL_AGENTS, GOAL_ENV, GOAL_SECTION, goal_hyperparams
 from agents.benchmark_tiers import (
     PLANNED_CEILINGS,
     RANDOM_SEEDS,
@@ -55,6 +55,7 @@ from agents.benchmark_tiers import (
     run_dir,
     tier_named,
 )
+from agents.command_line import SEED, OneLineParser, folder, json_file, one_line_errors
 from agents.envs import make_training_env, normalizer_of
 from agents.evaluation import (
     evaluate,
@@ -66,11 +67,12 @@ from agents.evaluation import (
     summarize,
 )
 from agents.policies import TrainedPolicy
-from agents.run_folder import read_csv
+from agents.run_folder import is_file_on_the_way, read_csv
 from agents.training import RUNS, latest_checkpoint, new_model, read_timing
 from box_toss_env.files import write_atomic
 
 ROOT = RUNS / "benchmark"
+DOCS = report.DOCS
 TRIAL_NAME = re.compile(r"[a-z0-9][a-z0-9-]*")
 ALL_TIERS = (*TIER_NAMES, benchmark_hidden.NAME)
 """``--tiers``' choices: the SB3 tiers (``agents.benchmark_tiers``) and the hidden-physics tier (``benchmark_hidden``:
@@ -246,14 +248,27 @@ def check_options(parser: argparse.ArgumentParser, args: argparse.Namespace) -> 
     for env_id in args.envs:
         if env_id not in gym.registry:
             parser.error(f"--envs: {env_id!r} is not registered")
-    if args.seeds is not None and any(seed < 0 for seed in args.seeds):
-        parser.error(f"--seeds must be integers >= 0, got {args.seeds}")
+    if is_file_on_the_way(args.root):
+        parser.error(f"--root {args.root} is a file, not a folder (or lies under one)")
+    if args.readme and not DOCS.parent.is_dir():
+        parser.error(f"--readme rewrites the repository's pages ({DOCS}): run it in a clone")
     if args.trial is not None and not TRIAL_NAME.fullmatch(args.trial):
         parser.error(f"--trial must be lower-case letters, digits and dashes (a folder name), got {args.trial!r}")
     if args.report_only:
         return
+    for text in args.overrides:
+        try:
+            configuration.parse_override(text)
+        except configuration.ConfigError as error:
+            parser.error(f"--set: {error}")
     for env_id in args.envs:
-        if env_id == GOAL_ENV:  # its agents' settings: GOAL_AGENTS and the goal recipes
+        if env_id == GOAL_ENV:  # its agents' settings: GOAL_AGENTS and the goal recipes (goal_hyperparams)
+            for agent, (algo, *_) in GOAL_AGENTS.items():
+                if algo in args.algos:
+                    try:
+                        configuration.check_config(goal_hyperparams(agent)[1], algo)
+                    except configuration.ConfigError as error:
+                        parser.error(f"{agent} on {env_id}: {error}")
             continue
         for tier in sb3_tiers(args):
             algos = [a for a in args.algos if a in tier.algos and tier.has_recipe(a, env_id)]
@@ -261,7 +276,8 @@ def check_options(parser: argparse.ArgumentParser, args: argparse.Namespace) -> 
                 try:
                     recipe(tier, algo, env_id, args.overrides, "train" if args.heldout else None)
                 except configuration.ConfigError as error:
-                    parser.error(f"{algo} on {env_id} ({tier.name}): {error}")
+                    given = f" with --set {' '.join(args.overrides)}" if args.overrides else ""
+                    parser.error(f"{algo} on {env_id} ({tier.name}){given}: {error}")
 
 
 def record(store: dict[str, Any], entry: dict[str, Any] | None, path: Path) -> None:
@@ -310,12 +326,12 @@ def collect(store: dict[str, Any], root: Path, path: Path) -> None:
         for env_id in tier.variants:
             for split in (None, "train"):
                 for algo in tier.algos:
-                    for folder in sorted(run_dir(root, env_id, tier, "x", split).parent.glob(f"{algo}-*seed*")):
-                        name, _, seed = folder.name.rpartition("-seed")
+                    for found_run in sorted(run_dir(root, env_id, tier, "x", split).parent.glob(f"{algo}-*seed*")):
+                        name, _, seed = found_run.name.rpartition("-seed")
                         trial = name[len(algo) + 1 :] or None
                         if not seed.isdigit() or (trial is not None and not TRIAL_NAME.fullmatch(trial)):
                             continue
-                        found = training_record(folder, env_id, tier, agent_name(algo, trial), int(seed), split)
+                        found = training_record(found_run, env_id, tier, agent_name(algo, trial), int(seed), split)
                         if found and store_module.key_of(found) not in {store_module.key_of(r) for r in store["runs"]}:
                             store_module.add(store, found)
     if len(store["runs"]) > before:
@@ -323,15 +339,18 @@ def collect(store: dict[str, Any], root: Path, path: Path) -> None:
         print(f"added {len(store['runs']) - before} finished runs found in {root} to {path}")
 
 
-def parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def make_parser() -> OneLineParser:
+    """The command's options (``check_options`` checks what their types cannot)."""
+    p = OneLineParser(prog="python -m agents.benchmark", description=__doc__.split("\n\n")[0])
     variants = [*VARIANTS, *(v for t in TIERS for v in t.variants), benchmark_hidden.ENV_ID, GOAL_ENV]
-    p.add_argument("--envs", nargs="+", default=list(dict.fromkeys(variants)))
+    p.add_argument("--envs", nargs="+", default=list(dict.fromkeys(variants)), help="registered env ids")
     p.add_argument("--tiers", nargs="+", default=list(ALL_TIERS), choices=ALL_TIERS, help="headline first")
-    p.add_argument("--algos", nargs="+", default=sorted(ALGORITHMS), choices=sorted(ALGORITHMS))
-    p.add_argument("--seeds", nargs="+", type=int, default=None, help="default: each tier's seeds per variant")
-    p.add_argument("--root", type=Path, default=ROOT)
-    p.add_argument("--store", type=Path, default=store_module.STORE, help="the stored runs (JSON)")
+    p.add_argument("--algos", nargs="+", default=sorted(ALGORITHMS), choices=sorted(ALGORITHMS), help="SB3 algorithms")
+    p.add_argument(
+        "--seeds", nargs="+", type=SEED, default=None, help=f"training seeds, {SEED.allowed} (default: each tier's)"
+    )
+    p.add_argument("--root", type=folder, default=ROOT, help="folder of the benchmark's runs")
+    p.add_argument("--store", type=json_file, default=store_module.STORE, help="the stored runs (a .json file)")
     p.add_argument("--heldout", action="store_true", help="train on the train split, score on train and test")
     p.add_argument(
         "--set",
@@ -356,7 +375,13 @@ def parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> None:
-    command = parser()
+    """The command; a damaged run file or a file-system error ends it in one line (``one_line_errors``)."""
+    with one_line_errors("python -m agents.benchmark"):
+        run(argv)
+
+
+def run(argv: list[str] | None = None) -> None:
+    command = make_parser()
     args = command.parse_args(argv)
     check_options(command, args)
     variants = [env_id for env_id in args.envs if env_id not in (GOAL_ENV, benchmark_hidden.ENV_ID)]

@@ -23,29 +23,8 @@ import gymnasium as gym
 from stable_baselines3.common.callbacks import BaseCallback
 
 from agents.envs import find_wrapper, wrap_vector_env
+from agents.recipe_options import read_stages
 from box_toss_env.wrappers.sb3_adapter import SB3VecEnvAdapter
-
-
-def read_stages(value: Any, n_timesteps: int | None = None) -> list[tuple[int, dict[str, Any]]]:
-    """``curriculum`` as (until, env_kwargs) stages in order ([] for None); a ValueError names what is wrong."""
-    if value is None:
-        return []
-    expected = "curriculum must be a list of {until: <throws>, env_kwargs: {...}} with until increasing"
-    if not isinstance(value, list) or not value:
-        raise ValueError(f"{expected}, got {value!r}")
-    stages: list[tuple[int, dict[str, Any]]] = []
-    for stage in value:
-        if not isinstance(stage, dict) or set(stage) != {"until", "env_kwargs"}:
-            raise ValueError(f"{expected}, got the stage {stage!r}")
-        until, kwargs = stage["until"], stage["env_kwargs"]
-        if not isinstance(until, int) or isinstance(until, bool) or until < 1 or not isinstance(kwargs, dict):
-            raise ValueError(f"{expected}, got the stage {stage!r}")
-        if stages and until <= stages[-1][0]:
-            raise ValueError(f"{expected}: {until} after {stages[-1][0]}")
-        stages.append((until, kwargs))
-    if n_timesteps is not None and stages[-1][0] >= n_timesteps:
-        raise ValueError(f"curriculum: the last stage must end before n_timesteps = {n_timesteps}, got {stages[-1][0]}")
-    return stages
 
 
 def env_kwargs_at(config: dict[str, Any], timesteps: int) -> dict[str, Any]:

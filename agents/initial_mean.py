@@ -32,6 +32,7 @@ import torch
 from stable_baselines3.common.base_class import BaseAlgorithm
 
 from agents.envs import make_vector_env
+from agents.recipe_options import read_initial_mean as read_option
 from box_toss_env.envs.ballistic import ballistic_actions
 from box_toss_env.files import write_atomic
 
@@ -41,37 +42,6 @@ FIT_BATCH = 256
 FIT_LEARNING_RATE = 1e-3
 FIT_SEED_OFFSET = 1_000_003  # the fit's episodes: env seed + this, apart from training's (seed, seed + 1, ...)
 TANH_LIMIT = 0.999  # targets of a tanh-squashed actor are kept inside (-1, 1)
-
-
-def read_option(value: Any) -> tuple[str, np.ndarray] | None:
-    """``initial_mean`` as (kind, vector): ("constant", action) or ("ballistic", command); None for None. A
-    ValueError names what is accepted."""
-    if value is None:
-        return None
-    kind, vector = ("ballistic", [0.0, 0.0, 0.0]) if value == "ballistic" else ("constant", value)
-    if isinstance(value, dict) and list(value) == ["ballistic"]:
-        kind, vector = "ballistic", value["ballistic"]
-    ok = (
-        isinstance(vector, (list, tuple))
-        and len(vector) == 3
-        and all(isinstance(v, (int, float)) and not isinstance(v, bool) and -1.0 <= v <= 1.0 for v in vector)
-    )
-    if not ok:
-        raise ValueError(
-            "initial_mean must be a list of 3 numbers in [-1, 1] (a constant env action), 'ballistic' or "
-            f"{{ballistic: [c0, c1, c2]}} (a ballistic command, each in [-1, 1]), got {value!r}"
-        )
-    return kind, np.asarray(vector, dtype=np.float64)
-
-
-def check(config: dict[str, Any]) -> None:
-    """A ValueError for an ``initial_mean`` that is malformed, or ballistic in a recipe acting through a wrapper."""
-    option = read_option(config.get("initial_mean"))
-    if option is not None and option[0] == "ballistic" and config.get("env_wrapper") is not None:
-        raise ValueError(
-            "initial_mean: a ballistic start is a throw in the env's own actions; this recipe acts through "
-            f"env_wrapper {config['env_wrapper']!r} (set env_wrapper=null, or give a constant action)"
-        )
 
 
 def first_observations(env_id: str, config: dict[str, Any], seed: int, n: int = SAMPLES) -> np.ndarray:

@@ -189,7 +189,7 @@ def test_what_the_store_holds_is_not_trained_again(tmp_path, monkeypatch):
     )
     monkeypatch.setattr(benchmark, "training_record", lambda *a: None)
     monkeypatch.setattr(benchmark, "ensure_prior", lambda root, env, tier, seed, o: evaluated.append(seed))
-    args = benchmark.parser().parse_args(["--envs", "BoxToss-v0", "--tiers", "raw", "--no-ceiling"])
+    args = benchmark.make_parser().parse_args(["--envs", "BoxToss-v0", "--tiers", "raw", "--no-ceiling"])
     args.store = tmp_path / "runs.json"
     benchmark.train_variant(args, store, "BoxToss-v0")
     assert trained == [("td3", seed) for seed in range(3)]  # TD3 had no run; PPO's 5 and SAC's 3 seeds are kept
