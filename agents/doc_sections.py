@@ -27,6 +27,7 @@ SECTION_PAGES = {
     "tune": DOCS / "hyperparameter-search.md",  # python -m agents.tune ... --readme
     "engine-benchmark": METHODOLOGY / "engine-benchmark.md",  # python -m benchmarks.engine --readme
     "throughput": DOCS / "throughput.md",  # python -m benchmarks.throughput --readme
+    "throughput-pixels": DOCS / "throughput.md",  # python -m benchmarks.throughput --pixels-only --readme
     "vector-reset": METHODOLOGY / "vector-reset.md",  # python -m benchmarks.vector_reset --readme
     "cold-start": DOCS / "cold-start.md",  # python -m benchmarks.cold_start --readme
     "rllib-sampling": METHODOLOGY / "rllib.md",  # python -m benchmarks.rllib_sampling --readme
