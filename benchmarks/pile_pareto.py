@@ -10,7 +10,7 @@ measures, interleaved timed repeats in thread CPU time give the cost, us per bod
 off in every engine, so the figures compare the solvers' work. Error: the deepest penetration over the window (the
 pile's impacts; the pyramid under its own weight) and at its end, and how far any box moved (drift: the pyramid
 should not move at all). A setting is on the Pareto front of its case when no other setting, of any engine, is both
-cheaper and has less penetration over the window.
+cheaper and has less penetration over the window (depths under a nanometre count as equal).
 """
 
 from __future__ import annotations
@@ -63,6 +63,7 @@ PILE = 100
 PYRAMID_ROWS = 20  # 210 boxes
 FIGURE = engine_scale.DOCS / "figures" / "pile_pareto.png"
 MARKER = "pile-pareto"
+ERROR_FLOOR = 1e-9  # [m] depths below this are rounding (a pyramid at rest: 1e-12), equal on the front
 
 
 @dataclass(frozen=True)
@@ -169,12 +170,13 @@ def pareto_rows(
 
 
 def on_front(window: Window, others: list[Window]) -> bool:
-    """No other window is both cheaper and less deep (and at least as good in both)."""
-    cost, error = window.us_per_body_second, window.quality.penetration
+    """No other window is both cheaper and less deep (and at least as good in both); depths under ERROR_FLOOR are
+    equal."""
+    cost, error = window.us_per_body_second, max(window.quality.penetration, ERROR_FLOOR)
     return not any(
         o.us_per_body_second <= cost
-        and o.quality.penetration <= error
-        and (o.us_per_body_second < cost or o.quality.penetration < error)
+        and max(o.quality.penetration, ERROR_FLOOR) <= error
+        and (o.us_per_body_second < cost or max(o.quality.penetration, ERROR_FLOOR) < error)
         for o in others
     )
 

@@ -118,6 +118,7 @@ class Quality:
 
     penetration: float = 0.0  # deepest, box into box or into the floor, over every sample
     penetration_end: float = math.nan  # at the last sample
+    energy_start: float = math.nan  # total energy at the start (potential from the floor)
     energy_gain: float = 0.0  # highest total energy above the start
     gains_energy: bool = False  # above ENERGY_SHARE of the energy above the lowest pose
     rise: float = 0.0  # the most any box rose above where it was at the start
@@ -145,6 +146,7 @@ class Track:
         self.half, self.mass, self.inertia = box_arrays(self.scene)
         self.deep = np.zeros(self.scene.n_bodies, dtype=np.bool_)
         self.energy0 = energy(self.start, self.mass, self.inertia, self.scene.gravity)
+        self.quality.energy_start = self.energy0
         lowest = float(-self.scene.gravity * self.mass @ self.half.min(axis=1))
         self.allowance = ENERGY_SHARE * max(self.energy0 - lowest, 0.0) + 1e-9 * self.scene.n_bodies
         self.pile = self.pile_bounds() if self.thrown is not None else None

@@ -50,6 +50,8 @@ def test_the_front_holds_the_settings_nothing_beats():
     a, b, c = window(10, 1e-3), window(20, 1e-4), window(30, 1e-3)
     others = [a, b, c]
     assert pile_pareto.on_front(a, others) and pile_pareto.on_front(b, others) and not pile_pareto.on_front(c, others)
+    exact = [window(10, 1e-12), window(20, 1e-13)]  # rounding: the cheaper one alone
+    assert pile_pareto.on_front(exact[0], exact) and not pile_pareto.on_front(exact[1], exact)
 
 
 def test_quick_rows_cover_every_engine_with_finite_figures(tmp_path):
