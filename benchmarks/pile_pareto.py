@@ -200,6 +200,7 @@ def plot(rows, path: Path = FIGURE) -> None:
     """Per case: penetration over the window, and at its end, against cost (log-log), a colour per engine, the
     defaults as stars, the Pareto front as a line."""
     import matplotlib
+    import matplotlib.ticker
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -234,7 +235,17 @@ def plot(rows, path: Path = FIGURE) -> None:
                     )
             front = sorted((w.us_per_body_second, max(value(w), 1e-13)) for _, w, f in mine if f)
             if front and j == 0:
-                ax.step(*zip(*front, strict=True), where="post", color="k", lw=0.8, alpha=0.6, label="front")
+                ax.step(
+                    *zip(*front, strict=True),
+                    where="post",
+                    color="k",
+                    lw=0.8,
+                    alpha=0.6,
+                    marker="s",
+                    markerfacecolor="none",
+                    markersize=9,
+                    label="front",
+                )
             ax.set(
                 xscale="log",
                 yscale="log",
@@ -243,6 +254,7 @@ def plot(rows, path: Path = FIGURE) -> None:
                 xlabel="CPU per body per simulated second [us]",
             )
             ax.grid(True, which="both", alpha=0.3)
+            ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
             ax.legend(fontsize=7)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -125,8 +125,11 @@ def test_where_ours_loses_the_tables_say_so():
     goals = "\n".join(scale_report.goals_table(windows, cases))
     assert "no (1.5x)" in goals
     assert scale_report.losses(windows) == (1, 2)
+    for w in windows:
+        w.case = "pile 1000"
     summary = scale_report.readme_summary(windows, "header.", "")
-    assert "| pile 100, dropped | 30.0 | 20.0 | ours loses, 1.5x |" in summary
+    assert "| pile 1000, dropped | 30.0 | 20.0 | ours loses, 1.5x |" in summary
+    assert "kept awake" not in summary  # the README's rows alone
     assert "in 1 of the 2 windows" in summary
 
 
