@@ -48,6 +48,7 @@ from benchmarks.suite_runs import (
     QUICK_REPEATS,
     REPEATS,
     Window,
+    loop_overhead,
     run_case,
     until_rest_default,
 )
@@ -250,10 +251,11 @@ def method(cases: list[Case], window: float, settle: float, repeats: int, budget
     ]
 
 
-def page_text(args, cases, windows, onbox, header: str, window: float, settle: float) -> str:
+def page_text(args, cases, windows, onbox, header: str, window: float, settle: float, overhead=None) -> str:
     cases_by = {c.name: c for c in cases}
     lines = [header, ""]
     lines += method(cases, window, settle, args.repeats, args.budget)
+    lines += scale_report.loop_note(overhead or {}, windows)
     lines += ["", "### Cost at the defaults: us per body per simulated second, one thread", ""]
     lines += scale_report.cost_table(windows)
     lines += ["", "### Ours at the defaults against the engine goals", ""]
@@ -342,11 +344,13 @@ def main(argv=None) -> None:
         f"{load_text()}."
     )
     windows, order = run_suite(args.suite, args.engines, args.repeats, args.budget, log)
+    log("the Python loop that steps the other engines")
+    overhead = loop_overhead()
     onbox = []
     if not args.no_onbox and OURS in args.engines:
         log("ours per throw of BoxToss-v0 and BoxToss-OnBox-v0")
         onbox = onbox_rows(*((QUICK_ONBOX_THROWS, QUICK_BATCHES) if args.quick else (ONBOX_THROWS, BATCHES)))
-    text = page_text(args, args.suite, windows, onbox, header, args.window, args.settle)
+    text = page_text(args, args.suite, windows, onbox, header, args.window, args.settle, overhead)
     text += (
         f"\n\nThe run took {(time.perf_counter() - began) / 60:.1f} min of wall time, "
         f"{time.process_time() / 60:.1f} min of this process's CPU."

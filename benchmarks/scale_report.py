@@ -182,6 +182,40 @@ def notes(windows: Sequence[Window]) -> list[str]:
     return lines
 
 
+def loop_note(overhead: dict[str, float], windows: Sequence[Window]) -> list[str]:
+    """What stepping from Python adds to the other engines' figures (``suite_runs.loop_overhead``'s us per step):
+    the loop, and an empty Box2D v3 world's whole step as a share of Box2D v3's step in each scene of 20 boxes or
+    fewer, the largest share over its windows in motion named."""
+    if "loop" not in overhead:
+        return []
+    line = (
+        "- Stepping from Python: Box2D v3, Box2D 2.3 and pymunk are stepped by a Python loop, one call a step, as "
+        f"their users step them (ours runs a window in one call). The loop around a call that does nothing costs "
+        f"{overhead['loop']:.3f} us a step"
+    )
+    empty = overhead.get("box2d3 empty")
+    small = [w for w in windows if w.engine == RIVAL and w.n <= 20 and w.steps and w.seconds and w.label != "rest"]
+    if empty is None or not small:
+        return [line + "."]
+    shares = [empty / (1e6 * w.cpu / w.steps) for w in small]
+    top = small[shares.index(max(shares))]
+    resting = [
+        empty / (1e6 * w.cpu / w.steps) for w in windows if w.engine == RIVAL and w.label == "rest" and w.seconds
+    ]
+    rest_text = (
+        f" In its windows at rest, where its bodies sleep, the empty world's step is {100 * min(resting):.0f}-"
+        f"{100 * max(resting):.0f}% of its step."
+        if resting
+        else ""
+    )
+    return [
+        line + f"; an empty Box2D v3 world's whole step through it, {empty:.2f} us (Box2D's fixed cost a step "
+        f"included): in the scenes of 20 boxes or fewer, up to {100 * max(shares):.0f}% of Box2D v3's step "
+        f"({top.case}, {WINDOW_TEXT.get(top.label, top.label)}: {empty * 1e-6 / (top.n * top.dt) * 1e6:.1f} of its "
+        f"{top.us_per_body_second:.1f} us per body per simulated second).{rest_text}"
+    ]
+
+
 def losses(windows: Sequence[Window]) -> tuple[int, int]:
     """(windows where ours costs more than Box2D v3, windows where both have a figure)."""
     by = keyed(windows)

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from benchmarks.other_scenes import STATE_SIZE, UnsupportedScene, World, make_world
+from benchmarks.other_scenes import STATE_SIZE, UnsupportedScene, World, available_scene_engines, make_world
 from benchmarks.scene_quality import Quality, Track
 from benchmarks.scene_suite import Case, Plan
 from box_toss_env.physics import Scene, Simulator, layout, make_settings, simulate, warm_start_memory
@@ -95,6 +95,30 @@ class OurWorld:
 
 
 EngineWorld = OurWorld | World
+
+LOOP_STEPS = 100_000  # calls per repeat of ``loop_overhead``
+
+
+def loop_overhead(steps: int = LOOP_STEPS, repeats: int = REPEATS) -> dict[str, float]:
+    """Thread CPU us per step of the Python loop that steps the other engines (``World.advance``, one call a step,
+    as their users step them): around a call that does nothing (``"loop"``), and around an empty Box2D v3 world's
+    whole step at its defaults, 60 Hz and 4 substeps (``"box2d3 empty"``, where pyb2d3 is installed): the most the
+    loop and Box2D's fixed cost a step can add to a small scene's figure. Best of ``repeats``."""
+
+    def idle(*_) -> None:
+        return None
+
+    calls: dict[str, Callable[[], object]] = {"loop": idle}
+    if "box2d3" in available_scene_engines():
+        import pyb2d3
+
+        world = pyb2d3.World(gravity=(0.0, -9.81))
+        calls["box2d3 empty"] = lambda: world.step(1 / 60, 4)
+    out = {}
+    for name, call in calls.items():
+        stepper = World(name, 1 / 60, call, idle, lambda: np.zeros(0, bool), idle)
+        out[name] = 1e6 * min(stepper.advance(steps) for _ in range(repeats)) / steps
+    return out
 
 
 Builder = Callable[[Case, bool], "EngineWorld"]

@@ -183,3 +183,17 @@ def test_bad_options_name_themselves(argv, message, capsys):
 def test_pile_case_stays_at_the_scene_defaults():
     kind, scene = engine_scale.pile_case(100)
     assert kind == "pile" and scene == scenes.pile(100)
+
+
+def test_the_python_loop_that_steps_the_other_engines_is_measured_and_said():
+    from benchmarks.suite_runs import loop_overhead
+
+    overhead = loop_overhead(steps=2000, repeats=1)
+    assert 0.0 < overhead["loop"] < overhead.get("box2d3 empty", math.inf)
+    dropped = suite_runs.Window("pile 16", "box2d3", "drop", 16, 1 / 60, 120, steps=120, seconds=[0.004])
+    resting = suite_runs.Window("pile 16", "box2d3", "rest", 16, 1 / 60, 120, steps=120, seconds=[0.001])
+    line = "\n".join(scale_report.loop_note({"loop": 0.03, "box2d3 empty": 0.4}, [dropped, resting]))
+    # 0.4 us of a 0.004 s / 120 steps = 33.3 us step: 1%; at rest 0.4 of 8.3 us: 5%
+    assert "0.030 us a step" in line and "up to 1% of Box2D v3's step (pile 16, dropped" in line
+    assert "is 5-5% of its step" in line
+    assert scale_report.loop_note({}, [dropped]) == []
