@@ -84,8 +84,13 @@ class Compilation:
         env = dict(os.environ)
         env["PYTHONPATH"] = os.pathsep.join(p for p in (package_root, env.get("PYTHONPATH")) if p)
         self.process = subprocess.Popen(
-            [sys.executable, "-m", "box_toss_env.physics.compile.background_compile"], stdin=subprocess.PIPE,
-            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env, start_new_session=True)
+            [sys.executable, "-m", "box_toss_env.physics.compile.background_compile"],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            env=env,
+            start_new_session=True,
+        )
         try:
             self.process.stdin.write(pickle.dumps((recipe, signature)))
             self.process.stdin.close()
