@@ -6,8 +6,9 @@ frictionless one and sees every solver follow).
 
 Coulomb friction with coefficient mu: a contact's friction impulse q (along the tangent t = (-n_y, n_x), n the
 normal pushing body 1 out of body 2) is bounded by |q| <= mu p, p its normal impulse (``friction_bound``,
-``clamp_friction``). A box-box contact takes the mixed material of Box2D's rules: friction sqrt(mu_1 mu_2),
-restitution max(e_1, e_2), penalty stiffness min(k_1, k_2); a box-floor contact the box's own
+``clamp_friction``), and a sliding contact takes q = -s mu p, s the sign of its slip (``friction_slope``, which the
+exact solves write into their systems). A box-box contact takes the mixed material of Box2D's rules: friction
+sqrt(mu_1 mu_2), restitution max(e_1, e_2), penalty stiffness min(k_1, k_2); a box-floor contact the box's own
 (``floor_friction``). An impact is a contact approaching faster than the restitution threshold; Newton's law aims
 its normal velocity at u_n+ = -e u_n- (``newton_target``, the colliding solver), Poisson's gives it e times its
 compression impulse (``poisson_impulse``, the floor-only solver, which never creates energy with friction).
@@ -43,9 +44,16 @@ def mixed_stiffness(k_1, k_2):
 
 
 @jit_stage(inline="always")
+def friction_slope(mu):
+    """The friction impulse a sliding contact takes per unit of normal impulse: mu (Coulomb). The exact solves
+    write a sliding contact's friction as this times its normal impulse (q = -s slope p, s the sign of the slip)."""
+    return mu
+
+
+@jit_stage(inline="always")
 def friction_bound(mu, normal_impulse):
-    """The most friction impulse a contact can take: mu p (Coulomb)."""
-    return mu * normal_impulse
+    """The most friction impulse a contact can take: mu p (Coulomb, ``friction_slope`` times p)."""
+    return friction_slope(mu) * normal_impulse
 
 
 @jit_stage(inline="always")

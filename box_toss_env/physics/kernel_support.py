@@ -8,9 +8,7 @@ import numpy as np
 from . import layout
 from .compile.compilation import cache_location, jit_stage
 from .geometry import lowest_face, vertex_offset
-
-FLAT_TOLERANCE = 1e-3  # [rad] a face this close to level counts as lying on the floor
-TOUCH_TOLERANCE = 1e-3  # [-] of hx + hy: a corner this close to y = 0 touches the floor
+from .tunables import FLAT_TOLERANCE, TOUCH_TOLERANCE
 
 
 @jit_stage

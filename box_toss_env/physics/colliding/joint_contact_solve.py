@@ -26,7 +26,7 @@ caller solves by alternation instead.
 """
 
 from ..compile.compilation import jit_stage
-from ..contact_law import friction_bound, tangent
+from ..contact_law import friction_bound, friction_slope, tangent
 from ..tunables import DIRECT_LIMIT, FRICTION_CONE_ROUNDING, JOINT_LIMIT, JOINT_ROUNDS, LCP_TOLERANCE, REGULARISATION
 from .narrowphase import BODY1, FRICTION, FRICTION_IMPULSE, IMPULSE, NX, NY, R1X, R1Y, R2X, R2Y
 
@@ -128,9 +128,9 @@ def solve_states(contacts, count, w, u0, state, a, index, x, impulse):
             if j % 2 == 0:  # p_d's column: a sliding contact's friction +-mu p_d folds in
                 d = j // 2
                 if state[d] == SLIDE_PLUS:
-                    value += contacts[d, FRICTION] * w[i, j + 1]
+                    value += friction_slope(contacts[d, FRICTION]) * w[i, j + 1]
                 elif state[d] == SLIDE_MINUS:
-                    value -= contacts[d, FRICTION] * w[i, j + 1]
+                    value -= friction_slope(contacts[d, FRICTION]) * w[i, j + 1]
             a[r, col] = value
         a[r, r] += REGULARISATION * w[i, i]
         a[r, k] = -u0[i]

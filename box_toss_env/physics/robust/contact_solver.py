@@ -1,7 +1,7 @@
-"""Stage 2 of the robust solver's contact step, solve contacts (and the solves stages 0 and 6 reuse): impulses
-on the corners that can touch the floor (at most three: the lowest corner and its two neighbours), solved
-together, with clamped Coulomb friction (``solve_contact_velocities``), and the implicit penalty correction
-of stage 6 (``correct_penetration``).
+"""The solve contacts stage of the floor-only solver's contact step (and the solves its restitution and relax
+stages reuse): impulses on the corners that can touch the floor (at most three: the lowest corner and its two
+neighbours), solved together, with clamped Coulomb friction (``solve_contact_velocities``), and the implicit
+penalty correction of the relax stage (``correct_penetration``).
 
 Notation for one box with inverse mass 1/m, inverse inertia 1/I, and a corner at lever arm
 r = (rx, ry) from the centre of mass; the floor normal is n = (0, 1), the tangent (1, 0):
@@ -22,7 +22,7 @@ Corners travel in a small work array ``corners[row, i]`` (rows below), the first
 import math
 
 from ..compile.compilation import jit_stage
-from ..contact_law import clamp_friction, friction_bound
+from ..contact_law import clamp_friction, friction_bound, friction_slope
 from ..geometry import vertex_offset
 from ..tunables import CORNER_CONVERGED, CORNER_SWEEPS, LCP_TOLERANCE, PAIR_CONDITION, PENALTY_DAMPING_RATIO
 
@@ -196,7 +196,7 @@ def solve_one_corner(vx, vy, spin, corners, friction, inv_mass, inv_inertia):
     if lam < 0.0:
         sign = 1.0 if u_t > 0.0 else -1.0
         for _ in range(2):  # sliding on, then (a slip that reverses under the normal impulse) the other way
-            denominator = k_nn - sign * friction * k_nt
+            denominator = k_nn - sign * friction_slope(friction) * k_nt
             if denominator > 0.0:
                 lam = (b - u_n) / denominator
                 q = -sign * friction_bound(friction, lam)
