@@ -1,10 +1,9 @@
-"""The colliding robust kernel: it builds the step state once (``state``), runs the grid steps (``advance_steps``:
-0. wake, alone, the substeps of ``step`` over all awake bodies or group by group, 8. sleep), sizing the arrays
-between steps, and writes the results back. A step's substeps never stop half-way: before each step its candidate
-pairs are found at every body's reach over the whole step (``groups.step_pairs``, the pair array grown until they
-fit) and the contact rows are grown to hold every contact those pairs and the floor can give (two a pair, four a
-body); the substeps search only among those pairs.
-"""
+"""The colliding robust kernel: it builds the step state once (``state``), runs the grid steps (``advance_steps``,
+``stages.COLLIDING_STEP``: wake, alone, the substeps of ``step`` over all awake bodies or group by group, sleep), sizing
+the arrays between steps, and writes the results back. A step's substeps never stop half-way: before each step its
+candidate pairs are found at every body's reach over the whole step (``groups.step_pairs``, the pair array grown until
+they fit) and the contact rows are grown to hold every contact those pairs and the floor can give (two a pair, four a
+body); the substeps search only among those pairs."""
 
 import math
 
@@ -64,7 +63,7 @@ def start_steps(context, bodies, sweep, sleep, warm):
             sweep = grown_sweep(sweep)
             slept = sleep_placed(bodies, sweep, sleep, context)
         n_awake -= slept
-    if 0 < n_awake < bodies.pose.shape[0] and context.max_steps > 0:  # 0. wake, for the first step
+    if 0 < n_awake < bodies.pose.shape[0] and context.max_steps > 0:  # wake, for the first step
         n_awake = wake(context, bodies, sweep, sleep)
     return sweep, n_awake
 
@@ -90,7 +89,7 @@ def load_warm_start(warm, n, impulses, dt):
 # -- the grid steps ---------------------------------------------------------------------------------
 @jit_stage
 def wake(context, bodies, sweep, sleep):
-    """0. Wake the sleeping islands an awake body can reach in the coming step (``islands.wake_touched``, at each
+    """Wake: the sleeping islands an awake body can reach in the coming step (``islands.wake_touched``, at each
     awake body's reach over dt). Returns how many bodies are awake."""
     update_geometry(bodies.pose, bodies.half, sleep.awake, sweep.trig, sweep.bound)
     body_reach(bodies.vel, bodies.radius, sleep.awake, context.dt, context.gravity, context.tolerance, sweep.reach)
@@ -103,7 +102,7 @@ def advance_steps(context, bodies, sweep, contacts, impulses, sleep, stats, scra
     """The grid steps while a body is awake, from ``progress`` (the step reached, the bodies awake, the impulses kept
     in ``contacts``: their count and substep length), each: alone (each awake body alone against the floor while no
     two can meet, ``alone``), or the step's candidate pairs (``groups.step_pairs``) and, if the arrays hold them,
-    the substeps 1.-7. and 8. sleep (``step.advance_step``); then 0. wake for the next step. Where the arrays cannot
+    the substeps and sleep (``step.advance_step``); then wake for the next step. Where the arrays cannot
     hold a step's pairs or its contacts, it returns before the step (nothing of it done) for the kernel to grow them
     and call again. Returns (progress, status, failing step, rows needed: 0 done, -1 more pairs, else contacts)."""
     n, n_awake, n_previous, h_previous = progress
@@ -140,7 +139,7 @@ def advance_steps(context, bodies, sweep, contacts, impulses, sleep, stats, scra
             n += 1
             if not finite:
                 return (n, n_awake, n_previous, h_previous), layout.STATUS_NONFINITE, n, 0
-        if 0 < n_awake < nb and n < context.max_steps:  # 0. wake, for the next step
+        if 0 < n_awake < nb and n < context.max_steps:  # wake, for the next step
             n_awake = wake(context, bodies, sweep, sleep)
     return (n, n_awake, n_previous, h_previous), layout.STATUS_OK, -1, 0
 

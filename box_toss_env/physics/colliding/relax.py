@@ -1,4 +1,4 @@
-"""Stage relax of the colliding solver (stage 2 of ``step``'s script): penetration deeper than the slop
+"""The relax stage of the colliding solver (``stages.COLLIDING_SUBSTEP``): penetration deeper than the slop
 removed by the critically damped penalty spring with backward Euler, as pseudo-velocities (the split impulse
 of ``robust.penalty``, now between two bodies), island by island (``correct_penetrations``,
 ``penalty_sweeps``).

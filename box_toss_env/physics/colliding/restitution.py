@@ -1,4 +1,4 @@
-"""Stage restitution of the colliding solver (stage 5 of ``step``'s script): the impacts' targets
+"""The restitution stage of the colliding solver (``stages.COLLIDING_SUBSTEP``): the impacts' targets
 u_rel . n >= -e u0 polished contact by contact after the joint solve (``apply_restitution``).
 """
 

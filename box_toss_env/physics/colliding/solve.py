@@ -1,4 +1,4 @@
-"""Stage solve of the colliding solver (stage 4 of ``step``'s script): the contact impulses, by the
+"""The solve contacts stage of the colliding solver (``stages.COLLIDING_SUBSTEP``): the contact impulses, by the
 cheapest method that is exact for the contact set (``solve_velocities``): normal and friction together up to
 JOINT_LIMIT contacts (``solve_jointly``, ``joint_contact_solve``), the normals exactly with friction sweeps up
 to DIRECT_LIMIT (``normal_lcp``, ``sweeps``), projected Gauss-Seidel beyond (``sweeps.gauss_seidel``).
@@ -16,7 +16,7 @@ from .sweeps import friction_sweep, gauss_seidel
 
 @jit_stage
 def solve_velocities(contacts, count, bodies, exact, context):
-    """Stage 4: the contact impulses of the first ``count`` contacts. Up to JOINT_LIMIT contacts with friction,
+    """Solve contacts: the contact impulses of the first ``count`` contacts. Up to JOINT_LIMIT contacts with friction,
     normal and friction impulses are solved together, exactly (``joint_contact_solve``); up to DIRECT_LIMIT contacts
     (or if that does not settle), the normal impulses are solved exactly together (``alternate``); beyond that, if
     the exact solve fails, or if the scene's ``solver_tolerance`` is looser than EXACT_CONVERGED (it chose the

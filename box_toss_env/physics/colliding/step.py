@@ -1,96 +1,33 @@
 """The step script of the robust solver for scenes whose boxes collide (``Scene(boxes_collide=True)``): a grid
 step (``advance_step``) takes its substeps with one count or group by group (``advance_substeps``), each substep
-(``substep``) being stages 1.-7., one stage a line; the kernel (``kernel``) runs the steps between 0. wake and the
-alone stage, and sizes the arrays between them. The contact formulas are in ``prepare``, the penalty in ``relax``,
-the warm start, the impulse solves and restitution in ``warm_start``, ``solve`` and ``restitution``, bodies alone in
-``alone``, groups of their own substeps in ``groups``, the geometry of contacts in ``narrowphase``, pairs in
-``broadphase``, sleeping in ``islands``, the step state in ``state``. The steps allocate nothing and count no
-references (several times faster for stages handed arrays, ``compilation.jit_stage``).
+(``substep``) running the stages of ``stages.COLLIDING_SUBSTEP``, one stage a line; the kernel (``kernel``) runs
+the steps between the wake and the alone stage, and sizes the arrays between them (``stages.COLLIDING_STEP``). What
+each stage does is ``stages.STAGES``'s; its formulas are its module's: the contact formulas in ``prepare``, the
+penalty in ``relax``, the warm start, the impulse solves and restitution in ``warm_start``, ``solve`` and
+``restitution``, bodies alone in ``alone``, groups of their own substeps in ``groups``, the geometry of contacts in
+``narrowphase``, pairs in ``broadphase``, sleeping in ``islands``, the substep count in ``substeps``, the step state
+in ``state``. The steps allocate nothing and count no references (several times faster for stages handed arrays,
+``compilation.jit_stage``).
 
-The stage script of one substep of length h:
-  1. find contacts: every box-box point whose gap the two bodies could close within h, every box-floor
-     corner within the box's reach plus the scene's largest (a struck box moves further than its own
-     speed says) (speculative contacts, ``narrowphase.find_contacts``); each starts from its impulse of
-     the last substep when the same feature touched (warm starting), so a stack's load is carried from
-     step to step rather than rebuilt by the iterations; and from run to run when the caller keeps the
-     ``warm`` array (``load_warm_start``, ``store_warm_start``: in chunks as in one run); a cold start of
-     more than DIRECT_LIMIT contacts starts from a guess of a resting pile's loads (``resting_loads``);
-  2. penalty, island by island: in an island holding a contact deeper than twice the slop, penetration deeper
-     than the slop is removed by the critically damped penalty spring with
-     backward Euler, as a pseudo-velocity (``robust_solver``'s split impulse, now between two bodies:
-     ERP = h omega / (h omega + 2), omega = sqrt(k K_n)); positions move, velocities do not, and the
-     potential energy it returns is taken from the kinetic energy of the bodies it moved, as far as
-     they have it (the one place a substep can gain energy: a box pushed up out of an overlap while at
-     rest; the scene's energy still never exceeds what it started with in our tests);
-  3. integrate velocities: v += h g;
-  4. solve contact velocities: the normal impulses stay >= 0 and let each gap close but not pass
-     (u_rel . n >= -max(gap, 0) / h); each contact's accumulated friction impulse is clamped to mu times
-     its normal impulse (it can bring the slip at a contact to zero, never drive it the other way). Up to
-     JOINT_LIMIT contacts, normal and friction impulses are solved exactly together (the Coulomb contact
-     LCP by an active set over each contact's stick / slide / free state, ``joint_contact_solve``); up to
-     DIRECT_LIMIT contacts, or if those states do not settle, the normal impulses are solved exactly
-     together (an active set on the dense Delassus matrix, ``normal_lcp``: a stack's load passes through
-     every box at once, whatever the mass ratio), alternating with friction sweeps until the impulses
-     change by less than CONVERGED of their sum (at most VELOCITY_ITERATIONS rounds); beyond that,
-     projected Gauss-Seidel over the contacts (Box2D's sequential impulses, friction then normal at each,
-     until a sweep changes the impulses by less than the scene's ``solver_tolerance`` of their sum, at
-     most ``solver_iterations`` sweeps);
-  5. restitution, only for impacts: a contact that approached faster than the restitution threshold
-     before this substep (u0 = u_rel . n < -threshold) and took an impulse gets the target
-     u_rel . n >= -e u0 (Newton's law with the approach speed before the solve, as Box2D v3), so a
-     single frictionless contact takes p = -(1 + e) u0 / K_n in all, the closed form, in the substep
-     its gap closes (also for e = 0: the impact is not spread over the speculative steps); resting
-     contacts (slower than the threshold) get none. The impacts are solved again with stage 4's solve,
-     together with every other contact and with friction (the simultaneous impulse LCP: a box struck
-     while lying on the floor is held by the floor and tips as friction says), then polished contact by
-     contact (``apply_restitution``). Restitution solved alone, without the floor or friction, drove a
-     box struck from above 1.3 cm into the floor at 200 m/s and made a box dropped on a box nearly
-     frictionless at its impact;
-  6. no energy gained: the bodies that took an impulse are scaled by the one factor s in [0, 1] that
-     keeps their kinetic + potential energy from rising in the substep (``energy_limit_scale``; with
-     several contacts, friction or warm starting the impulses alone could add energy). Scaling every
-     velocity by s keeps every contact satisfied and reverses no slip;
-  7. integrate positions: a body that took no impulse moves on its exact parabola
-     (x += h v - h^2 g / 2 with v already at the end of the substep), one in contact with symplectic
-     Euler (x += h v).
-A grid step dt is split into substeps so that no point of any box moves further than
-TUNNEL_FRACTION / 2 of the scene's smallest half extent in one (the point speed bound
-|v| + |g| h + |omega| R), so two boxes move by at most TUNNEL_FRACTION of it relative to one another,
-and no box turns further than MAX_ROTATION_PER_STEP, up to MAX_SUBSTEPS: one count for all the awake bodies
-(the fastest decides), or one per group of bodies that cannot meet within the step (below). No tunnelling: within that
-bound two boxes cannot pass through one another in a substep (they move by less than half the
-thinnest box, and the speculative contacts stop the gap from closing past zero); the floor's
-speculative contacts hold at any speed. The bound holds up to a relative speed of
-MAX_SUBSTEPS * TUNNEL_FRACTION * min(hx, hy) / dt (3,300 m/s for 10 cm thick boxes at dt = 1/256 s);
-beyond it the substeps are capped and only the speculative contacts remain (not guaranteed).
+A grid step dt is split into substeps so that no point of any box moves further than TUNNEL_FRACTION / 2 of the
+scene's smallest half extent in one (the point speed bound |v| + |g| h + |omega| R), so two boxes move by at most
+TUNNEL_FRACTION of it relative to one another, and no box turns further than MAX_ROTATION_PER_STEP, up to
+MAX_SUBSTEPS: one count for all the awake bodies (the fastest decides), or one per group of bodies that cannot meet
+within the step (``groups``). No tunnelling: within that bound two boxes cannot pass through one another in a
+substep (they move by less than half the thinnest box, and the speculative contacts stop the gap from closing past
+zero); the floor's speculative contacts hold at any speed. Beyond MAX_SUBSTEPS the substeps are capped and only the
+speculative contacts remain (not guaranteed).
 
-What a grid step does before and after the substeps, so that a scene pays only for what moves:
-  0. wake: with ``until_rest``, every sleeping island that an awake body can reach within the step wakes
-     (``islands.wake_touched``; the islands asleep at the end of the last call, kept in ``warm``, sleep from
-     the start, ``islands.restore_sleeping``, and so do the bodies placed at rest, ``islands.sleep_placed``);
-     sleeping bodies are left out of everything below;
-  alone: while at most ALONE_LIMIT bodies are awake, the whole steps for which no two boxes can meet
-     (``steps_alone``: on the exact parabolas while every awake body flies, or by a bound on every point's
-     speed from the body's energy, ``energy_speed``, while they bounce or slide on the floor apart) are
-     taken by each awake body alone against the floor with the floor-only solver (``robust_solver.advance_box``:
-     flight in closed form, impacts located in time, its own sleep), in one jump: a box thrown over a
-     sleeping one, or settling on the floor beside it, costs what a floor throw costs until they get close;
-  groups: where the awake bodies need different substep counts (and the step has more than one), the bodies
-     that cannot meet within the step (chains of candidate pairs at each body's reach over dt plus the
-     fastest's, ``groups.step_pairs``) are grouped by the count they need; where that saves at least
-     SPLIT_SAVING body-substeps and pays for the passes over every body that each group's substeps make, each
-     group takes its own substeps (``groups.plan_substeps``: a box thrown fast far from a pile leaves the pile its
-     own count), else all take the fastest's, as with one group;
-  1.-7. the substeps above, over the awake bodies (or a group's) only; contacts come from the sort-and-sweep
-     broadphase (``broadphase.candidate_pairs``), which visits the pairs in the order testing every pair did,
-     so the results are those of the all-pairs search: the step's pairs, found before its substeps at every
-     body's reach over the step (``groups.step_pairs``), each substep testing those at its own reach
-     (``broadphase.substep_pairs``);
-  8. sleep: with ``until_rest``, an island (bodies joined by box-box contacts) whose bodies have all been
-     supported and slower than ``sleep_speed`` at every point for ``sleep_time`` falls asleep
-     (``islands.fall_asleep``: velocities zero, no cost until touched); the run stops once every body sleeps.
-Impacts between boxes are resolved in the substep where the gap closes (not located in time as the
-floor-only solver locates a box's impacts with the floor).
+Contacts come from the sort-and-sweep broadphase (``broadphase.candidate_pairs``), which visits the pairs in the
+order testing every pair did, so the results are those of the all-pairs search: the step's pairs, found before its
+substeps at every body's reach over the step (``groups.step_pairs``), each substep testing those at its own reach
+(``broadphase.substep_pairs``). Impacts between boxes are resolved in the substep where the gap closes (not located
+in time as the floor-only solver locates a box's impacts with the floor). The restitution stage solves the impacts
+again with the solve contacts stage's solve, together with every other contact and with friction (the simultaneous
+impulse LCP: a box struck while lying on the floor is held by the floor and tips as friction says), then polishes
+them contact by contact (``apply_restitution``); the energy limit then keeps the bodies that took an impulse from
+gaining kinetic + potential energy (with several contacts, friction or warm starting the impulses alone could add
+energy; one factor on all their velocities keeps every contact satisfied and reverses no slip).
 """
 
 import math
@@ -126,7 +63,7 @@ from .substeps import body_reach, substeps
 from .warm_start import warm_start
 
 
-# -- 1. find contacts --------------------------------------------------------------------------------
+# -- find contacts -----------------------------------------------------------------------------------
 @jit_stage(inline="always")
 def contact_reach(bodies, sweep, include, h, context):
     """Each included body's bounding box and how far it can travel in the substep (``body_reach``); against
@@ -140,7 +77,7 @@ def contact_reach(bodies, sweep, include, h, context):
 
 @jit_stage(inline="always")
 def find_substep_contacts(context, bodies, sweep, contacts, include, h, pairs):
-    """1. broadphase and narrowphase: the contacts within what the included bodies can travel in the substep
+    """Find contacts: broadphase and narrowphase, the contacts within what the included bodies can travel in the substep
     (``contact_reach``), among the step's candidate pairs (``pairs``: how many, and whether they are this
     substep's own search already, ``groups.step_pairs``; else ``broadphase.substep_pairs``,
     ``narrowphase.find_contacts``); returns how many."""
@@ -165,7 +102,7 @@ def note_penetration(contacts, count, max_penetration):
             max_penetration[b2] = max(max_penetration[b2], depth)
 
 
-# -- 2.-3. before the solve: energies, approach speeds, gravity ------------------------------------
+# -- before the solve: energies, approach speeds; integrate velocities --------------------------
 @jit_stage(inline="always")
 def approach_speeds(contacts, count, bodies, kinetic_before):
     """Each body's kinetic energy and each contact's approach speed u_rel . n before the substep's impulses."""
@@ -185,7 +122,7 @@ def integrate_velocities(vel, include, h, gravity):
             vel[b, 1] += h * gravity
 
 
-# -- 4. warm start and solve -------------------------------------------------------------------------
+# -- warm start, solve contacts, store impulses ----------------------------------------------------
 @jit_stage(inline="always")
 def speculative_targets(rows, count, h):
     """u_rel . n >= -max(gap, 0) / h: each gap may close within the substep but not pass."""
@@ -204,7 +141,7 @@ def store_impulses(contacts, count, keys, impulses):
     return count
 
 
-# -- 5. restitution ----------------------------------------------------------------------------------
+# -- restitution -------------------------------------------------------------------------------------
 @jit_stage(inline="always")
 def restitution_targets(rows, count, threshold):
     """u_rel . n >= -e u0 for the contacts that approached faster than the threshold and took an impulse;
@@ -217,7 +154,7 @@ def restitution_targets(rows, count, threshold):
     return impacts
 
 
-# -- 6. no energy gained -----------------------------------------------------------------------------
+# -- energy limit ------------------------------------------------------------------------------------
 @jit_stage(inline="always")
 def mark_touched(contacts, count, impacts, threshold, work):
     """Which bodies took an impulse in the substep, and at how many impacts each."""
@@ -282,7 +219,7 @@ def limit_energy(contacts, count, bodies, stats, work, h, t, context):
                     vel[b, 2] *= scale
 
 
-# -- 7. integrate positions --------------------------------------------------------------------------
+# -- integrate positions -----------------------------------------------------------------------------
 @jit_stage(inline="always")
 def integrate_positions(pose, vel, include, touched, h, gravity):
     """The exact parabola out of contact (x += h v - h^2 g / 2, v at the end of the substep), symplectic
@@ -296,39 +233,41 @@ def integrate_positions(pose, vel, include, touched, h, gravity):
             pose[b, 2] += h * vel[b, 2]
 
 
-# -- the substep: stages 1.-7. -----------------------------------------------------------------------
+# -- the substep: stages.COLLIDING_SUBSTEP --------------------------------------------------------
 @jit_stage(inline="always")  # into the steps below (a call cost 4% of an OnBox throw)
 def substep(context, bodies, sweep, contacts, stats, scratch, include, h, t, pairs, warm_from, store_into):
-    """Stages 1.-7. of a substep of length h starting at time t over the ``include``d bodies, warm-started from
-    ``warm_from`` (keys, impulses, their count and substep length); returns (its contacts, how many impulses it
-    keeps) the impulses kept by key into ``store_into`` (keys, impulses; may be ``warm_from``'s arrays), for the
-    next substep's warm start. ``pairs``: the step's candidate pairs (how many, and whether they are this
-    substep's own search, ``groups.step_pairs``)."""
+    """The stages of a substep (``stages.COLLIDING_SUBSTEP``) of length h starting at time t over the ``include``d
+    bodies, warm-started from ``warm_from`` (keys, impulses, their count and substep length); returns (its contacts, how
+    many impulses it keeps) the impulses kept by key into ``store_into`` (keys, impulses; may be ``warm_from``'s
+    arrays), for the next substep's warm start. ``pairs``: the step's candidate pairs (how many, and whether they are
+    this substep's own search, ``groups.step_pairs``)."""
     gravity, threshold, vel, work, exact = context.gravity, context.threshold, bodies.vel, scratch.work, scratch.exact
-    # 1. find contacts
+    # find contacts
     count = find_substep_contacts(context, bodies, sweep, contacts, include, h, pairs)
     prepare_contacts(contacts, count, bodies)
     note_penetration(contacts, count, stats.max_penetration)
-    # 2. relax: split-impulse correction of penetrations deeper than the slop
+    # relax: split-impulse correction of penetrations deeper than the slop
     if context.use_penalty and count > 0:
         correct_penetrations(contacts, count, bodies, work, exact, h, context)
     approach_speeds(contacts, count, bodies, work.kinetic_before)
-    # 3. integrate velocities
+    # integrate velocities
     integrate_velocities(vel, include, h, gravity)
-    # 4. warm start, solve (speculative targets), store impulses for the next substep
+    # warm start: the speculative targets, each contact's impulses of the last substep
     speculative_targets(contacts.rows, count, h)
     warm_start(contacts, count, warm_from, bodies, h, gravity)
+    # solve contacts
     solve_velocities(contacts, count, bodies, exact, context)
+    # store impulses: for the next substep's warm start
     n_stored = store_impulses(contacts, count, store_into[0], store_into[1])
-    # 5. restitution for impacts only: solved with every contact and friction, then polished
+    # restitution: for impacts only, solved with every contact and friction, then polished
     impacts = restitution_targets(contacts.rows, count, threshold)
     if impacts > 0:
         solve_velocities(contacts, count, bodies, exact, context)
         apply_restitution(contacts, count, bodies, threshold)
-    # 6. no energy gained by the bodies that took an impulse
+    # energy limit: no energy gained by the bodies that took an impulse
     mark_touched(contacts, count, impacts, threshold, work)
     limit_energy(contacts, count, bodies, stats, work, h, t, context)
-    # 7. integrate positions
+    # integrate positions
     integrate_positions(bodies.pose, vel, include, work.touched, h, gravity)
     return count, n_stored
 
@@ -336,7 +275,7 @@ def substep(context, bodies, sweep, contacts, stats, scratch, include, h, t, pai
 # -- the substeps of a grid step ---------------------------------------------------------------------
 @jit_stage(inline="always")  # into advance_step
 def advance_substeps(state, n, plan, pairs, previous):
-    """The substeps 1.-7. of grid step n. With one count (``group`` < 0): n_sub substeps over every awake body, the
+    """The substeps of grid step n. With one count (``group`` < 0): n_sub substeps over every awake body, the
     first warm-started from ``previous`` (the last substep's impulses kept in ``impulses.keys``,
     ``impulses.impulses``: their count and substep length), each next one from the one before. Group by group
     (``groups``), from group ``group`` (its smallest body): each group's count is its own (``substeps`` over its
@@ -395,10 +334,10 @@ def advance_substeps(state, n, plan, pairs, previous):
 # -- a grid step -------------------------------------------------------------------------------------
 @jit_stage(inline="always")  # into kernel.advance_steps (a call a grid step cost OnBox throws 3-6%)
 def advance_step(context, bodies, sweep, contacts, impulses, sleep, stats, scratch, n, plan, n_awake, previous):
-    """Grid step n after the wake and the alone stage (``kernel.advance_steps``): the substeps 1.-7. over every awake
+    """Grid step n after the wake and the alone stage (``kernel.advance_steps``): the substeps over every awake
     body with one count, or group by group (``groups.plan_substeps``), among the step's candidate pairs (``plan``:
     the step's substep count, ``groups.step_substeps``, and its candidate pairs, ``groups.step_pairs``);
-    then the step counted and recorded, and 8. sleep. ``previous``: the impulses kept in ``impulses`` (their count and
+    then the step counted and recorded, and sleep. ``previous``: the impulses kept in ``impulses`` (their count and
     substep length). Returns (whether every body is still finite, how many bodies are awake, the impulses kept)."""
     n_sub, n_pairs = plan
     searched = n_sub == 1  # the step's pairs are its one substep's (``groups.step_pairs``)
@@ -406,11 +345,11 @@ def advance_step(context, bodies, sweep, contacts, impulses, sleep, stats, scrat
     stats.supported[:] = False
     scratch.alone.alone[:] = False
     step_state = (context, bodies, sweep, contacts, impulses, sleep, stats, scratch)
-    # 1.-7. over every awake body with one count, or group by group, each with its own
+    # substeps: over every awake body with one count, or group by group, each with its own
     count, n_previous, h_previous = advance_substeps(step_state, n, (n_sub, group), (n_pairs, searched), previous)
     if not end_step(bodies, sleep.awake, stats, n + 1, context.record):
         return False, n_awake, (n_previous, h_previous)
-    if context.until_rest:  # 8. sleep
+    if context.until_rest:  # sleep
         if group < 0:
             join_islands(contacts.ids, count, sleep.parent)
         n_awake -= sleep_islands(bodies, sleep, stats, context, n + 1)
@@ -446,7 +385,7 @@ def end_step(bodies, awake, stats, n, record):
 
 @jit_stage
 def sleep_islands(bodies, sleep, stats, context, n):
-    """8. The islands (``sleep.parent``, joined by the last substep's box-box contacts) whose bodies have all been
+    """Sleep: the islands (``sleep.parent``, joined by the last substep's box-box contacts) whose bodies have all been
     supported and slower than ``sleep_speed`` at every point for ``sleep_time`` fall asleep
     (``islands.fall_asleep``) after step n; returns how many bodies did."""
     pose, vel, awake, still_for = bodies.pose, bodies.vel, sleep.awake, sleep.still_for

@@ -1,23 +1,24 @@
-"""One contact step of the robust solver on the grid t_n = n dt, as the script of its stages (``contact_step``).
+"""One contact step of the floor-only robust solver on the grid t_n = n dt, as the script of its stages
+(``contact_step``, the order of ``stages.FLOOR_PIECE``).
 
 A step of length h is split into substeps where the box would turn more than MAX_ROTATION_PER_STEP, and each
 substep into pieces at the impacts located inside it; each piece runs
-  0. impacts (``restitution.contact_impact``): where a corner touching the floor approaches faster than the
+  restitution (``restitution.contact_impact``): where a corner touching the floor approaches faster than the
      restitution threshold, the touching corners take an impact at this instant;
-  prepare (``prepare_contacts``): the corners that can reach the floor in the piece (``contact_corners``: the
+  find contacts (``prepare_contacts``): the corners that can reach the floor in the piece (``contact_corners``: the
      lowest, and both its neighbours, a thin box's far end too), with their normal velocities before it;
-  1. integrate velocities: v += h g;
-  2. solve contacts (``solve_contacts``): those corners together (an LCP of up to three corners, one corner with
+  integrate velocities: v += h g;
+  solve contacts (``solve_contacts``): those corners together (an LCP of up to three corners, one corner with
      friction exactly, ``contact_solver``), each may close its gap but not pass it (speculative:
      u_n >= -max(y_i, 0) / h), with clamped friction that never reverses sliding;
-  3. locate impacts (``locate_impact``): a corner off the floor that this solve had to stop while it approached
+  locate impacts (``locate_impact``): a corner off the floor that this solve had to stop while it approached
      faster than the threshold would hit inside the piece, after gap / approach: the piece is redone up to that
-     instant (1.-2. again) and the impact resolved there at the next piece's 0., so impacts in contact are not
-     tied to the grid;
+     instant (integrate velocities and solve contacts again) and the impact resolved there by the next piece's
+     restitution, so impacts in contact are not tied to the grid;
   store impulses (``loaded_corners``): which corners carried load, so that they take part in the next impact;
-  4. energy limit (``energy_limit.limit_energy``): no step gains kinetic + potential energy;
-  5. integrate positions (``integrate_positions``): x += h v, alpha += h omega (symplectic Euler);
-  6. relax (``penalty.relax``): penetration beyond the slop removed by the implicit penalty, as a pseudo-velocity.
+  energy limit (``energy_limit.limit_energy``): no step gains kinetic + potential energy;
+  integrate positions (``integrate_positions``): x += h v, alpha += h omega (symplectic Euler);
+  relax (``penalty.relax``): penetration beyond the slop removed by the implicit penalty, as a pseudo-velocity.
 """
 
 import math
@@ -71,7 +72,7 @@ def contact_corners(motion, box, gravity, h, reach, work):
 
 @jit_stage(inline="always")
 def prepare_contacts(motion, h, box, gravity, work):
-    """Prepare a piece h: the corners that can reach the floor in it (``contact_corners``), with their normal
+    """Find contacts for a piece h: the corners that can reach the floor in it (``contact_corners``), with their normal
     velocities before it in row APPROACH. Returns how many there are.
 
     No point of the box moves faster than sqrt(2 KE (1/m + R^2 / I)) once gravity has acted (Cauchy-Schwarz;
@@ -150,23 +151,24 @@ def integrate_positions(motion, h):
 
 @jit_stage(inline="always")
 def solve_piece(motion, left, box, gravity, threshold, located_impacts, work):
-    """Stages 1.-3. of a piece of a contact step of at most ``left``: velocities with gravity, the contact
-    velocities solved, and, where a corner off the floor was stopped while approaching faster than the
-    threshold, the piece shortened to its arrival (that impact is then resolved at the piece's end, stage 0).
-    Returns (vx, vy, spin, piece, located corner or -1, located impacts so far, corners in contact, kinetic
-    energy at the start)."""
+    """Find contacts, integrate velocities, solve contacts and locate impacts for a piece of a contact step of at most
+    ``left``: velocities with gravity, the contact velocities solved, and, where a corner off the floor was stopped
+    while approaching faster than the threshold, the piece shortened to its arrival (that impact is then resolved at the
+    piece's end, by restitution). Returns (vx, vy, spin, piece, located corner or -1, located impacts so far, corners in
+    contact, kinetic energy at the start)."""
     piece = left
     located = -1
     for attempt in range(2):
         kinetic_before = kinetic_energy(motion.vx, motion.vy, motion.spin, box.inv_mass, box.inv_inertia)
+        # find contacts: the corners that can reach the floor in the piece
         n_corners = prepare_contacts(motion, piece, box, gravity, work)
-        # 1. integrate velocities
+        # integrate velocities
         vy = motion.vy + gravity * piece
-        # 2. solve contacts: each corner may close its gap but not pass it
+        # solve contacts: each corner may close its gap but not pass it
         vx, vy, spin = solve_contacts(motion.y, motion.vx, vy, motion.spin, piece, n_corners, box, work)
         if attempt == 1:
             break
-        # 3. locate impacts: the piece is redone up to the first arrival inside it
+        # locate impacts: the piece is redone up to the first arrival inside it
         arrival, hit = locate_impact(motion.y, n_corners, piece, threshold, box.tolerance, work)
         if hit < 0 or located_impacts >= MAX_LOCATED_IMPACTS:
             break
@@ -178,7 +180,7 @@ def solve_piece(motion, left, box, gravity, threshold, located_impacts, work):
 
 @jit_stage(inline="always")
 def contact_step(i, motion, h, box, settings, corners, t, tally, events, work):
-    """One contact step of length h on the grid, split where the box turns fast and at impacts: stages 0.-6. of
+    """One contact step of length h on the grid, split where the box turns fast and at impacts: the stages of
     this module's docstring, piece after piece. ``corners``: what the last step left (``memory.Corners``),
     ``tally``: the box's counts (``memory.Tally``). Returns (motion, corners, whether a corner held the box,
     tally)."""
@@ -193,7 +195,7 @@ def contact_step(i, motion, h, box, settings, corners, t, tally, events, work):
     for _ in range(n_sub):
         left = h_sub
         while left > 0.0:
-            # 0. impacts: a touching corner approaching faster than the threshold takes one at this instant
+            # restitution: a touching corner approaching faster than the threshold takes one at this instant
             vx, vy, spin, touching, approach = contact_impact(
                 motion, box, threshold, box.tolerance + lift, located, loaded, work
             )
@@ -202,20 +204,20 @@ def contact_step(i, motion, h, box, settings, corners, t, tally, events, work):
                 if settings.record:
                     record_event(events, i, n_impacts, t + elapsed, approach, touching)
                 n_impacts += 1
-            # prepare, 1. integrate velocities, 2. solve contacts, 3. locate impacts (the piece ends at one)
+            # find contacts, integrate velocities, solve contacts, locate impacts (the piece ends at one)
             vx, vy, spin, piece, located, located_impacts, n_corners, kinetic_before = solve_piece(
                 motion, left, box, gravity, threshold, located_impacts, work
             )
             # store impulses: the corners that held the box take part in the next impact
             loaded = loaded_corners(work.corners, n_corners, work.ids)
             held = held or loaded != 0
-            # 4. energy limit: the velocities scaled where the piece would gain energy
+            # energy limit: the velocities scaled where the piece would gain energy
             vx, vy, spin = limit_energy(vx, vy, spin, kinetic_before, piece, gravity, box.inv_mass, box.inv_inertia)
-            # 5. integrate positions
+            # integrate positions
             motion = integrate_positions(
                 Motion(motion.x, motion.y, motion.angle, vx, vy, spin, motion.cos_a, motion.sin_a), piece
             )
-            # 6. relax: the implicit penalty on what penetrates beyond the slop
+            # relax: the implicit penalty on what penetrates beyond the slop
             motion, penetration = relax(motion, box, settings, piece, work)
             max_penetration = max(max_penetration, penetration)
             held = held or penetration > 0.0

@@ -1,8 +1,9 @@
-"""Stage 0 of the robust solver, impacts (Box2D's restitution stage, here a whole impact law): the touching
+"""The restitution stage of the floor-only solver (``stages.FLOOR_PIECE``: a whole impact law): the touching
 corners of a box take an impact together, in Poisson's two phases.
 
-  compression: the impulses lam_c that stop every approaching corner (u_n+ >= 0), solved together as in
-    stage 2 (``contact_solver.solve_contact_velocities``, target b_i = 0), friction clamped to mu lam_c;
+  compression: the impulses lam_c that stop every approaching corner (u_n+ >= 0), solved together as in the
+    solve contacts stage (``contact_solver.solve_contact_velocities``, target b_i = 0), friction clamped to mu
+    lam_c;
   restitution: each corner that hit faster than the restitution threshold gets e lam_c more along the
     normal, friction clamped to mu e lam_c, then the corners pushed towards the floor by another's bounce
     are held at their targets.
@@ -13,8 +14,8 @@ restitution returns e^2 of it, and clamped friction only removes energy.
 
 A flying box takes its impact at the instant a corner reaches the floor (``resolve_impact``, called from
 ``flight.fly_to_impact``); a box in contact at the start of each piece of a contact step, where a touching
-corner approaches faster than the threshold (``contact_impact``), which is at a located arrival (stage 3)
-rather than on the grid.
+corner approaches faster than the threshold (``contact_impact``), which is at a located arrival (the locate
+impacts stage) rather than on the grid.
 """
 
 from ..compile.compilation import jit_stage

@@ -12,31 +12,13 @@ frictionless corner and never creates energy with friction) for corners approach
 restitution threshold, friction clamped to mu times the normal impulse. A box that leaves the floor
 flies on; one that stays goes to
 
-Contact (``contact_step``): time-stepping on the grid t_n = n dt, the stages of one step (or of a
-piece of it) being
-  0. impacts (``restitution.contact_impact``): where a corner touching the floor approaches faster than
-     the restitution threshold, the touching corners take an impact at this instant (Poisson as above);
-  1. integrate velocities: v += dt g;
-  2. solve contacts (``contact_solver``): the corners that can reach the floor in the step (the lowest,
-     and both its neighbours: a thin box's far end too, ``contact_step.contact_corners``) together (an
-     LCP of up to three corners; one corner with friction exactly), each may close its gap but not pass
-     it (speculative: u_n >= -max(y_i, 0)/dt), with clamped friction that never reverses sliding;
-  3. locate impacts (``contact_step.locate_impact``): a corner off the floor that this solve had to stop
-     while it approached faster than the threshold would hit inside the step, after gap / approach: the
-     piece is redone up to that instant and the impact resolved there (0.), so impacts in contact are
-     not tied to the grid;
-  4. energy limit (``energy_limit``): where the step would end with more kinetic + potential energy
-     than it began with (the contacts pushing the centre up within a step), the velocities are scaled
-     down to exactly what gains nothing (``energy_limit.energy_limit_scale``);
-  5. integrate positions: x += dt v, alpha += dt omega (symplectic Euler);
-  6. relax (``penalty``): penetration is removed by the critically damped penalty spring integrated with
-     backward Euler, as a pseudo-velocity, stable for every stiffness and step
-     (``contact_solver.penalty_correction_share``); the potential energy this returns is taken from the
-     kinetic.
-A step is split into substeps when the box would turn more than MAX_ROTATION_PER_STEP.
-The box flies again when no corner is loaded or below the floor, and
-  7. sleep: it is put to sleep (velocities set to zero, stepping stops) once it has lain still on a
-     face for ``sleep_time`` (``kernel_support.lies_still_at``, ``kernel_support.rest_timer``).
+Contact (``contact_step``): time-stepping on the grid t_n = n dt, each step (or piece of one) running the stages of
+``stages.FLOOR_PIECE`` (restitution at this instant, find contacts, integrate velocities, solve contacts, locate
+impacts, store impulses, energy limit, integrate positions, relax; ``contact_step``'s docstring says what each does
+here), split into substeps where the box would turn more than MAX_ROTATION_PER_STEP. The box flies again when no
+corner is loaded or below the floor, and sleeps (velocities set to zero, stepping stops) once it has lain still on a
+face for ``sleep_time`` (``kernel_support.lies_still_at``, ``kernel_support.rest_timer``): the grid step is
+``stages.FLOOR_STEP``.
 What a box carries from one call to the next is its row of ``memory``.
 
 What this fixes in the seed scheme (measured on it): corners resolved one after another make
@@ -93,7 +75,7 @@ def floor_settings(settings, use_penalty, use_friction, record):
 
 @jit_stage(inline="always")
 def falls_asleep(motion, box, settings, still_for, h):
-    """7. sleep: the sleep timer after a contact step of length h (``kernel_support.rest_timer``: still on a face,
+    """Sleep: the sleep timer after a contact step of length h (``kernel_support.rest_timer``: still on a face,
     ``lies_still_at``) and whether the box rests now."""
     still = lies_still_at(
         motion.y, motion.cos_a, motion.sin_a, motion.vx, motion.vy, motion.spin, box.hx, box.hy, settings.sleep_speed
@@ -132,7 +114,7 @@ def advance_box(i, state, params, memory, n, n_end, settings, work, recording):
             h = (n + 1) * dt - t  # a partial step brings the box back onto the grid
         else:
             h = dt
-        # ---- contact: one step on the grid, stages 0.-6., split where the box turns fast and at impacts ----
+        # ---- substeps: one contact step on the grid (stages.FLOOR_PIECE), split where the box turns fast ----
         motion, corners, held, tally = contact_step(
             i, motion, h, box, settings, corners, t, tally, recording.events, work
         )
@@ -145,7 +127,7 @@ def advance_box(i, state, params, memory, n, n_end, settings, work, recording):
             status = layout.STATUS_NONFINITE
             fail_step = n
             break
-        # ---- 7. sleep: still on a face for sleep_time ----
+        # ---- sleep: still on a face for sleep_time ----
         if settings.until_rest:
             still_for, rests = falls_asleep(motion, box, settings, still_for, h)
             if rests:
