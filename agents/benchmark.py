@@ -33,7 +33,7 @@ import argparse
 import json
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
@@ -243,7 +243,7 @@ def agent_rows(
 ) -> list[dict[str, Any]]:
     """The rows of the runs found in ``root``: random actions (the same in every tier), then each algorithm's
     seeds in ``tier``."""
-    rows = []
+    rows: list[dict[str, Any]] = []
     random = report.read_results(root / env_id / "random")
     if random:
         rows.append({"agent": "random actions", "algo": "random", "results": [random], "timing": [None]})
@@ -319,7 +319,7 @@ def training_return(path: Path) -> float | None:
     ``rollout/ep_rew_mean`` in the last row of ``logs/progress.csv`` that has it), or None."""
     rows = read_csv(path / "logs" / "progress.csv")[1] if (path / "logs" / "progress.csv").exists() else []
     values = [row.get("rollout/ep_rew_mean") for row in rows if row.get("rollout/ep_rew_mean")]
-    return float(values[-1]) if values else None
+    return float(cast(str, values[-1])) if values else None
 
 
 # -- tables kept between runs -------------------------------------------------------------------

@@ -151,7 +151,7 @@ def read_expression(text: str, key: str) -> Any:
         if isinstance(node, (ast.List, ast.Tuple)):
             return [value(item) for item in node.elts]
         if isinstance(node, ast.Dict) and all(k is not None for k in node.keys):
-            return {value(k): value(v) for k, v in zip(node.keys, node.values, strict=True)}
+            return {value(k): value(v) for k, v in zip(node.keys, node.values, strict=True) if k is not None}
         if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "dict" and not node.args:
             return {item.arg: value(item.value) for item in node.keywords}
         if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id == "nn":
@@ -380,7 +380,7 @@ SCHEMA: dict[str, Rule] = {
         },
     ),
     "noise_std": Rule("float", 0),
-    "vec_env_kwargs": Rule("mapping", mapping={"threads": Rule("int", 1, numba.config.NUMBA_NUM_THREADS)}),
+    "vec_env_kwargs": Rule("mapping", mapping={"threads": Rule("int", 1, numba.config.NUMBA_NUM_THREADS)}),  # type: ignore[attr-defined]
     "torch_threads": Rule("int", 1),
     "eval_freq": Rule("int", 0),
     "eval_targets": Rule("int", 1),

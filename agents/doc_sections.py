@@ -1,9 +1,9 @@
 """Write a command's measured output into the documentation page that holds its section, between its
 markers, so every figure the docs quote comes from a command (``<!-- NAME:start -->`` ... ``<!-- NAME:end -->``).
 
-The README is the front page: it holds the ``benchmark`` section and the engine's summary
-(``engine-scale-summary``). The other sections live in the pages of the documentation site (``docs/``), named
-in ``SECTION_PAGES``.
+The README is the front page: it holds the ``benchmark`` section, the engine's summary (``engine-scale-summary``)
+and the headline figures (``headline``, from ``agents.figures``). The other sections live in the pages of the
+documentation site (``docs/``), most in its methodology pages (``docs/methodology/``), named in ``SECTION_PAGES``.
 """
 
 from __future__ import annotations
@@ -16,26 +16,30 @@ from box_toss_env.files import write_atomic
 REPO = Path(__file__).resolve().parents[1]
 README = REPO / "README.md"
 DOCS = REPO / "docs"
+METHODOLOGY = DOCS / "methodology"
 SECTION_PAGES = {
     "benchmark": README,  # the headline table of the front page (python -m agents.benchmark --report-only --readme)
     "engine-scale-summary": README,  # python -m benchmarks.engine_scale --write-docs (the page's table: its own marker)
+    "headline": README,  # the headline figures (agents.figures, from docs/generated/figures.yml)
     "benchmark-goal": DOCS / "agents" / "benchmark.md",  # python -m agents.benchmark --envs BoxToss-Goal-v0 --readme
-    "agents": DOCS / "agents.md",  # python -m agents.main --full --readme
+    "agents": METHODOLOGY / "main-command.md",  # python -m agents.main --full --readme
     "variant-gifs": DOCS / "environment.md",  # python -m agents.variant_gifs
     "tune": DOCS / "hyperparameter-search.md",  # python -m agents.tune ... --readme
-    "engine-benchmark": DOCS / "engine.md",  # python -m benchmarks.engine --readme
-    "throughput": DOCS / "batched.md",  # python -m benchmarks.throughput --readme
-    "vector-reset": DOCS / "batched.md",  # python -m benchmarks.vector_reset --readme
+    "engine-benchmark": METHODOLOGY / "engine-benchmark.md",  # python -m benchmarks.engine --readme
+    "throughput": DOCS / "throughput.md",  # python -m benchmarks.throughput --readme
+    "vector-reset": METHODOLOGY / "vector-reset.md",  # python -m benchmarks.vector_reset --readme
     "cold-start": DOCS / "cold-start.md",  # python -m benchmarks.cold_start --readme
-    "rllib-sampling": DOCS / "rllib.md",  # python -m benchmarks.rllib_sampling --readme
+    "rllib-sampling": METHODOLOGY / "rllib.md",  # python -m benchmarks.rllib_sampling --readme
     "reports": DOCS / "reports.md",  # python -m reports.precision / stability / collisions
-    "raw-actions": DOCS / "agents.md",  # python -m agents.raw_actions --readme
-    "raw-faces": DOCS / "agents.md",  # python -m agents.raw_actions --by-face --envs BoxToss-ThisSideUp-v0 --readme
-    "raw-face-reach": DOCS
-    / "agents.md",  # python -m agents.raw_actions --reach RUN --envs BoxToss-ThisSideUp-v0 --readme
+    "raw-actions": METHODOLOGY / "raw-actions.md",  # python -m agents.raw_actions --readme
+    # python -m agents.raw_actions --by-face --envs BoxToss-ThisSideUp-v0 --readme
+    "raw-faces": METHODOLOGY / "raw-actions.md",
+    # python -m agents.raw_actions --reach RUN --envs BoxToss-ThisSideUp-v0 --readme
+    "raw-face-reach": METHODOLOGY / "raw-actions.md",
     "stack-ceiling": DOCS / "stack.md",  # python -m agents.stack_planner --readme
     "stack-ppo": DOCS / "stack.md",  # python -m agents.stack_planner --model RUN --readme
     "stack-throughput": DOCS / "stack.md",  # python -m benchmarks.stack_throughput --readme
+    "hidden-physics": DOCS / "hidden_physics.md",  # python -m agents.hidden_physics_tier report --readme
     "reality-impacts": DOCS / "reality.md",  # python -m reports.reality.impacts --data DIR --ellipse FILE
 }
 

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from typing import Any
+from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
@@ -68,7 +68,7 @@ def read_env_wrapper(spec: Any) -> tuple[str, dict[str, Any]] | None:
     a ValueError naming what is accepted otherwise."""
     if spec is None:
         return None
-    name, kwargs = spec, {}
+    name, kwargs = spec, cast(dict[str, Any], {})
     if isinstance(spec, dict) and len(spec) == 1:
         name, kwargs = next(iter(spec.items()))
         kwargs = {} if kwargs is None else kwargs
@@ -98,10 +98,10 @@ def command_map(env_wrapper: Any) -> Callable[[np.ndarray, np.ndarray, gym.Env],
     kwargs = wrapper[1]
     if wrapper[0] == STACK_COMMANDS:
         return lambda observations, commands, env: batch_command_actions(
-            observations, commands, env.unwrapped.config, **kwargs
+            observations, commands, cast(Any, env.unwrapped).config, **kwargs
         )
     return lambda observations, commands, env: ballistic_actions(
-        observations, commands, env.unwrapped.config, **kwargs
+        observations, commands, cast(Any, env.unwrapped).config, **kwargs
     )[0]
 
 
@@ -144,7 +144,7 @@ def make_training_env(
     return venv
 
 
-def find_wrapper(venv: VecEnv, kind: type) -> Any:
+def find_wrapper(venv: VecEnv | None, kind: type) -> Any:
     """The first wrapper of type ``kind`` in the chain of ``venv`` (None if absent)."""
     while venv is not None:
         if isinstance(venv, kind):
@@ -162,4 +162,6 @@ def observation_normalizer(vec_normalize: VecNormalize | None):
     ``VecNormalize``); it never updates the statistics."""
     if vec_normalize is None or not vec_normalize.norm_obs:
         return lambda obs: np.asarray(obs, dtype=np.float32)
-    return lambda obs: vec_normalize.normalize_obs(np.asarray(obs, dtype=np.float32)).astype(np.float32)
+    return lambda obs: cast(np.ndarray, vec_normalize.normalize_obs(np.asarray(obs, dtype=np.float32))).astype(
+        np.float32
+    )

@@ -19,7 +19,7 @@ import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
@@ -31,7 +31,7 @@ from agents.config import load_yaml, parse_override
 from agents.policies import ConstantPolicy, GoalPolicy, Policy, RandomPolicy, TrainedPolicy, load_model
 from agents.run_folder import RunFolderError, check_component, write_atomic
 from box_toss_env.envs import task
-from box_toss_env.envs.box_toss import EnergyGainError
+from box_toss_env.envs.functional import EnergyGainError
 from box_toss_env.physics import NonFiniteStateError
 
 TEST_FIRST_SEED, TEST_TARGETS = 10_000, 1_024  # the report's targets
@@ -147,7 +147,7 @@ def evaluate(policy: Policy, env_id: str, env_kwargs: dict[str, Any] | None = No
     try:
         observations, infos = draw_targets(env, seeds)
         start = time.perf_counter()
-        actions = np.asarray(policy.act(observations, infos, env), dtype=np.float64).reshape(len(seeds), -1)
+        actions = np.asarray(policy.act(observations, infos, cast(Any, env)), dtype=np.float64).reshape(len(seeds), -1)
         act_seconds = time.perf_counter() - start
         return throw(env, seeds, actions, infos), act_seconds
     finally:
@@ -182,12 +182,12 @@ def evaluate_stack(
     }
     act_seconds = 0.0
     try:
-        observations, _ = env.reset(seed=[int(seed) for seed in seeds])
-        infos = [{} for _ in range(n)]
+        observations, _ = env.reset(seed=[int(seed) for seed in seeds])  # type: ignore[arg-type]  # one per env
+        infos: list[dict[str, Any]] = [{} for _ in range(n)]
         done = np.zeros(n, dtype=bool)
         while not done.all():
             start = time.perf_counter()
-            actions = np.asarray(policy.act(observations, infos, env), dtype=np.float32).reshape(n, -1)
+            actions = np.asarray(policy.act(observations, infos, cast(Any, env)), dtype=np.float32).reshape(n, -1)
             act_seconds += time.perf_counter() - start
             observations, reward, terminated, truncated, info = env.step(np.clip(actions, -1.0, 1.0))
             live = ~done
@@ -359,12 +359,12 @@ def load_policy(run_dir: Path, model: str = "final") -> tuple[Policy, dict[str, 
     if algo in BASELINES:
         return make_baseline(algo, config.get("baseline", {})), config
     if config.get("goal"):  # Dict observations (BoxToss-Goal-v0): HER's replay buffer is not needed to act
-        model = load_model(
+        trained = load_model(
             algo,
             run_dir / "model.zip",
             custom_objects={"replay_buffer_class": None, "replay_buffer_kwargs": {}, "buffer_size": 1},
         )
-        return GoalPolicy(model, config.get("hyperparams", {}).get("env_wrapper")), config
+        return GoalPolicy(trained, config.get("hyperparams", {}).get("env_wrapper")), config
     hyperparams = config.get("hyperparams", {})
     return TrainedPolicy.load(
         run_dir, algo, model, hyperparams.get("env_wrapper"), normalized=bool(hyperparams.get("normalize", True))
@@ -433,7 +433,7 @@ def evaluate_run(
         return evaluate_stack_run(run_dir, config, policy, model, env_id, kwargs, seeds, tag, out, start, quiet)
     throws, act_seconds = evaluate(policy, env_id, kwargs, seeds)
     wall = time.perf_counter() - start
-    target_x_range = gym.make(env_id, **kwargs).unwrapped.config.target_x_range
+    target_x_range = cast(Any, gym.make(env_id, **kwargs).unwrapped).config.target_x_range
     summary = summarize(throws, target_x_range)
     out.mkdir(parents=True, exist_ok=True)
     results = {

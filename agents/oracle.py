@@ -10,12 +10,12 @@ every iteration simulates all candidates of all unsolved targets in one engine c
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
 
-from box_toss_env.envs import task
+from box_toss_env.envs import task_columns, task_config
 from box_toss_env.envs.functional import BoxTossFunctional, episodes_from_reset_infos
 
 episodes_from_infos = episodes_from_reset_infos
@@ -27,13 +27,13 @@ class ThrowSimulator:
     ``envs.functional.BoxTossFunctional``) over a batch of candidates, on its compiled kernel and settings."""
 
     def __init__(self, env: gym.Env, threads: int | None = None):
-        self.core: BoxTossFunctional = env.unwrapped.core
+        self.core: BoxTossFunctional = cast(Any, env.unwrapped).core
         self.config = self.core.config
         self.settings = self.core.settings  # the env's solver settings (dt, sleep, ...): throws as the env's
         self.simulator = self.core.make_simulator(parallel=True, threads=threads)
         self.low, self.high = self.core.observation_low, self.core.observation_high
 
-    def rewards(self, episodes: task.Episodes, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def rewards(self, episodes: task_config.Episodes, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(reward, success, distance) of throwing ``actions`` (n, 3) in ``episodes`` (n rows); a
         throw the env would refuse (non-finite state, energy gain) gets reward -inf."""
         core = self.core
@@ -73,14 +73,14 @@ class OraclePlanner:
     def act(self, observations: np.ndarray, reset_infos: list[dict[str, Any]], env: gym.Env) -> np.ndarray:
         return self.plan(ThrowSimulator(env, self.settings.threads), episodes_from_infos(reset_infos))
 
-    def plan(self, simulator: ThrowSimulator, episodes: task.Episodes) -> np.ndarray:
+    def plan(self, simulator: ThrowSimulator, episodes: task_config.Episodes) -> np.ndarray:
         """The best action found for each episode (n, 3)."""
         s = self.settings
         rng = np.random.default_rng(s.seed)
         n = len(episodes.data)
         keep = min(s.elite, s.initial)
         # round 0: uniform candidates; the elite (n, keep, 3) holds the best throws so far, best first
-        candidates = rng.uniform(-1.0, 1.0, (n, s.initial, task.ACTION_SIZE))
+        candidates = rng.uniform(-1.0, 1.0, (n, s.initial, task_columns.ACTION_SIZE))
         elite, elite_scores, elite_settled = self._select(simulator, episodes, np.arange(n), candidates, keep)
         self.simulated = n * s.initial
         for _ in range(s.iterations):
@@ -89,7 +89,9 @@ class OraclePlanner:
                 break
             mean = elite[active].mean(axis=1, keepdims=True)
             std = np.maximum(elite[active].std(axis=1, keepdims=True), s.min_std)
-            draws = np.clip(mean + std * rng.standard_normal((active.size, s.population, task.ACTION_SIZE)), -1, 1)
+            draws = np.clip(
+                mean + std * rng.standard_normal((active.size, s.population, task_columns.ACTION_SIZE)), -1, 1
+            )
             self.simulated += draws.shape[0] * draws.shape[1]
             elite[active], elite_scores[active], elite_settled[active] = self._select(
                 simulator, episodes, active, draws, keep, (elite[active], elite_scores[active], elite_settled[active])
@@ -99,7 +101,7 @@ class OraclePlanner:
     def _select(
         self,
         simulator: ThrowSimulator,
-        episodes: task.Episodes,
+        episodes: task_config.Episodes,
         rows: np.ndarray,
         candidates: np.ndarray,
         keep: int,
@@ -108,8 +110,8 @@ class OraclePlanner:
         """Simulate ``candidates`` (len(rows), k, 3) and keep the ``keep`` best per row, with the
         incumbents (actions, scores, settled) if given: (actions, scores, settled), best first."""
         k = candidates.shape[1]
-        repeated = task.Episodes(np.repeat(episodes.data[rows], k, axis=0))
-        reward, success, distance = simulator.rewards(repeated, candidates.reshape(-1, task.ACTION_SIZE))
+        repeated = task_config.Episodes(np.repeat(episodes.data[rows], k, axis=0))
+        reward, success, distance = simulator.rewards(repeated, candidates.reshape(-1, task_columns.ACTION_SIZE))
         scores = reward.reshape(len(rows), k)
         tolerance = self.settings.settle * simulator.config.position_tolerance
         settled = (success & (distance <= tolerance)).reshape(scores.shape)

@@ -19,7 +19,7 @@ from stable_baselines3.common.vec_env import VecNormalize
 
 from agents import algorithms
 from agents.envs import command_map, observation_normalizer
-from box_toss_env.envs import task
+from box_toss_env.envs import task_columns
 from box_toss_env.envs.goal import goal_observations
 
 
@@ -53,7 +53,7 @@ class RandomPolicy:
         self.rng = np.random.default_rng(seed)
 
     def act(self, observations: np.ndarray, reset_infos, env: gym.Env) -> np.ndarray:
-        return self.rng.uniform(-1.0, 1.0, (len(observations), task.ACTION_SIZE))
+        return self.rng.uniform(-1.0, 1.0, (len(observations), task_columns.ACTION_SIZE))
 
 
 class ConstantPolicy:

@@ -9,7 +9,7 @@ success of a Gaussian policy centred on a correct throw, as an off-policy learne
 action noise, SAC's stochastic policy). The width of the region that succeeds, in each space, is what those numbers
 measure; the commands' region is the wider one where they succeed at a larger sigma.
 
-    python -m agents.raw_actions --targets 64 --readme      # the table in docs/agents.md (section raw-actions)
+    python -m agents.raw_actions --targets 64 --readme      # the table in docs/methodology/raw-actions.md
 
 With ``--by-face`` (a variant that names one face a target, BoxToss-ThisSideUp-v0), per target face: where the
 throws that stand the box on it lie in the env's actions (``by_face``; section raw-faces). With ``--reach RUN`` (a
@@ -23,6 +23,7 @@ import argparse
 import pickle
 import time
 from pathlib import Path
+from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
@@ -32,7 +33,7 @@ from agents import oracle
 from agents.doc_sections import replace_section
 from agents.evaluation import draw_targets, load_policy, target_seeds
 from agents.policies import Policy, TrainedPolicy, load_model
-from box_toss_env.envs import task
+from box_toss_env.envs import task, task_columns, task_config
 from box_toss_env.envs.ballistic import ballistic_actions
 from box_toss_env.envs.task_columns import EP_TARGET_FACES, OBS_TARGET_FACES
 from box_toss_env.physics import layout
@@ -50,21 +51,21 @@ class CommandSimulator:
     def __init__(self, simulator: oracle.ThrowSimulator):
         self.simulator, self.config = simulator, simulator.config
 
-    def actions(self, episodes: task.Episodes, commands: np.ndarray) -> np.ndarray:
+    def actions(self, episodes: task_config.Episodes, commands: np.ndarray) -> np.ndarray:
         core = self.simulator.core
         observations = core.observation(core.for_episodes(episodes))
         return ballistic_actions(observations, commands, self.config)[0]
 
-    def rewards(self, episodes: task.Episodes, commands: np.ndarray):
+    def rewards(self, episodes: task_config.Episodes, commands: np.ndarray):
         return self.simulator.rewards(episodes, self.actions(episodes, commands))
 
 
 def noisy_success(
-    simulator, episodes: task.Episodes, solutions: np.ndarray, sigma: float, draws: int, rng: np.random.Generator
+    simulator, episodes: task_config.Episodes, solutions: np.ndarray, sigma: float, draws: int, rng: np.random.Generator
 ) -> float:
     """The success rate of ``draws`` throws per episode at its solution plus N(0, sigma^2) noise per dimension."""
     n = len(episodes.data)
-    repeated = task.Episodes(np.repeat(episodes.data, draws, axis=0))
+    repeated = task_config.Episodes(np.repeat(episodes.data, draws, axis=0))
     noisy = np.clip(np.repeat(solutions, draws, axis=0) + sigma * rng.standard_normal((n * draws, 3)), -1.0, 1.0)
     return float(simulator.rewards(repeated, noisy)[1].mean())
 
@@ -76,13 +77,13 @@ def measure(env_id: str, n_targets: int, draws: int, sigmas=SIGMAS, seed: int = 
     _, infos = draw_targets(env, target_seeds(n_targets))
     episodes = oracle.episodes_from_infos(infos)
     base = oracle.ThrowSimulator(env, threads=1)
-    result = {"env_id": env_id, "targets": n_targets, "draws": draws, "spaces": {}}
+    result: dict[str, Any] = {"env_id": env_id, "targets": n_targets, "draws": draws, "spaces": {}}
     for name, simulator in (("env actions", base), ("ballistic commands", CommandSimulator(base))):
         start = time.perf_counter()
         planner = oracle.OraclePlanner(oracle.OracleSettings(threads=1, seed=seed))
-        solutions = planner.plan(simulator, episodes)
+        solutions = planner.plan(cast(oracle.ThrowSimulator, simulator), episodes)
         solved = simulator.rewards(episodes, solutions)[1]
-        kept = task.Episodes(episodes.data[solved])
+        kept = task_config.Episodes(episodes.data[solved])
         rng = np.random.default_rng(seed)
         result["spaces"][name] = {
             "solved": float(solved.mean()),
@@ -106,7 +107,9 @@ def by_face(env_id: str, n_targets: int, draws: int, sigma: float = 0.01, seed: 
     episodes = oracle.episodes_from_infos(infos)
     base = oracle.ThrowSimulator(env, threads=1)
     commands = CommandSimulator(base)
-    solutions = oracle.OraclePlanner(oracle.OracleSettings(threads=1, seed=seed)).plan(commands, episodes)
+    solutions = oracle.OraclePlanner(oracle.OracleSettings(threads=1, seed=seed)).plan(
+        cast(oracle.ThrowSimulator, commands), episodes
+    )
     actions = commands.actions(episodes, solutions)
     solved = base.rewards(episodes, actions)[1]
     faces = np.array([int(np.argmax(info["target_faces"])) for info in infos])
@@ -114,19 +117,21 @@ def by_face(env_id: str, n_targets: int, draws: int, sigma: float = 0.01, seed: 
     rows = []
     for face in range(4):
         chosen = (faces == face) & solved
-        row = {"face": face, "targets": int((faces == face).sum()), "solved": int(chosen.sum())}
+        row: dict[str, Any] = {"face": face, "targets": int((faces == face).sum()), "solved": int(chosen.sum())}
         if chosen.any():
             row["low"], row["high"] = actions[chosen].min(axis=0).tolist(), actions[chosen].max(axis=0).tolist()
-            kept = task.Episodes(episodes.data[chosen])
+            kept = task_config.Episodes(episodes.data[chosen])
             row["noisy"] = noisy_success(base, kept, actions[chosen], sigma, draws, rng)
         rows.append(row)
     env.close()
     return rows
 
 
-def with_face(observations: np.ndarray, episodes: task.Episodes, face: int) -> tuple[np.ndarray, task.Episodes]:
+def with_face(
+    observations: np.ndarray, episodes: task_config.Episodes, face: int
+) -> tuple[np.ndarray, task_config.Episodes]:
     """The same targets (first observations and episodes) with ``face`` as their one target face."""
-    observations, episodes = observations.copy(), task.Episodes(episodes.data.copy())
+    observations, episodes = observations.copy(), task_config.Episodes(episodes.data.copy())
     observations[:, OBS_TARGET_FACES] = 0.0
     observations[:, OBS_TARGET_FACES.start + face] = 1.0
     episodes.data[:, EP_TARGET_FACES] = 0.0
@@ -162,17 +167,19 @@ def reach(
         success = simulator.rewards(relabelled[face], actions[face])[1]
         own.append({"face": face, "success": float(success.mean()), "spin": float(actions[face][:, 2].mean())})
     core = simulator.core  # the throw at action 0, where an untrained policy's mean starts: the faces it lands on
-    batch = core.transition(core.for_episodes(episodes), np.zeros((n_targets, task.ACTION_SIZE)), simulator.simulator)
+    batch = core.transition(
+        core.for_episodes(episodes), np.zeros((n_targets, task_columns.ACTION_SIZE)), simulator.simulator
+    )
     landed = task.faces_down(batch.thrown_state[:, layout.ANGLE])
     zero = (np.bincount(landed, minlength=4) / n_targets).tolist()
     rng = np.random.default_rng(seed)
     rows = []
     for start in (0, 2):
         for end in (1, 3):
-            repeated = task.Episodes(np.repeat(relabelled[end].data, draws, axis=0))
-            row = {"start": start, "end": end, "noisy": {}, "targets": {}}
+            repeated = task_config.Episodes(np.repeat(relabelled[end].data, draws, axis=0))
+            row: dict[str, Any] = {"start": start, "end": end, "noisy": {}, "targets": {}}
             for sigma in sigmas:
-                noise = sigma * rng.standard_normal((n_targets * draws, task.ACTION_SIZE))
+                noise = sigma * rng.standard_normal((n_targets * draws, task_columns.ACTION_SIZE))
                 noisy = np.clip(np.repeat(actions[start], draws, axis=0) + noise, -1.0, 1.0)
                 stood = simulator.rewards(repeated, noisy)[1].reshape(n_targets, draws)
                 row["noisy"][str(sigma)], row["targets"][str(sigma)] = float(stood.mean()), float(stood.any(1).mean())
@@ -180,12 +187,12 @@ def reach(
     line = []
     for alpha in LINE_STEPS:  # the segment from the policy's face-0 throw to its face-2 throw
         throws = (1.0 - alpha) * actions[0] + alpha * actions[2]
-        row = {"alpha": alpha}
+        point: dict[Any, Any] = {"alpha": alpha}
         for end in (1, 3):
             reward, success, distance = simulator.rewards(relabelled[end], throws)
-            row[end] = {"reward": float(reward.mean()), "success": float(success.mean())}
-        row["distance"] = float(np.median(distance))
-        line.append(row)
+            point[end] = {"reward": float(reward.mean()), "success": float(success.mean())}
+        point["distance"] = float(np.median(distance))
+        line.append(point)
     env.close()
     return {"own": own, "zero": zero, "reach": rows, "line": line}
 
@@ -200,7 +207,7 @@ def checkpoint_policy(run_dir: Path, algo: str, steps: int) -> tuple[TrainedPoli
     if stats.exists():
         with open(stats, "rb") as file:
             vec_normalize = pickle.load(file)  # the statistics only, as TrainedPolicy.load reads them
-    std = np.exp(model.policy.log_std.detach().cpu().numpy())  # type: ignore[union-attr]  # PPO's Gaussian
+    std = np.exp(model.policy.log_std.detach().cpu().numpy())  # type: ignore[union-attr, operator]  # PPO's Gaussian
     return TrainedPolicy(model, vec_normalize), std
 
 
@@ -337,7 +344,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--envs", nargs="+", default=list(ENVS))
     parser.add_argument("--targets", type=int, default=64)
     parser.add_argument("--draws", type=int, default=32, help="noisy throws per target and sigma")
-    parser.add_argument("--readme", action="store_true", help="write the table into docs/agents.md")
+    parser.add_argument("--readme", action="store_true", help="write the table into docs/methodology/raw-actions.md")
     parser.add_argument(
         "--by-face",
         action="store_true",

@@ -1,8 +1,8 @@
-"""Tables and figures from evaluated runs, and the README's agents section (written by
-``python -m agents.main --full --readme``).
+"""Tables and figures from evaluated runs, and the main command's methodology page (written by
+``python -m agents.main --full --readme``: docs/methodology/main-command.md, section ``agents``).
 
-Every figure in the README's agents section is written here from the runs' ``results.json`` and
-``timing.json`` files, which the training, evaluation and baseline scripts measured.
+Every figure there is written here from the runs' ``results.json`` and ``timing.json`` files, which the
+training, evaluation and baseline scripts measured; the headline figures go to ``agents.figures``.
 """
 
 from __future__ import annotations
@@ -10,12 +10,13 @@ from __future__ import annotations
 import csv
 import json
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import error as gym_error
 
+from agents import figures
 from agents.ceiling import ceiling_of
 from agents.config import load_yaml
 from agents.doc_sections import page_for, replace_section
@@ -77,12 +78,7 @@ def summary_row(name: str, run_dir: Path, tag: str = "default") -> dict[str, Any
 
 
 # -- tables --------------------------------------------------------------------------------------
-def format_seconds(seconds: float) -> str:
-    if seconds < 1:
-        return f"{seconds:.2f} s"
-    if seconds < 120:
-        return f"{seconds:.0f} s"
-    return f"{seconds / 60:.1f} min"
+format_seconds = figures.duration  # one format for a duration, in the tables and the headline figures
 
 
 def markdown_table(rows: list[dict[str, Any]]) -> str:
@@ -249,7 +245,7 @@ def plot_run(run_dir: Path, eval_dir: Path) -> list[Path]:
     results = json.loads((eval_dir / "results.json").read_text())
     if not (eval_dir / "throws.npz").exists():  # a stacking env's episodes: no landing errors to draw
         return paths
-    config = gym.make(results["env_id"], **results["env_kwargs"]).unwrapped.config
+    config = cast(Any, gym.make(results["env_id"], **results["env_kwargs"]).unwrapped).config
     paths.append(
         plot_landing_errors(
             {run_dir.name: Throws.load(eval_dir / "throws.npz")},
@@ -282,58 +278,31 @@ def record_video(
         action = policy.act(obs[None], [info], env)[0]
         env.reset(seed=seed)  # a planner may have used the env; start the throw afresh
         env.step(action)
-        frames += env.render()
+        frames += cast(list[np.ndarray], env.render())
     env.close()
     return write_video(frames, path, env.metadata["render_fps"])
 
 
 # -- the README section --------------------------------------------------------------------------
-INTRO = """# Agents: PPO, SAC and TD3, baselines, the ceiling and evaluation (`agents/`)
-
-```bash
-python -m agents.main                                    # short PPO run on {env_id} + random and oracle: the table
-python -m agents.train --algo sac --env BoxToss-ShortEnd-v0   # hyperparameters: agents/hyperparams/sac.yml (by env id)
-python -m agents.train --name long --set n_timesteps=1e6 # override any hyperparameter
-python -m agents.train --resume runs/long --set n_timesteps=2e6   # continue from the last checkpoint
-python -m agents.evaluate runs/short --video 4           # table by distance and face, plots, a GIF (render extra)
-python -m agents.evaluate runs/short --env-kwargs solver=seed dt=0.0009765625   # under other physics
-python -m agents.baselines oracle --env BoxToss-ShortEnd-v0   # the simulator-planning oracle, as a run folder
-python -m agents.benchmark                               # every variant x algorithm x seed, and the ceiling
-python -m agents.main --full --readme                    # this section, rewritten from the measurements
-tensorboard --logdir runs
-```
-
-`agents/hyperparams/ppo.yml`, `sac.yml` and `td3.yml` are in RL Baselines3 Zoo's format and load unchanged
-(`pip install -e ".[zoo]"`, then `python -m rl_zoo3.train --algo ppo --env BoxToss-ShortEnd-v0 --gym-packages
-box_toss_env --conf-file agents/hyperparams/ppo.yml` and `python -m rl_zoo3.enjoy ...`); the settings only our
-scripts use (engine and torch threads, validation and checkpoints) are in `agents/hyperparams/project.yml`.
-Our training runs the algorithm on the batched vector env (`gymnasium.make_vec`, all envs thrown in one engine
-call, through `box_toss_env.wrappers.sb3_adapter.SB3VecEnvAdapter`), with observations normalised by
-`VecNormalize` and one torch thread. Where a face counts (`BoxToss-ShortEnd-v0`, `-ThisSideUp-v0`, `-Mixed-v0`)
-and on a box (`BoxToss-OnBox-v0`, touching down on the base's top) the algorithms act in ballistic commands
-(`env_wrapper: box_toss_env.envs.ballistic.BallisticThrows` in the hyperparameter files: flight time, landing
-offset and lean from a throw that lands a target face flat on the target, see the environment section);
-evaluation maps a policy's commands to the env's actions the same way, so every agent is scored on the env's
-own throws. Each run folder `runs/NAME/` keeps `config.yml` (algorithm, resolved
-hyperparameters, env kwargs, seed, package version), `command.txt`, `model.zip` and `vecnormalize.pkl`, the best
-model by validation success, `evaluations.csv` and `logs/progress.csv` (appended, never rewritten: a resume drops
-the rows after its checkpoint), TensorBoard logs, checkpoints (with the replay buffer for SAC and TD3; a final one
-at the end of every session), `timing.json` (written as training goes, so a killed run's time counts) and
-`eval/*/results.json` (an evaluation with other settings, `--targets 8` say, goes to `eval/targets=8`, never over
-another); what a run folder guarantees is in [run folders](docs/agents/run_folders.md).
-
-The main job trains on `{env_id}`, where the face counts: each episode draws one face that must end down.
-Every agent is scored on the same {targets} test targets: target i is what
+INTRO = """**Targets.** Every agent is scored on the same {targets} test targets: target i is what
 `gymnasium.make("{env_id}").reset(seed={first} + i)` draws ({first} to {last}), thrown once with the
-deterministic policy. Success: at rest within {tolerance:g} m of the target on the target face; distance
-error: |x - target x| where the box came to rest; face accuracy: the target face ended down, wherever the box
-landed. During training the policy is evaluated on {validation_targets} other fixed targets (seeds
-{validation}...). Random: uniform actions. Oracle: for each target, a cross-entropy search over the 3-D action
-that simulates candidate throws with the env's own engine kernel (all targets' candidates in one call) and
-throws the best; it stops refining a target once a throw lands within {settle:g} m. Its wall time is its
-planning time for all test targets; PPO's is its training time (seed 0, on the shared 2-core machine these
-figures come from). The oracle's default search is not the ceiling: see [the benchmark](docs/agents/benchmark.md),
-where the search grows until its success stops rising.
+deterministic policy. During training the policy is evaluated on {validation_targets} other fixed targets (seeds
+{validation}...).
+
+**Scores.** Success: at rest within {tolerance:g} m of the target on the target face. Distance error:
+|x - target x| where the box came to rest. Face accuracy: the target face ended down, wherever the box landed.
+
+**Agents.** Random: uniform actions. PPO: `agents/hyperparams/ppo.yml`'s entry for `{env_id}` (the short run at
+the main command's budget, the full run at the file's), seed 0, acting in ballistic commands. Oracle: for each
+target, a cross-entropy search over the 3-D action that simulates candidate throws with the env's own engine
+kernel and throws the best; it stops refining a target once a throw lands within {settle:g} m. This default
+search is not the ceiling: [the benchmark](docs/agents/benchmark.md) grows the search until its success stops
+rising.
+
+**Time.** PPO's wall time is its training; the oracle's is its planning for all test targets. The main
+command's time adds the random baseline, the short run and the oracle, as `python -m agents.main` runs them, in
+wall time and in the CPU time of its process, which other jobs on the machine do not inflate. Every figure comes
+from one 2-core machine shared with other jobs.
 
 """
 
@@ -375,11 +344,16 @@ def fidelity_lines(runs: dict[str, Path], fidelity: list[tuple[str, str, str]]) 
     ]
 
 
-def readme_section(runs: dict[str, Path], fidelity: list[tuple[str, str, str]], docs: Path = DOCS) -> str:
+def readme_section(
+    runs: dict[str, Path],
+    fidelity: list[tuple[str, str, str]],
+    docs: Path = DOCS,
+    times: dict[str, dict[str, float]] | None = None,
+) -> str:
     """The agents section (markdown) from evaluated runs: the results table, the breakdown by
     target distance, the physics-fidelity table and the figures (written to ``docs``)."""
     rows = [row for name, run in runs.items() if (row := summary_row(name, run)) is not None]
-    env = gym.make(rows[0]["env_id"], **rows[0]["env_kwargs"]).unwrapped
+    env = cast(Any, gym.make(rows[0]["env_id"], **rows[0]["env_kwargs"]).unwrapped)
     curves = {name: curve for name, run in runs.items() if (curve := read_evaluations(run)) is not None}
     levels = {row["name"]: row["success_rate"] for row in rows if row["name"] in ("random", "oracle")}
     plot_learning_curves(curves, docs / "learning_curve.png", levels)
@@ -410,16 +384,16 @@ def readme_section(runs: dict[str, Path], fidelity: list[tuple[str, str, str]], 
     if "short" in by_name and "random" in by_name:
         short, random = by_name["short"], by_name["random"]
         lines.append(
-            f"The default run (`python -m agents.main`) lands {short['success_rate']:.1%} of the throws "
+            f"The main command's run (`python -m agents.main`) lands {short['success_rate']:.1%} of the throws "
             f"after {format_seconds(short['wall_seconds'])} of training; random actions land "
             f"{random['success_rate']:.1%}."
         )
-    if "full" in by_name and "oracle" in by_name:
-        full, oracle = by_name["full"], by_name["oracle"]
+    if times is not None:
         lines.append(
-            f"PPO (full) reaches {full['success_rate'] / oracle['success_rate']:.1%} of the "
-            "default-search oracle's success "
-            f"rate in {full['timesteps']:,} env steps and {format_seconds(full['wall_seconds'])}."
+            f"The main command took {format_seconds(times['command']['wall'])} of wall time and "
+            f"{format_seconds(times['command']['cpu'])} of CPU time (its process, every thread); its training run "
+            f"(the short run's training and test evaluation) took {format_seconds(times['training']['wall'])} and "
+            f"{format_seconds(times['training']['cpu'])}."
         )
     shares = [f"{AGENT_LABELS[row['name']]} {row['env_share']:.0%}" for row in rows if row.get("env_share")]
     if shares:
@@ -453,12 +427,42 @@ def write_readme(section: str, name: str = "agents") -> None:
     print(f"wrote the {name} section of {page}")
 
 
-def write_docs(runs: dict[str, Path], fidelity: list[tuple[str, str, str]], docs: Path = DOCS) -> str:
-    """Figures and a GIF of the full PPO run into ``docs``, and the README's agents section."""
+def main_figures(runs: dict[str, Path], times: dict[str, dict[str, float]], machine: str) -> dict[str, Any]:
+    """The main command's headline figures (``agents.figures``' ``main`` group): its short run's success and throws,
+    random throws' success, and the CPU and wall time of the short run's training and of the whole command."""
+    short, random = summary_row("short", runs["short"]), summary_row("random", runs["random"])
+    assert short is not None and random is not None  # both evaluated by agents.main
+    return {
+        "env_id": short["env_id"],
+        "throws": figures.count(short["timesteps"]),
+        "test_targets": figures.count(TEST_TARGETS),
+        "success": figures.percent(short["success_rate"]),
+        "random_success": figures.percent(random["success_rate"]),
+        "train_cpu": figures.duration(times["training"]["cpu"]),
+        "train_wall": figures.duration(times["training"]["wall"]),
+        "command_cpu": figures.duration(times["command"]["cpu"]),
+        "command_wall": figures.duration(times["command"]["wall"]),
+        "machine": machine,
+    }
+
+
+def write_docs(
+    runs: dict[str, Path],
+    fidelity: list[tuple[str, str, str]],
+    docs: Path = DOCS,
+    *,
+    times: dict[str, dict[str, float]] | None = None,
+    machine: str = "",
+) -> str:
+    """Figures and a GIF of the full PPO run into ``docs``, the methodology page's agents section, and (given the
+    main command's times, ``{"command" | "training": {"wall": s, "cpu": s}}``) the headline figures' ``main``."""
     try:
         print(f"wrote {record_video(runs['full'], docs / 'throws.gif', 3, env_kwargs=GIF_ENV_KWARGS)}")
     except (ImportError, gym_error.DependencyNotInstalled) as error:  # the render extra is not installed
         print(f"no GIF ({error})")
-    section = readme_section(runs, fidelity, docs)
+    section = readme_section(runs, fidelity, docs, times)
     write_readme(section)
+    if times is not None:
+        figures.update("main", main_figures(runs, times, machine))
+        print(f"wrote the main group of {figures.FIGURES} and the README's headline")
     return section

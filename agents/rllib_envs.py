@@ -48,8 +48,8 @@ def make_env(env_id: str, env_config: dict[str, Any]) -> gym.Env | gym.vector.Ve
     if num_envs is None:
         env = gym.make(env_id, **kwargs)
         return BallisticThrows(env) if ballistic else env
-    env = gym.make_vec(env_id, num_envs=num_envs, vectorization_mode="vector_entry_point", threads=threads, **kwargs)
-    return NextStepAutoreset(BallisticThrowsVector(env) if ballistic else env)
+    envs = gym.make_vec(env_id, num_envs=num_envs, vectorization_mode="vector_entry_point", threads=threads, **kwargs)
+    return NextStepAutoreset(BallisticThrowsVector(envs) if ballistic else envs)
 
 
 def register_rllib_envs(env_ids: tuple[str, ...] = ENV_IDS) -> None:

@@ -19,7 +19,7 @@ ballistic commands where the recipe names ``BallisticThrows``. Two settings are 
 options, and both are set as SB3's here: RLlib adds an artificial (loss-masked) bootstrap timestep to every
 episode, so with one-throw episodes half its rows are artificial; it standardised the advantages over them too
 (``MaskedAdvantagePPOLearner`` standardises over the real throws of each minibatch) and cuts minibatches by rows
-(``ROWS_PER_THROW``). The first was why RLlib's PPO did not learn where SB3's did (docs/rllib.md has the
+(``ROWS_PER_THROW``). The first was why RLlib's PPO did not learn where SB3's did (docs/methodology/rllib.md has the
 figures). Each iteration prints the mean return and the success rate of the sampled (exploring) throws
 (``--diagnostics``: and the learner's figures, ``--eval-every``: and the mean action's success); at the end the
 policy's mean action is evaluated on ``--eval-episodes`` fresh throws.
@@ -31,12 +31,13 @@ import argparse
 import math
 import sys
 import time
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import ray
 import torch
-from ray.rllib.algorithms.ppo import PPO, PPOConfig
+from ray.rllib.algorithms.algorithm import Algorithm
+from ray.rllib.algorithms.ppo import PPOConfig
 from ray.rllib.algorithms.ppo.torch.default_ppo_torch_rl_module import DefaultPPOTorchRLModule
 from ray.rllib.algorithms.ppo.torch.ppo_torch_learner import PPOTorchLearner
 from ray.rllib.connectors.env_to_module import MeanStdFilter
@@ -169,7 +170,7 @@ def make_config(
             num_env_runners=num_env_runners,
             num_envs_per_env_runner=num_envs,
             gym_env_vectorize_mode=VECTORIZE_MODES[vectorize],
-            env_to_module_connector=lambda env, spaces, device: MeanStdFilter(),
+            env_to_module_connector=mean_std_filter,
         )
         .training(
             train_batch_size_per_learner=settings["train_batch_size"],
@@ -198,7 +199,12 @@ def iterations_of(config: PPOConfig, env_id: str) -> int:
     return math.ceil(recipe(env_id)["n_throws"] / config.train_batch_size_per_learner)
 
 
-def evaluate(algo: PPO, episodes: int) -> dict[str, float]:
+def mean_std_filter(env: Any, spaces: Any = None, device: Any = None) -> MeanStdFilter:
+    """RLlib's running mean and std filter of the observations, a new one for each env runner."""
+    return MeanStdFilter()
+
+
+def evaluate(algo: Algorithm, episodes: int) -> dict[str, float]:
     """Success and mean return of the policy's mean action (``explore=False``) on at least ``episodes`` fresh
     throws of the local env runner (its env's own draws, not the SB3 test seeds)."""
     done = [
@@ -242,17 +248,17 @@ def summary(result: dict[str, Any]) -> dict[str, float]:
 
 def train(
     config: PPOConfig, iterations: int, diagnostics: bool = False, eval_every: int = 0, eval_episodes: int = 256
-) -> tuple[PPO, list[dict[str, float]]]:
+) -> tuple[Algorithm, list[dict[str, Any]]]:
     """``iterations`` of ``algo.train()``; with ``diagnostics`` each line adds the learner's figures and the
     action std (``exp`` of the free log std) after the update; every ``eval_every`` iterations (0: never) the
     mean action's success on ``eval_episodes`` fresh throws (``evaluate``), as SB3's runs validate."""
     algo = config.build_algo()
-    history = []
+    history: list[dict[str, Any]] = []
     for iteration in range(iterations):
         start = time.perf_counter()
-        figures = summary(algo.train())
+        figures: dict[str, Any] = summary(algo.train())
         figures["seconds"] = time.perf_counter() - start
-        figures["action_std"] = [float(v) for v in algo.get_module().pi.log_std.detach().exp()]
+        figures["action_std"] = [float(v) for v in cast(Any, algo.get_module()).pi.log_std.detach().exp()]
         history.append(figures)
         line = (
             f"iteration {iteration + 1}: {figures['env_steps']:,.0f} throws, return {figures['return']:.3f}, "

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import optuna.distributions as distributions
 
@@ -52,7 +52,8 @@ class Dimension:
         if isinstance(self.distribution, distributions.IntDistribution) and not float(value).is_integer():
             return None
         value = int(value) if isinstance(self.distribution, distributions.IntDistribution) else float(value)
-        return value if self.distribution.low <= value <= self.distribution.high else None
+        numeric = cast(distributions.FloatDistribution | distributions.IntDistribution, self.distribution)
+        return value if numeric.low <= value <= numeric.high else None
 
 
 def load_space(algo: str, path: str | Path = SEARCH_SPACE) -> dict[str, Dimension]:
@@ -168,7 +169,7 @@ def first_point(space: dict[str, Dimension]) -> dict[str, Any]:
         key: (
             dimension.distribution.choices[0]
             if isinstance(dimension.distribution, distributions.CategoricalDistribution)
-            else dimension.distribution.low
+            else cast(distributions.FloatDistribution | distributions.IntDistribution, dimension.distribution).low
         )
         for key, dimension in space.items()
     }

@@ -22,12 +22,14 @@ import json
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import cast
 
 import gymnasium as gym
 import numpy as np
 
 from agents.doc_sections import REPO, replace_section
 from box_toss_env.envs import stack_commands, stack_task
+from box_toss_env.envs.stack import BoxTossStackEnv
 from box_toss_env.files import write_atomic
 
 TEST_FIRST_SEED = 10_000  # episodes are seeds 10000, 10001, ... (as the one-throw test targets)
@@ -73,7 +75,7 @@ class StackPlanner:
 
     def plan(self, env: gym.Env, observation: np.ndarray) -> np.ndarray:
         """The best action (3,) found for the box in the hand of ``env`` (which it leaves as it was)."""
-        unwrapped = env.unwrapped
+        unwrapped = cast(BoxTossStackEnv, env.unwrapped)
         config = unwrapped.config
         settings = self.settings
         k = unwrapped.thrown
@@ -85,13 +87,13 @@ class StackPlanner:
         all_commands, all_scores = np.zeros((0, 3)), np.zeros(0)
         for round_ in range(settings.iterations + 1):
             actions = command_actions(observation, commands, config, settings)
-            outcomes = unwrapped.try_throws(actions, threads=settings.threads)
+            tried = unwrapped.try_throws(actions, threads=settings.threads)
             self.simulated += len(actions)
-            centre = np.abs(unwrapped.last_tried[:, k, 0] - unwrapped.target_x)
+            centre = np.abs(tried.states[:, k, 0] - unwrapped.target_x)
             # a box lying flat is the best base for the next: height beyond its width is not credited
-            height = outcomes.terms["reward_height"]
+            height = tried.info["reward_height"]
             scores = (
-                outcomes.reward
+                tried.reward
                 - height
                 + np.minimum(height, config.height_weight * width)
                 - settings.centring_weight * centre
@@ -100,14 +102,15 @@ class StackPlanner:
             if scores[i] > best_score:
                 best_score, best_action = scores[i], actions[i]
             all_commands, all_scores = np.vstack((all_commands, commands)), np.concatenate((all_scores, scores))
-            flat_on_top = outcomes.terms["reward_height"][i] >= 0.95 * config.height_weight * width
-            if outcomes.success[i] or (flat_on_top and centre[i] < 0.03 and not outcomes.fell[i]):
+            flat_on_top = height[i] >= 0.95 * config.height_weight * width
+            if tried.info["success"][i] or (flat_on_top and centre[i] < 0.03 and not tried.info["fell"][i]):
                 break
             if round_ == settings.iterations:
                 break
             elite = all_commands[np.argsort(all_scores)[-settings.elite :]]
             mean, std = elite.mean(axis=0), np.maximum(elite.std(axis=0), 0.02)
             commands = np.clip(self.rng.normal(mean, std, (settings.population, 3)), -1.0, 1.0)
+        assert best_action is not None  # the first round scores its candidates
         return best_action
 
 
@@ -167,7 +170,9 @@ def zoo_policy(run_dir: Path):
     def act(env: gym.Env, observation: np.ndarray) -> np.ndarray:
         seen = normalize.normalize_obs(observation[None]) if normalize is not None else observation[None]
         command, _ = model.predict(seen, deterministic=True)
-        return stack_commands.command_actions(observation, command, env.unwrapped.config)[0].astype(np.float32)
+        return stack_commands.command_actions(observation, command, cast(BoxTossStackEnv, env.unwrapped).config)[
+            0
+        ].astype(np.float32)
 
     return act
 

@@ -279,7 +279,9 @@ python -m agents.tune --report runs/tune/NAME              # the tables again
 
 Each trial samples the declared space of the algorithm (`agents/search_space.yml`, one Optuna distribution per
 hyperparameter; `--space FILE` for another) around `agents/hyperparams/<algo>.yml` (`--set` overrides, `--timesteps`:
-each trial's budget); the first trial is the file's own values. Ray Tune runs the trials with Optuna's TPE sampler
+each trial's budget); the first trial is the file's own values.
+
+Ray Tune runs the trials with Optuna's TPE sampler
 (`OptunaSearch`) and prunes with ASHA (`--pruner asha|median|none`) on the periodic validation: each validation of
 `agents.training.ValidationCallback` is reported to Tune, its objective being the validation success, then the mean
 distance as a tie-break. Every trial is a run folder (`config.yml`, `evaluations.csv`, `model.zip`, the test

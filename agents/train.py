@@ -19,6 +19,7 @@ import json
 import shlex
 import sys
 from pathlib import Path
+from typing import Any, cast
 
 import gymnasium as gym
 
@@ -106,7 +107,7 @@ def resolve(args: argparse.Namespace) -> tuple[str, str, int, dict]:
         raise configuration.ConfigError(f"env_kwargs: {error}") from None
     try:
         wrapper = read_env_wrapper(config.get("env_wrapper"))
-        stack = isinstance(env.unwrapped.config, StackConfig)
+        stack = isinstance(cast(Any, env.unwrapped).config, StackConfig)
         if wrapper is not None and (wrapper[0] == STACK_COMMANDS) != stack:
             raise ValueError(
                 f"{wrapper[0]} does not act on {env_id}; "
@@ -121,7 +122,7 @@ def resolve(args: argparse.Namespace) -> tuple[str, str, int, dict]:
                 "offset_range": DEFAULT_OFFSET_RANGE,
                 "turn_range": DEFAULT_TURN_RANGE,
             }
-            check_command_settings(env.unwrapped.config, **{**defaults, **wrapper[1]})
+            check_command_settings(cast(Any, env.unwrapped).config, **{**defaults, **wrapper[1]})
     except (TypeError, ValueError) as error:
         raise configuration.ConfigError(f"env_wrapper: {error}") from None
     finally:

@@ -25,7 +25,7 @@ import time
 import zipfile
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import torch
@@ -97,7 +97,7 @@ class RunClock:
         return self.previous["wall_seconds"] + time.perf_counter() - self.start
 
     def timing(self, timesteps: int) -> dict[str, Any]:
-        timing = {
+        timing: dict[str, Any] = {
             "algo": self.algo,
             "timesteps": int(timesteps),
             "wall_seconds": self.wall(),  # everything in model.learn, every session (killed ones too)
@@ -411,7 +411,7 @@ def warm_up_engine(env_id: str, config: dict[str, Any]) -> None:
     loading from numba's cache) is not counted as env time."""
     venv = make_vector_env(env_id, 1, config["env_kwargs"], config.get("vec_env_kwargs"))
     venv.reset()
-    venv.step(np.zeros((1, *venv.action_space.shape), dtype=np.float32))
+    venv.step(np.zeros((1, *(venv.action_space.shape or ())), dtype=np.float32))
     venv.close()
 
 
@@ -423,7 +423,7 @@ def resume_model(run_dir: Path, algo: str, checkpoint, venv, off_policy: bool):
         raise UnreadableModelError(f"{checkpoint[0]} holds a model of {model.num_timesteps} steps, not {checkpoint[2]}")
     buffer = checkpoint[0].with_name(f"{algo}_replay_buffer_{checkpoint[2]}_steps.pkl")
     if off_policy and buffer.exists():
-        model.load_replay_buffer(buffer)
+        model.load_replay_buffer(buffer)  # type: ignore[attr-defined]  # an off-policy algorithm's
     for leftover in [*run_dir.glob(".*.tmp*"), *run_dir.glob("checkpoints/.*.tmp*")]:  # cut by a kill
         leftover.unlink()
     _, progress_dropped = truncate_csv(run_dir / "logs" / "progress.csv", "time/total_timesteps", checkpoint[2])
@@ -479,7 +479,7 @@ def train(
             seed=seed,
             device="cpu",
             verbose=0,
-            **configuration.algorithm_kwargs(config, algo, venv.action_space.shape[0]),
+            **configuration.algorithm_kwargs(config, algo, cast(tuple[int, ...], venv.action_space.shape)[0]),
         )
     model.set_logger(
         Logger(
@@ -499,6 +499,7 @@ def train(
     save_checkpoint(model, run_dir, algo, replay_buffer=off_policy)  # where a later --resume starts
     save_model(model, normalizer_of(venv), run_dir)
     timing = clock.write(model.num_timesteps)
+    assert timing is not None  # written when not throttled (every=0)
     venv.close()
     if final_eval:
         evaluate_run(run_dir, quiet=True)

@@ -102,7 +102,7 @@ def trial_cpus() -> int:
 def pin_threads(config: dict[str, Any], cpus: int) -> dict[str, Any]:
     """``config`` with torch's and the engine's threads set to ``cpus`` (numba's count too, for the
     kernels that do not take ``threads``); ``train`` sets torch's after the engine's first step."""
-    cpus = min(cpus, numba.config.NUMBA_NUM_THREADS)
+    cpus = min(cpus, numba.config.NUMBA_NUM_THREADS)  # type: ignore[attr-defined]  # set when numba loads
     numba.set_num_threads(cpus)
     return {
         **config,
@@ -242,7 +242,7 @@ class WallClock(tune.Callback):
         self.path, self.key = Path(path), key
         self.previous, self.start = 0.0, time.perf_counter()
 
-    def setup(self, **info) -> None:  # at the start of every session, the first and each restore
+    def setup(self, stop=None, num_samples=None, total_num_samples=None, **info) -> None:  # every session's start
         self.previous = self.read().get(self.key, 0.0)
         self.start = time.perf_counter()
 

@@ -18,7 +18,7 @@ import argparse
 import os
 import tempfile
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
@@ -30,13 +30,14 @@ from agents.evaluation import TEST_FIRST_SEED
 from agents.oracle import OraclePlanner, ThrowSimulator, episodes_from_infos
 from box_toss_env.rendering.video import write_gif
 
-GIF_ENV_KWARGS = {"render_width": 360, "render_height": 240, "render_fps": 20}
+GIF_ENV_KWARGS: dict[str, Any] = {"render_width": 360, "render_height": 240, "render_fps": 20}
 PLANNER_BUDGET = BUDGETS[2]  # 512 uniform candidates, then 16 rounds of 64
 OUT = DOCS / "figures"
 MAX_BYTES = 300_000
 
 
-SEQUENTIAL = ("BoxToss-Stack-v0",)  # episodes of several throws, planned by agents.stack_planner (docs/stack.md)
+SEQUENTIAL = ("BoxToss-Stack-v0", "BoxToss-HiddenPhysics-v0")
+"""Ids whose episodes are several throws (docs/stack.md, docs/hidden_physics.md): no one-throw GIF."""
 
 
 def variant_ids() -> list[str]:
@@ -109,10 +110,10 @@ def record_variant(
     the box took; its row (seed, result, size)."""
     seed, action = good_throw(env_id, first_seed, tries, threads, shown)
     env = gym.make(env_id, render_mode="rgb_array_list", **GIF_ENV_KWARGS)
-    throw_env(env)._renderer_for_env().trace = True  # as record_throws draws it
+    cast(Any, throw_env(env))._renderer_for_env().trace = True  # as record_throws draws it
     env.reset(seed=seed)
     info = env.step(action)[4]
-    frames = env.render()
+    frames = cast(list[np.ndarray], env.render())
     env.close()
     path = write_atomically(frames, out / f"variant_{env_id}.gif", GIF_ENV_KWARGS["render_fps"])
     return {
@@ -161,7 +162,8 @@ def main(argv: list[str] | None = None) -> None:
     unknown = [env_id for env_id in envs if env_id not in gym.registry]
     if unknown:
         parser.error(f"unknown env ids {unknown}; registered: {variant_ids()}")
-    rows, shown = [], set()
+    rows: list[dict[str, Any]] = []
+    shown: set[int] = set()
     for env_id in envs:  # each variant's figure shows an episode no earlier one showed
         row = record_variant(env_id, args.out, args.first_seed, args.tries, args.threads, shown)
         rows.append(row)

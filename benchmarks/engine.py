@@ -284,7 +284,7 @@ def load_text() -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--quick", action="store_true", help="fewer repeats and steps")
-    parser.add_argument("--readme", action="store_true", help="also write the figures into docs/engine.md")
+    parser.add_argument("--readme", action="store_true", help="also write the methodology page")
     args = parser.parse_args()
     repeats, steps = (3, 1024) if args.quick else (5, 4096)
     import numba

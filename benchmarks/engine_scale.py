@@ -63,30 +63,17 @@ from box_toss_env.physics import Box, Scene, Simulator, layout, make_settings, s
 OUR_DT: dict[str, float] = {"pile": 1 / 60, "wide pile": 1 / 60, "pyramid": 1 / 60}
 """[s] our engine's step per kind of scene: the one place to edit when the engine picks its own. The cheapest of
 1/60, 1/90 and 1/120 at which the awake scene's deepest penetration stays under 1 mm throughout (the bound the
-engine issue sets; Box2D v3 at its default: 5-11 mm at the end of the run). Measured on 2026-11-27 with the local
-Gauss-Seidel sweeps (0.5 s of lead-in and 2 s awake with OUR_SOLVER, thread CPU time on a quiet machine), us per
-body per simulated second and deepest penetration throughout / at the end: the wide pile of 1,000 (seed 0) at 1/60
-16.4 (847 / 199 um), 1/90 24.3 (403 / 109 um), 1/120 28.9 (310 / 94 um); seeds 1 and 2 at 1/60 16.3 and 18.1 (340,
-442 um throughout); the wide pile of 5,000 at 1/60 21.7 (553 / 525 um), 1/90 29.1 (412 / 110 um), 1/120 36.6 (275 /
-99 um): a box toppling off the top makes the peaks. The step is 1/90 for a user who wants every contact under 0.5
-mm. Before the lever-rule cold start the wide piles stood frozen at these settings (every speed under 0.05 mm/s after
-20 steps, 93-100 um throughout; 1/90 cost 18.5-22.5). At 1/60 the pile of 100 ends at 103 um, the pyramid (started
-exactly resting, and resting on) at 2e-10 m."""
+engine issue sets); a user who wants every contact under 0.5 mm takes 1/90. The measurements that chose it are on
+docs/engine_scale.md ("How our settings were chosen")."""
 OUR_SOLVER = {"solver_tolerance": 1e-4, "solver_iterations": 32, "penetration_slop": 5e-5}
 """Our solver settings for these scenes: the Gauss-Seidel stop (``Scene.solver_tolerance``, ``solver_iterations``;
 sweeps stop once they change the impulses by less than 1e-4 of their sum, after 32 at most) and
 ``penetration_slop`` 50 um (the penalty starts once a contact is twice that deep and leaves up to that alone;
-Box2D's slop is 5 mm). Against the scene defaults (1e-9, 16 sweeps that nearly always run, no slop), measured side
-by side at stop 30 over 2 s awake: the pile of 100 cost 150 us per body per simulated second at 1/120 s, 94 with
-the stop, 71 with a slop of 10 um too. Measured side by side on 2026-11-27 (2 s awake after the lead-in, thread CPU
-time beside trainings), us per body per simulated second and penetration, for the pile of 100 at 1/60, the wide
-pile of 1,000 at 1/90 and the pyramid at 1/60: slop 30 um 27.6-27.9, 18.8-18.9, 24.3-24.4 (70, 59, 35 um); 40 um
-26.7, 18.8, 24.3 (86, 78, 35 um); 50 um 23.8-24.1, 18.5-18.9, 24.2-24.3 (101, 95, 35 um): in the pile of 100 the
-penalty ran at every step, 16 sweeps that do not converge on a column of 10 (counted), and a wider band lets it rest.
-Before (the wide pile at 1/120): slop 10 um 32.7, 48.1, 24.5 (57, 21, 16 um); tolerance 1e-3 instead of 1e-4: 30.6,
-57.5, 77.3 (a looser solve lets more contacts sink into the penalty's band, whose sweeps then run). A settled pile
-kept awake creeps at 1e-4 (its top box's drift is in the table; at the defaults 0.1 um in 10 s), which the settled
-runs' sleeping ends; ``benchmarks.pile_pareto`` turns the tolerance and the slop."""
+Box2D's slop is 5 mm). The stop spares the sweeps that do not converge on a column of boxes, the slop lets the
+penalty rest instead of running at every step; a looser stop lets more contacts sink into the penalty's band,
+and a settled pile kept awake creeps at this stop, which the settled runs' sleeping ends. What each setting costs
+and buys, measured: docs/engine_scale.md ("How our settings were chosen"); ``benchmarks.pile_pareto`` turns the
+tolerance and the slop."""
 
 
 OURS = "ours"
@@ -100,8 +87,7 @@ PYRAMID_ROWS = 20  # 210 boxes
 SETTLE = 2.0  # [s] untimed settling of a pile
 SETTLE_DT = 1 / 90
 """[s] the step of our settling of a pile, whatever step the pile is timed at (``OUR_DT``), so that every engine and
-every timed step start from one state. Settled at 1/60 instead, the wide piles of 1,000 and 5,000 still had 8 boxes
-awake after the asleep runs' 2 s of lead-in."""
+every timed step start from one state; at 1/60 the wide piles keep boxes awake after the asleep runs' lead-in."""
 WINDOW, QUICK_WINDOW = 2.0, 1.0  # [s] simulated time timed per case
 MIN_STEPS = 4
 REPEATS = 3  # best of this many timed runs, as far as the budget allows
@@ -112,10 +98,9 @@ MODES = ("awake", "settled", "asleep")
 LEAD_IN = {"awake": 0.5, "settled": 0.0, "asleep": 2.0}
 """[s] simulated untimed before the window, per mode, in the same world (ours: a run whose warm start carries its
 contacts' impulses and its sleep into the timed one): awake, so that every engine is timed with its contacts warm,
-as a scene that goes on is (ours pays its cold start once: from ``resting_loads``' guess the wide pile of 1,000's first
-15 steps cost about 3 times a warm step, thread CPU time; from the guess before it, which split each body's load
-equally among its supports, they cost 10 times, the sweeps at their cap); asleep, so that Box2D's islands (0.5 s
-still) and ours have fallen asleep; settled from a fresh start: what falling asleep costs."""
+as a scene that goes on is (ours pays its cold start once, in the lead-in: docs/engine_scale.md says what it
+costs); asleep, so that Box2D's islands (0.5 s still) and ours have fallen asleep; settled from a fresh start: what
+falling asleep costs."""
 ONBOX_THROWS, QUICK_ONBOX_THROWS = 400, 100
 BATCH, BATCHES, QUICK_BATCHES = 256, 3, 1  # make_vec(BATCH, threads=1), batch steps timed
 

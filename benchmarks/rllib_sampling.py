@@ -70,7 +70,7 @@ def main() -> None:
     parser.add_argument("--num-envs", type=int, nargs="+", default=[32, 256])
     parser.add_argument("--throws", type=int, default=4096)
     parser.add_argument("--repeats", type=int, default=5)
-    parser.add_argument("--readme", action="store_true", help="write the table into docs/rllib.md")
+    parser.add_argument("--readme", action="store_true", help="write the table into docs/methodology/rllib.md")
     args = parser.parse_args()
 
     ray.init(address="local", num_cpus=1, include_dashboard=False)

@@ -1,5 +1,5 @@
-"""Throughput of BoxToss against the engines a user would pick instead. Prints measured figures,
-writes them to ``docs/throughput.md`` (and docs/batched.md with ``--readme``); asserts nothing.
+"""Throughput of BoxToss against the engines a user would pick instead. Prints measured figures (with
+``--readme`` also into ``docs/throughput.md`` and the headline figures, ``agents.figures``); asserts nothing.
 
     python -m benchmarks.throughput [--quick] [--readme]
 
@@ -19,21 +19,18 @@ import argparse
 import os
 import time
 import tracemalloc
-from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 from gymnasium.vector import AutoresetMode
 
 import box_toss_env  # noqa: F401  (registers BoxToss-v0)
+from agents import figures
 from agents.doc_sections import replace_section
 from benchmarks.env_throughput import throws_per_second
 from benchmarks.other_engines import ENGINES, Toss, missing_engines, steps_for_duration
 from box_toss_env.envs.box_toss_vector import BoxTossVectorEnv
-from box_toss_env.files import write_atomic
 from box_toss_env.physics import Simulator, layout, make_settings, scenes
-
-DOCS = Path(__file__).resolve().parents[1] / "docs" / "throughput.md"
 
 
 def best_rate(run, throws_per_call: int, repeats: int) -> float:
@@ -146,7 +143,9 @@ def memory_per_env(small: int = 256, large: int = 4096) -> tuple[float, float]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="fewer repeats and throws")
-    parser.add_argument("--readme", action="store_true", help="also write the table into docs/batched.md")
+    parser.add_argument(
+        "--readme", action="store_true", help="also write docs/throughput.md's section and the headline figures"
+    )
     args = parser.parse_args()
     repeats = 2 if args.quick else 5
     import numba
@@ -159,10 +158,13 @@ def main() -> None:
     lines += ["| setting | throws/s |", "|---|---:|"]
     single = single_env_rate(1000 if args.quick else 5000, repeats)
     lines.append(f"| one `BoxToss-v0` via `gymnasium.make` | {single:,.0f} |")
+    batched = {}
     for n in (1, 16, 256, 4096):
         steps = max(2, 4096 // n) if not args.quick else max(1, 512 // n)
         for threads in (1, 2):
-            rate = vector_rate(gym.make_vec("BoxToss-v0", num_envs=n, threads=threads), steps, repeats)
+            rate = batched[n, threads] = vector_rate(
+                gym.make_vec("BoxToss-v0", num_envs=n, threads=threads), steps, repeats
+            )
             lines.append(
                 f'| `make_vec("BoxToss-v0", num_envs={n})`, {threads} thread{"s" * (threads > 1)} | {rate:,.0f} |'
             )
@@ -203,10 +205,19 @@ def main() -> None:
     lines[0] = lines[0][:-1] + f"; load average {load} at the end (a shared machine: other jobs' load lowers these)."
     report = "\n".join(lines)
     print(report)
-    DOCS.parent.mkdir(exist_ok=True)
-    write_atomic(DOCS, "# Throughput\n\n" + report + "\n")
     if args.readme:
         replace_section("throughput", report)
+        (n, threads), rate = max(batched.items(), key=lambda item: item[1])
+        figures.update(
+            "throughput",
+            {
+                "single": figures.count(single),
+                "batched": figures.count(rate),
+                "batched_envs": figures.count(n),
+                "batched_threads": f"{threads} engine thread{'s' * (threads > 1)}",
+                "engine_us": f"{ours_one * 1e6:.0f}",
+            },
+        )
 
 
 if __name__ == "__main__":

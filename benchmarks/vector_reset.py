@@ -62,7 +62,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--envs", type=int, default=10**6, help="envs in the batch (default 1,000,000)")
     parser.add_argument("--repeats", type=int, default=3, help="fresh processes (default 3)")
-    parser.add_argument("--readme", action="store_true", help="also write the table into docs/batched.md")
+    parser.add_argument("--readme", action="store_true", help="also write the methodology page")
     args = parser.parse_args()
     if args.envs < 1:
         parser.error(f"--envs must be >= 1, got {args.envs}")

@@ -8,8 +8,8 @@ __version__ = "0.1.0"
 
 
 def _register_envs() -> None:
-    """Register ``BoxToss-v0``, its variants and ``BoxToss-Stack-v0`` with string entry points (nothing is imported
-    until an env is made, so ``import box_toss_env`` does not import pygame or the envs)."""
+    """Register ``BoxToss-v0``, its variants, ``BoxToss-Stack-v0`` and ``BoxToss-HiddenPhysics-v0`` with string entry
+    points (nothing is imported until an env is made, so ``import box_toss_env`` does not import pygame or the envs)."""
     import gymnasium
 
     variants: dict[str, dict[str, object]] = {
@@ -34,6 +34,13 @@ def _register_envs() -> None:
             id="BoxToss-Stack-v0",
             entry_point="box_toss_env.envs.stack:BoxTossStackEnv",
             vector_entry_point="box_toss_env.envs.stack_vector:BoxTossStackVectorEnv",
+        )
+
+    if "BoxToss-HiddenPhysics-v0" not in gymnasium.registry:  # throws of one box whose physics is not observed
+        gymnasium.register(
+            id="BoxToss-HiddenPhysics-v0",
+            entry_point="box_toss_env.envs.hidden_physics:BoxTossHiddenPhysicsEnv",
+            vector_entry_point="box_toss_env.envs.hidden_physics:BoxTossHiddenPhysicsVectorEnv",
         )
 
     if "BoxToss-Goal-v0" not in gymnasium.registry:

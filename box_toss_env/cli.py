@@ -26,8 +26,8 @@ COMMANDS = {
     "bench": ("benchmarks.NAME", "a benchmark: box-toss bench NAME [options], NAME one of those below"),
 }
 BENCHMARKS = {
-    "engine": "ns per body-step and us per throw of the engine (docs/engine.md)",
-    "throughput": "throws per second of the env, single and batched, and of other engines (docs/batched.md)",
+    "engine": "ns per body-step and us per throw of the engine (docs/methodology/engine-benchmark.md)",
+    "throughput": "throws per second of the env, single and batched, and of other engines (docs/throughput.md)",
     "cold_start": "the first throw in a fresh interpreter, cold and warm cache (docs/cold-start.md)",
     "env_throughput": "throws per second of one env id, single and batched",
     "rllib_sampling": "RLlib's sampling speed, native batched env against its default (rllib extra)",

@@ -14,7 +14,7 @@ from functools import cached_property
 import numpy as np
 
 from benchmarks.other_engines import Toss
-from box_toss_env.envs import arguments, task
+from box_toss_env.envs import arguments, task, task_columns, task_config
 from box_toss_env.envs.functional import BoxTossFunctional
 from box_toss_env.physics import Box, Scene, layout, scenes
 
@@ -308,7 +308,7 @@ class Throws:
     [-1, 1]^3, from one seeded generator. ``run`` simulates them as the env does: until each box rests (at most
     ``max_sim_time``), one row per throw in one engine call."""
 
-    config: task.TaskConfig
+    config: task_config.TaskConfig
     initial: np.ndarray  # (n, 6) thrown states
     params: np.ndarray  # (n, 7)
     seed: int
@@ -349,7 +349,9 @@ class Throws:
         """(low, high) of (x, y) that no throw can leave: the env's observation bounds, which follow
         from the throw's energy; a landing outside them is a blow-up."""
         low, high = task.observation_bounds(self.config, self.config.max_sim_time)
-        return low[task.OBS_X : task.OBS_Y + 1].astype(float), high[task.OBS_X : task.OBS_Y + 1].astype(float)
+        return low[task_columns.OBS_X : task_columns.OBS_Y + 1].astype(float), high[
+            task_columns.OBS_X : task_columns.OBS_Y + 1
+        ].astype(float)
 
     def blown_up(self, states: np.ndarray, stats: np.ndarray) -> np.ndarray:
         """(n,) True where a throw went non-finite or landed where its energy cannot take it."""
@@ -365,8 +367,8 @@ def seeded_throws(n: int = 256, seed: int = 2024) -> Throws:
     core = BoxTossFunctional()
     rng = np.random.default_rng(seed)
     batch = core.initial(rng, core.empty(n))
-    actions = rng.uniform(-1.0, 1.0, size=(n, task.ACTION_SIZE))
-    core.launch(batch, core.check_actions(actions, (n, task.ACTION_SIZE)))
+    actions = rng.uniform(-1.0, 1.0, size=(n, task_columns.ACTION_SIZE))
+    core.launch(batch, core.check_actions(actions, (n, task_columns.ACTION_SIZE)))
     return Throws(config=core.config, initial=batch.state.copy(), params=batch.params.copy(), seed=seed)
 
 

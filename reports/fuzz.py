@@ -10,7 +10,7 @@ Three fuzzes, each a strategy of examples and a check returning what an example 
    robust solver: no exception at all (``EnergyGainError`` included), a finite observation inside the
    observation space, penetration below 5% of the smaller side;
 3. ``env_accepted``: BoxToss-v0 made with arguments drawn anywhere in the ranges the env accepts
-   (``task.ENV_RANGES``, docs/ranges.md), both solvers: making the env, resetting and throwing raise
+   (``task_config.ENV_RANGES``, docs/ranges.md), both solvers: making the env, resetting and throwing raise
    nothing but the documented ``EnergyGainError`` and ``NonFiniteStateError``, and what is returned is
    finite and inside the observation space.
 
@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from box_toss_env.envs import task
+from box_toss_env.envs import task_columns, task_config
 from box_toss_env.physics import Box, NonFiniteStateError, Scene, simulate
 
 PENETRATION_SHARE = 0.05  # of the box's smaller side
@@ -202,11 +202,11 @@ def env_declared_strategy(profile: Profile):
 
 
 def env_accepted_strategy(profile: Profile):
-    """BoxToss-v0 keyword arguments anywhere in ``task.ENV_RANGES`` (the step count capped by the profile), a
+    """BoxToss-v0 keyword arguments anywhere in ``task_config.ENV_RANGES`` (the step count capped by the profile), a
     solver, a seed and an action."""
     from hypothesis import strategies as st
 
-    ranges = task.ENV_RANGES
+    ranges = task_config.ENV_RANGES
 
     def positive(name, low=None):
         allowed = ranges[name]
@@ -251,7 +251,7 @@ def env_accepted_strategy(profile: Profile):
                 "max_sim_time": positive("max_sim_time", 1e-3),
                 "clearance": st.floats(1e-6, 10.0),
                 "height_span": st.floats(0.0, 10.0),
-                "target_face": st.sampled_from(task.TARGET_FACE_KINDS),
+                "target_face": st.sampled_from(task_columns.TARGET_FACE_KINDS),
                 "solver": st.sampled_from(("robust", "seed")),
             }
         ).map(kwargs),
@@ -308,7 +308,7 @@ def accepted_throw_outcome(example) -> tuple[list[str], str]:
     """(what a throw with arguments anywhere in the accepted ranges violates, the name of the documented error it
     raised or ""): an exception other than the documented EnergyGainError and NonFiniteStateError, or a
     returned value that is not finite or outside the observation space, is a violation."""
-    from box_toss_env.envs.box_toss import EnergyGainError
+    from box_toss_env.envs.functional import EnergyGainError
 
     kwargs, seed, action = example
     try:

@@ -31,3 +31,27 @@ def test_packages_import_only_the_packages_below_them(package):
         for path in (REPO / package).rglob("*.py")
     }
     assert {path: others for path, others in wrong.items() if others} == {}
+
+
+def test_the_tests_mirror_the_package_layout():
+    """Each folder of tests/ is named after the package folder whose code it tests (``tests/wrappers`` tests
+    ``box_toss_env/wrappers``, ``tests/agents`` the ``agents`` package, ``tests/docs`` the site, ...)."""
+    tests = (REPO / "tests").iterdir()
+    folders = {path.name for path in tests if path.is_dir() and not path.name.startswith((".", "_"))}
+    packages = {path.name for path in (REPO / "box_toss_env").iterdir() if (path / "__init__.py").exists()}
+    packages |= {name for name in ("agents", "benchmarks", "reports", "examples", "docs") if (REPO / name).is_dir()}
+    assert folders - packages == set()
+
+
+def test_the_task_envs_hold_no_engine_set_up_of_their_own():
+    """The multi-throw envs are thin wrappers over their core: of the engine they import its array layout at most
+    (no scene, kernel, simulator or settings)."""
+    envs = REPO / "box_toss_env" / "envs"
+    for name in ("stack.py", "stack_vector.py", "hidden_physics.py"):
+        engine_names = {
+            alias.name
+            for node in ast.walk(ast.parse((envs / name).read_text()))
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("box_toss_env.physics")
+            for alias in node.names
+        }
+        assert engine_names <= {"layout"}, name

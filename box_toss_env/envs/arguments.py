@@ -3,7 +3,7 @@
 ``ENV_ARGUMENTS`` is the one declaration. What reads it:
 
 - ``BoxTossEnv.__init__`` takes its defaults (``ENV_DEFAULTS``) and refuses a name it does not list;
-- the validation (``task.make_task_config``, ``task.ENV_RANGES``) takes the ranges;
+- the validation (``task_config.make_task_config``, ``task_config.ENV_RANGES``) takes the ranges;
 - the "Arguments" table of ``BoxTossEnv``'s docstring (the environment page and ``help()``) is
   ``arguments_table()``;
 - ``BoxTossFunctional`` (``envs.functional``) takes the same arguments, less the rendering ones.
@@ -190,10 +190,10 @@ def _cell(text: str) -> str:
     return text.replace("|", "\\|")
 
 
-def arguments_table() -> str:
-    """The Markdown table of ``ENV_ARGUMENTS``: argument, type, default, allowed range, meaning."""
+def arguments_table(arguments: tuple[Argument, ...] = ENV_ARGUMENTS) -> str:
+    """The Markdown table of ``arguments`` (``ENV_ARGUMENTS``): argument, type, default, allowed range, meaning."""
     lines = ["| Argument | Type | Default | Range | Meaning |", "|---|---|---|---|---|"]
-    for a in ENV_ARGUMENTS:
+    for a in arguments:
         allowed = "" if a.allowed is None else f"{a.allowed}" + (" each end" if "float, float" in a.type else "")
         lines.append(f"| ``{a.name}`` | {_cell(a.type)} | {_cell(a.shown_default)} | {allowed} | {_cell(a.doc)} |")
     return "\n".join(lines)

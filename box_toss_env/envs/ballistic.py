@@ -45,24 +45,24 @@ from typing import Any, SupportsFloat
 import gymnasium as gym
 import numpy as np
 
-from box_toss_env.envs import task
+from box_toss_env.envs import task, task_columns, task_config
 from box_toss_env.physics.ranges import Range
 
 MIN_FLIGHT_TIME = 0.2  # [s] default lower end of T: below it a half turn needs more than 15 rad/s
 DEFAULT_OFFSET_RANGE = 0.5  # [m] x* - target_x in [-offset_range, offset_range]
 DEFAULT_TURN_RANGE = 0.25 * math.pi  # [rad] phi - phi_face in [-turn_range, turn_range]: leans up to 45 degrees
 # (a range of pi/2 reaches the neighbouring faces too, where PPO found a poorer optimum: 22 % on short ends)
-_FACE_DOWN_ANGLES = -task.QUARTER_TURN * np.arange(4.0)  # face f points down at angle -f pi/2
+_FACE_DOWN_ANGLES = -task_columns.QUARTER_TURN * np.arange(4.0)  # face f points down at angle -f pi/2
 
 
 def check_command_settings(
-    config: task.TaskConfig, flight_time_range, offset_range, turn_range
+    config: task_config.TaskConfig, flight_time_range, offset_range, turn_range
 ) -> tuple[tuple[float, float], float, float]:
     """Validated (flight_time_range, offset_range, turn_range); None takes the default
     (T in [0.2 s, 2 max_speed / g]: the flight of the steepest, fastest throw)."""
     if flight_time_range is None:
         flight_time_range = (MIN_FLIGHT_TIME, max(2.0 * config.max_speed / config.gravity, 2 * MIN_FLIGHT_TIME))
-    low, high = task.check_interval("flight_time_range", flight_time_range, Range(0.0, 1e3, "s", low_open=True))
+    low, high = task_config.check_interval("flight_time_range", flight_time_range, Range(0.0, 1e3, "s", low_open=True))
     if low >= high:
         raise ValueError(f"flight_time_range must have low < high, got {flight_time_range!r}")
     offset_range = Range(0.0, 1e3, "m").check("offset_range", offset_range)
@@ -84,16 +84,16 @@ def observed_base_top(observations: np.ndarray) -> np.ndarray:
     y_base + (L_b/2) |sin theta_b| + (H_b/2) |cos theta_b|."""
     obs = np.asarray(observations, dtype=np.float64)
     return (
-        obs[:, task.OBS_BASE_Y]
-        + 0.5 * obs[:, task.OBS_BASE_LENGTH] * np.abs(obs[:, task.OBS_BASE_SIN])
-        + 0.5 * obs[:, task.OBS_BASE_HEIGHT] * np.abs(obs[:, task.OBS_BASE_COS])
+        obs[:, task_columns.OBS_BASE_Y]
+        + 0.5 * obs[:, task_columns.OBS_BASE_LENGTH] * np.abs(obs[:, task_columns.OBS_BASE_SIN])
+        + 0.5 * obs[:, task_columns.OBS_BASE_HEIGHT] * np.abs(obs[:, task_columns.OBS_BASE_COS])
     )
 
 
 def ballistic_throws(
     observations: np.ndarray,
     commands: np.ndarray,
-    config: task.TaskConfig,
+    config: task_config.TaskConfig,
     flight_time_range: tuple[float, float],
     offset_range: float,
     turn_range: float,
@@ -102,12 +102,12 @@ def ballistic_throws(
     from the release poses in ``observations`` (n, obs), by the formulas of the module docstring."""
     obs = np.asarray(observations, dtype=np.float64)
     c = np.asarray(commands, dtype=np.float64)
-    x0, y0 = obs[:, task.OBS_X], obs[:, task.OBS_Y]
-    theta0 = np.arctan2(obs[:, task.OBS_SIN], obs[:, task.OBS_COS])
+    x0, y0 = obs[:, task_columns.OBS_X], obs[:, task_columns.OBS_Y]
+    theta0 = np.arctan2(obs[:, task_columns.OBS_SIN], obs[:, task_columns.OBS_COS])
     t_low, t_high = flight_time_range
     flight_time = t_low + (t_high - t_low) * 0.5 * (c[:, 0] + 1.0)
-    landing_x = obs[:, task.OBS_TARGET_X] + offset_range * c[:, 1]
-    phi = face_angles(theta0, obs[:, task.OBS_TARGET_FACES]) + turn_range * c[:, 2]
+    landing_x = obs[:, task_columns.OBS_TARGET_X] + offset_range * c[:, 1]
+    phi = face_angles(theta0, obs[:, task_columns.OBS_TARGET_FACES]) + turn_range * c[:, 2]
     height = config.half_length * np.abs(np.sin(phi)) + config.half_width * np.abs(np.cos(phi))
     if config.base_box:  # touch down on the base box's top
         height = height + observed_base_top(obs)
@@ -120,7 +120,7 @@ def ballistic_throws(
 def ballistic_actions(
     observations: np.ndarray,
     commands: np.ndarray,
-    config: task.TaskConfig,
+    config: task_config.TaskConfig,
     flight_time_range: tuple[float, float] | None = None,
     offset_range: float = DEFAULT_OFFSET_RANGE,
     turn_range: float = DEFAULT_TURN_RANGE,
@@ -155,7 +155,7 @@ class BallisticThrows(gym.Wrapper):
         turn_range: float = DEFAULT_TURN_RANGE,
     ):
         super().__init__(env)
-        self.config: task.TaskConfig = env.unwrapped.config  # type: ignore[attr-defined]  # a BoxToss env
+        self.config: task_config.TaskConfig = env.unwrapped.config  # type: ignore[attr-defined]  # a BoxToss env
         self.settings = check_command_settings(self.config, flight_time_range, offset_range, turn_range)
         self._observation: np.ndarray | None = None
 
@@ -167,7 +167,7 @@ class BallisticThrows(gym.Wrapper):
     def step(self, action) -> tuple[Any, SupportsFloat, bool, bool, dict[str, Any]]:
         if self._observation is None:
             raise gym.error.ResetNeeded("call reset() before step()")
-        command = task.check_actions(action, (task.ACTION_SIZE,))
+        command = task.check_actions(action, (task_columns.ACTION_SIZE,))
         actions, clipped = ballistic_actions(self._observation[None], command, self.config, *self.settings)
         observation, reward, terminated, truncated, info = self.env.step(actions[0])
         self._observation = _throw_observation(observation)

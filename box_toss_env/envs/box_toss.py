@@ -13,14 +13,9 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.error import ResetNeeded
 
-from box_toss_env.envs import task
+from box_toss_env.envs import task, task_columns, task_config
 from box_toss_env.envs.arguments import CORE_ARGUMENTS, ENV_ARGUMENTS, arguments_table, with_defaults
-from box_toss_env.envs.functional import (  # noqa: F401  (EnergyGainError, base_landing_info: their old home)
-    BoxTossFunctional,
-    EnergyGainError,
-    base_landing_info,
-    first_of,
-)
+from box_toss_env.envs.functional import BoxTossFunctional, first_of
 from box_toss_env.envs.random_streams import check_seed
 from box_toss_env.physics import Simulator, layout
 from box_toss_env.physics.grouped import GroupedSimulator
@@ -143,7 +138,7 @@ class BoxTossEnv(gym.Env):
     ``step`` again before ``reset`` raises ``gymnasium.error.ResetNeeded``. The explicit seed scheme
     (``solver="seed"``) gains energy when ``dt`` is too large for ``penalty_stiffness`` (at the
     default 1/128 s with 1e5 N/m it does; 1/1024 s is fine): ``step`` then raises
-    ``box_toss_env.envs.box_toss.EnergyGainError`` if the final state leaves the observation bounds,
+    ``box_toss_env.envs.functional.EnergyGainError`` if the final state leaves the observation bounds,
     and the engine's ``NonFiniteStateError`` if it diverges, rather than return such values.
 
     ``info`` after ``reset``: ``target_x``, ``target_faces`` (4 flags), ``release_x``, ``release_y``,
@@ -213,15 +208,17 @@ class BoxTossEnv(gym.Env):
     returns an (H, W, 3) uint8 frame of the current state; ``"human"`` opens a pygame window and plays
     each throw in real time; ``"rgb_array_list"`` records each throw and ``render()`` returns the
     frames since the last call (the box in the hand, then the whole throw at ``render_fps``, then its
-    result held for a second), for videos of whole throws (``box_toss_env.envs.record_throws`` writes
-    them to a GIF or MP4; Gymnasium's ``RecordVideo`` keeps only one frame per step). A throw that
+    result held for a second). For videos of whole throws, wrap the env in
+    ``box_toss_env.wrappers.RecordThrowVideo`` (Gymnasium's ``RecordVideo`` keeping every frame; the plain
+    ``RecordVideo`` keeps one frame per step, two a throw) or write them to a GIF or MP4 with
+    ``box_toss_env.envs.record_throws``. A throw that
     leaves the home view (release points and targets) is zoomed out to keep the box in frame: one camera
     fitted to the whole throw in recordings, a following camera in the window (``envs.render``). Only
     the last two modes record trajectories, so training without them pays nothing for rendering.
 
     ## Version History
 
-    * v0: initial version.
+    * v0: initial version (``box_toss_env`` 0.1.0; the changelog lists what changed since).
     """
 
     metadata = {"render_modes": RenderModes(RENDER_MODES), "render_fps": 30}
@@ -242,14 +239,14 @@ class BoxTossEnv(gym.Env):
             self.core.flags,
         )
         self._settings = self.core.settings
-        self.render_fps = task.ENV_RANGES["render_fps"].check("render_fps", args["render_fps"])
+        self.render_fps = task_config.ENV_RANGES["render_fps"].check("render_fps", args["render_fps"])
         self.render_size = (
             _check_pixels("render_width", args["render_width"]),
             _check_pixels("render_height", args["render_height"]),
         )
         self.metadata = {**self.metadata, "render_fps": self.render_fps}
 
-        self.action_space = spaces.Box(-1.0, 1.0, shape=(task.ACTION_SIZE,), dtype=np.float32)
+        self.action_space = spaces.Box(-1.0, 1.0, shape=(task_columns.ACTION_SIZE,), dtype=np.float32)
         self.observation_space = spaces.Box(self.core.observation_low, self.core.observation_high, dtype=np.float32)
 
         # per-episode arrays, allocated once: a throw only writes its six initial numbers. The engine's

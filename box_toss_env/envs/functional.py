@@ -35,13 +35,12 @@ from typing import Any
 
 import numpy as np
 
-from box_toss_env.envs import task
+from box_toss_env.envs import task, task_columns, task_config
 from box_toss_env.envs.arguments import CORE_ARGUMENTS, with_defaults
-from box_toss_env.physics import Box, Scene, Simulator, check_finite_stats, layout, make_settings
+from box_toss_env.envs.engine import EngineConfig, make_engine
+from box_toss_env.physics import Simulator, check_finite_stats, layout
 from box_toss_env.physics.grouped import GroupedSimulator
 from box_toss_env.physics.grouped import make_simulator as make_grouped_simulator
-from box_toss_env.physics.kernels import KernelFlags
-from box_toss_env.physics.ranges import check_step_count
 
 
 # the columns the reset's and the step's info read
@@ -50,22 +49,27 @@ def _columns(*pairs: tuple[str, int]) -> tuple[tuple[str, ...], np.ndarray]:
 
 
 RESET_INFO = _columns(
-    ("target_x", task.EP_TARGET_X),
-    ("release_x", task.EP_RELEASE_X),
-    ("release_y", task.EP_RELEASE_Y),
-    ("release_angle", task.EP_RELEASE_ANGLE),
-    ("mass", task.EP_MASS),
-    ("friction", task.EP_FRICTION),
-    ("restitution", task.EP_RESTITUTION),
+    ("target_x", task_columns.EP_TARGET_X),
+    ("release_x", task_columns.EP_RELEASE_X),
+    ("release_y", task_columns.EP_RELEASE_Y),
+    ("release_angle", task_columns.EP_RELEASE_ANGLE),
+    ("mass", task_columns.EP_MASS),
+    ("friction", task_columns.EP_FRICTION),
+    ("restitution", task_columns.EP_RESTITUTION),
 )
 RESET_INFO_WITH_BASE = _columns(
-    *zip(*RESET_INFO, strict=True), ("base_length", task.EP_BASE_LENGTH), ("base_height", task.EP_BASE_HEIGHT)
+    *zip(*RESET_INFO, strict=True),
+    ("base_length", task_columns.EP_BASE_LENGTH),
+    ("base_height", task_columns.EP_BASE_HEIGHT),
 )
 STEP_STATS = np.array(
     [layout.FIRST_CONTACT_TIME, layout.END_TIME, layout.MAX_PENETRATION, layout.N_IMPACTS, layout.N_STEPS],
     dtype=np.intp,
 )
-STEP_EPISODE = np.array([task.EP_TARGET_X, task.EP_MASS, task.EP_FRICTION, task.EP_RESTITUTION], dtype=np.intp)
+STEP_EPISODE = np.array(
+    [task_columns.EP_TARGET_X, task_columns.EP_MASS, task_columns.EP_FRICTION, task_columns.EP_RESTITUTION],
+    dtype=np.intp,
+)
 
 
 class EnergyGainError(FloatingPointError):
@@ -82,7 +86,7 @@ class ThrowBatch:
     ``i * bodies_per_env``, with a base box that box in the next row.
 
     Attributes:
-        episodes: what ``initial`` drew, one row per throw (``task.Episodes``).
+        episodes: what ``initial`` drew, one row per throw (``task_config.Episodes``).
         params: (n * bodies_per_env, layout.PARAM_SIZE) the engine's body parameters.
         state: (n * bodies_per_env, layout.STATE_SIZE) body states x, y, angle, vx, vy, spin.
         stats: (n * bodies_per_env, layout.STATS_SIZE) what the engine recorded of the last run.
@@ -90,7 +94,7 @@ class ThrowBatch:
             once, or per episode when the dynamics or the base box are drawn).
     """
 
-    episodes: task.Episodes
+    episodes: task_config.Episodes
     params: np.ndarray
     state: np.ndarray
     stats: np.ndarray
@@ -128,7 +132,7 @@ class ThrowBatch:
     def copy(self) -> ThrowBatch:
         """A deep copy (the functional way to keep a state before a method writes into it)."""
         return ThrowBatch(
-            task.Episodes(self.episodes.data.copy()),
+            task_config.Episodes(self.episodes.data.copy()),
             self.params.copy(),
             self.state.copy(),
             self.stats.copy(),
@@ -139,54 +143,29 @@ class ThrowBatch:
 class BoxTossFunctional:
     """The BoxToss throw, batch-first; keyword arguments are ``BoxTossEnv``'s but the rendering ones.
 
-    Every argument is validated here (``arguments.ENV_ARGUMENTS``, ``task.make_task_config`` and the
+    Every argument is validated here (``arguments.ENV_ARGUMENTS``, ``task_config.make_task_config`` and the
     engine's ``Scene``): a TypeError names one of the wrong type, a ValueError one outside its range.
 
     Attributes:
         arguments: every argument's value, defaults filled in.
-        config: the validated task (``task.TaskConfig``).
+        config: the validated task (``task_config.TaskConfig``).
         solver, dt: the engine's solver and time step [s].
         max_steps: the most time steps of a throw (``max_sim_time`` in whole steps).
         flags: the compile-time switches of the engine kernel (``physics.KernelFlags``).
         settings: the engine's settings array (dt, gravity, sleep, ...; ``physics.layout``).
+        engine_config: what the task asks of the engine (``engine.make_engine`` made the four above from it).
         observation_low, observation_high: float32 bounds no observation leaves (``task.observation_bounds``).
     """
 
     def __init__(self, **kwargs: Any):
         self.arguments = args = with_defaults(kwargs, CORE_ARGUMENTS, type(self).__name__)
         task_names = [name for name in CORE_ARGUMENTS if name not in ("solver", "dt")]
-        self.config = config = task.make_task_config(**{name: args[name] for name in task_names})
+        self.config = config = task_config.make_task_config(**{name: args[name] for name in task_names})
         # the engine validates the solver settings (dt, solver, material) and names what is wrong
-        scene = Scene(
-            boxes=(
-                Box(
-                    length=args["box_length"],
-                    width=args["box_width"],
-                    mass=config.mass_range[1],
-                    position=(config.release_x_range[0], config.release_height_range[0]),
-                ),
-            ),
-            dt=args["dt"],
-            gravity=-config.gravity,
-            restitution=config.restitution_range[1],
-            friction=config.friction_range[1],
-            penalty_stiffness=config.penalty_stiffness,
-            solver=args["solver"],
-        )
-        self.solver, self.dt = scene.solver, scene.dt
-        self.max_steps = max(1, check_step_count("max_sim_time", config.max_sim_time, scene.dt))
-        # with a base box the thrown box and the base are one scene of colliding boxes (the colliding kernel);
-        # without one, the floor-only kernel, which compiles no box-box contact at all
-        self.flags = KernelFlags(
-            solver=scene.solver,
-            use_impulses=True,
-            use_penalty=scene.has_penalty,
-            use_friction=config.friction_range[1] > 0.0,
-            record=False,
-            parallel=False,
-            boxes_collide=config.base_box,
-        )
-        self.settings = make_settings(scene, self.max_steps, until_rest=True)
+        self.engine_config = engine_config(config, args["box_length"], args["box_width"], args["solver"], args["dt"])
+        engine = make_engine(self.engine_config)
+        self.solver, self.dt, self.max_steps = engine.solver, engine.dt, engine.max_steps
+        self.flags, self.settings = engine.flags, engine.settings
         self.observation_low, self.observation_high = task.observation_bounds(config, self.max_steps * self.dt)
 
     # -- the batch and the engine -------------------------------------------------------------------
@@ -194,13 +173,13 @@ class BoxTossFunctional:
         """A batch of ``n`` throws, its arrays zero (``initial`` or ``for_episodes`` fills them)."""
         bodies = n * self.config.bodies_per_env
         return ThrowBatch(
-            task.Episodes.empty(n, self.config.episode_size),
+            task_config.Episodes.empty(n, self.config.episode_size),
             np.zeros((bodies, layout.PARAM_SIZE)),
             np.zeros((bodies, layout.STATE_SIZE)),
             np.zeros((bodies, layout.STATS_SIZE)),
         )
 
-    def for_episodes(self, episodes: task.Episodes) -> ThrowBatch:
+    def for_episodes(self, episodes: task_config.Episodes) -> ThrowBatch:
         """A new batch of the given episodes (n rows), the boxes in the hand: to throw from episodes
         drawn elsewhere (the oracle plans from what ``reset`` returned)."""
         batch = self.empty(len(episodes.data))
@@ -261,7 +240,7 @@ class BoxTossFunctional:
         data = batch.episodes.data
         names, columns = RESET_INFO_WITH_BASE if self.config.base_box else RESET_INFO
         rows = data.take(columns, axis=1).T  # one copy, a row per key
-        info = {"target_x": rows[0], "target_faces": data[:, task.EP_TARGET_FACES].astype(np.int8)}
+        info = {"target_x": rows[0], "target_faces": data[:, task_columns.EP_TARGET_FACES].astype(np.int8)}
         info.update(zip(names[1:], rows[1:], strict=True))
         return info
 
@@ -290,7 +269,7 @@ class BoxTossFunctional:
 
     def transition(self, batch: ThrowBatch, actions, simulator: Simulator | GroupedSimulator) -> ThrowBatch:
         """``launch`` then ``simulate``: actions (n, 3) in [-1, 1] (clipped; checked) to final states."""
-        actions = self.check_actions(actions, (batch.n, task.ACTION_SIZE))
+        actions = self.check_actions(actions, (batch.n, task_columns.ACTION_SIZE))
         return self.simulate(self.launch(batch, actions), simulator)
 
     # -- 4. observation and reward ------------------------------------------------------------------
@@ -380,7 +359,7 @@ class BoxTossFunctional:
             f"outside the observation bounds [{low[column]:g}, {high[column]:g}]"
         )
         stiffness = self.config.penalty_stiffness
-        if column == task.OBS_Y and observation[column] < low[column]:
+        if column == task_columns.OBS_Y and observation[column] < low[column]:
             what = (
                 f"{where}: the box sank through the floor (its centre more than a corner radius below it) "
                 f"with solver={self.solver!r}. "
@@ -406,8 +385,29 @@ class BoxTossFunctional:
         )
 
 
+def engine_config(
+    config: task_config.TaskConfig, box_length: float, box_width: float, solver: str, dt: float
+) -> EngineConfig:
+    """What a one-throw task asks of the engine: its box, the largest mass, friction and restitution it draws,
+    the solver and step; with a base box the thrown box and the base are one scene of colliding boxes (the
+    colliding kernel), without one the floor-only kernel."""
+    return EngineConfig(
+        box_size=(box_length, box_width),
+        mass=config.mass_range[1],
+        release=(config.release_x_range[0], config.release_height_range[0]),
+        gravity=config.gravity,
+        restitution=config.restitution_range[1],
+        friction=config.friction_range[1],
+        penalty_stiffness=config.penalty_stiffness,
+        solver=solver,
+        dt=dt,
+        max_sim_time=config.max_sim_time,
+        boxes_collide=config.base_box,
+    )
+
+
 def base_landing_info(
-    base_states: np.ndarray, states: np.ndarray, episodes: task.Episodes, config: task.TaskConfig
+    base_states: np.ndarray, states: np.ndarray, episodes: task_config.Episodes, config: task_config.TaskConfig
 ) -> dict[str, np.ndarray]:
     """The step info of a task with a base box, (n,) arrays: where the base ended (``base_x``, ``base_y``
     [m], ``base_angle`` [rad, wrapped to [-pi, pi)]), the thrown box's lowest point above the base's top
@@ -425,16 +425,18 @@ def base_landing_info(
     }
 
 
-def episodes_from_reset_infos(reset_infos: list[dict[str, Any]]) -> task.Episodes:
+def episodes_from_reset_infos(reset_infos: list[dict[str, Any]]) -> task_config.Episodes:
     """The episodes (release pose, target, dynamics, and the base box's size where there is one) that
     ``reset`` drew, rebuilt from its infos (one per throw, each as ``BoxTossEnv.reset`` returns it):
     the inverse of ``BoxTossFunctional.reset_info``."""
     base_box = bool(reset_infos) and "base_length" in reset_infos[0]
     names, columns = RESET_INFO_WITH_BASE if base_box else RESET_INFO
-    episodes = task.Episodes.empty(len(reset_infos), task.EPISODE_SIZE_WITH_BASE if base_box else task.EPISODE_SIZE)
+    episodes = task_config.Episodes.empty(
+        len(reset_infos), task_columns.EPISODE_SIZE_WITH_BASE if base_box else task_columns.EPISODE_SIZE
+    )
     for row, info in zip(episodes.data, reset_infos, strict=True):
         row[columns] = [info[name] for name in names]
-        row[task.EP_TARGET_FACES] = info["target_faces"]
+        row[task_columns.EP_TARGET_FACES] = info["target_faces"]
     return episodes
 
 

@@ -8,7 +8,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from box_toss_env.envs import task
+from box_toss_env.envs import task, task_columns, task_config
 from box_toss_env.envs.box_toss import BoxTossEnv
 from box_toss_env.envs.random_streams import check_seed
 
@@ -16,7 +16,7 @@ from box_toss_env.envs.random_streams import check_seed
 GOAL_X, GOAL_AT_REST, GOAL_TILT = 0, 1, 2
 GOAL_FACES = slice(3, 7)
 GOAL_SIZE = 7
-MAX_TILT = 0.5 * task.QUARTER_TURN  # [rad] |tilt| <= pi/4: the face down is the one nearest to flat
+MAX_TILT = 0.5 * task_columns.QUARTER_TURN  # [rad] |tilt| <= pi/4: the face down is the one nearest to flat
 
 
 def achieved_goals(x: np.ndarray, angles: np.ndarray, at_rest: np.ndarray) -> np.ndarray:
@@ -28,12 +28,12 @@ def achieved_goals(x: np.ndarray, angles: np.ndarray, at_rest: np.ndarray) -> np
     goals = np.zeros((len(angles), GOAL_SIZE), dtype=np.float32)
     goals[:, GOAL_X] = x
     goals[:, GOAL_AT_REST] = at_rest
-    goals[:, GOAL_TILT] = task.wrap_angles(angles + task.QUARTER_TURN * faces)
+    goals[:, GOAL_TILT] = task.wrap_angles(angles + task_columns.QUARTER_TURN * faces)
     goals[np.arange(len(angles)), GOAL_FACES.start + faces] = 1.0
     return goals
 
 
-def desired_goals(episodes: task.Episodes) -> np.ndarray:
+def desired_goals(episodes: task_config.Episodes) -> np.ndarray:
     """Desired goals (n, 7) float32 of the episodes: the target x, at rest (1), flat (tilt 0) and the
     target-face mask."""
     goals = np.zeros((len(episodes.data), GOAL_SIZE), dtype=np.float32)
@@ -49,12 +49,12 @@ def goal_observations(observations: np.ndarray) -> dict[str, np.ndarray]:
     the hand (its x and angle, at rest 0), the desired goal the observation's target x and target-face mask. So a
     policy trained on the goal env throws at ``BoxToss-v0``'s targets (the evaluation's)."""
     observations = np.asarray(observations, dtype=np.float32).reshape(-1, np.shape(observations)[-1])
-    angles = np.arctan2(observations[:, task.OBS_SIN], observations[:, task.OBS_COS])
-    achieved = achieved_goals(observations[:, task.OBS_X], angles, np.zeros(len(observations)))
+    angles = np.arctan2(observations[:, task_columns.OBS_SIN], observations[:, task_columns.OBS_COS])
+    achieved = achieved_goals(observations[:, task_columns.OBS_X], angles, np.zeros(len(observations)))
     desired = np.zeros((len(observations), GOAL_SIZE), dtype=np.float32)
-    desired[:, GOAL_X] = observations[:, task.OBS_TARGET_X]
+    desired[:, GOAL_X] = observations[:, task_columns.OBS_TARGET_X]
     desired[:, GOAL_AT_REST] = 1.0
-    desired[:, GOAL_FACES] = observations[:, task.OBS_TARGET_FACES]
+    desired[:, GOAL_FACES] = observations[:, task_columns.OBS_TARGET_FACES]
     return {"observation": observations, "achieved_goal": achieved, "desired_goal": desired}
 
 
@@ -145,8 +145,8 @@ class BoxTossGoalEnv(gym.Env):
         self.config = self.throw_env.config
         self.action_space = self.throw_env.action_space
         inner = cast(spaces.Box, self.throw_env.observation_space)
-        x_low = min(inner.low[task.OBS_X], inner.low[task.OBS_TARGET_X])
-        x_high = max(inner.high[task.OBS_X], inner.high[task.OBS_TARGET_X])
+        x_low = min(inner.low[task_columns.OBS_X], inner.low[task_columns.OBS_TARGET_X])
+        x_high = max(inner.high[task_columns.OBS_X], inner.high[task_columns.OBS_TARGET_X])
         low = np.array([x_low, 0.0, -MAX_TILT, 0.0, 0.0, 0.0, 0.0], dtype=np.float32)
         high = np.array([x_high, 1.0, MAX_TILT, 1.0, 1.0, 1.0, 1.0], dtype=np.float32)
         self.observation_space = spaces.Dict(
@@ -195,7 +195,7 @@ class BoxTossGoalEnv(gym.Env):
         achieved = np.broadcast_to(achieved, shape).reshape(-1, GOAL_SIZE)
         desired = np.broadcast_to(desired, shape).reshape(-1, GOAL_SIZE)
         distance = np.abs(achieved[:, GOAL_X] - desired[:, GOAL_X])
-        angles = achieved[:, GOAL_TILT] - task.QUARTER_TURN * np.argmax(achieved[:, GOAL_FACES], axis=1)
+        angles = achieved[:, GOAL_TILT] - task_columns.QUARTER_TURN * np.argmax(achieved[:, GOAL_FACES], axis=1)
         orientation_error = task.orientation_errors(angles, desired[:, GOAL_FACES])
         success = (
             (achieved[:, GOAL_AT_REST] > 0.5)

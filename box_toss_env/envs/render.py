@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from box_toss_env.envs import task
+from box_toss_env.envs import task, task_config
 from box_toss_env.physics import layout
 
 VIEW_MARGIN_M = 0.6
@@ -120,7 +120,7 @@ class ThrowRenderer:
 
     def __init__(
         self,
-        config: task.TaskConfig,
+        config: task_config.TaskConfig,
         width_px: int,
         height_px: int,
         fps: float,

@@ -21,7 +21,7 @@ from typing import Any, SupportsFloat, cast
 import gymnasium as gym
 import numpy as np
 
-from box_toss_env.envs import stack_task, task
+from box_toss_env.envs import stack_task, task, task_columns
 
 FLIGHT_TIME_RANGE = (0.3, 1.6)  # [s]
 OFFSET_RANGE = 0.3  # [m]
@@ -77,7 +77,7 @@ class StackCommands(gym.Wrapper):
     def step(self, action) -> tuple[Any, SupportsFloat, bool, bool, dict[str, Any]]:
         if self._observation is None:
             raise gym.error.ResetNeeded("call reset() before step()")
-        command = task.check_actions(action, (task.ACTION_SIZE,))
+        command = task.check_actions(action, (task_columns.ACTION_SIZE,))
         env_action = command_actions(self._observation, command, self.config, *self.settings)[0]
         observation, reward, terminated, truncated, info = self.env.step(env_action.astype(np.float32))
         self._observation = np.asarray(observation)

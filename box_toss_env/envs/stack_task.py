@@ -19,10 +19,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from box_toss_env.envs import task
+from box_toss_env.envs import task_columns, task_config
+from box_toss_env.envs.arguments import ARGUMENTS, PAIR, Argument
+from box_toss_env.envs.engine import EngineConfig
 from box_toss_env.physics import layout
 from box_toss_env.physics.ranges import ENGINE_RANGES, Range
 from box_toss_env.physics.validation import check_integer
@@ -40,7 +43,75 @@ STACK_RANGES = {
     "fall_tolerance": Range(0.0, 1e3, "m", low_open=True),
     "success_fraction": Range(0.0, 1.0, low_open=True),
 }
-"""The stacking env's own arguments and their allowed ranges (the others are ``task.ENV_RANGES``')."""
+"""The stacking env's own arguments and their allowed ranges (the others are ``task_config.ENV_RANGES``')."""
+
+
+def _one_throw(name: str, default: Any, doc: str = "") -> Argument:
+    """``BoxToss-v0``'s argument ``name`` with the stack's default (and meaning, where it differs)."""
+    argument = ARGUMENTS[name]
+    return Argument(name, argument.type, default, doc or argument.doc, argument.allowed, argument.shown, argument.group)
+
+
+STACK_ARGUMENTS: tuple[Argument, ...] = (
+    Argument("n_boxes", "int", 4, f"boxes in the hand, thrown one per step, in [1, {MAX_BOXES}]"),
+    Argument(
+        "box_length_range",
+        PAIR,
+        (0.3, 0.5),
+        "each box's length, drawn per episode [m]",
+        STACK_RANGES["box_length_range"],
+    ),
+    Argument(
+        "box_width_range",
+        PAIR,
+        (0.15, 0.25),
+        "each box's width, drawn per episode [m], at most the shortest length",
+        STACK_RANGES["box_width_range"],
+    ),
+    Argument("mass_range", PAIR, (1.0, 3.0), "each box's mass, drawn per episode [kg]", STACK_RANGES["mass_range"]),
+    _one_throw("friction", 0.5, "Coulomb friction of every box (box-box: the same)"),
+    _one_throw("restitution", 0.3, "restitution of every box"),
+    _one_throw("penalty_stiffness", 1e5),
+    _one_throw("gravity", 9.81),
+    _one_throw("release_x_range", (-0.1, 0.1), "release x of each box's centre [m]"),
+    _one_throw("release_height_range", (1.2, 1.6), "release height [m], above the largest corner radius"),
+    _one_throw("release_angle_range", (-0.3, 0.3)),
+    _one_throw("target_x_range", (1.5, 3.0), "target x [m], the target clear of the hand"),
+    Argument(
+        "target_radius",
+        "float",
+        0.25,
+        "a box is on the target when its centre is this close to it [m]",
+        STACK_RANGES["target_radius"],
+    ),
+    _one_throw("max_speed", 8.0),
+    _one_throw("launch_angle_range", (-0.25 * math.pi, 0.5 * math.pi)),
+    _one_throw("max_spin", 20.0),
+    Argument("height_weight", "float", 5.0, "weight of the height term [1/m]", STACK_RANGES["height_weight"]),
+    _one_throw("distance_weight", 0.5),
+    Argument("fall_penalty", "float", 1.0, "reward taken when the stack falls", STACK_RANGES["fall_penalty"]),
+    _one_throw("success_bonus", 1.0),
+    Argument(
+        "fall_tolerance",
+        "float",
+        0.05,
+        "a box on the target whose top comes down further has fallen [m]",
+        STACK_RANGES["fall_tolerance"],
+    ),
+    Argument(
+        "success_fraction",
+        "float",
+        0.9,
+        "share of the sum of the widths the final stack must reach",
+        STACK_RANGES["success_fraction"],
+    ),
+    _one_throw("dt", 1 / 128),
+    _one_throw("max_sim_time", 10.0),
+    _one_throw("render_width", 600),
+    _one_throw("render_height", 400),
+)
+"""The keyword arguments of ``BoxToss-Stack-v0``, declared once: the env's signature and its docstring's table
+are made from them; ``render_mode`` is Gymnasium's and not among them."""
 
 # -- observation layout ---------------------------------------------------------------------------------
 BODY_COLUMNS = ("x", "y", "cos(angle)", "sin(angle)", "vx", "vy", "spin", "length", "width", "mass", "thrown")
@@ -103,6 +174,7 @@ class StackConfig:
     fall_tolerance: float  # [m]
     success_fraction: float
     max_sim_time: float  # [s]
+    dt: float  # [s]
 
     @property
     def obs_size(self) -> int:
@@ -114,8 +186,14 @@ class StackConfig:
 
 
 def make_stack_config(**kwargs) -> StackConfig:
-    """``StackConfig`` of the env's arguments, each checked (TypeError / ValueError naming it)."""
-    ranges = {**task.ENV_RANGES, **STACK_RANGES}
+    """``StackConfig`` of the env's arguments (``STACK_ARGUMENTS`` but the rendering ones; the defaults where
+    not given), each checked: a TypeError names an unknown or mistyped one, a ValueError one out of its range."""
+    names = [argument.name for argument in STACK_ARGUMENTS if argument.group != "render"]
+    unknown = [name for name in kwargs if name not in names]
+    if unknown:
+        raise TypeError(f"BoxTossStackEnv() got an unexpected keyword argument {unknown[0]!r}")
+    kwargs = {a.name: kwargs.get(a.name, a.default) for a in STACK_ARGUMENTS if a.group != "render"}
+    ranges = {**task_config.ENV_RANGES, **STACK_RANGES}
     values = dict(kwargs)
     values["n_boxes"] = check_integer("n_boxes", kwargs["n_boxes"], 1, MAX_BOXES)
     for name in (
@@ -128,7 +206,7 @@ def make_stack_config(**kwargs) -> StackConfig:
         "target_x_range",
         "launch_angle_range",
     ):
-        values[name] = task.check_interval(name, kwargs[name], ranges[name])
+        values[name] = task_config.check_interval(name, kwargs[name], ranges[name])
     for name in (
         "friction",
         "restitution",
@@ -144,6 +222,7 @@ def make_stack_config(**kwargs) -> StackConfig:
         "fall_tolerance",
         "success_fraction",
         "max_sim_time",
+        "dt",
     ):
         values[name] = ranges[name].check(name, kwargs[name])
     if values["box_width_range"][1] > values["box_length_range"][0]:
@@ -362,7 +441,7 @@ def observation_bounds(config: StackConfig, horizon: float) -> tuple[np.ndarray,
     + g y_release_max, and contacts never add any, so the scene never holds more than E = n m_max e. Every
     body's speed is then below sqrt(2 E / m_min), its spin below sqrt(2 E / I_min), its centre below
     E / (m_min g) above the floor plus its corner radius, and it travels less than that speed times the
-    whole episode's simulated time n * horizon from the hand. Each bound is ``task.ENERGY_MARGIN`` times that;
+    whole episode's simulated time n * horizon from the hand. Each bound is ``task_columns.ENERGY_MARGIN`` times that;
     a column whose value is fixed gets bounds one float32 step either side of it; columns that are zero
     before a box is thrown (or after the last) include 0.
     """
@@ -379,7 +458,7 @@ def observation_bounds(config: StackConfig, horizon: float) -> tuple[np.ndarray,
             + config.gravity * config.release_height_range[1]
         )
     )
-    margin = task.ENERGY_MARGIN
+    margin = task_columns.ENERGY_MARGIN
     speed = margin * math.sqrt(2.0 * energy / m_lo)
     spin = margin * math.sqrt(2.0 * energy / inertia_min)
     reach = speed * n * horizon
@@ -414,3 +493,126 @@ def observation_bounds(config: StackConfig, horizon: float) -> tuple[np.ndarray,
 
 def observation_names(config: StackConfig) -> tuple[str, ...]:
     return tuple(f"box {j} {name}" for j in range(config.n_boxes) for name in BODY_COLUMNS) + TAIL_COLUMNS
+
+
+# -- the task, for the multi-throw core ------------------------------------------------------------------
+STEP_INFO_KEYS = (
+    *REWARD_TERMS,
+    "stack_height",
+    "stack_size",
+    "fell",
+    "at_rest",
+    "success",
+    "distance",
+    "final_x",
+    "final_y",
+    "final_angle",
+    "thrown",
+    "sim_time",
+    "n_steps",
+)
+"""The step's info keys (``BoxTossStackEnv``'s docstring says what each is)."""
+
+
+class StackTask:
+    """``BoxToss-Stack-v0`` for the multi-throw core (``multi_throw.MultiThrowFunctional``): an episode is a hand
+    of boxes and a target (``episodes`` rows: the hand's ``EPISODE_COLUMNS`` per box, then the target x), each
+    throw adds the next box of the hand to the scene, and the stack's height is carried from throw to throw
+    (``memory`` column 0). Keyword arguments: ``STACK_ARGUMENTS``' but the rendering ones."""
+
+    carries_bodies = True
+    memory_size = 1
+
+    def __init__(self, **kwargs: Any):
+        self.config = config = make_stack_config(**kwargs)
+        self.max_bodies = config.n_boxes
+        self.episode_size = uniforms_per_episode(config)
+        self.engine_config = EngineConfig(
+            box_size=(config.box_length_range[1], config.box_width_range[1]),
+            mass=config.mass_range[1],
+            release=(0.0, config.release_height_range[1]),
+            gravity=config.gravity,
+            restitution=config.restitution,
+            friction=config.friction,
+            penalty_stiffness=config.penalty_stiffness,
+            solver="robust",
+            dt=config.dt,
+            max_sim_time=config.max_sim_time,
+            boxes_collide=True,
+        )
+
+    def hands(self, episodes: np.ndarray) -> np.ndarray:
+        """(m, n_boxes, EPISODE_COLUMNS) the hands of ``episodes`` (a view)."""
+        return episodes[:, :-1].reshape(len(episodes), self.config.n_boxes, EPISODE_COLUMNS)
+
+    def targets(self, episodes: np.ndarray) -> np.ndarray:
+        """(m,) the target x of ``episodes`` [m] (a view)."""
+        return episodes[:, -1]
+
+    def draw(self, uniforms: np.ndarray) -> np.ndarray:
+        hand, target_x = episode_from_uniforms(uniforms, self.config)
+        return np.concatenate((hand.reshape(len(uniforms), -1), target_x[:, None]), axis=1)
+
+    def body_params(self, episodes: np.ndarray) -> np.ndarray:
+        return body_params(self.hands(episodes), self.config)
+
+    def release(self, episodes: np.ndarray, thrown: np.ndarray) -> np.ndarray:
+        return self.hands(episodes)[np.arange(len(episodes)), thrown, E_RELEASE_X:]
+
+    def throw_states(self, release: np.ndarray, actions: np.ndarray) -> np.ndarray:
+        return thrown_states(release, actions, self.config)
+
+    def observe(self, batch) -> np.ndarray:
+        episodes = batch.episodes
+        return observe(
+            batch.state, self.hands(episodes), batch.thrown, self.targets(episodes), batch.memory[:, 0], self.config
+        )
+
+    def score(self, batch, at_rest: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray], np.ndarray]:
+        """Each env's throw of box k onto its scene of k boxes (``score_throws``, the envs grouped by k); the
+        stack's height is kept for the next throw. Terminated: the stack fell, or the hand is empty."""
+        n, targets = batch.n, self.targets(batch.episodes)
+        reward, info = np.zeros(n), {key: np.zeros(n) for key in STEP_INFO_KEYS}
+        for size in np.unique(batch.thrown).tolist():
+            envs = np.flatnonzero(batch.thrown == size)
+            after = batch.state[envs, :size]
+            half = batch.params[envs, :size, layout.HALF_LENGTH : layout.HALF_WIDTH + 1]
+            before = batch.before[envs, : size - 1]
+            outcome = score_throws(before, after, half, at_rest[envs], targets[envs], self.config)
+            stats = batch.stats[envs, :size]
+            reward[envs] = outcome.reward
+            for name, value in outcome.terms.items():
+                info[name][envs] = value
+            info["stack_height"][envs], info["stack_size"][envs] = outcome.height, outcome.on_target.sum(axis=1)
+            info["fell"][envs], info["success"][envs], info["distance"][envs] = (
+                outcome.fell,
+                outcome.success,
+                outcome.distance,
+            )
+            thrown = after[:, size - 1]
+            info["final_x"][envs], info["final_y"][envs] = thrown[:, layout.X], thrown[:, layout.Y]
+            info["final_angle"][envs] = (thrown[:, layout.ANGLE] + math.pi) % (2.0 * math.pi) - math.pi
+            info["sim_time"][envs] = stats[:, 0, layout.END_TIME]
+            info["n_steps"][envs] = stats[..., layout.N_STEPS].max(axis=1)
+        info["at_rest"], info["thrown"] = at_rest, batch.thrown
+        for key, dtype in (("stack_size", np.int64), ("thrown", np.int64), ("n_steps", np.int64)):
+            info[key] = info[key].astype(dtype)
+        for key in ("fell", "at_rest", "success"):
+            info[key] = info[key].astype(bool)
+        batch.memory[:, 0] = info["stack_height"]
+        return reward, info, info["fell"] | (batch.thrown == self.config.n_boxes)
+
+    def reset_info(self, batch) -> dict[str, np.ndarray]:
+        hands = self.hands(batch.episodes)
+        return {
+            "target_x": self.targets(batch.episodes).copy(),
+            "box_lengths": hands[..., E_LENGTH].copy(),
+            "box_widths": hands[..., E_WIDTH].copy(),
+            "box_masses": hands[..., E_MASS].copy(),
+        }
+
+    def observation_bounds(self, horizon: float) -> tuple[np.ndarray, np.ndarray]:
+        return observation_bounds(self.config, horizon)
+
+    def observation_names(self) -> tuple[str, ...]:
+        return observation_names(self.config)

@@ -2,7 +2,7 @@
 
 Two solvers share one scene description:
 
-- ``solver="seed"``: the scheme of ``shared/reference/rigid_body_collisions.txt``, exactly
+- ``solver="seed"``: the scheme of the reference text (its method restated in docs/engine.md), exactly
   (``reference_solver``);
 - ``solver="robust"`` (default): the same ingredients arranged to stay right at any step,
   stiffness, speed, spin, mass and aspect ratio (``robust_solver``).

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from box_toss_env.envs import task
+from box_toss_env.envs import task, task_config
 
 THROW_GAIN = 4.0
 """Launch speed per metre of drag [1/s]: a 1 m drag throws at 4 m/s (the default max_speed, 8 m/s,
@@ -40,7 +40,7 @@ def clip_launch_angle(theta: float, low: float, high: float) -> float:
     return low if abs(wrap_angle(theta - low)) <= abs(wrap_angle(theta - high)) else high
 
 
-def throw_to_action(velocity, spin: float, config: task.TaskConfig) -> tuple[np.ndarray, bool]:
+def throw_to_action(velocity, spin: float, config: task_config.TaskConfig) -> tuple[np.ndarray, bool]:
     """The action in [-1, 1]^3 that throws at ``velocity`` (vx, vy) [m/s] spinning at ``spin`` [rad/s],
     and whether it had to be clipped into the action space.
 
@@ -80,7 +80,7 @@ class PlayController:
 
     def __init__(self, env, seed: int | None = None):
         self.env = env
-        self.config: task.TaskConfig = env.unwrapped.config
+        self.config: task_config.TaskConfig = env.unwrapped.config
         self._seeds = np.random.default_rng(seed)
         self.episode_seed = 0
         self.info: dict[str, Any] = {}

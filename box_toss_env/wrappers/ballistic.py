@@ -17,7 +17,7 @@ import numpy as np
 from gymnasium.error import ResetNeeded
 from gymnasium.vector import VectorEnv, VectorWrapper
 
-from box_toss_env.envs import task
+from box_toss_env.envs import task, task_columns, task_config
 from box_toss_env.envs.ballistic import (
     DEFAULT_OFFSET_RANGE,
     DEFAULT_TURN_RANGE,
@@ -39,7 +39,7 @@ class BallisticThrowsVector(VectorWrapper):
     ):
         super().__init__(env)
         config = getattr(env.unwrapped, "config", None)
-        if not isinstance(config, task.TaskConfig):
+        if not isinstance(config, task_config.TaskConfig):
             raise TypeError(f"env must be a BoxToss vector env (with a task config), got {env!r}")
         self.config = config
         self.settings = check_command_settings(config, flight_time_range, offset_range, turn_range)
@@ -53,7 +53,7 @@ class BallisticThrowsVector(VectorWrapper):
     def step(self, actions) -> tuple[Any, Any, Any, Any, dict[str, Any]]:
         if self._observations is None:
             raise ResetNeeded("call reset() before step()")
-        commands = task.check_actions(actions, (self.num_envs, task.ACTION_SIZE))
+        commands = task.check_actions(actions, (self.num_envs, task_columns.ACTION_SIZE))
         env_actions, clipped = ballistic_actions(self._observations, commands, self.config, *self.settings)
         observations, rewards, terminations, truncations, info = self.env.step(env_actions)
         self._observations = np.asarray(observations)

@@ -5,7 +5,7 @@ the envs that ended, ``reset(options={"reset_mask": mask})``, before stepping th
 ``SyncVectorEnv(..., autoreset_mode=AutoresetMode.DISABLED)`` asserts it). The native env draws each env's
 next episode in the step that ends the last one (``SAME_STEP``); this wrapper holds those first
 observations back until the env is reset, so each env's episodes come from its random stream in the same
-order as in a ``SyncVectorEnv`` of single envs with the same seeds (``tests/vector/test_vector_conventions.py``),
+order as in a ``SyncVectorEnv`` of single envs with the same seeds (``tests/wrappers/test_vector_conventions.py``),
 at the native env's speed. A partial reset takes no seeds: the next episodes were drawn already.
 """
 

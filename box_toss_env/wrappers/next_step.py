@@ -11,7 +11,7 @@ at once, so this adapter alternates exactly:
     step 2, 4, 6 ...  no simulation: the reset step         obs = next episodes, reward 0, terminated all False
 
 and returns what a ``SyncVectorEnv`` of single BoxToss envs (``NEXT_STEP``) returns for the same seeds
-and actions (``tests/vector/test_next_step.py``), at the native env's speed.
+and actions (``tests/wrappers/test_next_step.py``), at the native env's speed.
 """
 
 from __future__ import annotations

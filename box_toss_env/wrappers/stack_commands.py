@@ -15,7 +15,7 @@ import numpy as np
 from gymnasium.error import ResetNeeded
 from gymnasium.vector import VectorEnv, VectorWrapper
 
-from box_toss_env.envs import stack_task, task
+from box_toss_env.envs import stack_task, task, task_columns
 from box_toss_env.envs.stack_commands import (
     FLIGHT_TIME_RANGE,
     OFFSET_RANGE,
@@ -51,7 +51,7 @@ class StackCommandsVector(VectorWrapper):
     def step(self, actions) -> tuple[Any, Any, Any, Any, dict[str, Any]]:
         if self._observations is None:
             raise ResetNeeded("call reset() before step()")
-        commands = task.check_actions(actions, (self.num_envs, task.ACTION_SIZE))
+        commands = task.check_actions(actions, (self.num_envs, task_columns.ACTION_SIZE))
         env_actions = batch_command_actions(self._observations, commands, self.config, *self.settings)
         observations, rewards, terminations, truncations, info = self.env.step(env_actions.astype(np.float32))
         self._observations = np.asarray(observations)

@@ -5,7 +5,7 @@ import pytest
 
 from agents import raw_actions
 from agents.policies import ConstantPolicy
-from box_toss_env.envs import task
+from box_toss_env.envs import task_columns, task_config
 
 
 def test_by_face_gives_each_target_face_the_range_of_its_solutions_in_env_actions():
@@ -51,10 +51,10 @@ def test_reach_scores_noisy_throws_around_a_policys_long_side_throws_for_each_sh
 def test_with_face_makes_every_target_one_of_the_given_face():
     observations = np.zeros((2, 12), dtype=np.float32)
     observations[:, 8] = 1.0
-    episodes = task.Episodes(np.zeros((2, task.EPISODE_SIZE)))
+    episodes = task_config.Episodes(np.zeros((2, task_columns.EPISODE_SIZE)))
     obs, relabelled = raw_actions.with_face(observations, episodes, 3)
     assert obs[:, 8:12].tolist() == [[0, 0, 0, 1]] * 2 and observations[0, 8] == 1.0
-    assert relabelled.data[:, task.EP_TARGET_FACES].tolist() == [[0, 0, 0, 1]] * 2
+    assert relabelled.data[:, task_columns.EP_TARGET_FACES].tolist() == [[0, 0, 0, 1]] * 2
 
 
 def test_reach_takes_one_variant_whose_targets_name_one_face(capsys):
@@ -75,7 +75,7 @@ def test_course_gives_each_checkpoint_its_spread_and_per_face_throws(tmp_path):
     assert [row["steps"] for row in rows] == [0]
     assert rows[0]["std"] == pytest.approx([np.exp(-2.5)] * 3, rel=1e-5)
     assert len(rows[0]["faces"]) == 4
-    for face in rows[0]["faces"]:  # an untrained policy's mean is near action 0, which lands face 0 (docs/agents.md)
+    for face in rows[0]["faces"]:  # an untrained mean is near action 0: face 0 (methodology/raw-actions.md)
         assert abs(face["spin"]) < 0.05 and 0.0 <= face["success"] <= 1.0 and 0.0 <= face["face 0"] <= 1.0
     text = raw_actions.course_table("BoxToss-ThisSideUp-v0", rows, 4, "--steps 0")
     assert "| 0 | 0.082, 0.082, 0.082 |" in text

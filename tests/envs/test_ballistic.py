@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import box_toss_env  # noqa: F401
-from box_toss_env.envs import task
+from box_toss_env.envs import task, task_columns
 from box_toss_env.envs.ballistic import (
     DEFAULT_TURN_RANGE,
     BallisticThrows,
@@ -40,7 +40,7 @@ def test_free_flight_reaches_the_commanded_touchdown_pose(command):
     (t_low, t_high), offset_range, turn_range = settings
     flight_time = t_low + (t_high - t_low) * (command[0] + 1) / 2
     x0, y0, theta0 = float(obs[0]), float(obs[1]), math.atan2(float(obs[3]), float(obs[2]))
-    phi = face_angles(np.array([theta0]), obs[None, task.OBS_TARGET_FACES])[0] + turn_range * command[2]
+    phi = face_angles(np.array([theta0]), obs[None, task_columns.OBS_TARGET_FACES])[0] + turn_range * command[2]
     box = Box(
         length=2 * config.half_length,
         width=2 * config.half_width,
@@ -54,7 +54,7 @@ def test_free_flight_reaches_the_commanded_touchdown_pose(command):
     result = simulate(scene, steps=64, record=True)
     x, y, final_angle = result.final_state[0, :3]
     height = config.half_length * abs(math.sin(phi)) + config.half_width * abs(math.cos(phi))
-    assert x == pytest.approx(float(obs[task.OBS_TARGET_X]) + offset_range * command[1], abs=1e-9)
+    assert x == pytest.approx(float(obs[task_columns.OBS_TARGET_X]) + offset_range * command[1], abs=1e-9)
     assert y == pytest.approx(height, abs=1e-9)
     assert final_angle == pytest.approx(phi, abs=1e-9)
     assert result.impacts[0].shape[0] == 0 or result.impacts[0][0, 0] >= flight_time - 1e-9
@@ -103,7 +103,7 @@ def test_the_zero_command_lands_a_target_face_flat_on_the_target():
     long_side_targets = 0
     for seed in range(40):
         obs, _ = env.reset(seed=seed)
-        if obs[task.OBS_TARGET_FACES][[0, 2]].any():
+        if obs[task_columns.OBS_TARGET_FACES][[0, 2]].any():
             _, _, _, _, info = env.step(np.zeros(3, dtype=np.float32))
             assert info["success"], (seed, info)
             long_side_targets += 1

@@ -15,8 +15,9 @@ from episodes import assert_identical, rollout
 from gymnasium.error import DependencyNotInstalled, ResetNeeded
 
 import box_toss_env  # noqa: F401  (registers the ids)
-from box_toss_env.envs import record_throws, task
-from box_toss_env.envs.box_toss import BoxTossEnv, EnergyGainError
+from box_toss_env.envs import record_throws, task, task_columns
+from box_toss_env.envs.box_toss import BoxTossEnv
+from box_toss_env.envs.functional import EnergyGainError
 from box_toss_env.physics import layout
 from box_toss_env.rendering import Palette
 
@@ -107,11 +108,13 @@ def test_spaces_and_return_types():
     assert np.all(np.isfinite(env.observation_space.low)) and np.all(np.isfinite(env.observation_space.high))
     obs, info = env.reset(seed=0)
     assert obs.dtype == np.float32 and env.observation_space.contains(obs)
-    assert obs[task.OBS_VX : task.OBS_SPIN + 1].tolist() == [0.0, 0.0, 0.0]  # at rest in the hand
+    assert obs[task_columns.OBS_VX : task_columns.OBS_SPIN + 1].tolist() == [0.0, 0.0, 0.0]  # at rest in the hand
     obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
     assert type(reward) is float and terminated is True and truncated is False
     assert {key: type(info[key]) for key in STEP_INFO_KEYS} == STEP_INFO_KEYS
-    assert obs[task.OBS_X] == np.float32(info["final_x"]) and obs[task.OBS_Y] == np.float32(info["final_y"])
+    assert obs[task_columns.OBS_X] == np.float32(info["final_x"]) and obs[task_columns.OBS_Y] == np.float32(
+        info["final_y"]
+    )
 
 
 # -- determinism and pickling ---------------------------------------------------------------------
@@ -337,15 +340,15 @@ def test_random_throws_stay_inside_the_observation_space_and_the_ranges():
     for reset_obs, reset_info, (obs, reward, _, _, info) in rollout(env, 0, random_actions(200)):
         assert space.contains(reset_obs) and space.contains(obs) and math.isfinite(reward)
         for name, column in (
-            ("mass", task.OBS_MASS),
-            ("friction", task.OBS_FRICTION),
-            ("restitution", task.OBS_RESTITUTION),
+            ("mass", task_columns.OBS_MASS),
+            ("friction", task_columns.OBS_FRICTION),
+            ("restitution", task_columns.OBS_RESTITUTION),
         ):
             low, high = getattr(config, f"{name}_range")
             assert low <= reset_info[name] <= high and info[name] == reset_info[name]
             assert reset_obs[column] == obs[column] == np.float32(reset_info[name])  # observed
-        assert reset_obs[task.OBS_TARGET_X] == np.float32(reset_info["target_x"])
-        assert reset_obs[task.OBS_TARGET_FACES].tolist() == reset_info["target_faces"].tolist()
+        assert reset_obs[task_columns.OBS_TARGET_X] == np.float32(reset_info["target_x"])
+        assert reset_obs[task_columns.OBS_TARGET_FACES].tolist() == reset_info["target_faces"].tolist()
         successes += info["success"]
     params = env.unwrapped._params[0]
     assert params[layout.MASS] == info["mass"] and params[layout.FRICTION] == info["friction"]
@@ -409,8 +412,8 @@ def test_the_robust_solvers_errors_speak_of_the_robust_solver():
 
     env = BoxTossEnv()
     sunk, fast = env.observation_space.low.copy(), env.observation_space.high.copy()
-    sunk[task.OBS_Y] -= 1.0
-    fast[task.OBS_VX] *= 2.0
+    sunk[task_columns.OBS_Y] -= 1.0
+    fast[task_columns.OBS_VX] *= 2.0
     messages = [env._bounds_message(sunk), env._bounds_message(fast), str(NonFiniteStateError(0, 3, "robust"))]
     assert "sank through the floor" in messages[0] and "created energy" in messages[1]
     for message in messages:

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import box_toss_env  # noqa: F401  (registers BoxToss-v0)
-from box_toss_env.envs import task
+from box_toss_env.envs import task_config
 from box_toss_env.envs.arguments import ENV_ARGUMENTS, ENV_DEFAULTS, arguments_table
 from box_toss_env.envs.box_toss import BoxTossEnv
 from box_toss_env.envs.box_toss_vector import BoxTossVectorEnv
@@ -38,7 +38,7 @@ def test_the_core_alone_throws_as_the_env_does():
 def test_a_batch_result_does_not_depend_on_the_batch_size():
     core = BoxTossFunctional()
     big = core.initial(np.random.default_rng(1), core.empty(8))
-    small = core.for_episodes(task.Episodes(big.episodes.data[5:6].copy()))
+    small = core.for_episodes(task_config.Episodes(big.episodes.data[5:6].copy()))
     simulator = core.make_simulator(parallel=True)
     core.transition(big, actions(8), simulator)
     core.transition(small, actions(8)[5:6], simulator)
@@ -51,9 +51,9 @@ def test_every_argument_is_declared_once_and_read_from_the_declaration():
     assert all(signature.parameters[a.name].default == a.default for a in ENV_ARGUMENTS)
     assert arguments_table() in inspect.cleandoc(BoxTossEnv.__doc__)
     assert all(
-        task.ENV_RANGES[name] is a.allowed
+        task_config.ENV_RANGES[name] is a.allowed
         for name, a in ((a.name, a) for a in ENV_ARGUMENTS)
-        if name in task.ENV_RANGES
+        if name in task_config.ENV_RANGES
     )
     with pytest.raises(TypeError, match="unexpected keyword argument 'box_lenght'"):
         BoxTossEnv(box_lenght=0.3)

@@ -13,7 +13,7 @@ import pytest
 from episodes import assert_identical, rollout
 
 import box_toss_env  # noqa: F401  (registers the ids)
-from box_toss_env.envs import task
+from box_toss_env.envs import arguments, task, task_columns
 from box_toss_env.envs.ballistic import BallisticThrows, ballistic_actions, ballistic_throws, check_command_settings
 from box_toss_env.envs.box_toss_vector import BoxTossVectorEnv
 from box_toss_env.physics import Simulator, kernels, layout
@@ -36,13 +36,13 @@ def test_registered_with_a_base_box_and_box_box_contact():
     env = gym.make(ENV_ID)
     config = env.unwrapped.config
     assert config.base_box and config.bodies_per_env == 2
-    assert config.base_length_range == task.BASE_DEFAULTS["base_length_range"]
-    assert config.base_height_range == task.BASE_DEFAULTS["base_height_range"]
+    assert config.base_length_range == arguments.BASE_DEFAULTS["base_length_range"]
+    assert config.base_height_range == arguments.BASE_DEFAULTS["base_height_range"]
     assert env.unwrapped.flags.boxes_collide
-    assert env.observation_space.shape == (task.OBS_SIZE + task.BASE_OBS_SIZE,)
+    assert env.observation_space.shape == (task_columns.OBS_SIZE + task_columns.BASE_OBS_SIZE,)
     assert np.all(np.isfinite(env.observation_space.low)) and np.all(np.isfinite(env.observation_space.high))
     assert gym.make(ENV_ID, observe_dynamics=True).observation_space.shape == (
-        task.OBS_SIZE_WITH_DYNAMICS + task.BASE_OBS_SIZE,
+        task_columns.OBS_SIZE_WITH_DYNAMICS + task_columns.BASE_OBS_SIZE,
     )
 
 
@@ -79,7 +79,9 @@ def test_step_info_has_the_base_and_python_scalars():
     obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
     assert type(reward) is float and terminated is True and truncated is False
     assert {key: type(info[key]) for key in BASE_INFO_KEYS} == BASE_INFO_KEYS
-    assert obs[task.OBS_BASE_X] == np.float32(info["base_x"]) and obs[task.OBS_BASE_Y] == np.float32(info["base_y"])
+    assert obs[task_columns.OBS_BASE_X] == np.float32(info["base_x"]) and obs[task_columns.OBS_BASE_Y] == np.float32(
+        info["base_y"]
+    )
     assert env.observation_space.contains(obs)
 
 
@@ -92,11 +94,11 @@ def test_the_base_box_is_drawn_within_its_ranges_and_rests_on_the_floor_at_the_t
         obs, info = env.reset(seed=seed)
         lengths.append(info["base_length"])
         heights.append(info["base_height"])
-        assert obs[task.OBS_BASE_X] == obs[task.OBS_TARGET_X] == np.float32(info["target_x"])
-        assert obs[task.OBS_BASE_Y] == np.float32(0.5 * info["base_height"])  # on the floor
-        assert (obs[task.OBS_BASE_COS], obs[task.OBS_BASE_SIN]) == (1.0, 0.0)  # level
-        assert obs[task.OBS_BASE_LENGTH] == np.float32(info["base_length"])
-        assert obs[task.OBS_BASE_HEIGHT] == np.float32(info["base_height"])
+        assert obs[task_columns.OBS_BASE_X] == obs[task_columns.OBS_TARGET_X] == np.float32(info["target_x"])
+        assert obs[task_columns.OBS_BASE_Y] == np.float32(0.5 * info["base_height"])  # on the floor
+        assert (obs[task_columns.OBS_BASE_COS], obs[task_columns.OBS_BASE_SIN]) == (1.0, 0.0)  # level
+        assert obs[task_columns.OBS_BASE_LENGTH] == np.float32(info["base_length"])
+        assert obs[task_columns.OBS_BASE_HEIGHT] == np.float32(info["base_height"])
     lengths, heights = np.array(lengths), np.array(heights)
     assert 0.5 <= lengths.min() and lengths.max() <= 0.9 and 0.1 <= heights.min() and heights.max() <= 0.4
     assert lengths.max() - lengths.min() > 0.3 and heights.max() - heights.min() > 0.25  # spread over the range
@@ -109,7 +111,7 @@ def test_the_engine_gets_each_episodes_base_box():
         params = env._params[1]
         assert params[layout.HALF_LENGTH] == 0.5 * info["base_length"]
         assert params[layout.HALF_WIDTH] == 0.5 * info["base_height"]
-        assert params[layout.MASS] == task.BASE_DEFAULTS["base_mass"]
+        assert params[layout.MASS] == arguments.BASE_DEFAULTS["base_mass"]
         np.testing.assert_allclose(
             params[layout.INERTIA], params[layout.MASS] * (info["base_length"] ** 2 + info["base_height"] ** 2) / 12
         )
@@ -151,7 +153,7 @@ def test_a_throw_that_lands_beside_the_base_fails():
         action, _ = ballistic_actions(obs[None], np.array([[0.6, 1.0, 0.0]]), env.unwrapped.config, offset_range=1.5)
         _, reward, _, _, info = env.step(action[0])
         assert info["at_rest"] and not info["success"] and not info["on_base"]
-        assert info["final_x"] > info["base_x"] + 0.5 * env.unwrapped._episodes.data[0, task.EP_BASE_LENGTH]
+        assert info["final_x"] > info["base_x"] + 0.5 * env.unwrapped._episodes.data[0, task_columns.EP_BASE_LENGTH]
         assert info["height_above_base"] == pytest.approx(-info_base_height(env), abs=2e-3)  # on the floor
         assert info["distance"] == pytest.approx(
             math.hypot(info["final_x"] - info["base_x"], info["height_above_base"])
@@ -160,7 +162,7 @@ def test_a_throw_that_lands_beside_the_base_fails():
 
 
 def info_base_height(env) -> float:
-    return float(env.unwrapped._episodes.data[0, task.EP_BASE_HEIGHT])
+    return float(env.unwrapped._episodes.data[0, task_columns.EP_BASE_HEIGHT])
 
 
 def test_reward_is_the_sum_of_its_terms_with_the_distance_to_the_top():
@@ -222,7 +224,7 @@ def test_env_i_of_the_batch_is_the_single_env_seeded_the_same_way():
     kwargs = dict(friction_range=(0.3, 0.8), target_face="mixed")
     envs = gym.make_vec(ENV_ID, num_envs=N, vectorization_mode="vector_entry_point", **kwargs)
     assert isinstance(envs.unwrapped, BoxTossVectorEnv) and isinstance(envs.unwrapped.simulator, GroupedSimulator)
-    assert envs.observation_space.shape == (N, task.OBS_SIZE + task.BASE_OBS_SIZE)
+    assert envs.observation_space.shape == (N, task_columns.OBS_SIZE + task_columns.BASE_OBS_SIZE)
     obs, _ = envs.reset(seed=11)
     steps = [envs.step(random_actions(k)) for k in range(2)]
     for i in range(N):
@@ -258,7 +260,7 @@ def test_ballistic_commands_on_the_batch_and_the_sb3_adapter():
     )
     venv.seed(0)
     obs = venv.reset()
-    assert obs.shape == (4, task.OBS_SIZE + task.BASE_OBS_SIZE)
+    assert obs.shape == (4, task_columns.OBS_SIZE + task_columns.BASE_OBS_SIZE)
     obs, rewards, dones, infos = venv.step(np.tile(ON_TOP, (4, 1)))
     assert dones.all() and len(infos) == 4 and "terminal_observation" in infos[0] and "on_base" in infos[0]
     venv.close()
@@ -277,11 +279,11 @@ def test_ballistic_commands_touch_down_on_the_bases_top():
         speed, angle, spin = ballistic_throws(obs[None], command, config, *settings)[0]
         t_low, t_high = settings[0]
         flight = t_low + (t_high - t_low) * 0.6
-        theta0 = math.atan2(obs[task.OBS_SIN], obs[task.OBS_COS])
+        theta0 = math.atan2(obs[task_columns.OBS_SIN], obs[task_columns.OBS_COS])
         phi = theta0 + spin * flight
         h = config.half_length * abs(math.sin(phi)) + config.half_width * abs(math.cos(phi))
-        x = obs[task.OBS_X] + speed * math.cos(angle) * flight
-        y = obs[task.OBS_Y] + speed * math.sin(angle) * flight - 0.5 * config.gravity * flight**2
+        x = obs[task_columns.OBS_X] + speed * math.cos(angle) * flight
+        y = obs[task_columns.OBS_Y] + speed * math.sin(angle) * flight - 0.5 * config.gravity * flight**2
         assert x == pytest.approx(info["target_x"], abs=1e-5)
         assert y == pytest.approx(info["base_height"] + h, abs=1e-5)
         action, clipped = ballistic_actions(obs[None], command, config)
@@ -336,7 +338,7 @@ def test_other_variants_run_the_floor_only_kernel_with_no_base(env_id):
     env = gym.make(env_id).unwrapped
     assert not env.config.base_box and env.config.bodies_per_env == 1
     assert not env.flags.boxes_collide
-    assert env.observation_space.shape == (task.OBS_SIZE,) and env._state.shape == (1, layout.STATE_SIZE)
+    assert env.observation_space.shape == (task_columns.OBS_SIZE,) and env._state.shape == (1, layout.STATE_SIZE)
     assert env._build_simulator().kernel is kernels._make_kernel("robust", True, True, True, False)
     envs = BoxTossVectorEnv(2, **{k: v for k, v in gym.spec(env_id).kwargs.items()})
     assert type(envs.simulator) is Simulator and not envs.simulator.flags.boxes_collide

@@ -141,7 +141,8 @@ def test_the_stack_sleeps_through_a_throw_that_does_not_reach_it():
     away = stack_task.actions_of_throws(np.array([3.0]), np.array([math.pi - 0.5]), np.array([0.0]), unwrapped.config)
     _, _, _, _, info = env.step(away[0])
     assert info["at_rest"] and not info["fell"]
-    assert not unwrapped._stats[:2, layout.N_STEPS].any() and unwrapped._stats[2, layout.N_STEPS] > 0
+    stats = unwrapped._batch.stats[0]
+    assert not stats[:2, layout.N_STEPS].any() and stats[2, layout.N_STEPS] > 0
     assert unwrapped.scene[0][:2].tobytes() == stack.tobytes()
 
 
@@ -153,8 +154,8 @@ def test_a_box_that_knocks_the_stack_over_ends_the_episode():
     unwrapped = env.unwrapped
     height = observation[stack_task.BODY_SIZE * 4 + stack_task.G_HEIGHT]
     # a fast, nearly flat throw straight at the stack's top box: 8 m/s, aimed a little below its top
-    hand = unwrapped._hand[2]
-    dx = unwrapped._target_x - hand[stack_task.E_RELEASE_X]
+    hand = unwrapped.core.task.hands(unwrapped._batch.episodes)[0, 2]
+    dx = unwrapped.target_x - hand[stack_task.E_RELEASE_X]
     direction = math.atan2(height - 0.1 - hand[stack_task.E_RELEASE_Y], dx)
     action = stack_task.actions_of_throws(np.array([8.0]), np.array([direction]), np.array([0.0]), unwrapped.config)[0]
     observation, reward, terminated, truncated, info = env.step(action)
@@ -173,14 +174,14 @@ def test_candidate_throws_on_copies_of_the_scene_are_the_throw_made():
     before = unwrapped.scene[0]
     actions = np.random.default_rng(0).uniform(-1, 1, (6, 3))
     actions[2] = lob(env, observation)
-    outcomes = unwrapped.try_throws(actions)
-    tried = unwrapped.last_tried.copy()
+    tried_throws = unwrapped.try_throws(actions)
+    tried = tried_throws.states
     np.testing.assert_array_equal(unwrapped.scene[0], before)  # the env's own scene is untouched
     for i in (2, 4):
         copy = pickle.loads(pickle.dumps(unwrapped))
         _, reward, _, _, info = copy.step(actions[i])
         assert copy.scene[0].tobytes() == tried[i].tobytes()
-        assert reward == outcomes.reward[i] and info["fell"] == outcomes.fell[i]
+        assert reward == tried_throws.reward[i] and info == {key: value[i] for key, value in tried_throws.info.items()}
 
 
 def test_render_draws_every_box_the_height_and_the_score():
@@ -193,7 +194,7 @@ def test_render_draws_every_box_the_height_and_the_score():
     frame = env.render()
     text = env.unwrapped._renderer.drawn_text["lines"]
     assert any("stack height" in line for line in text) and any(f"{reward:+.2f}" in line for line in text)
-    assert len(env.unwrapped._drawn_scene()["position"]) == 2  # the box thrown and the one in the hand
+    assert len(env.unwrapped.drawn_scene()["position"]) == 2  # the box thrown and the one in the hand
 
 
 @pytest.mark.parametrize(

@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from box_toss_env.envs import task
+from box_toss_env.envs import task, task_columns, task_config
 from box_toss_env.envs.box_toss import BoxTossEnv
 from box_toss_env.physics import face_down, layout
 
@@ -20,7 +20,7 @@ CONFIG = BoxTossEnv(
 
 
 def sample(n, seed=0, config=CONFIG):
-    return task.sample_episodes(np.random.default_rng(seed), config, task.Episodes.empty(n))
+    return task.sample_episodes(np.random.default_rng(seed), config, task_config.Episodes.empty(n))
 
 
 def test_a_batch_is_the_rows_computed_one_by_one():
@@ -33,7 +33,7 @@ def test_a_batch_is_the_rows_computed_one_by_one():
     obs = task.observe(states, episodes, CONFIG)
     reward, terms, success, distance, error = task.reward_terms(states, at_rest, episodes, CONFIG)
     for i in range(n):
-        one = task.Episodes(episodes.data[i : i + 1].copy())
+        one = task_config.Episodes(episodes.data[i : i + 1].copy())
         state = task.write_initial_states(np.zeros((1, 6)), one, task.actions_to_throws(actions[i : i + 1], CONFIG))
         state[:, layout.ANGLE] = states[i, layout.ANGLE]
         np.testing.assert_array_equal(state[0], states[i])
@@ -47,13 +47,13 @@ def test_sampling_stays_in_the_ranges_and_covers_them():
     episodes = sample(4000)
     data = episodes.data
     for column, (low, high) in (
-        (task.EP_RELEASE_X, CONFIG.release_x_range),
-        (task.EP_RELEASE_Y, CONFIG.release_height_range),
-        (task.EP_RELEASE_ANGLE, CONFIG.release_angle_range),
-        (task.EP_TARGET_X, CONFIG.target_x_range),
-        (task.EP_MASS, CONFIG.mass_range),
-        (task.EP_FRICTION, CONFIG.friction_range),
-        (task.EP_RESTITUTION, CONFIG.restitution_range),
+        (task_columns.EP_RELEASE_X, CONFIG.release_x_range),
+        (task_columns.EP_RELEASE_Y, CONFIG.release_height_range),
+        (task_columns.EP_RELEASE_ANGLE, CONFIG.release_angle_range),
+        (task_columns.EP_TARGET_X, CONFIG.target_x_range),
+        (task_columns.EP_MASS, CONFIG.mass_range),
+        (task_columns.EP_FRICTION, CONFIG.friction_range),
+        (task_columns.EP_RESTITUTION, CONFIG.restitution_range),
     ):
         assert low <= data[:, column].min() < low + 0.01 * (high - low)
         assert high - 0.01 * (high - low) < data[:, column].max() <= high
@@ -148,5 +148,5 @@ def test_throws_to_actions_inverts_actions_to_throws():
 def test_the_ranges_page_lists_the_env_ranges():
     """docs/ranges.md is the one place the ranges are written down; it agrees with the code."""
     text = (Path(__file__).parents[2] / "docs" / "ranges.md").read_text()
-    for name, allowed in task.ENV_RANGES.items():
+    for name, allowed in task_config.ENV_RANGES.items():
         assert f"| `{name}` | {allowed} |" in text, name

@@ -1,4 +1,4 @@
-"""A plain-Python transcription of ``shared/reference/rigid_body_collisions.txt``, written from
+"""A plain-Python transcription of the reference text (restated in docs/engine.md), written from
 the text alone (no kernel code), to check the seed solver against.
 
 Vectors are 2-tuples and every formula is spelled out as the text gives it, with the floor

@@ -1,4 +1,4 @@
-"""The seed's scheme, exactly as ``shared/reference/rigid_body_collisions.txt`` describes it.
+"""The seed's scheme, exactly as the reference text (restated in docs/engine.md) describes it.
 
 Per time step and per box:
   1. detect contacts: every corner b_global = R b_local + x with y < 0;

@@ -39,16 +39,3 @@ def test_matches_a_sync_vector_env_of_single_envs_step_for_step():
 def test_refuses_an_env_that_does_not_reset_in_the_same_step():
     with pytest.raises(ValueError, match="SAME_STEP"):
         NextStepAutoreset(gym.make_vec("BoxToss-v0", num_envs=2, vectorization_mode="sync"))
-
-
-def test_the_former_package_path_gives_the_same_modules():
-    """``box_toss_env.vector`` was the wrappers' package: its modules are ``box_toss_env.wrappers``'s own."""
-    import pickle
-
-    import box_toss_env.vector.next_step as old_next_step
-    import box_toss_env.wrappers.next_step as next_step
-    from box_toss_env.vector.normalize import NormalizeObservation as OldNormalize
-    from box_toss_env.wrappers.normalize import NormalizeObservation
-
-    assert old_next_step is next_step and OldNormalize is NormalizeObservation
-    assert pickle.loads(pickle.dumps(NextStepAutoreset)) is next_step.NextStepAutoreset

@@ -1,4 +1,4 @@
-"""The native batched BoxToss env: parity with the single env, autoreset, threads, SB3 adapter."""
+"""The native batched BoxToss env: parity with the single env, autoreset, threads, arguments, pickling."""
 
 import pickle
 
@@ -164,31 +164,3 @@ def test_pickles_and_renders():
     np.testing.assert_array_equal(a[0], b[0])
     frames = envs.render()
     assert len(frames) == 2 and frames[0].ndim == 3 and frames[0].dtype == np.uint8
-
-
-def test_sb3_trains_on_the_batched_env_through_the_adapter():
-    pytest.importorskip("stable_baselines3")
-    from stable_baselines3 import PPO
-    from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
-
-    from box_toss_env.wrappers.sb3_adapter import SB3VecEnvAdapter
-
-    adapter = SB3VecEnvAdapter(gym.make_vec("BoxToss-v0", num_envs=4))
-    adapter.seed(3)
-    first = adapter.reset()
-    _, rewards, dones, infos = adapter.step(random_actions(0, 4))
-    assert dones.all() and rewards.dtype == np.float32
-    assert all("terminal_observation" in info and "success" in info for info in infos)
-    assert not np.array_equal(first, np.stack([info["terminal_observation"] for info in infos]))
-    venv = VecNormalize(VecMonitor(adapter))
-    model = PPO("MlpPolicy", venv, n_steps=16, batch_size=32, n_epochs=1, seed=0)
-    model.learn(total_timesteps=128)
-    assert model.num_timesteps >= 128
-
-
-def test_the_adapter_refuses_next_step_autoreset():
-    from box_toss_env.wrappers.sb3_adapter import SB3VecEnvAdapter
-
-    envs = gym.make_vec("BoxToss-v0", num_envs=2, vectorization_mode="sync")
-    with pytest.raises(ValueError, match="SAME_STEP"):
-        SB3VecEnvAdapter(envs)
