@@ -11,18 +11,17 @@ from __future__ import annotations
 import argparse
 import shlex
 import sys
-from pathlib import Path
 
-from agents.evaluation import TEST_TARGETS, evaluate_run, make_baseline_run, parse_kwargs
-from agents.run_folder import RunFolderError, check_component
-from agents.training import RUNS
+from agents.command_line import COUNT, RUNS, OneLineParser, folder, one_line_errors, single_name
+from agents.targets import TEST_TARGETS
+
+PROG = "python -m agents.baselines"
 
 
-def main(argv: list[str] | None = None) -> None:
-    argv = sys.argv[1:] if argv is None else list(argv)
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def make_parser() -> OneLineParser:
+    parser = OneLineParser(prog=PROG, description=__doc__.split("\n\n")[0])
     parser.add_argument("algo", choices=("random", "oracle"))
-    parser.add_argument("--env", default="BoxToss-v0")
+    parser.add_argument("--env", default="BoxToss-v0", help="env id (default: BoxToss-v0)")
     parser.add_argument("--env-kwargs", nargs="*", default=[], metavar="KEY=VALUE")
     parser.add_argument(
         "--set",
@@ -33,27 +32,55 @@ def main(argv: list[str] | None = None) -> None:
         dest="settings",
         help="baseline settings, e.g. seed=1 (random) or population=128 iterations=8 (oracle)",
     )
-    parser.add_argument("--name", help="run folder name (default: the baseline's name)")
-    parser.add_argument("--runs-dir", type=Path, default=RUNS)
-    parser.add_argument("--targets", type=int, default=TEST_TARGETS)
-    args = parser.parse_args(argv)
+    parser.add_argument("--name", type=single_name, help="run folder name (default: the baseline's name)")
+    parser.add_argument("--runs-dir", type=folder, default=RUNS)
+    parser.add_argument("--targets", type=COUNT, default=TEST_TARGETS, help=f"test targets, {COUNT.allowed}")
+    return parser
+
+
+def check_args(args: argparse.Namespace) -> tuple[dict, dict]:
+    """(env kwargs, baseline settings), the env id, its kwargs and the settings checked before anything is made."""
+    import gymnasium as gym
+
+    import box_toss_env  # noqa: F401  (registers the BoxToss envs)
+    from agents.config import ConfigError
+    from agents.evaluation import make_baseline, parse_kwargs
+
     try:
-        if args.name is not None:
-            check_component(args.name, "--name")
-        if args.targets < 1:
-            raise RunFolderError(f"--targets must be an integer >= 1, got {args.targets}")
-    except RunFolderError as error:
-        print(f"agents.baselines: {error}", file=sys.stderr)
-        sys.exit(2)
-    run_dir = make_baseline_run(
-        args.algo,
-        args.runs_dir / (args.name or args.algo),
-        args.env,
-        parse_kwargs(args.env_kwargs),
-        parse_kwargs(args.settings),
-        shlex.join(["python", "-m", "agents.baselines", *argv]),
-    )
-    results = evaluate_run(run_dir, n_targets=args.targets)
+        env_kwargs, settings = parse_kwargs(args.env_kwargs), parse_kwargs(args.settings)
+    except ConfigError as error:
+        raise ConfigError(f"--env-kwargs / --set: {error}") from None
+    if args.env not in gym.registry:
+        raise ConfigError(f"--env {args.env!r} is not registered")
+    try:
+        gym.make(args.env, **env_kwargs).close()
+    except (TypeError, ValueError) as error:
+        raise ConfigError(f"--env-kwargs: {error}") from None
+    try:
+        make_baseline(args.algo, settings)
+    except (TypeError, ValueError) as error:
+        raise ConfigError(f"--set: {error}") from None
+    return env_kwargs, settings
+
+
+def main(argv: list[str] | None = None) -> None:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    args = make_parser().parse_args(argv)
+    with one_line_errors(PROG):
+        env_kwargs, settings = check_args(args)
+        from agents.evaluation import evaluate_run, make_baseline_run
+        from agents.run_folder import check_runs_dir
+
+        check_runs_dir(args.runs_dir)
+        run_dir = make_baseline_run(
+            args.algo,
+            args.runs_dir / (args.name or args.algo),
+            args.env,
+            env_kwargs,
+            settings,
+            shlex.join(["python", "-m", "agents.baselines", *argv]),
+        )
+        results = evaluate_run(run_dir, n_targets=args.targets)
     print(f"{args.algo}: acted on {args.targets} targets in {results['act_seconds']:.1f} s")
 
 

@@ -42,11 +42,12 @@ import yaml
 from agents import algorithms, ceiling, report, section_merge, stack_planner, train
 from agents import config as configuration
 from agents.algorithms import ALGORITHMS
+from agents.command_line import SEED, OneLineParser, folder, one_line_errors
 from agents.config import algorithm_kwargs, load_hyperparams
 from agents.doc_sections import README, read_section, replace_section
 from agents.envs import read_env_wrapper
 from agents.evaluation import STACK_TEST_EPISODES, TEST_TARGETS, evaluate_run, is_stack, make_baseline_run
-from agents.run_folder import read_csv
+from agents.run_folder import is_file_on_the_way, read_csv
 from agents.section_merge import fill_line, merge_section
 from agents.training import RUNS, latest_checkpoint, read_timing
 from box_toss_env.envs.ballistic import BallisticThrows
@@ -701,10 +702,25 @@ def check_options(parser: argparse.ArgumentParser, args: argparse.Namespace) -> 
     for env_id in args.envs:
         if env_id not in gym.registry:
             parser.error(f"--envs: {env_id!r} is not registered")
+    if is_file_on_the_way(args.root):
+        parser.error(f"--root {args.root} is a file, not a folder (or lies under one)")
+    if args.readme and not DOCS.parent.is_dir():
+        parser.error(f"--readme rewrites the repository's pages ({DOCS}): run it in a clone")
     if args.report_only:
         return
+    for text in args.overrides:
+        try:
+            configuration.parse_override(text)
+        except configuration.ConfigError as error:
+            parser.error(f"--set: {error}")
     for env_id in args.envs:
         if env_id == GOAL_ENV:  # its agents' settings: GOAL_AGENTS and the goal recipes (goal_hyperparams)
+            for agent, (algo, *_) in GOAL_AGENTS.items():
+                if algo in args.algos:
+                    try:
+                        configuration.check_config(goal_hyperparams(agent)[1], algo)
+                    except configuration.ConfigError as error:
+                        parser.error(f"{agent} on {env_id}: {error}")
             continue
         for algo in args.algos:
             for tier in args.tiers:
@@ -716,7 +732,8 @@ def check_options(parser: argparse.ArgumentParser, args: argparse.Namespace) -> 
                     )
                     configuration.check_config(config, algo)
                 except configuration.ConfigError as error:
-                    parser.error(f"{algo} on {env_id} ({tier}): {error}")
+                    given = f" with --set {' '.join(args.overrides)}" if args.overrides else ""
+                    parser.error(f"{algo} on {env_id} ({tier}){given}: {error}")
 
 
 def train_missing(args: argparse.Namespace, variants: list[str], goal: bool) -> None:
@@ -738,12 +755,13 @@ def train_missing(args: argparse.Namespace, variants: list[str], goal: bool) -> 
                     ensure_goal_trained(args.root, agent, seed)
 
 
-def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def make_parser() -> OneLineParser:
+    """The command's options (``check_options`` checks what their types cannot)."""
+    parser = OneLineParser(prog="python -m agents.benchmark", description=__doc__.split("\n\n")[0])
     parser.add_argument("--envs", nargs="+", default=[*VARIANTS, GOAL_ENV])
     parser.add_argument("--algos", nargs="+", default=sorted(ALGORITHMS), choices=sorted(ALGORITHMS))
-    parser.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
-    parser.add_argument("--root", type=Path, default=ROOT)
+    parser.add_argument("--seeds", nargs="+", type=SEED, default=[0, 1, 2], help=f"training seeds, {SEED.allowed}")
+    parser.add_argument("--root", type=folder, default=ROOT, help="folder of the benchmark's runs")
     parser.add_argument(
         "--tiers",
         nargs="+",
@@ -763,6 +781,17 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--no-ceiling", action="store_true", help="skip the oracle sweep")
     parser.add_argument("--report-only", action="store_true", help="train nothing: tables from finished runs")
     parser.add_argument("--readme", action="store_true", help="write docs/agents/benchmark.md and the README section")
+    return parser
+
+
+def main(argv: list[str] | None = None) -> None:
+    """The command; a damaged run file or a file-system error ends it in one line (``one_line_errors``)."""
+    with one_line_errors("python -m agents.benchmark"):
+        run(argv)
+
+
+def run(argv: list[str] | None = None) -> None:
+    parser = make_parser()
     args = parser.parse_args(argv)
     variants = [env_id for env_id in args.envs if env_id != GOAL_ENV]
     goal = GOAL_ENV in args.envs

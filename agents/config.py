@@ -18,27 +18,22 @@ A configuration is one plain dict of both (what ``config.yml`` in a run folder h
 expression strings read into dicts (``activation_fn: nn.Tanh`` stays a name). Expressions are read
 with ``ast``, never evaluated: only ``dict(...)``, literals and ``nn.<Name>`` are accepted.
 Overrides are ``key=value`` strings; the key may be dotted (``policy_kwargs.net_arch=[64, 64]``) and
-the value is read with ``yaml.safe_load``.
+the value is read as YAML (``read_value``: only true and false are booleans).
 """
 
 from __future__ import annotations
 
-import argparse
 import ast
 import copy
-import math
+import re
 from pathlib import Path
 from typing import Any
 
-import numba
-import numpy as np
-import torch.nn
 import yaml
-from stable_baselines3.common.noise import NormalActionNoise
 
-from agents import algorithms
-from agents.envs import read_env_wrapper
-from box_toss_env.files import write_atomic
+from agents import algorithms, schema
+from agents.command_line import InputError, OneLineParser  # noqa: F401  (OneLineParser: re-exported)
+from agents.env_wrappers import read_env_wrapper
 
 HYPERPARAMS = Path(__file__).parent / "hyperparams"
 RAW_HYPERPARAMS = HYPERPARAMS / "raw"
@@ -64,15 +59,8 @@ PROJECT_KEYS = {
 EXPRESSION_KEYS = ("policy_kwargs", "normalize", "replay_buffer_kwargs")  # Zoo evaluates these strings
 
 
-class ConfigError(ValueError):
+class ConfigError(InputError):
     """A configuration that cannot run; the message names the key and what is allowed."""
-
-
-class OneLineParser(argparse.ArgumentParser):
-    """A parser whose errors are one line, exit code 2 (argparse would print the whole usage first)."""
-
-    def error(self, message: str):
-        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
 
 
 # -- reading files -------------------------------------------------------------------------------
@@ -154,17 +142,31 @@ def read_expression(text: str, key: str) -> Any:
             return {value(k): value(v) for k, v in zip(node.keys, node.values, strict=True) if k is not None}
         if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "dict" and not node.args:
             return {item.arg: value(item.value) for item in node.keywords}
-        if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id == "nn":
-            return f"nn.{node.attr}"
+        if isinstance(node, ast.Attribute) and (name := dotted_name(node)) and name.split(".")[0] in CLASS_ROOTS:
+            return name
         if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub):
             return -value(node.operand)
-        raise ConfigError(f"{key}: {text!r} may hold only dict(...), numbers, strings, lists and nn.<Name>")
+        raise ConfigError(
+            f"{key}: {text!r} may hold only dict(...), numbers, strings, lists and class names (nn.<Name>, th.<...>)"
+        )
 
     try:
         tree = ast.parse(text, mode="eval")
     except SyntaxError:
         raise ConfigError(f"{key}: {text!r} is not a Python expression") from None
     return value(tree.body)
+
+
+CLASS_ROOTS = ("nn", "th", "torch")  # Zoo's expressions name torch classes as nn.Tanh, th.optim.Adam
+
+
+def dotted_name(node: ast.AST) -> str | None:
+    """``a.b.C`` of an attribute chain on a name, else None."""
+    parts = []
+    while isinstance(node, ast.Attribute):
+        parts.append(node.attr)
+        node = node.value
+    return ".".join([node.id, *reversed(parts)]) if isinstance(node, ast.Name) else None
 
 
 def coerce_numbers(value: Any) -> Any:
@@ -174,21 +176,54 @@ def coerce_numbers(value: Any) -> Any:
     if isinstance(value, list):
         return [coerce_numbers(item) for item in value]
     if isinstance(value, str):
-        return read_value(value)
+        return as_number(value)
     return value
+
+
+class StrictBooleans(yaml.SafeLoader):
+    """YAML's safe loader with YAML 1.2's booleans: only true and false (any case) are booleans; YAML 1.1's
+    ``yes``, ``no``, ``on``, ``off`` stay strings, which a boolean option refuses, rather than a typo's neighbour
+    being taken for a boolean."""
+
+
+StrictBooleans.yaml_implicit_resolvers = {
+    first: [(tag, regexp) for tag, regexp in resolvers if tag != "tag:yaml.org,2002:bool"]
+    for first, resolvers in yaml.SafeLoader.yaml_implicit_resolvers.items()
+}
+StrictBooleans.add_implicit_resolver(
+    "tag:yaml.org,2002:bool", re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$"), list("tTfF")
+)
+
+
+def load_strict(text: str) -> Any:
+    """``text`` read as YAML with ``StrictBooleans``."""
+    return yaml.load(text, Loader=StrictBooleans)  # noqa: S506  (a SafeLoader)
 
 
 def read_value(text: str) -> Any:
-    """``yaml.safe_load(text)``, except that numbers YAML 1.1 reads as strings (``1e-3``, ``3E5``)
-    are numbers."""
-    value = yaml.safe_load(text)
-    if isinstance(value, str):
-        try:
-            number = float(value)
-        except ValueError:
-            return value
-        return int(number) if number.is_integer() and "." not in value and "e-" not in value.lower() else number
-    return value
+    """``text`` read as YAML (``load_strict``: only true and false are booleans), except that numbers YAML 1.1
+    reads as strings (``1e-3``, ``3E5``) are numbers. An empty value is an error, not null."""
+    if not text.strip():
+        raise ConfigError("an empty value: write null for none, '' for an empty string")
+    try:
+        value = load_strict(text)
+    except yaml.YAMLError as error:
+        raise ConfigError(f"{text!r} is not a YAML value: {one_line(str(error))}") from None
+    return as_number(value) if isinstance(value, str) else value
+
+
+def as_number(text: str) -> Any:
+    """``text`` as a number if it reads as one (``1e-3``, ``3E5``, which YAML 1.1 leaves strings), else ``text``."""
+    try:
+        number = float(text)
+    except ValueError:
+        return text
+    return int(number) if number.is_integer() and "." not in text and "e-" not in text.lower() else number
+
+
+def one_line(text: str) -> str:
+    """``text`` with its lines joined (YAML's and pickle's messages span several)."""
+    return " ".join(line.strip() for line in text.splitlines() if line.strip())
 
 
 # -- writing files -------------------------------------------------------------------------------
@@ -208,12 +243,14 @@ def expression(value: Any) -> str:
         return "dict(" + ", ".join(f"{key}={expression(item)}" for key, item in value.items()) + ")"
     if isinstance(value, (list, tuple)):
         return "[" + ", ".join(expression(item) for item in value) + "]"
-    if isinstance(value, str) and value.startswith("nn."):
-        return value
+    if isinstance(value, str) and value.split(".")[0] in CLASS_ROOTS and "." in value:
+        return value  # a class name: nn.Tanh, th.optim.Adam
     return repr(value)
 
 
 def save_yaml(data: Any, path: str | Path) -> None:
+    from box_toss_env.files import write_atomic
+
     write_atomic(path, yaml.safe_dump(data, sort_keys=False))
 
 
@@ -224,15 +261,18 @@ def load_yaml(path: str | Path) -> Any:
 
 # -- overrides and checks ------------------------------------------------------------------------
 def known_keys(algo: str) -> list[str]:
-    return sorted(set(ZOO_KEYS) | set(PROJECT_KEYS) | algorithms.constructor_keys(algo))
+    return sorted(schema.algorithm_rules(algo))
 
 
 def parse_override(text: str) -> tuple[list[str], Any]:
-    """``"a.b=value"`` as (["a", "b"], yaml.safe_load("value"))."""
+    """``"a.b=value"`` as (["a", "b"], the value read as YAML: ``read_value``)."""
     key, sep, value = text.partition("=")
-    if not sep or not key.strip():
+    if not sep or not key.strip() or any(not part.strip() for part in key.split(".")):
         raise ConfigError(f"an override must look like key=value (e.g. n_timesteps=100000), got {text!r}")
-    return key.strip().split("."), read_value(value)
+    try:
+        return [part.strip() for part in key.split(".")], read_value(value)
+    except ConfigError as error:
+        raise ConfigError(f"{key.strip()}: {error}") from None
 
 
 def apply_overrides(config: dict[str, Any], overrides: list[str] | None, algo: str = "ppo") -> dict[str, Any]:
@@ -254,188 +294,76 @@ def apply_overrides(config: dict[str, Any], overrides: list[str] | None, algo: s
 
 
 def check_config(config: dict[str, Any], algo: str = "ppo") -> None:
-    """A ConfigError naming the first key that is unknown, missing or out of range."""
+    """A ConfigError naming the first key that is unknown, missing or out of range (``agents.schema``: the
+    types and ranges from the signatures of the algorithm, its policy, its buffers and VecNormalize), then
+    the rules that tie keys together."""
     if not isinstance(config, dict):
         raise ConfigError(f"a configuration must be a mapping, got {config!r}")
-    for key in config:
-        if key not in known_keys(algo):
-            raise ConfigError(f"unknown hyperparameter {key!r} for {algo}; known: {known_keys(algo)}")
+    try:
+        schema.check_schema(config, algo)
+    except schema.SchemaError as error:
+        raise ConfigError(str(error)) from None
     if not isinstance(config.get("policy"), str):
         raise ConfigError(f"policy must be given, e.g. policy: MlpPolicy (got {config.get('policy')!r})")
     for key in ("n_timesteps", "n_envs"):
-        if not isinstance(config.get(key), int) or isinstance(config.get(key), bool) or config[key] < 1:
-            raise ConfigError(f"{key} must be an integer >= 1, got {config.get(key)!r}")
-    check_schema(config, algo)
-    policy_kwargs = config.get("policy_kwargs", {})
-    if not isinstance(policy_kwargs, dict):
-        raise ConfigError(f"policy_kwargs must be a mapping, got {policy_kwargs!r}")
-    activation = policy_kwargs.get("activation_fn", "nn.Tanh")
-    if not (
-        isinstance(activation, str)
-        and activation.startswith("nn.")
-        and isinstance(getattr(torch.nn, activation[3:], None), type)
-    ):
-        raise ConfigError(
-            f"policy_kwargs.activation_fn must name a torch.nn activation (nn.Tanh, nn.ReLU, ...), got {activation!r}"
-        )
+        if key not in config:
+            raise ConfigError(f"{key} must be given, an integer >= 1")
     try:
         read_env_wrapper(config.get("env_wrapper"))
     except ValueError as error:
         raise ConfigError(str(error)) from None
-    if config.get("noise_type") not in (None, "normal"):
-        raise ConfigError(f"noise_type must be 'normal' (or absent), got {config['noise_type']!r}")
-    for key in ("learning_rate", "clip_range"):
-        if isinstance(config.get(key), str):
-            schedule(key, config[key])
-
-
-# -- the schema: every option's type and range, checked at once before anything is made -----------
-class Rule:
-    """What one configuration key accepts: an integer or a number in [low, high], a boolean, one of
-    ``choices``, a ``lin_<number>`` schedule (``schedule=True``), a list of layer sizes, or a mapping
-    (checked by ``mapping`` rules); ``allowed`` says it in words for the error message."""
-
-    def __init__(
-        self,
-        kind: str,
-        low: float | None = None,
-        high: float | None = None,
-        *,
-        choices: tuple = (),
-        schedule: bool = False,
-        mapping: dict[str, Rule] | None = None,
-        above: bool = False,
-    ):
-        self.kind, self.low, self.high, self.choices = kind, low, high, choices
-        self.schedule, self.mapping, self.above = schedule, mapping or {}, above
-
-    @property
-    def allowed(self) -> str:
-        if self.kind == "bool":
-            return "true or false"
-        if self.kind == "layers":
-            return "a list of layer sizes >= 1 (e.g. [64, 64]), or dict(pi=[...], vf=[...])"
-        if self.kind == "mapping":
-            return f"a mapping of {sorted(self.mapping)}" if self.mapping else "a mapping"
-        noun = "an integer" if self.kind == "int" else "a number"
-        bounds = []
-        if self.low is not None:
-            bounds.append(f"{'>' if self.above else '>='} {self.low:g}")
-        if self.high is not None:
-            bounds.append(f"<= {self.high:g}")
-        words = f"{noun} {' and '.join(bounds)}".strip()
-        extra = [repr(choice) for choice in self.choices] + (["'lin_<number>'"] if self.schedule else [])
-        return " or ".join([words, *extra])
-
-    def ok(self, value: Any) -> bool:
-        if value in self.choices and not isinstance(value, bool):
-            return True
-        if self.schedule and isinstance(value, str):
-            prefix, _, start = value.partition("_")
-            number = read_value(start)
-            return (
-                prefix == "lin"
-                and isinstance(number, (int, float))
-                and not isinstance(number, bool)
-                and math.isfinite(number)
-                and number > 0
-            )
-        if self.kind == "bool":
-            return isinstance(value, bool)
-        if self.kind == "layers":
-            if isinstance(value, dict):
-                return bool(value) and set(value) <= {"pi", "vf", "qf"} and all(map(layer_sizes, value.values()))
-            return layer_sizes(value)
-        if self.kind == "mapping":
-            return isinstance(value, dict)
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            return False
-        if self.kind == "int" and not isinstance(value, int):
-            return False
-        if not math.isfinite(value):
-            return False
-        if self.low is not None and (value <= self.low if self.above else value < self.low):
-            return False
-        return self.high is None or value <= self.high
-
-
-def layer_sizes(value: Any) -> bool:
-    return isinstance(value, list) and all(isinstance(n, int) and not isinstance(n, bool) and n >= 1 for n in value)
-
-
-UNIT = (0.0, 1.0)
-SCHEMA: dict[str, Rule] = {
-    # RL Zoo's keys and ours
-    "n_timesteps": Rule("int", 1),
-    "n_envs": Rule("int", 1),
-    "normalize": Rule(
-        "bool",
-        mapping={
-            "norm_obs": Rule("bool"),
-            "norm_reward": Rule("bool"),
-            "clip_obs": Rule("float", 0, above=True),
-            "clip_reward": Rule("float", 0, above=True),
-            "gamma": Rule("float", *UNIT),
-            "epsilon": Rule("float", 0, above=True),
-        },
-    ),
-    "noise_std": Rule("float", 0),
-    "vec_env_kwargs": Rule("mapping", mapping={"threads": Rule("int", 1, numba.config.NUMBA_NUM_THREADS)}),  # type: ignore[attr-defined]
-    "torch_threads": Rule("int", 1),
-    "eval_freq": Rule("int", 0),
-    "eval_targets": Rule("int", 1),
-    "checkpoint_freq": Rule("int", 0),
-    # the algorithms' constructor arguments
-    "learning_rate": Rule("float", 0, above=True, schedule=True),
-    "n_steps": Rule("int", 1),
-    "batch_size": Rule("int", 2),
-    "n_epochs": Rule("int", 1),
-    "gamma": Rule("float", *UNIT),
-    "gae_lambda": Rule("float", *UNIT),
-    "clip_range": Rule("float", 0, above=True, schedule=True),
-    "ent_coef": Rule("float", 0, choices=("auto",)),
-    "vf_coef": Rule("float", 0),
-    "max_grad_norm": Rule("float", 0, above=True),
-    "buffer_size": Rule("int", 1),
-    "learning_starts": Rule("int", 0),
-    "tau": Rule("float", *UNIT),
-    "gradient_steps": Rule("int", 1, choices=(-1,)),
-    "policy_delay": Rule("int", 1),
-    "target_policy_noise": Rule("float", 0),
-    "target_noise_clip": Rule("float", 0),
-    "policy_kwargs": Rule(
-        "mapping", mapping={"net_arch": Rule("layers"), "log_std_init": Rule("float"), "ortho_init": Rule("bool")}
-    ),
-}
-"""Every key with a range. ``check_config`` applies it; the bad-option tests are generated from it."""
-
-
-def check_value(key: str, value: Any, rule: Rule) -> None:
-    if rule.mapping and isinstance(value, dict):
-        for name, item in value.items():
-            if name in rule.mapping:
-                check_value(f"{key}.{name}", item, rule.mapping[name])
-        return
-    if not rule.ok(value):
-        allowed = rule.allowed
-        if rule.kind == "bool" and rule.mapping:
-            allowed = f"true, false or a mapping of {sorted(rule.mapping)}"
-        raise ConfigError(f"{key} must be {allowed}, got {value!r}")
-
-
-def check_schema(config: dict[str, Any], algo: str = "ppo") -> None:
-    """A ConfigError naming the first key (dotted into mappings) whose value is out of its range. An on-policy
-    rollout (``n_steps`` x ``n_envs``) must hold a ``batch_size``; an off-policy ``n_steps`` is the n-step return's
-    length, which the batch does not depend on."""
-    for key, rule in SCHEMA.items():
-        if key in config and not (config[key] is None and key in ("policy_kwargs", "vec_env_kwargs")):
-            check_value(key, config[key], rule)
+    if config.get("noise_std") is not None and config.get("noise_type") is None:
+        raise ConfigError("noise_std needs noise_type: normal (the action noise it is the size of)")
+    if config.get("noise_type") == "normal" and config.get("noise_std") is None:
+        raise ConfigError("noise_type normal needs noise_std, a number >= 0 (in action units)")
     on_policy = not algorithms.is_off_policy(algo)
-    if on_policy and "batch_size" in config and "n_steps" in config and config.get("n_envs"):
-        if config["batch_size"] > config["n_steps"] * config["n_envs"]:
+    if on_policy and "batch_size" in config and "n_steps" in config:
+        rollout = config["n_steps"] * config["n_envs"]
+        if config["batch_size"] > rollout:
             raise ConfigError(
-                f"batch_size must be <= n_steps x n_envs = {config['n_steps'] * config['n_envs']} "
-                f"(the rollout), got {config['batch_size']}"
+                f"batch_size must be <= n_steps x n_envs = {rollout} (the rollout), got {config['batch_size']}"
+            )
+    check_policy_parts(config, algo)
+
+
+OBSERVATION_PARTS = {
+    # policy: (the observations it reads, the classes its buffers and features extractor must be)
+    "MlpPolicy": ("flat (Box)", {"ReplayBuffer", "RolloutBuffer", "FlattenExtractor"}),
+    "MultiInputPolicy": ("Dict", {"DictReplayBuffer", "DictRolloutBuffer", "HerReplayBuffer", "CombinedExtractor"}),
+}
+"""Which buffers and features extractors each policy's observations take (SB3 asserts or fails on the others,
+after the run folder exists); ``CnnPolicy`` reads images, which no BoxToss env observes."""
+
+
+def check_policy_parts(config: dict[str, Any], algo: str) -> None:
+    """A ConfigError if the policy, the buffer classes, the features extractor or ``net_arch``'s keys do not fit
+    together: SB3 checks them only when it builds the model, with an assertion or an AttributeError."""
+    policy = config["policy"]
+    if policy not in OBSERVATION_PARTS:
+        raise ConfigError(
+            f"policy must be one of {sorted(OBSERVATION_PARTS)} (BoxToss observations are flat or a Dict, "
+            f"never images), got {policy!r}"
+        )
+    observations, fitting = OBSERVATION_PARTS[policy]
+    policy_kwargs = config.get("policy_kwargs") or {}
+    named = [(key, config.get(key)) for key in ("replay_buffer_class", "rollout_buffer_class")]
+    named.append(("policy_kwargs.features_extractor_class", policy_kwargs.get("features_extractor_class")))
+    for key, value in named:
+        known = {name for parts in OBSERVATION_PARTS.values() for name in parts[1]} | {"NatureCNN"}
+        if value in known and value not in fitting:
+            raise ConfigError(f"{key} {value} does not take {policy}'s {observations} observations")
+    if config.get("replay_buffer_class") == "HerReplayBuffer" and policy != "MultiInputPolicy":
+        raise ConfigError(
+            "replay_buffer_class HerReplayBuffer needs policy: MultiInputPolicy (a goal env's Dict observations)"
+        )
+    net_arch = policy_kwargs.get("net_arch")
+    if isinstance(net_arch, dict):
+        keys = ("pi", "qf") if algorithms.is_off_policy(algo) else ("pi", "vf")
+        if set(net_arch) - set(keys) or (algorithms.is_off_policy(algo) and set(net_arch) != set(keys)):
+            need = "both" if algorithms.is_off_policy(algo) else "only"
+            raise ConfigError(
+                f"policy_kwargs.net_arch of {algo} takes {need} the keys {list(keys)} (actor, critic), "
+                f"got {sorted(net_arch)}"
             )
 
 
@@ -443,24 +371,33 @@ def check_schema(config: dict[str, Any], algo: str = "ppo") -> None:
 def algorithm_kwargs(config: dict[str, Any], algo: str, action_size: int = 3) -> dict[str, Any]:
     """The constructor arguments of ``algo`` from ``config``: activation names made torch classes,
     ``lin_<x>`` made schedules, a ``train_freq`` list a tuple, ``noise_type`` an action noise."""
-    keys = algorithms.constructor_keys(algo)
-    kwargs = {key: copy.deepcopy(value) for key, value in config.items() if key in keys}
-    policy_kwargs = kwargs.setdefault("policy_kwargs", {})
-    if "activation_fn" in policy_kwargs:
-        policy_kwargs["activation_fn"] = getattr(torch.nn, policy_kwargs["activation_fn"][3:])
-    for key in ("learning_rate", "clip_range"):
-        if isinstance(kwargs.get(key), str):
-            kwargs[key] = schedule(key, kwargs[key])
+    import numpy as np
+    from stable_baselines3.common.noise import NormalActionNoise
+
+    rules = schema.algorithm_rules(algo)
+    kwargs = {key: copy.deepcopy(value) for key, value in config.items() if key in algorithms.constructor_keys(algo)}
+    kwargs["policy_kwargs"] = with_classes(kwargs.get("policy_kwargs") or {})
+    for key, value in list(kwargs.items()):
+        if isinstance(value, str) and "schedule" in rules[key].forms and value.startswith("lin_"):
+            kwargs[key] = schedule(key, value)
+        elif isinstance(value, str) and "class" in rules[key].forms and (base := rules[key].base) is not None:
+            kwargs[key] = schema.resolve_class(value, base)  # Zoo names the class: HerReplayBuffer
     if isinstance(kwargs.get("train_freq"), list):
         kwargs["train_freq"] = tuple(kwargs["train_freq"])
-    if isinstance(kwargs.get("replay_buffer_class"), str):  # Zoo names the class: HerReplayBuffer
-        import stable_baselines3
-
-        kwargs["replay_buffer_class"] = getattr(stable_baselines3, kwargs["replay_buffer_class"])
     if config.get("noise_type") == "normal":
         sigma = float(config["noise_std"]) * np.ones(action_size)
         kwargs["action_noise"] = NormalActionNoise(np.zeros(action_size), sigma)
     return kwargs
+
+
+def with_classes(policy_kwargs: dict[str, Any]) -> dict[str, Any]:
+    """``policy_kwargs`` with the classes it names (``nn.Tanh``, ``th.optim.Adam``: ``*_fn`` and ``*_class``)
+    made classes; a name that ``check_config`` has refused is left as it is."""
+    resolved = dict(policy_kwargs)
+    for key, value in policy_kwargs.items():
+        if isinstance(value, str) and (key.endswith("_fn") or key.endswith("_class")):
+            resolved[key] = schema.resolve_class(value, object) or value
+    return resolved
 
 
 def schedule(name: str, text: str):

@@ -26,19 +26,12 @@ import numpy as np
 from stable_baselines3.common.vec_env import VecEnv, VecEnvWrapper, VecMonitor, VecNormalize
 
 import box_toss_env  # noqa: F401  (registers the BoxToss envs)
+from agents.env_wrappers import BALLISTIC, ENV_WRAPPERS, STACK_COMMANDS, read_env_wrapper  # noqa: F401 (re-exported)
 from box_toss_env.envs.ballistic import ballistic_actions
 from box_toss_env.envs.stack_commands import batch_command_actions
 from box_toss_env.wrappers.ballistic import BallisticThrowsVector
 from box_toss_env.wrappers.sb3_adapter import SB3VecEnvAdapter
 from box_toss_env.wrappers.stack_commands import StackCommandsVector
-
-BALLISTIC = "box_toss_env.envs.ballistic.BallisticThrows"
-STACK_COMMANDS = "box_toss_env.envs.stack_commands.StackCommands"
-ENV_WRAPPERS = {
-    BALLISTIC: "ballistic throw commands (flight time, landing offset, lean from the prior)",
-    STACK_COMMANDS: "BoxToss-Stack-v0's throw commands (flight time, touchdown offset, lean, aimed at the stack's top)",
-}
-"""The values of ``env_wrapper`` that training accepts (each has a vector form and a ``command_map``)."""
 
 
 class TimedVecEnv(VecEnvWrapper):
@@ -61,22 +54,6 @@ class TimedVecEnv(VecEnvWrapper):
         self.env_seconds += time.perf_counter() - start
         self.env_steps += self.num_envs
         return result
-
-
-def read_env_wrapper(spec: Any) -> tuple[str, dict[str, Any]] | None:
-    """Zoo's ``env_wrapper`` value (None, a class path, or ``{class path: kwargs}``) as (path, kwargs);
-    a ValueError naming what is accepted otherwise."""
-    if spec is None:
-        return None
-    name, kwargs = spec, cast(dict[str, Any], {})
-    if isinstance(spec, dict) and len(spec) == 1:
-        name, kwargs = next(iter(spec.items()))
-        kwargs = {} if kwargs is None else kwargs
-    if not isinstance(name, str) or name not in ENV_WRAPPERS or not isinstance(kwargs, dict):
-        raise ValueError(
-            f"env_wrapper must be one of {sorted(ENV_WRAPPERS)}, optionally as {{name: {{kwargs}}}}, got {spec!r}"
-        )
-    return name, kwargs
 
 
 def wrap_vector_env(vector_env: gym.vector.VectorEnv, env_wrapper: Any) -> gym.vector.VectorEnv:
@@ -127,17 +104,18 @@ def make_training_env(
     env_kwargs: dict[str, Any] | None = None,
     vec_env_kwargs: dict[str, Any] | None = None,
     normalize: dict[str, Any] | bool = True,
-    normalize_path: str | None = None,
+    statistics: VecNormalize | None = None,
     env_wrapper: Any = None,
 ) -> VecEnv:
-    """The full training stack (module docstring), seeded; with ``normalize_path`` the observation
-    statistics are loaded from a saved ``VecNormalize`` (to resume training)."""
+    """The full training stack (module docstring), seeded; with ``statistics`` (a saved ``VecNormalize``, read
+    and checked by ``agents.run_files.read_normalizer``) the observations are normalised as they were (a resume)."""
     venv: VecEnv = make_vector_env(env_id, n_envs, env_kwargs, vec_env_kwargs, env_wrapper)
     venv.seed(seed)
     venv = VecMonitor(venv)
-    if normalize_path is not None:
-        venv = VecNormalize.load(normalize_path, venv)
-        venv.training = True
+    if statistics is not None:
+        statistics.set_venv(venv)
+        statistics.training = True
+        venv = statistics
     elif normalize:
         options = {"norm_obs": True, "norm_reward": False, **(normalize if isinstance(normalize, dict) else {})}
         venv = VecNormalize(venv, **options)

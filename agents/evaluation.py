@@ -27,15 +27,16 @@ import yaml
 
 import box_toss_env  # noqa: F401  (registers the BoxToss envs)
 from agents import oracle
-from agents.config import load_yaml, parse_override
+from agents.config import parse_override
 from agents.policies import ConstantPolicy, GoalPolicy, Policy, RandomPolicy, TrainedPolicy, load_model
-from agents.run_folder import RunFolderError, check_component, write_atomic
+from agents.run_files import read_run_config
+from agents.run_folder import RunFolderError, check_component, lock_run, unlock_run, write_atomic
+from agents.targets import STACK_TEST_EPISODES, TEST_FIRST_SEED, TEST_TARGETS, VALIDATION_FIRST_SEED  # noqa: F401
 from box_toss_env.envs import task
 from box_toss_env.envs.functional import EnergyGainError
+from box_toss_env.files import DamagedFileError, file_action, remove_stale_temporaries
 from box_toss_env.physics import NonFiniteStateError
 
-TEST_FIRST_SEED, TEST_TARGETS = 10_000, 1_024  # the report's targets
-VALIDATION_FIRST_SEED = 20_000  # periodic evaluation during training: other targets than the report's
 THROWN_IN = {"BoxToss-Goal-v0": "BoxToss-v0"}
 """Envs whose runs are evaluated in another env: the goal env's throws are BoxToss-v0's (the same draws for a
 seed, ``tests/envs/test_goal.py``), thrown there with ``GoalPolicy``."""
@@ -155,7 +156,6 @@ def evaluate(policy: Policy, env_id: str, env_kwargs: dict[str, Any] | None = No
 
 
 # -- episodes of several throws (BoxToss-Stack-v0) ------------------------------------------------
-STACK_TEST_EPISODES = 256  # the report's episodes of a stacking env (seeds 10000...): 4 throws each
 
 
 def is_stack(env_id: str) -> bool:
@@ -353,11 +353,15 @@ def make_baseline_run(
 
 
 def load_policy(run_dir: Path, model: str = "final") -> tuple[Policy, dict[str, Any]]:
-    """The policy saved in a run folder and the run's ``config.yml``."""
-    config = load_yaml(run_dir / "config.yml")
+    """The policy saved in a run folder and the run's ``config.yml``, every file read checked (a
+    DamagedFileError naming a damaged one)."""
+    config = read_run_config(run_dir)
     algo = config["algo"]
     if algo in BASELINES:
-        return make_baseline(algo, config.get("baseline", {})), config
+        try:
+            return make_baseline(algo, config.get("baseline") or {}), config
+        except (TypeError, ValueError) as error:
+            raise DamagedFileError(f"{run_dir / 'config.yml'} is damaged: baseline: {error}") from None
     if config.get("goal"):  # Dict observations (BoxToss-Goal-v0): HER's replay buffer is not needed to act
         trained = load_model(
             algo,
@@ -428,14 +432,23 @@ def evaluate_run(
     out = run_dir / "eval" / tag
     settings = {"model": model, "env_id": env_id, "env_kwargs": kwargs, "seeds": [int(seeds[0]), int(seeds[-1])]}
     check_results_folder(out, settings)
-    start = time.perf_counter()
-    if is_stack(env_id):
-        return evaluate_stack_run(run_dir, config, policy, model, env_id, kwargs, seeds, tag, out, start, quiet)
+    claim_results_folder(out)
+    try:
+        start = time.perf_counter()
+        if is_stack(env_id):
+            return evaluate_stack_run(run_dir, config, policy, model, env_id, kwargs, seeds, tag, out, start, quiet)
+        return evaluate_throws_run(run_dir, config, policy, model, env_id, kwargs, seeds, tag, out, start, quiet)
+    finally:
+        unlock_run(out)
+
+
+def evaluate_throws_run(run_dir, config, policy, model, env_id, kwargs, seeds, tag, out, start, quiet):
+    """``evaluate_run`` for an env of one throw per episode: the throws, scored (``summarize``), into ``out``
+    (results.json, throws.npz)."""
     throws, act_seconds = evaluate(policy, env_id, kwargs, seeds)
     wall = time.perf_counter() - start
     target_x_range = cast(Any, gym.make(env_id, **kwargs).unwrapped).config.target_x_range
     summary = summarize(throws, target_x_range)
-    out.mkdir(parents=True, exist_ok=True)
     results = {
         "run": run_dir.name,
         "algo": config["algo"],
@@ -459,6 +472,15 @@ def evaluate_run(
         print(format_summary(run_dir.name, summary))
         print(f"results in {out}")
     return results
+
+
+def claim_results_folder(out: Path) -> None:
+    """Make ``out`` (a results folder, ``RUN/eval/TAG``), hold its lock for this process (a RunFolderError if
+    another evaluation writes there) and remove the temporary files an interrupted write left there."""
+    with file_action("make the results folder", out):
+        out.mkdir(parents=True, exist_ok=True)
+    lock_run(out, "evaluation")
+    remove_stale_temporaries(out)
 
 
 def check_results_folder(out: Path, settings: dict[str, Any]) -> None:

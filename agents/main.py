@@ -1,13 +1,14 @@
 """Train PPO on a task where the landing face counts, evaluate it next to the baselines, print the table.
 
-    python -m agents.main                   # short PPO run on BoxToss-ThisSideUp-v0 (runs/short), random and oracle
-    python -m agents.main --full --readme   # also the full run and the physics-fidelity evaluations, then
-                                            # rewrite docs/methodology/main-command.md, docs/agents/ and the
-                                            # headline figures (docs/generated/figures.yml, the README's)
+    box-toss main                   # short PPO run on BoxToss-ThisSideUp-v0 (runs/short), random and oracle
+    box-toss main --full --readme   # also the full run and the physics-fidelity evaluations, then rewrite
+                                    # docs/methodology/main-command.md, docs/agents/ and the headline figures
+                                    # (docs/generated/figures.yml, the README's), in a clone
 
 Everything is evaluated on the same 1,024 fixed test targets (``agents.evaluate``). To train longer,
-change ``n_timesteps`` in ``agents/hyperparams/ppo.yml`` and run ``python -m agents.train``; for every
-variant and algorithm, ``python -m agents.benchmark``.
+change ``n_timesteps`` in ``agents/hyperparams/ppo.yml`` and run ``box-toss train``; for every
+variant and algorithm, ``python -m agents.benchmark``. (``python -m agents.main`` is the same command.) Every
+option, and the configuration of every training the command will run, is checked before anything is created.
 """
 
 from __future__ import annotations
@@ -19,10 +20,12 @@ import time
 from pathlib import Path
 from typing import Any
 
-from agents import evaluation, report, train
-from agents.config import OneLineParser
-from agents.run_folder import RunFolderError, check_runs_dir
-from agents.training import RUNS
+from agents import train
+from agents.command_line import COUNT, RUNS, CommandError, OneLineParser, folder, one_line_errors
+from agents.targets import TEST_FIRST_SEED, TEST_TARGETS
+
+PROG = "box-toss main"
+DOCS = Path(__file__).resolve().parents[1] / "docs"  # the repository's pages, which --readme rewrites
 
 ENV_ID = "BoxToss-ThisSideUp-v0"  # one face drawn per episode must end down: the pose counts
 SHORT_TIMESTEPS = 500_000  # the default run (about 2 min); the full run uses n_timesteps of agents/hyperparams/ppo.yml
@@ -75,47 +78,70 @@ def machine_note() -> str:
 
 def baseline(algo: str, runs_dir: Path, *, replan: bool = True) -> Path:
     """Evaluate a baseline into ``runs_dir/algo`` (kept if already evaluated and not ``replan``)."""
+    from agents import evaluation, report
+
     run_dir = runs_dir / algo
     if replan or report.read_results(run_dir) is None:
-        print(f"evaluating the {algo} baseline on {evaluation.TEST_TARGETS:,} test targets ...")
+        print(f"evaluating the {algo} baseline on {TEST_TARGETS:,} test targets ...")
         evaluation.make_baseline_run(algo, run_dir, ENV_ID, command=f"python -m agents.baselines {algo} --env {ENV_ID}")
         evaluation.evaluate_run(run_dir, quiet=True)
     return run_dir
 
 
-def main(argv: list[str] | None = None) -> None:
-    parser = OneLineParser(prog="python -m agents.main", description=__doc__.split("\n\n")[0])
-    parser.add_argument("--runs-dir", type=Path, default=RUNS)
-    parser.add_argument("--timesteps", type=int, default=SHORT_TIMESTEPS, help="budget of the short run")
+def make_parser() -> OneLineParser:
+    """The command's options, each checked as it is parsed (its type names its range)."""
+    parser = OneLineParser(prog=PROG, description=__doc__.split("\n\n")[0])
+    parser.add_argument("--runs-dir", type=folder, default=RUNS, help="folder of the run folders (default: runs)")
+    parser.add_argument(
+        "--timesteps", type=COUNT, default=SHORT_TIMESTEPS, help=f"budget of the short run, {COUNT.allowed}"
+    )
     parser.add_argument("--full", action="store_true", help="also train the full run and evaluate physics fidelity")
     parser.add_argument(
         "--readme",
         action="store_true",
-        help="write the results into the docs (the main command's page and headline figures)",
+        help="with --full, in a clone: rewrite docs/methodology/main-command.md, docs/agents/ and the headline figures",
     )
     parser.add_argument("--no-oracle", action="store_true", help="skip the oracle (it plans for ~20 s)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
-    args = parser.parse_args(argv)
-    if args.timesteps < 1:
-        parser.error(f"--timesteps must be an integer >= 1, got {args.timesteps}")
-    try:
-        check_runs_dir(args.runs_dir)
-    except RunFolderError as error:
-        parser.error(str(error))
-    start = time.perf_counter()
+    return parser
+
+
+def parse_args(argv: list[str] | None):
+    return make_parser().parse_args(argv)
+
+
+def check_options(args, common: list[str]) -> None:
+    """Every option, and the configuration of each training the command runs, checked before anything is made."""
+    if args.readme:
+        if not args.full or args.no_oracle:
+            raise CommandError("--readme needs --full and the oracle")
+        if not (DOCS / "index.md").is_file():
+            raise CommandError(f"--readme rewrites the repository's pages ({DOCS}): run it in a clone")
+        taken = [
+            str(args.runs_dir / name) for name in ("short", "full") if (args.runs_dir / name / "config.yml").exists()
+        ]
+        if taken:
+            raise CommandError(f"--readme trains {' and '.join(taken)} afresh: move the existing runs away first")
+    train.resolve(train.parse_args([*common, "--set", f"n_timesteps={args.timesteps}"]))
+    if args.full:
+        train.resolve(train.parse_args(common))
+    from agents.run_folder import check_runs_dir
+
+    check_runs_dir(args.runs_dir)
+
+
+def main(argv: list[str] | None = None) -> None:
+    args = parse_args(argv)
     runs_dir: Path = args.runs_dir
     progress = ["--no-progress"] if args.no_progress else []
     common = ["--env", ENV_ID, "--runs-dir", str(runs_dir), *progress]
-
-    if args.readme:
-        if not args.full or args.no_oracle:
-            sys.exit("--readme needs --full and the oracle")
-        taken = [str(runs_dir / name) for name in ("short", "full") if (runs_dir / name / "config.yml").exists()]
-        if taken:
-            sys.exit(f"--readme trains {' and '.join(taken)} afresh: move the existing runs away first")
+    with one_line_errors(PROG):
+        check_options(args, common)
+    start = time.perf_counter()
     # the main command's own time, wall and CPU: what runs without --full (random, the short run, the oracle)
     command = Stopwatch()
-    rows = {"random": baseline("random", runs_dir)}
+    with one_line_errors(PROG):
+        rows = {"random": baseline("random", runs_dir)}
     short = free_name(runs_dir, "short") if not args.readme else "short"
     training = Stopwatch()
     rows["short"] = train.main([*common, "--name", short, "--set", f"n_timesteps={args.timesteps}"])
@@ -123,10 +149,19 @@ def main(argv: list[str] | None = None) -> None:
     command.stop()
     if args.full:
         rows["full"] = train.main([*common, "--name", free_name(runs_dir, "full") if not args.readme else "full"])
-    if not args.no_oracle:
-        command.start()
-        rows["oracle"] = baseline("oracle", runs_dir, replan=args.readme)
-        command.stop()
+    with one_line_errors(PROG):
+        if not args.no_oracle:
+            command.start()
+            rows["oracle"] = baseline("oracle", runs_dir, replan=args.readme)
+            command.stop()
+        times = {"command": command.seconds(), "training": training.seconds()}
+        report_results(args, rows, argv, start, times)
+
+
+def report_results(args, rows: dict[str, Path], argv: list[str] | None, start: float, times: dict) -> None:
+    """The physics-fidelity evaluations (``--full``), the table, and with ``--readme`` the agents page."""
+    from agents import evaluation, report
+
     fidelity = []
     if args.full:
         for name, tag, kwargs, label in FIDELITY_SETTINGS:
@@ -134,12 +169,11 @@ def main(argv: list[str] | None = None) -> None:
                 print(f"evaluating {name} under {label} ...")
                 results = evaluation.evaluate_run(rows[name], env_kwargs=kwargs, tag=tag, quiet=True)
                 fidelity.append({"agent": f"{name}: {label}", **results})
-
     table = [row for name, run in rows.items() if (row := report.summary_row(name, run)) is not None]
     print()
     print(
-        f"{ENV_ID}: {evaluation.TEST_TARGETS:,} fixed test targets (seeds {evaluation.TEST_FIRST_SEED}-"
-        f"{evaluation.TEST_FIRST_SEED + evaluation.TEST_TARGETS - 1}), deterministic policies"
+        f"{ENV_ID}: {TEST_TARGETS:,} fixed test targets (seeds {TEST_FIRST_SEED}-"
+        f"{TEST_FIRST_SEED + TEST_TARGETS - 1}), deterministic policies"
     )
     print(report.text_table(table))
     if "oracle" in rows:
@@ -151,15 +185,14 @@ def main(argv: list[str] | None = None) -> None:
     assert ppo is not None  # the run just trained
     print(
         f"\nPPO: the env took {ppo['env_share']:.0%} of the training loop's wall time; the run is in {rows['short']} "
-        f"(python -m agents.evaluate {rows['short']} --video 4 for plots and a GIF; "
+        f"(box-toss evaluate {rows['short']} --video 4 for plots and a GIF; "
         f"tensorboard --logdir {rows['short'] / 'logs'})"
     )
     if args.readme:
-        times = {"command": command.seconds(), "training": training.seconds()}
         report.write_docs(rows, FIDELITY, times=times, machine=machine_note())
     print(
         f"total wall time {time.perf_counter() - start:.0f} s  "
-        f"(command: python -m agents.main {shlex.join(argv if argv is not None else sys.argv[1:])})"
+        f"(command: box-toss main {shlex.join(argv if argv is not None else sys.argv[1:])})"
     )
 
 

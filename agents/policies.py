@@ -7,8 +7,6 @@ oracle, which plans with the simulator, is in ``agents.oracle``.
 
 from __future__ import annotations
 
-import pickle
-import zipfile
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -19,24 +17,33 @@ from stable_baselines3.common.vec_env import VecNormalize
 
 from agents import algorithms
 from agents.envs import command_map, observation_normalizer
+from agents.run_files import check_model_file, read_normalizer
 from box_toss_env.envs import task_columns
 from box_toss_env.envs.goal import goal_observations
+from box_toss_env.files import DamagedFileError
 
 
-class UnreadableModelError(ValueError):
+class UnreadableModelError(DamagedFileError):
     """A saved model that is missing, truncated or not a model of the algorithm."""
 
 
 def load_model(algo: str, path: Path, **kwargs) -> BaseAlgorithm:
-    """``algo``'s model saved at ``path`` (CPU); an UnreadableModelError naming the file if it cannot be read."""
+    """``algo``'s model saved at ``path`` (CPU); an UnreadableModelError naming the file if it is missing or
+    damaged (``check_model_file``), or if SB3 cannot load it as a model of ``algo``."""
     if not path.exists():
         raise UnreadableModelError(f"{path} does not exist (did the run finish? --resume it)")
     try:
+        check_model_file(path)
+    except DamagedFileError as error:
+        raise UnreadableModelError(f"{error}; retrain, or --resume from a checkpoint") from None
+    try:
         return algorithms.algorithm_class(algo).load(path, device="cpu", **kwargs)
-    except (zipfile.BadZipFile, EOFError, KeyError, ValueError, RuntimeError, OSError) as error:
+    except OSError:
+        raise
+    except Exception as error:  # the file is whole (checked above) but not a model SB3 loads as algo's
+        message = " ".join(str(error).split())[:200]
         raise UnreadableModelError(
-            f"{path} cannot be read as a {algo.upper()} model ({type(error).__name__}: "
-            f"{error}); it may be truncated: retrain, or --resume from a checkpoint"
+            f"{path} cannot be read as a {algo.upper()} model ({type(error).__name__}: {message})"
         ) from None
 
 
@@ -113,7 +120,6 @@ class TrainedPolicy:
                 f"{stats} is missing: the model was trained on normalised observations and "
                 f"acts at random without their statistics"
             )
-        if stats.exists():
-            with open(stats, "rb") as file:
-                vec_normalize = pickle.load(file)  # the statistics only (SB3 pickles it without its venv)
+        if stats.exists():  # the statistics only (SB3 pickles them without their venv)
+            vec_normalize = read_normalizer(stats, model.observation_space.shape)
         return cls(model, vec_normalize, env_wrapper)

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import pickle
 import shutil
 from pathlib import Path
 from typing import Any
@@ -37,7 +36,8 @@ from agents import evaluation, figures
 from agents.config import OneLineParser, load_yaml
 from agents.model_card import write_model_card
 from agents.policies import TrainedPolicy, UnreadableModelError, load_model
-from box_toss_env.files import write_atomic
+from agents.run_files import read_json_mapping, read_normalizer, read_text
+from box_toss_env.files import DamagedFileError, write_atomic
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
 CHECKSUMS = "SHA256SUMS"
@@ -58,7 +58,10 @@ def read_checksums(models: Path = MODELS) -> dict[str, str]:
     path = models / CHECKSUMS
     if not path.exists():
         return {}
-    return {name: digest for digest, name in (line.split(maxsplit=1) for line in path.read_text().splitlines())}
+    pairs = [line.split(maxsplit=1) for line in read_text(path).splitlines() if line.strip()]
+    if any(len(pair) != 2 for pair in pairs):
+        raise DamagedFileError(f"{path} is damaged: a line is not sha256sum's '<digest>  <file>'")
+    return {name: digest for digest, name in pairs}
 
 
 def write_checksums(models: Path = MODELS) -> None:
@@ -88,7 +91,7 @@ class PretrainedAgent:
         self.config = config
         """The run's configuration (``config.yml``): algorithm, env id, hyperparameters, env kwargs, seed."""
         self.env_id: str = config["env_id"]
-        self.results: dict[str, Any] = json.loads((folder / "results.json").read_text())
+        self.results: dict[str, Any] = read_json_mapping(folder / "results.json")
         """The evaluation the model card reports (``results.json``)."""
         self._env = gym.make(self.env_id, **config.get("env_kwargs", {}))  # its task settings map commands
 
@@ -123,7 +126,7 @@ def load_agent(env_id: str, algo: str = "ppo", models: Path | str = MODELS) -> P
     config = load_yaml(folder / "config.yml")
     model = load_model(algo, folder / f"{folder.name}.zip")
     stats = folder / "vec_normalize.pkl"
-    vec_normalize = pickle.loads(stats.read_bytes()) if stats.exists() else None
+    vec_normalize = read_normalizer(stats, model.observation_space.shape) if stats.exists() else None
     policy = TrainedPolicy(model, vec_normalize, config["hyperparams"].get("env_wrapper"))
     return PretrainedAgent(folder, policy, config)
 

@@ -7,7 +7,6 @@ training, evaluation and baseline scripts measured; the headline figures go to `
 
 from __future__ import annotations
 
-import csv
 import json
 from pathlib import Path
 from typing import Any, cast
@@ -22,6 +21,8 @@ from agents.config import load_yaml
 from agents.doc_sections import page_for, replace_section
 from agents.evaluation import TEST_FIRST_SEED, TEST_TARGETS, VALIDATION_FIRST_SEED, Throws, load_policy
 from agents.oracle import OracleSettings
+from agents.run_files import read_json_mapping
+from agents.run_folder import number_column, read_csv
 from agents.training import read_timing
 from box_toss_env.files import save_figure, write_atomic
 from box_toss_env.rendering import write_video
@@ -42,17 +43,17 @@ COLOURS = {"random": "tab:gray", "short": "tab:orange", "full": "tab:blue", "ora
 
 # -- reading runs --------------------------------------------------------------------------------
 def read_results(run_dir: Path, tag: str = "default") -> dict[str, Any] | None:
+    """An evaluation's results.json (None if the run has none; a DamagedFileError naming it if damaged)."""
     path = Path(run_dir) / "eval" / tag / "results.json"
-    return json.loads(path.read_text()) if path.exists() else None
+    return read_json_mapping(path, ("success_rate",)) if path.exists() else None
 
 
 def read_evaluations(run_dir: Path) -> dict[str, np.ndarray] | None:
+    """A run's evaluations.csv as columns of numbers (None if it has no rows; a DamagedFileError naming it if a
+    value is not a number)."""
     path = Path(run_dir) / "evaluations.csv"
-    if not path.exists():
-        return None
-    with open(path) as file:
-        rows = list(csv.DictReader(file))
-    return {key: np.array([float(row[key]) for row in rows]) for key in rows[0]} if rows else None
+    columns, rows = read_csv(path)
+    return {key: np.array(number_column(path, rows, key)) for key in columns} if rows else None
 
 
 def wall_seconds(run_dir: Path, results: dict[str, Any]) -> float:

@@ -23,10 +23,16 @@ from typing import Any
 
 from stable_baselines3.common.logger import KVWriter
 
-from box_toss_env.files import atomic_path, write_atomic  # noqa: F401  (write_atomic: re-exported)
+from agents.command_line import InputError
+from box_toss_env.files import (  # noqa: F401  (write_atomic: re-exported)
+    DamagedFileError,
+    atomic_path,
+    file_action,
+    write_atomic,
+)
 
 
-class RunFolderError(ValueError):
+class RunFolderError(InputError):
     """A run folder, name or file that cannot be used; the message names it."""
 
 
@@ -46,14 +52,18 @@ def check_component(value: str, option: str) -> str:
 
 
 def check_runs_dir(runs: Path) -> Path:
-    """``runs`` made if absent; a RunFolderError if it (or a parent) is a file."""
-    try:
+    """``runs`` made if absent; a RunFolderError if it (or a parent) is a file, an OSError naming it if the
+    file system refuses to make it."""
+    if is_file_on_the_way(runs):
+        raise RunFolderError(f"--runs-dir {runs} is a file, not a folder (or lies under one)")
+    with file_action("make the runs folder", runs):
         runs.mkdir(parents=True, exist_ok=True)
-    except (FileExistsError, NotADirectoryError):
-        raise RunFolderError(f"--runs-dir {runs} is a file, not a folder") from None
-    except OSError as error:
-        raise RunFolderError(f"--runs-dir {runs} cannot be made: {error.strerror}") from None
     return runs
+
+
+def is_file_on_the_way(path: Path) -> bool:
+    """Whether ``path`` or one of its parents is a file (so that no folder can be made there)."""
+    return any(part.exists() and not part.is_dir() for part in (path, *path.parents))
 
 
 def claim_folder(runs: Path, base: str) -> Path:
@@ -63,7 +73,8 @@ def claim_folder(runs: Path, base: str) -> Path:
     for n in range(1, 10_000):
         path = runs / (base if n == 1 else f"{base}-{n}")
         try:
-            os.mkdir(path)
+            with file_action("make the run folder", path):
+                os.mkdir(path)
         except FileExistsError:
             continue
         return path
@@ -74,18 +85,20 @@ LOCK = ".lock"
 _held: dict[Path, Any] = {}  # the locks this process holds, kept open for its lifetime
 
 
-def lock_run(run_dir: Path) -> None:
+def lock_run(run_dir: Path, user: str = "training") -> None:
     """Hold ``run_dir/.lock`` (an advisory lock, released when the process ends, kill -9 included);
-    a RunFolderError if another process holds it (a training of that run is going on)."""
+    a RunFolderError if another process holds it (a ``user`` of that folder is going on: a training of a run,
+    an evaluation into a results folder)."""
     run_dir = Path(run_dir)
     if run_dir.resolve() in _held:
         return
-    handle = open(run_dir / LOCK, "a")
+    with file_action("lock the folder (open its lock file)", run_dir / LOCK):
+        handle = open(run_dir / LOCK, "a")
     try:
         fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except BlockingIOError:
         handle.close()
-        raise RunFolderError(f"{run_dir} is in use by another training (it holds {run_dir / LOCK})") from None
+        raise RunFolderError(f"{run_dir} is in use by another {user} (it holds {run_dir / LOCK})") from None
     _held[run_dir.resolve()] = handle
 
 
@@ -115,7 +128,7 @@ def copy_atomic(source: str | Path, destination: str | Path) -> None:
 
 def append_line(path: str | Path, line: str) -> None:
     """One line appended to ``path`` and flushed to disk (a kill leaves it whole or cut, never reordered)."""
-    with open(path, "a", newline="") as file:
+    with file_action("append to", path), open(path, "a", newline="") as file:
         file.write(line if line.endswith("\n") else line + "\n")
         file.flush()
         os.fsync(file.fileno())
@@ -133,7 +146,12 @@ def read_csv(path: str | Path) -> tuple[list[str], list[dict[str, str]]]:
     path = Path(path)
     if not path.exists():
         return [], []
-    text = path.read_text()
+    with file_action("read", path):
+        data = path.read_bytes()
+    try:
+        text = data.decode()
+    except UnicodeDecodeError:
+        raise DamagedFileError(f"{path} is damaged: it is not text (UTF-8)") from None
     if text and not text.endswith("\n"):  # a line cut by a kill
         text = text[: text.rfind("\n") + 1]
     reader = csv.reader(io.StringIO(text))
@@ -142,18 +160,36 @@ def read_csv(path: str | Path) -> tuple[list[str], list[dict[str, str]]]:
     return columns, rows
 
 
-def truncate_csv(path: str | Path, column: str, last: int) -> tuple[int, int]:
+def truncate_csv(path: str | Path, column: str, last: int, *, dry_run: bool = False) -> tuple[int, int]:
     """Drop the rows of the CSV log at ``path`` whose ``column`` is above ``last`` (and a cut line):
-    the log then ends where the checkpoint at ``last`` steps was. Returns (rows kept, rows dropped)."""
+    the log then ends where the checkpoint at ``last`` steps was. Returns (rows kept, rows dropped); with
+    ``dry_run`` nothing is written (the log is only checked: a DamagedFileError names a row that is not a number)."""
     path = Path(path)
     columns, rows = read_csv(path)
     if not columns:
         return 0, 0
-    kept = [row for row in rows if row.get(column) not in (None, "") and float(row[column]) <= last]
+    if column not in columns:
+        raise DamagedFileError(f"{path} is damaged: its header {columns} has no {column}")
+    valued = [row for row in rows if row.get(column) not in (None, "")]
+    kept = [row for row, value in zip(valued, number_column(path, valued, column), strict=True) if value <= last]
     dropped = len(path.read_text().splitlines()) - 1 - len(kept)
-    if dropped:
+    if dropped and not dry_run:
         write_atomic(path, "".join([csv_line(columns)] + [csv_line([row[c] for c in columns]) for row in kept]))
     return len(kept), dropped
+
+
+def number_column(path: Path, rows: list[dict[str, str]], column: str) -> list[float]:
+    """The values of ``column`` in a CSV log's ``rows``, as numbers (a DamagedFileError naming the file and
+    the row of one that is not)."""
+    values = []
+    for i, row in enumerate(rows):
+        try:
+            values.append(float(row[column]))
+        except (KeyError, TypeError, ValueError):
+            raise DamagedFileError(
+                f"{path} is damaged: row {i + 2} has {row.get(column)!r} for {column}, not a number"
+            ) from None
+    return values
 
 
 class AppendingCSVOutput(KVWriter):

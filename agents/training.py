@@ -19,10 +19,8 @@ from __future__ import annotations
 
 import json
 import os
-import re
 import shutil
 import time
-import zipfile
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, cast
@@ -33,8 +31,17 @@ import yaml
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.logger import Logger, TensorBoardOutputFormat
 
-from agents import algorithms
+from agents import algorithms, command_line
 from agents import config as configuration
+from agents.checkpoints import (  # noqa: F401  (latest_checkpoint, model_timesteps: re-exported)
+    BEST_FILES,
+    Checkpoint,
+    best_snapshot,
+    latest_checkpoint,
+    model_timesteps,
+    resume_point,
+    set_aside,
+)
 from agents.envs import TimedVecEnv, find_wrapper, make_training_env, make_vector_env, normalizer_of
 from agents.evaluation import (
     VALIDATION_FIRST_SEED,
@@ -47,6 +54,7 @@ from agents.evaluation import (
     target_seeds,
 )
 from agents.policies import TrainedPolicy, UnreadableModelError, load_model
+from agents.run_files import read_json_mapping, read_normalizer
 from agents.run_folder import (
     LOCK,
     AppendingCSVOutput,
@@ -64,8 +72,9 @@ from agents.run_folder import (
     unlock_run,
     write_atomic,
 )
+from box_toss_env.files import DamagedFileError, remove_stale_temporaries
 
-RUNS = Path("runs")
+RUNS = command_line.RUNS
 EVAL_COLUMNS = (
     "timesteps",
     "wall_seconds",
@@ -128,16 +137,6 @@ class ClockCallback(BaseCallback):
     def _on_step(self) -> bool:
         self.clock.write(self.num_timesteps, every=1.0)
         return True
-
-
-BEST_FILES = ("best_model.zip", "best_vecnormalize.pkl")
-
-
-def best_snapshot(run_dir: Path, algo: str, steps: int, name: str) -> Path:
-    """Where the checkpoint at ``steps`` keeps the run's ``name`` (one of ``BEST_FILES``) as it was then:
-    ``checkpoints/<algo>_best_model_<steps>_steps.zip``, ``..._best_vecnormalize_<steps>_steps.pkl``."""
-    stem, suffix = name.rsplit(".", 1)
-    return run_dir / "checkpoints" / f"{algo}_{stem}_{steps}_steps.{suffix}"
 
 
 def save_checkpoint(model, run_dir: Path, algo: str, *, replay_buffer: bool) -> Path:
@@ -294,40 +293,16 @@ def restore_best(run_dir: Path, algo: str, steps: int) -> str:
     return f"; removed {' and '.join(removed)} (saved after {steps} steps)" if removed else ""
 
 
-def model_timesteps(path: Path) -> int | None:
-    """The env steps a saved SB3 model was trained for (from its zip; None if unreadable)."""
-    try:
-        with zipfile.ZipFile(path) as archive:
-            return int(json.loads(archive.read("data"))["num_timesteps"])
-    except (OSError, zipfile.BadZipFile, KeyError, ValueError, TypeError):
-        return None
-
-
-def latest_checkpoint(run_dir: Path, algo: str) -> tuple[Path, Path | None, int] | None:
-    """(model, vecnormalize or None, timesteps) of the newest checkpoint of a run (or None). A run
-    trained before checkpoints were written at its end may have only ``model.zip``."""
-    found = []
-    for path in (run_dir / "checkpoints").glob(f"{algo}_*_steps.zip"):
-        match = re.fullmatch(rf"{algo}_(\d+)_steps\.zip", path.name)
-        if match:
-            found.append((int(match.group(1)), 1, path))
-    if (run_dir / "model.zip").exists() and (steps := model_timesteps(run_dir / "model.zip")) is not None:
-        found.append((steps, 0, run_dir / "model.zip"))
-    if not found:
-        return None
-    steps, _, path = max(found)
-    stats = (
-        run_dir / "vecnormalize.pkl"
-        if path.name == "model.zip"
-        else path.with_name(f"{algo}_vecnormalize_{steps}_steps.pkl")
-    )
-    return path, (stats if stats.exists() else None), steps
-
-
 def read_timing(run_dir: Path) -> dict[str, Any] | None:
-    """A run's timing.json (None before its training first started)."""
+    """A run's timing.json (None before its training first started; a DamagedFileError naming it if damaged)."""
     path = Path(run_dir) / "timing.json"
-    return json.loads(path.read_text()) if path.exists() else None
+    if not path.exists():
+        return None
+    timing = read_json_mapping(path, ("wall_seconds",))
+    for key in ("wall_seconds", "env_seconds", "eval_seconds"):
+        if not isinstance(timing.get(key, 0.0), (int, float)):
+            raise DamagedFileError(f"{path} is damaged: {key} is {timing[key]!r}, not a number of seconds")
+    return timing
 
 
 def new_run_dir(runs: Path, name: str | None, env_id: str, algo: str) -> Path:
@@ -384,26 +359,15 @@ def write_run_files(run_dir: Path, algo: str, env_id: str, seed: int, config: di
     append_line(run_dir / "command.txt", command)
 
 
-def check_resume(run_dir: Path, algo: str, config: dict[str, Any]) -> tuple[Path, Path | None, int]:
-    """The checkpoint a resume of ``run_dir`` starts from; a RunFolderError naming the missing file
-    if there is none, or if the run normalises observations and the checkpoint's statistics are gone."""
-    checkpoint = latest_checkpoint(run_dir, algo)
-    if checkpoint is None:
-        raise RunFolderError(
-            f"--resume {run_dir}: no checkpoint to resume from (no {run_dir}/checkpoints/"
-            f"{algo}_<steps>_steps.zip nor {run_dir}/model.zip); train it afresh"
-        )
-    if config.get("normalize", True) and checkpoint[1] is None:
-        missing = (
-            run_dir / "vecnormalize.pkl"
-            if checkpoint[0].name == "model.zip"
-            else checkpoint[0].with_name(f"{algo}_vecnormalize_{checkpoint[2]}_steps.pkl")
-        )
-        raise RunFolderError(
-            f"--resume {run_dir}: {missing} is missing (the observation statistics of "
-            f"{checkpoint[0].name}); cannot resume without them"
-        )
-    return checkpoint
+def observation_shape(env_id: str, config: dict[str, Any]) -> tuple[int, ...]:
+    """The shape of ``env_id``'s observations under ``config``'s env kwargs."""
+    import gymnasium as gym
+
+    env = gym.make(env_id, **(config.get("env_kwargs") or {}))
+    try:
+        return tuple(env.observation_space.shape or ())
+    finally:
+        env.close()
 
 
 def warm_up_engine(env_id: str, config: dict[str, Any]) -> None:
@@ -415,27 +379,28 @@ def warm_up_engine(env_id: str, config: dict[str, Any]) -> None:
     venv.close()
 
 
-def resume_model(run_dir: Path, algo: str, checkpoint, venv, off_policy: bool):
-    """The model of ``checkpoint`` (path, normaliser, steps) on ``venv``, with its replay buffer; the files a kill
-    left half-written are removed and the log rows written after the checkpoint dropped (and said)."""
-    model = load_model(algo, checkpoint[0], env=venv)
-    if model.num_timesteps != checkpoint[2]:
-        raise UnreadableModelError(f"{checkpoint[0]} holds a model of {model.num_timesteps} steps, not {checkpoint[2]}")
-    buffer = checkpoint[0].with_name(f"{algo}_replay_buffer_{checkpoint[2]}_steps.pkl")
-    if off_policy and buffer.exists():
-        model.load_replay_buffer(buffer)  # type: ignore[attr-defined]  # an off-policy algorithm's
-    for leftover in [*run_dir.glob(".*.tmp*"), *run_dir.glob("checkpoints/.*.tmp*")]:  # cut by a kill
-        leftover.unlink()
-    _, progress_dropped = truncate_csv(run_dir / "logs" / "progress.csv", "time/total_timesteps", checkpoint[2])
-    _, evaluations_dropped = truncate_csv(run_dir / "evaluations.csv", "timesteps", checkpoint[2])
+def resume_model(run_dir: Path, algo: str, checkpoint: Checkpoint, venv, off_policy: bool):
+    """The model of ``checkpoint`` on ``venv``, with its replay buffer; the files a kill left half-written are
+    removed and the log rows written after the checkpoint dropped (and said)."""
+    model = load_model(algo, checkpoint.model, env=venv)
+    if model.num_timesteps != checkpoint.steps:
+        raise UnreadableModelError(
+            f"{checkpoint.model} holds a model of {model.num_timesteps} steps, not {checkpoint.steps}"
+        )
+    if off_policy and checkpoint.replay_buffer.exists():
+        model.load_replay_buffer(checkpoint.replay_buffer)  # type: ignore[attr-defined]  # an off-policy algorithm's
+    for folder in (run_dir, run_dir / "checkpoints", run_dir / "logs"):  # temporary files cut by a kill
+        remove_stale_temporaries(folder)
+    _, progress_dropped = truncate_csv(run_dir / "logs" / "progress.csv", "time/total_timesteps", checkpoint.steps)
+    _, evaluations_dropped = truncate_csv(run_dir / "evaluations.csv", "timesteps", checkpoint.steps)
     dropped = (
         f"; dropped the rows written after it: {progress_dropped} of logs/progress.csv, "
         f"{evaluations_dropped} of evaluations.csv"
         if progress_dropped or evaluations_dropped
         else ""
     )
-    dropped += restore_best(run_dir, algo, checkpoint[2])
-    print(f"resuming {run_dir} from {checkpoint[0]} at {model.num_timesteps} steps{dropped}")
+    dropped += restore_best(run_dir, algo, checkpoint.steps)
+    print(f"resuming {run_dir} from {checkpoint.model} at {model.num_timesteps} steps{dropped}")
     return model
 
 
@@ -446,18 +411,21 @@ def train(
     seed: int,
     algo: str = "ppo",
     *,
-    resume: bool = False,
+    resume: bool | Checkpoint = False,
     progress_bar: bool = True,
     final_eval: bool = True,
     on_validation: Callable[[dict[str, Any]], None] | None = None,
 ) -> dict[str, Any]:
     """Train (or continue) the run in ``run_dir`` up to ``config["n_timesteps"]``; returns the timing.
-    ``on_validation`` receives each periodic validation's row of evaluations.csv (a dict)."""
-    checkpoint = check_resume(run_dir, algo, config) if resume else None
+    ``resume``: True continues from the newest checkpoint (``resume_point``: checked), a ``Checkpoint`` from that
+    one (checked by the caller). ``on_validation`` receives each periodic validation's row of evaluations.csv."""
+    checkpoint = (
+        resume if isinstance(resume, Checkpoint) else (resume_point(run_dir, algo, config)[0] if resume else None)
+    )
     warm_up_engine(env_id, config)
     torch.set_num_threads(int(config.get("torch_threads", 1)))
     # a resumed run draws new episodes (seeded after the steps already taken), not the first ones again
-    env_seed = seed + (checkpoint[2] if checkpoint else 0)
+    env_seed = seed + (checkpoint.steps if checkpoint else 0)
     venv = make_training_env(
         env_id,
         config["n_envs"],
@@ -465,7 +433,9 @@ def train(
         env_kwargs=config["env_kwargs"],
         vec_env_kwargs=config.get("vec_env_kwargs"),
         normalize=config.get("normalize", True),
-        normalize_path=str(checkpoint[1]) if checkpoint and checkpoint[1] else None,
+        statistics=read_normalizer(checkpoint.statistics, observation_shape(env_id, config))
+        if checkpoint and checkpoint.statistics.exists()
+        else None,
         env_wrapper=config.get("env_wrapper"),
     )
     cls = algorithms.algorithm_class(algo)

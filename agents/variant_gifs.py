@@ -1,15 +1,16 @@
 """One short GIF per registered BoxToss variant, each a good throw planned by the oracle (the docs' variant figures).
 
-    python -m agents.variant_gifs                 # every registered BoxToss-* id into docs/figures/, and the section
-    python -m agents.variant_gifs --envs BoxToss-ShortEnd-v0 --out /tmp/gifs --no-docs
+    python -m agents.variant_gifs --write-docs    # every registered BoxToss-* id into docs/figures/, and the section
+    python -m agents.variant_gifs --envs BoxToss-ShortEnd-v0 --out /tmp/gifs
 
 For each variant the oracle (``agents.oracle``, at the ceiling's third search budget) plans the throw at the first
 test target (seed 10000 on) that no earlier variant's figure showed; if it does not succeed there, the next seed
 is tried (``--tries``). The throw is
 recorded as ``record_throws`` does (the box in the hand, the whole throw with its path, its result held for a
 second), small (360 x 240 at 20 fps), and written atomically (a temporary file in the same folder, then
-``os.replace``). With docs, the section ``variant-gifs`` of docs/environment.md is rewritten: one figure per
-variant with the seed and the throw's result.
+``os.replace``) into ``--out`` (default: ``variant_gifs/`` where the command runs). With ``--write-docs`` they go to
+docs/figures/ and the section ``variant-gifs`` of docs/environment.md is rewritten: one figure per variant with the
+seed and the throw's result (the repository's files change only when asked).
 """
 
 from __future__ import annotations
@@ -131,8 +132,8 @@ def record_variant(
 def docs_section(rows: list[dict[str, Any]]) -> str:
     """The ``variant-gifs`` section: one figure per variant with its seed and result."""
     lines = [
-        "Written by `python -m agents.variant_gifs` (each variant's throw planned by the oracle at its third "
-        "search budget; 360 x 240 at 20 fps):",
+        "Written by `python -m agents.variant_gifs --write-docs` (each variant's throw planned by the oracle at its "
+        "third search budget; 360 x 240 at 20 fps):",
         "",
     ]
     for row in rows:
@@ -150,12 +151,17 @@ def docs_section(rows: list[dict[str, Any]]) -> str:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m agents.variant_gifs", description=__doc__.split("\n\n")[0])
     parser.add_argument("--envs", nargs="+", default=None, help="env ids (default: every registered BoxToss-* id)")
-    parser.add_argument("--out", type=Path, default=OUT, help=f"folder of the GIFs (default: {OUT})")
+    parser.add_argument("--out", type=Path, default=None, help="folder of the GIFs (default: variant_gifs/)")
     parser.add_argument("--first-seed", type=int, default=TEST_FIRST_SEED, help="first seed tried (>= 0)")
     parser.add_argument("--tries", type=int, default=8, help="seeds tried per variant until a success (>= 1)")
     parser.add_argument("--threads", type=int, default=None, help="engine threads of the oracle (>= 1)")
-    parser.add_argument("--no-docs", action="store_true", help="do not rewrite docs/environment.md's section")
+    parser.add_argument(
+        "--write-docs", action="store_true", help=f"write the GIFs into {OUT} and docs/environment.md's section"
+    )
     args = parser.parse_args(argv)
+    if args.write_docs and args.out is not None:
+        parser.error("--write-docs writes the GIFs into the docs' folder: drop --out")
+    args.out = OUT if args.write_docs else (args.out or Path("variant_gifs"))
     if args.first_seed < 0 or args.tries < 1 or (args.threads is not None and args.threads < 1):
         parser.error("--first-seed must be >= 0, --tries and --threads >= 1")
     envs = args.envs or variant_ids()
@@ -173,7 +179,7 @@ def main(argv: list[str] | None = None) -> None:
         )
         if row["bytes"] > MAX_BYTES:
             print(f"warning: {row['path']} is above {MAX_BYTES} bytes")
-    if not args.no_docs:
+    if args.write_docs:
         replace_section("variant-gifs", docs_section(rows))
         print("wrote the variant-gifs section of docs/environment.md")
 

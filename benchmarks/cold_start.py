@@ -1,27 +1,35 @@
-"""Cold start: how long the first throw takes in a fresh interpreter, with numba's cache empty (cold)
-and filled by the run before (warm). Prints measured figures; asserts nothing.
+"""First use: how soon a fresh process throws, and how fast it throws in its first minute, for every
+registered id, with numba's cache empty and with the cache an earlier process of the same id left.
+Prints measured figures; asserts nothing.
 
-    python -m benchmarks.cold_start [--repeats 3] [--readme]
+    python -m benchmarks.cold_start [--ids ID ...] [--seconds 60] [--window 5] [--install editable|wheel]
+                                    [--write-docs]
 
-Each case runs in a fresh interpreter with ``NUMBA_CACHE_DIR`` pointing at a fresh temporary
-directory: the cold run, then the warm run in the same directory. Times are wall times [s]:
+Each case is an id made either by ``gym.make`` (one env) or by ``gym.make_vec`` (the batch of ``VECTOR_ENVS``),
+run twice in fresh interpreters whose working folder is an empty temporary directory, with
+``NUMBA_CACHE_DIR`` pointing at a fresh temporary directory:
 
-- ``gym.make`` and ``make_vec``: from ``import gymnasium, box_toss_env`` to the end of the first
-  ``step`` (making the env, ``reset`` and one throw); ``make_vec`` once more with the cache holding what
-  a ``gym.make`` run compiled (does the batched env reuse the single env's kernel?);
-- the same for ``BoxToss-OnBox-v0`` (its colliding kernel; batched: 8 envs, the most that start
-  interpreted);
-- SB3 ``SubprocVecEnv`` with 4 workers: from creating it (Stable-Baselines3, torch and the package are
-  imported in the parent already) to the end of its first ``step``, each worker importing the
-  package and throwing once. The same with CartPole-v1 is what SB3's workers cost by themselves
-  (each starts and imports SB3 and torch).
+- **empty**: the cache empty. The env's first throws run its kernel's interpreted copy while a worker
+  process compiles the kernel (``box_toss_env.physics.compile.background_compile``); the process throws on
+  for ``--seconds`` (then waits for the worker, so that the cache is whole);
+- **warm**: the same cache, which the empty run's worker filled, in a new process.
 
-On a cold cache the envs throw with the kernel's interpreted copy while a worker process compiles it
-(``box_toss_env.physics.compile.background_compile``); each case then throws on until every env runs the
-compiled kernel, and that moment is reported too ("compiled after"). The warm run starts once the
-cold run's compile workers are done.
+Per run: the first throw [s] (wall time from before ``gym.make`` to the end of the first ``step``, the
+package imported already; the import is its own column), the interpreter's CPU time to that point, the
+numba compilations in the process (none is expected: a cold kernel compiles in the worker, a warm one is
+loaded), whether the first throw ran interpreted, the throughput in each ``--window``-second window from
+the end of the first throw for ``--seconds`` [throws/s], and the moment the last interpreted throw ended.
+The worker's compile time comes from its log (``box_toss_env-compile.log`` in the cache). The compiled
+throughput an id is held to is the median window of its warm run. A single env throws once an episode
+(``reset`` + ``step``; ``BoxToss-Stack-v0`` resets when its episode ends); a batched one steps its batch
+(every env throws, autoreset).
 
-``--pythonpath DIR`` measures the package found in DIR instead (e.g. an older checkout).
+Goals (issue 42): a warm process's first throw within 1 s of ``gym.make`` and its first window at 90% or
+more of the compiled throughput; an empty cache's first throw within 3 s. Timings are wall times on a
+shared machine: the load average is printed beside each row.
+
+``--install wheel`` measures the package built as a wheel (``pip wheel``) and installed into a temporary
+folder, instead of this checkout; ``--pythonpath DIR`` measures the package found in DIR.
 """
 
 from __future__ import annotations
@@ -36,170 +44,237 @@ import tempfile
 import textwrap
 from pathlib import Path
 
+import gymnasium as gym
+
+import box_toss_env  # noqa: F401  (registers the ids)
 from agents.doc_sections import replace_section
 
 REPO = Path(__file__).resolve().parent.parent
+IDS = tuple(env_id for env_id in gym.registry if env_id.startswith("BoxToss-"))
+"""Every registered id, in the order the package registers them."""
+VECTOR_ENVS = {"BoxToss-OnBox-v0": 8, "BoxToss-Stack-v0": 8, "BoxToss-Goal-v0": 8}  # the others: 64
+"""The batch ``make_vec`` is measured with: 64 envs, or 8 where a throw onto boxes runs interpreted at most
+8 at a time (``physics.grouped.MAX_INTERPRETED_GROUPED_BODIES``) and for the goal env (Gymnasium's
+``SyncVectorEnv`` of single envs: it has no batched env of its own)."""
+FIRST_THROW_EMPTY, FIRST_THROW_WARM, FIRST_WINDOW_SHARE = 3.0, 1.0, 0.9
 
 PROBE = textwrap.dedent("""
-    import json, sys, time
-    case = sys.argv[1]
-    start, start_cpu = time.perf_counter(), time.process_time()
-    import numba  # timed on its own: the package imports it anyway
-    numba_import = time.process_time() - start_cpu
+    import json, os, sys, time
+    env_id, num_envs, seconds, window = sys.argv[1], int(sys.argv[2]), float(sys.argv[3]), float(sys.argv[4])
+    cpu_start, wall_start = time.process_time(), time.perf_counter()
     import gymnasium as gym
+    import numpy as np
     import box_toss_env
-    try:
-        from box_toss_env.physics.compile.background_compile import wait_for_workers
-    except ImportError:  # a checkout from before the interpreted start
-        def wait_for_workers():
-            pass
-    compiled = cpu = None
-    if case == "subproc":
-        import numpy as np
-        from stable_baselines3.common.vec_env import SubprocVecEnv
+    from numba.core import event
+    from box_toss_env.physics.compile import background_compile
+    imported = time.perf_counter() - wall_start
+    interpreted = {"runs": 0, "last": None}
+    original_run = background_compile.InterpretedStart.run
 
-        class Probe(gym.Wrapper):
-            def kernel_interpreted(self):  # whether this worker's last throw ran the interpreted kernel
-                return bool(getattr(self.env.unwrapped._simulator, "interpreted", False))
+    def counted_run(self, args, outputs):  # counts the runs of interpreted copies
+        ran = original_run(self, args, outputs)
+        if ran:
+            interpreted["runs"] += 1
+            interpreted["last"] = time.perf_counter()
+        return ran
 
-            def wait_for_workers(self):
-                wait_for_workers()
-
-        start = time.perf_counter()
-        envs = SubprocVecEnv([lambda: Probe(gym.make("box_toss_env:BoxToss-v0"))] * 4)
-        envs.reset()
-        action = np.zeros((4, 3), dtype=np.float32)
-        envs.step(action)
-        seconds = time.perf_counter() - start
-        while any(envs.env_method("kernel_interpreted")):
-            envs.step(action)
-        compiled_after = time.perf_counter() - start
-        envs.env_method("wait_for_workers")
-        envs.close()
-    elif case == "subproc_cartpole":
-        import numpy as np
-        from stable_baselines3.common.vec_env import SubprocVecEnv
-
-        start = time.perf_counter()
-        envs = SubprocVecEnv([lambda: gym.make("CartPole-v1")] * 4)
-        envs.reset()
-        envs.step(np.zeros(4, dtype=np.int64))
-        seconds = compiled_after = time.perf_counter() - start
-        envs.close()
-    else:
-        from numba.core import event
-        env_id, num_envs = {"make": ("BoxToss-v0", 0), "make_vec": ("BoxToss-v0", 64),
-                            "make_on_box": ("BoxToss-OnBox-v0", 0), "make_vec_on_box": ("BoxToss-OnBox-v0", 8)}[case]
-        with event.install_recorder("numba:compile") as recorder:
-            env = gym.make_vec(env_id, num_envs=num_envs) if num_envs else gym.make(env_id)
-            env.reset(seed=0)
-            env.step(env.action_space.sample())
-        seconds, cpu = time.perf_counter() - start, time.process_time() - start_cpu
-        compiled = sum(1 for _, e in recorder.buffer if e.is_start)  # numba compilations here (loads not counted)
-        simulator = env.unwrapped.simulator if num_envs else env.unwrapped._simulator
-        while getattr(simulator, "interpreted", False):  # throwing on, as a training loop would
+    background_compile.InterpretedStart.run = counted_run
+    recording = event.install_recorder("numba:compile")
+    recorder = recording.__enter__()
+    made = time.perf_counter()
+    env = gym.make_vec(env_id, num_envs=num_envs) if num_envs else gym.make(env_id)
+    env.action_space.seed(0)
+    env.reset(seed=0)
+    _, _, terminated, truncated, _ = env.step(env.action_space.sample())
+    first = time.perf_counter()
+    result = {"first_throw": first - made, "import": imported, "cpu": time.process_time() - cpu_start,
+              "compiled_here": sum(1 for _, e in recorder.buffer if e.is_start),
+              "first_interpreted": interpreted["runs"] > 0, "package": box_toss_env.__file__}
+    windows, cpu_windows, interpreted_windows = [], [], []
+    end, count, runs, cpu = first + window, 0, interpreted["runs"], time.process_time()
+    while len(windows) < round(seconds / window):
+        if not num_envs and np.any(terminated | truncated):
             env.reset()
-            env.step(env.action_space.sample())
-        compiled_after = time.perf_counter() - start
-        wait_for_workers()  # a worker still compiling other kernels (none expected) finishes before the warm run
-    print(json.dumps({"seconds": seconds, "cpu": cpu, "compiled": compiled, "numba_import": numba_import,
-                      "compiled_after": compiled_after, "package": box_toss_env.__file__}))
+        _, _, terminated, truncated, _ = env.step(env.action_space.sample())
+        count += max(num_envs, 1)
+        now = time.perf_counter()
+        if now >= end:
+            windows.append(count / (now - end + window))
+            cpu_windows.append(count / (time.process_time() - cpu))
+            interpreted_windows.append(interpreted["runs"] > runs)
+            end, count, runs, cpu = now + window, 0, interpreted["runs"], time.process_time()
+    last = interpreted["last"]
+    result.update(windows=windows, cpu_windows=cpu_windows, interpreted_windows=interpreted_windows,
+                  compiled_after=None if last is None else last - made, load=os.getloadavg()[0])
+    background_compile.wait_for_workers()  # the worker's kernel in the cache before the warm run
+    print(json.dumps(result))
 """)
 
-CASES = {
-    "make": 'gym.make("BoxToss-v0")',
-    "make_vec": 'make_vec("BoxToss-v0", num_envs=64)',
-    "make_vec_after_make": "make_vec(64) after a gym.make throw",
-    "make_on_box": 'gym.make("BoxToss-OnBox-v0")',
-    "make_vec_on_box": 'make_vec("BoxToss-OnBox-v0", num_envs=8)',
-    "subproc": "SB3 SubprocVecEnv, 4 workers",
-    "subproc_cartpole": "the same with CartPole-v1 (SB3's own start)",
-}
 
-
-def run_case(case: str, cache: str, pythonpath: str) -> dict:
-    env = {**os.environ, "NUMBA_CACHE_DIR": cache, "PYTHONPATH": pythonpath, "BOX_TOSS_ENV_START_INTERPRETED": "1"}
-    done = subprocess.run(
-        [sys.executable, "-c", PROBE, case],
-        env=env,
-        capture_output=True,
-        text=True,
-        check=False,
-        cwd=tempfile.gettempdir(),
-        timeout=1800,
-    )
+def run_probe(env_id: str, num_envs: int, cache: str, pythonpath: str, seconds: float, window: float) -> dict:
+    """One run in a fresh interpreter (working folder: a new empty directory)."""
+    env = {key: value for key, value in os.environ.items() if key not in ("PYTHONPATH", "NUMBA_DISABLE_JIT")}
+    env.update(NUMBA_CACHE_DIR=cache, PYTHONPATH=pythonpath, BOX_TOSS_ENV_START_INTERPRETED="1")
+    with tempfile.TemporaryDirectory(prefix="box_toss_cold_start_cwd_") as folder:
+        done = subprocess.run(
+            [sys.executable, "-c", PROBE, env_id, str(num_envs), str(seconds), str(window)],
+            env=env,
+            capture_output=True,
+            text=True,
+            check=False,
+            cwd=folder,
+            timeout=seconds + 1800,
+        )
     if done.returncode != 0:
-        raise RuntimeError(f"case {case} failed:\n{done.stderr}")
+        raise RuntimeError(f"{env_id} (num_envs {num_envs}) failed:\n{done.stderr}")
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
-def measure(repeats: int, pythonpath: str, cases: list[str], log=print) -> dict[str, dict[str, list]]:
-    """Per case, the cold and the warm runs' results, ``repeats`` of each (a fresh cache per repeat)."""
-    results = {case: {"cold": [], "warm": []} for case in cases}
-    for repeat in range(repeats):
-        for case in cases:
-            with tempfile.TemporaryDirectory(prefix="box_toss_cold_start_") as cache:
-                if case == "make_vec_after_make":  # "cold": only the single env's throw is cached
-                    run_case("make", cache, pythonpath)
-                for state in ("cold", "warm"):
-                    result = run_case("make_vec" if case == "make_vec_after_make" else case, cache, pythonpath)
-                    results[case][state].append(result)
-                    log(f"  repeat {repeat + 1}/{repeats} {case:8} {state}: {result['seconds']:.2f} s")
-    return results
+def env_load() -> float:
+    return os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
 
 
-def summary(values: list[float]) -> str:
-    """Median and range of ``values``."""
-    if len(values) == 1:
-        return f"{values[0]:.2f}"
-    return f"{statistics.median(values):.2f} ({min(values):.2f}-{max(values):.2f})"
+def worker_compiles(cache: str) -> list[tuple[str, float]]:
+    """(kernel, CPU seconds) of every compile the workers logged in ``cache``."""
+    found = []
+    for log in sorted(Path(cache).rglob("box_toss_env-compile.log")):
+        for line in log.read_text().splitlines():
+            if ": compiled " in line and " s of CPU)" in line:
+                kernel = line.split(": compiled ", 1)[1].rsplit(" in ", 1)[0]
+                found.append((kernel, float(line.rsplit("(", 1)[1].split(" s of CPU")[0])))
+    return found
 
 
-def report(results: dict[str, dict[str, list]], repeats: int) -> str:
+def measure(ids, pythonpath: str, seconds: float, window: float, log=print) -> list[dict]:
+    """Per id and mode (single, batched), the empty-cache and the warm run, each in a fresh cache."""
+    cases = []
+    for env_id in ids:
+        for num_envs in (0, VECTOR_ENVS.get(env_id, 64)):
+            with tempfile.TemporaryDirectory(prefix="box_toss_cold_start_cache_") as cache:
+                load = env_load()
+                empty = run_probe(env_id, num_envs, cache, pythonpath, seconds, window)
+                compiles = worker_compiles(cache)
+                warm = run_probe(env_id, num_envs, cache, pythonpath, seconds, window)
+            case = {"id": env_id, "num_envs": num_envs, "empty": empty, "warm": warm, "worker": compiles, "load": load}
+            cases.append(case)
+            log(
+                f"  {env_id} {num_envs or 'single'}: empty {empty['first_throw']:.2f} s, warm "
+                f"{warm['first_throw']:.2f} s, worker {sum(c for _, c in compiles):.1f} s of CPU (load {load:.1f})"
+            )
+    return cases
+
+
+def first_window_share(run: dict, key: str = "cpu_windows") -> float:
+    """The first window's throughput over the median window's (of the same run): per second of the process's
+    CPU (``cpu_windows``: what a busy machine does not change) or of wall time (``windows``)."""
+    windows = run[key]
+    return windows[0] / statistics.median(windows) if windows else float("nan")
+
+
+def report(cases: list[dict], seconds: float, window: float) -> str:
     import numba
 
-    load = ", ".join(f"{value:.1f}" for value in os.getloadavg()) if hasattr(os, "getloadavg") else "n/a"
     lines = [
-        f"numba {numba.__version__}, {os.cpu_count()} cores (load average {load} at the end: a shared machine)",
-        f"first throw in a fresh interpreter: wall time [s], median of {repeats} (min-max), and the interpreter's "
-        "CPU time [s], median",
-        "cold: NUMBA_CACHE_DIR empty; warm: filled by the cold run; compiled after: when "
-        "the throws (going on) ran the compiled kernel, not its interpreted copy, in the cold run [s], median; "
-        "compilations: numba compilations in the measured process in the cold run",
+        f"numba {numba.__version__}, {os.cpu_count()} cores, a shared machine: load = the 1-minute load average "
+        "before the case",
+        "first [s]: from gym.make to the end of the first step (the package imported), wall; cpu [s]: the "
+        "interpreter's CPU to that point, import included; interp: the first throw ran interpreted; compiled after "
+        "[s]: the end of the last interpreted throw; worker [s]: CPU of the background compile (its log); "
+        "compiles: numba compilations in the warm process; first window: the throughput of the first "
+        f"{window:g} s after the first throw over the run's median {window:g}-s window, per second of the "
+        "process's CPU (per second of wall time in brackets); compiled: the warm run's median window [throws "
+        "per second of wall time]",
+        f"goals: empty first <= {FIRST_THROW_EMPTY:g} s; warm first <= {FIRST_THROW_WARM:g} s, warm first window "
+        f">= {FIRST_WINDOW_SHARE:.0%}",
         "",
-        f"{'case':44} {'cold':>19} {'cpu':>5} {'warm':>17} {'cpu':>5} {'compiled after':>15} {'compilations':>13}",
+        f"{'id':22} {'envs':>4} | {'empty: first':>12} {'cpu':>5} {'interp':>6} {'compiled after':>14} "
+        f"{'worker':>6} | {'warm: first':>11} {'cpu':>5} {'compiles':>8} {'first window':>13} {'compiled':>9} | "
+        f"{'load':>4}",
     ]
-    for case, runs in results.items():
-        cells = []
-        for state in ("cold", "warm"):
-            cells.append(summary([r["seconds"] for r in runs[state]]))
-            cpu = [r["cpu"] for r in runs[state] if r["cpu"] is not None]
-            cells.append(f"{statistics.median(cpu):.2f}" if cpu else "-")
-        after = f"{statistics.median(r['compiled_after'] for r in runs['cold']):.2f}"
-        compiled = "-" if case.startswith("subproc") else str(runs["cold"][0]["compiled"])
+    for case in cases:
+        empty, warm = case["empty"], case["warm"]
+        after = "-" if empty["compiled_after"] is None else f"{empty['compiled_after']:.1f}"
+        compiled = statistics.median(warm["windows"]) if warm["windows"] else float("nan")
+        share = f"{first_window_share(warm):.0%} ({first_window_share(warm, 'windows'):.0%})"
         lines.append(
-            f"{CASES[case]:44} {cells[0]:>19} {cells[1]:>5} {cells[2]:>17} {cells[3]:>5} {after:>15} {compiled:>13}"
+            f"{case['id']:22} {case['num_envs'] or 1:>4} | {empty['first_throw']:>12.2f} {empty['cpu']:>5.2f} "
+            f"{'yes' if empty['first_interpreted'] else 'no':>6} {after:>14} "
+            f"{sum(c for _, c in case['worker']):>6.1f} | {warm['first_throw']:>11.2f} {warm['cpu']:>5.2f} "
+            f"{warm['compiled_here']:>8} {share:>13} {compiled:>9.0f} | {case['load']:>4.1f}"
         )
-    numba_import = [r["numba_import"] for runs in results.values() for r in runs["warm"]]
-    lines += ["", f"of which `import numba` alone: {statistics.median(numba_import):.2f} s of CPU (median, warm runs)"]
-    return "\n".join(lines)
+    return "\n".join(lines + window_lines(cases, seconds, window) + compile_lines(cases))
+
+
+def window_lines(cases: list[dict], seconds: float, window: float) -> list[str]:
+    lines = [
+        "",
+        f"throughput in each {window:g}-s window for {seconds:g} s [throws per second of wall time] (*: a "
+        "window with interpreted throws)",
+    ]
+    for case in cases:
+        for state in ("empty", "warm"):
+            run = case[state]
+            cells = " ".join(
+                f"{w:.0f}{'*' if i else ''}" for w, i in zip(run["windows"], run["interpreted_windows"], strict=True)
+            )
+            lines.append(f"{case['id']:22} {case['num_envs'] or 1:>4} {state:5}: {cells}")
+    return lines
+
+
+def compile_lines(cases: list[dict]) -> list[str]:
+    kernels: dict[str, list[float]] = {}
+    for case in cases:
+        for kernel, cpu in case["worker"]:
+            kernels.setdefault(kernel, []).append(cpu)
+    lines = ["", "background compiles in the empty runs [s of CPU, min-max over the runs that compiled the kernel]"]
+    return lines + [f"{min(cpus):5.1f}-{max(cpus):5.1f} ({len(cpus)}x) {kernel}" for kernel, cpus in kernels.items()]
+
+
+def wheel_install(folder: Path) -> str:
+    """Build this checkout's wheel and install it (without dependencies: the running environment has
+    them) into ``folder``; returns the folder to put on PYTHONPATH."""
+    subprocess.run(
+        [sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(folder / "wheel"), str(REPO)], check=True
+    )
+    wheel = next((folder / "wheel").glob("box_toss_env-*.whl"))
+    site = folder / "site"
+    subprocess.run(
+        [sys.executable, "-m", "pip", "install", "--no-deps", "-q", "--target", str(site), str(wheel)], check=True
+    )
+    return str(site)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--repeats", type=int, default=3, help="cold and warm runs per case (default 3)")
-    parser.add_argument("--cases", nargs="+", choices=list(CASES), default=list(CASES))
+    parser.add_argument("--ids", nargs="+", choices=IDS, default=list(IDS))
+    parser.add_argument("--seconds", type=float, default=60.0, help="how long each run throws (default 60)")
+    parser.add_argument("--window", type=float, default=5.0, help="throughput window [s] (default 5)")
     parser.add_argument(
-        "--pythonpath", default=str(REPO), help="where the measured box_toss_env is (default: this checkout)"
+        "--install",
+        choices=("editable", "wheel"),
+        default="editable",
+        help="this checkout as it is, or built into a wheel and installed in a temporary folder",
     )
-    parser.add_argument("--readme", action="store_true", help="also write the figures into docs/cold-start.md")
+    parser.add_argument("--pythonpath", default=None, help="measure the box_toss_env found in DIR instead")
+    parser.add_argument(
+        "--write-docs",
+        "--readme",
+        dest="write_docs",
+        action="store_true",
+        help="also write the figures into docs/cold-start.md",
+    )
     args = parser.parse_args()
-    results = measure(args.repeats, args.pythonpath, args.cases)
-    package = results[args.cases[0]]["cold"][0]["package"]
-    text = report(results, args.repeats)
-    print(f"\n$ python -m benchmarks.cold_start  (package: {package})\n{text}")
-    if args.readme:
-        replace_section("cold-start", f"```text\n$ python -m benchmarks.cold_start\n{text}\n```")
+    if args.seconds < args.window or args.window <= 0:
+        parser.error(f"--window must be > 0 and at most --seconds, got {args.window} and {args.seconds}")
+    with tempfile.TemporaryDirectory(prefix="box_toss_cold_start_wheel_") as folder:
+        pythonpath = args.pythonpath or (wheel_install(Path(folder)) if args.install == "wheel" else str(REPO))
+        cases = measure(args.ids, pythonpath, args.seconds, args.window)
+    package = cases[0]["empty"]["package"]
+    command = "python -m benchmarks.cold_start" + (" --install wheel" if args.install == "wheel" else "")
+    text = report(cases, args.seconds, args.window)
+    print(f"\n$ {command}  (package: {package})\n{text}")
+    if args.write_docs:
+        replace_section("cold-start", f"```text\n$ {command}\n{text}\n```")
 
 
 if __name__ == "__main__":

@@ -475,7 +475,8 @@ def report(args: argparse.Namespace, log: Callable[[str], None]) -> tuple[str, s
     ]
     if quick:
         lines += ["", "(quick run: shorter window, smaller budget, no 5,000-box pile)"]
-    plot(rows)
+    if getattr(args, "write_docs", False):  # the figure is the docs' (a tracked file): written only when asked
+        plot(rows)
     return "\n".join(lines), readme_summary(rows, onbox, lines[0])
 
 

@@ -173,12 +173,13 @@ def plot(rows, path: Path = FIGURE) -> None:
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help=f"{QUICK_WINDOW:g} s window instead of {WINDOW:g} s")
-    parser.add_argument("--write-docs", action="store_true", help="write the table into docs/engine_scale.md")
+    parser.add_argument("--write-docs", action="store_true", help="write the table and the figure into docs/")
     args = parser.parse_args(argv)
     window = QUICK_WINDOW if args.quick else WINDOW
     began = time.perf_counter()
     rows = pareto_rows(window, log=lambda line: print(f"[{time.perf_counter() - began:6.1f} s] {line}", flush=True))
-    plot(rows)
+    if args.write_docs:  # the figure is the docs' (a tracked file): written only when asked
+        plot(rows)
     lines = [
         f"`python -m benchmarks.pile_pareto{' --quick' if args.quick else ''}`: {window:g} s of simulated time "
         f"per variant, awake; {engine_scale.load_text()}.",

@@ -44,7 +44,16 @@ def _register_envs() -> None:
         )
 
     if "BoxToss-Goal-v0" not in gymnasium.registry:
-        gymnasium.register(id="BoxToss-Goal-v0", entry_point="box_toss_env.envs.goal:BoxTossGoalEnv")
+        # gymnasium.make returns the goal env itself, without OrderEnforcing and PassiveEnvChecker (the env orders
+        # reset before step itself, and passes every checker): their wrappers do not forward compute_reward, which
+        # goal-conditioned tools (SB3's check_env, HER) call on the env they are given
+        gymnasium.register(
+            id="BoxToss-Goal-v0",
+            entry_point="box_toss_env.envs.goal:BoxTossGoalEnv",
+            vector_entry_point="box_toss_env.envs.goal_vector:BoxTossGoalVectorEnv",
+            order_enforce=False,
+            disable_env_checker=True,
+        )
 
 
 _register_envs()

@@ -58,6 +58,15 @@ def goal_observations(observations: np.ndarray) -> dict[str, np.ndarray]:
     return {"observation": observations, "achieved_goal": achieved, "desired_goal": desired}
 
 
+def refuse_base_box(kwargs: dict[str, Any]) -> None:
+    """A ValueError if ``kwargs`` ask for a base box, which the goal cannot describe."""
+    if kwargs.get("base_box"):
+        raise ValueError(
+            "BoxToss-Goal-v0 does not take base_box=True: the goal (x, at rest, tilt, face) "
+            "does not hold where the base box ended, which the distance depends on"
+        )
+
+
 class BoxTossGoalEnv(gym.Env):
     r"""BoxToss with gymnasium-robotics' goal-conditioned interface, so that HER can relabel each throw as
     a success for where it came to rest.
@@ -135,11 +144,7 @@ class BoxTossGoalEnv(gym.Env):
     metadata = BoxTossEnv.metadata
 
     def __init__(self, render_mode: str | None = None, **kwargs):
-        if kwargs.get("base_box"):
-            raise ValueError(
-                "BoxToss-Goal-v0 does not take base_box=True: the goal (x, at rest, tilt, face) "
-                "does not hold where the base box ended, which the distance depends on"
-            )
+        refuse_base_box(kwargs)
         self.throw_env = BoxTossEnv(render_mode=render_mode, **kwargs)
         self.render_mode = self.throw_env.render_mode
         self.config = self.throw_env.config

@@ -61,7 +61,7 @@ class OneLineParser(argparse.ArgumentParser):
 
 def make_parser() -> argparse.ArgumentParser:
     parser = OneLineParser(
-        prog="python -m box_toss_env.viewer",
+        prog="box-toss view",
         description="The seed demo's rigid-body viewer (any named scene), or BoxToss played by hand (--play). "
         "Keys are listed in the window's panel.",
         epilog="Headless: --frames N --out PATH draws N frames to PNG without opening a window "

@@ -222,11 +222,34 @@ MODEL_LABELS = {
 }
 
 
+def dropped_text(cleaning: data.Cleaning) -> str:
+    """What the cleaning dropped, by reason, for an error message."""
+    reasons = [f"{len(numbers)} {reason}" for reason, numbers in cleaning.dropped.items()]
+    return f"of {cleaning.files} traj_N.csv files, dropped: {'; '.join(reasons) or 'none'}"
+
+
+def check_sets(folder: Path, train: SquareImpacts, held: SquareImpacts, cleaning: data.Cleaning) -> None:
+    """A ValueError (``--data: ...``, one line) unless each class of impacts has a training drop (odd number) and
+    a held-out one (even number)."""
+    for kind in ("corner", "all"):
+        fit, test = int(train.mask(kind).sum()), int(held.mask(kind).sum())
+        if not fit or not test:
+            raise ValueError(
+                f"--data: {folder} has {fit} odd-numbered (fitted) and {test} even-numbered (held-out) usable "
+                f"{'corner ' if kind == 'corner' else ''}impacts; the report needs one of each at least "
+                f"({dropped_text(cleaning)})"
+            )
+
+
 def run_square(folder: Path, engines: bool = True, quick: bool = False) -> dict:
     drops, cleaning = data.load(folder)
+    drops = [d for d in drops if d.impact + 3 < data.FRAMES]  # recorded 3 frames past the impact (square_impacts)
+    if not drops:
+        raise ValueError(f"--data: no usable drop in {folder} ({dropped_text(cleaning)})")
     impacts = square_impacts(drops)
     train = impacts.subset(impacts.numbers % 2 == 1)
     held = impacts.subset(impacts.numbers % 2 == 0)
+    check_sets(folder, train, held, cleaning)
     results = []
     for kind in ("corner", "all"):
         fit_on, test_on = train.subset(train.mask(kind)), held.subset(held.mask(kind))
@@ -300,6 +323,27 @@ def read_mat(path: Path) -> dict:
             }
 
 
+def ellipse_arrays(path: Path) -> EllipseImpacts:
+    """The four arrays of ``data_ellipse.mat``'s struct ``data``, checked: a ValueError (``--ellipse: ...``)
+    naming the file and what is wrong if it is not a MATLAB file, or not of the dataset's layout."""
+    try:
+        record = read_mat(path)["data"]
+        field_of = (lambda name: record[name]) if isinstance(record, dict) else (lambda name: getattr(record, name))
+        arrays = [np.asarray(field_of(name), dtype=float) for name in ("states_i", "states_f", "n", "d")]
+    except Exception as error:  # scipy and h5py raise a dozen types for a file that is not theirs
+        if isinstance(error, OSError) and error.errno is not None:
+            raise  # the file system's refusal: said by main
+        raise ValueError(
+            f"--ellipse: {path} is not the planar impact dataset's data_ellipse.mat (a MATLAB struct data with "
+            f"states_i, states_f, n, d): {type(error).__name__}: {' '.join(str(error).split())[:120]}"
+        ) from None
+    shapes = [array.shape for array in arrays]
+    rows = shapes[0][0] if shapes[0] else 0
+    if not rows or [shape[1:] for shape in shapes] != [(6,), (6,), (3,), (3,)] or {s[0] for s in shapes} != {rows}:
+        raise ValueError(f"--ellipse: {path}: its arrays are of shapes {shapes}, not (n, 6), (n, 6), (n, 3), (n, 3)")
+    return EllipseImpacts(*arrays)
+
+
 def read_ellipse(path: Path) -> EllipseImpacts:
     """``data_ellipse.mat`` (a struct ``data`` with states_i, states_f, n, d) and, if it lies beside it,
     ``v_models.mat`` (``v_models``, n x 18: six models' vx, vy, omega)."""
@@ -309,14 +353,17 @@ def read_ellipse(path: Path) -> EllipseImpacts:
             f"--ellipse: {path} is not a file (download processed_data/data_ellipse.mat of "
             "mcubelab/planar-impact-dataset)"
         )
-    record = read_mat(path)["data"]
-    field_of = (lambda name: record[name]) if isinstance(record, dict) else (lambda name: getattr(record, name))
-    impacts = EllipseImpacts(*(np.asarray(field_of(name), dtype=float) for name in ("states_i", "states_f", "n", "d")))
+    impacts = ellipse_arrays(path)
     if not (np.allclose(impacts.normal[:, :2], [0.0, 1.0]) and np.allclose(impacts.tangent[:, :2], [1.0, 0.0])):
         raise ValueError(f"--ellipse: {path}: the contact is not on a horizontal floor (normal rows (0, 1, .))")
     models = path.with_name("v_models.mat")
     if models.is_file():
-        table = np.asarray(read_mat(models)["v_models"], dtype=float)
+        try:
+            table = np.asarray(read_mat(models)["v_models"], dtype=float)
+        except Exception as error:  # as in ellipse_arrays
+            if isinstance(error, OSError) and error.errno is not None:
+                raise
+            raise ValueError(f"--ellipse: {models} (beside it) is not the published models' v_models.mat") from None
         if table.shape == (len(impacts.before), 3 * len(PUBLISHED)):
             impacts.published = table.reshape(len(table), len(PUBLISHED), 3)
     return impacts
@@ -706,6 +753,10 @@ def main(argv=None) -> int:
         if str(problem).startswith("--"):
             raise SystemExit(f"{parser.prog}: error: {problem}") from None
         raise
+    except OSError as problem:
+        from box_toss_env.files import describe_os_error
+
+        raise SystemExit(f"{parser.prog}: error: {describe_os_error(problem)}") from None
     note = (
         ""
         if ellipse is not None

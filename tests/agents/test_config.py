@@ -22,7 +22,7 @@ def test_every_algorithm_has_valid_hyperparameters_for_every_variant(algo):
         hyperparams = config.load_hyperparams(algo, env_id)
         config.check_config(hyperparams, algo)
         kwargs = config.algorithm_kwargs(hyperparams, algo)
-        assert set(kwargs) <= algorithms.constructor_keys(algo)
+        assert set(kwargs) <= algorithms.constructor_keys(algo) | {"action_noise"}  # set from noise_type
         if algo == "ppo":
             assert hyperparams["n_steps"] * hyperparams["n_envs"] % hyperparams["batch_size"] == 0
 
@@ -100,7 +100,7 @@ def test_linear_schedule():
     [
         ({"n_envs": 0}, "n_envs"),
         ({"n_timesteps": True}, "n_timesteps"),
-        ({"policy": None}, "policy must be given"),
+        ({"policy": None}, "policy must be"),
         ({"policy_kwargs": {"activation_fn": "sigmoid"}}, "activation_fn"),
         ({"policy_kwargs": {"activation_fn": "nn.NotAThing"}}, "activation_fn"),
         ({"env_wrapper": "gymnasium.wrappers.ClipAction"}, "env_wrapper must be one of"),
@@ -133,7 +133,7 @@ def test_raw_recipes_are_valid_zoo_entries_without_a_wrapper(algo):
         assert env_id in VARIANTS
         hyperparams = config.load_hyperparams(algo, env_id, config.RAW_HYPERPARAMS)
         config.check_config(hyperparams, algo)
-        assert set(config.algorithm_kwargs(hyperparams, algo)) <= algorithms.constructor_keys(algo)
+        assert set(config.algorithm_kwargs(hyperparams, algo)) <= algorithms.constructor_keys(algo) | {"action_noise"}
         assert hyperparams.get("env_wrapper") is None
         assert hyperparams["torch_threads"] == config.load_hyperparams(algo, env_id)["torch_threads"]
 

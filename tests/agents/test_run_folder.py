@@ -173,18 +173,18 @@ def test_a_resume_without_checkpoint_or_statistics_refuses_naming_the_file(tiny_
     subprocess.run(["cp", "-r", str(tiny_run), str(copy)], check=True)
     for path in copy.glob("checkpoints/ppo_vecnormalize_128_steps.pkl"):
         path.unlink()
-    one_line_error(run("agents.train", "--resume", str(copy), ok=False), "ppo_vecnormalize_128_steps.pkl is missing")
+    one_line_error(run("agents.train", "--resume", str(copy), ok=False), "ppo_vecnormalize_128_steps.pkl is missing", 1)
     (copy / "vecnormalize.pkl").unlink()
     one_line_error(run("agents.evaluate", str(copy), "--targets", "4", ok=False), "vecnormalize.pkl is missing", 1)
     for path in list(copy.glob("checkpoints/*")) + [copy / "model.zip"]:
         path.unlink()
-    one_line_error(run("agents.train", "--resume", str(copy), ok=False), "no checkpoint to resume from")
+    one_line_error(run("agents.train", "--resume", str(copy), ok=False), "no checkpoint to resume from", 1)
 
 
 def test_paths_never_escape_the_runs_folder(tiny_run, tmp_path):
-    one_line_error(run(*train_tiny(tmp_path, "../x", 64), ok=False), "--name must be a single folder name")
+    one_line_error(run(*train_tiny(tmp_path, "../x", 64), ok=False), "--name: must be a single folder name")
     one_line_error(
-        run("agents.evaluate", str(tiny_run), "--tag", "../../x", ok=False), "--tag must be a single folder name"
+        run("agents.evaluate", str(tiny_run), "--tag", "../../x", ok=False), "--tag: must be a single folder name"
     )
     (tmp_path / "file").write_text("")
     one_line_error(run(*train_tiny(tmp_path / "file", "x", 64), ok=False), "is a file, not a folder")
@@ -199,7 +199,6 @@ def test_evaluations_with_other_settings_never_overwrite_each_other(tiny_run):
     one_line_error(
         run("agents.evaluate", str(tiny_run), "--targets", "8", "--tag", "mine", ok=False),
         "holds an evaluation with other settings",
-        1,
     )
     assert json.loads((tiny_run / "eval" / "mine" / "results.json").read_text())["n"] == 4
 

@@ -124,7 +124,7 @@ def test_a_killed_two_trial_sweep_resumes_from_its_checkpoints_and_writes_its_ta
         (["--trials", "0"], "trials must be >= 1"),
         (["--cpus-per-trial", "0"], "cpus_per_trial must be >= 1"),
         (["--timesteps", "5000"], "eval_freq must be in \\[1, n_timesteps\\)"),
-        (["--set", "policy_kwargs.activation_fn=nn.Nope"], "activation_fn must name a torch.nn activation"),
+        (["--set", "policy_kwargs.activation_fn=nn.Nope"], "activation_fn must be the name of a torch.nn"),
         (["--space", "missing.yml"], "no hyperparameter file missing.yml"),
     ],
 )

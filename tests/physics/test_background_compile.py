@@ -18,7 +18,7 @@ import pytest
 import box_toss_env
 from box_toss_env.envs.random_streams import RandomStreams, fill_uniform
 from box_toss_env.physics import grouped
-from box_toss_env.physics.compile import background_compile
+from box_toss_env.physics.compile import background_compile, compilation
 from box_toss_env.physics.compile.background_compile import MAX_INTERPRETED_BODIES, InterpretedStart, interpreted_copy
 from box_toss_env.physics.compile.compilation import jit_kernel
 
@@ -90,9 +90,9 @@ def test_the_interpreted_random_streams_draw_what_the_compiled_ones_draw():
 
 
 class RunningWorker:
-    """A stand-in for a worker that never finishes."""
+    """A stand-in for a background compile that never finishes."""
 
-    def done(self) -> bool:
+    def ready(self) -> bool:
         return False
 
 
@@ -194,3 +194,126 @@ def test_a_cold_env_throws_at_once_and_then_runs_the_kernel_a_worker_compiled(tm
     assert not result["later_interpreted"] and not result["batch_later_interpreted"]
     assert result["loaded"] == 1 and result["compiled_after"] == 0  # the worker's kernel, loaded from the cache
     assert result["same"] and result["same_batch"]
+    assert "compiles in the background" in done.stderr  # the log line that says why the first throws are slow
+    logs = list((tmp_path / "cache").rglob(background_compile.LOG_NAME))
+    compiled = [line.split(": ", 1)[1].split(" in ")[0] for log in logs for line in log.read_text().splitlines()]
+    assert sorted(line for line in compiled if line.startswith("compiled ")) == [
+        "compiled fill_uniform_kernel()",  # the batch's random streams, by a worker of their own
+        "compiled make_kernel_of(" + KERNEL_FIELDS + ")",
+    ]
+
+
+KERNEL_FIELDS = (
+    "solver='robust', use_impulses=True, use_penalty=True, use_friction=True, record=False, parallel=False, "
+    "boxes_collide=False"
+)
+
+# -- one compile between processes: the kernel's compile lock ---------------------------------------------
+TINY_KERNELS = """
+from box_toss_env.physics.compile.compilation import jit_kernel
+
+
+@jit_kernel
+def add_one(values):
+    for i in range(values.shape[0]):
+        values[i] += 1.0
+
+
+def kernel():
+    return add_one
+"""
+
+CLAIM_PROBE = textwrap.dedent("""
+    import json, os, sys, time
+    import numpy as np
+    from box_toss_env.physics.compile import background_compile, compilation
+    import tiny_kernels
+    start = background_compile.InterpretedStart(tiny_kernels.add_one, ("tiny_kernels", "kernel", {}))
+    values, runs, go, deadline = np.ones(3), 0, sys.argv[1], time.monotonic() + 600
+    while start.run((values,), (values,)):
+        runs += 1
+        if runs == 1:
+            print(json.dumps({"worker_at_start": start.compilation.worker is not None}), flush=True)
+        while go != "-" and not os.path.exists(go):  # the test holds the compile lock until it makes this file
+            time.sleep(0.01)
+        time.sleep(0.001)
+        assert time.monotonic() < deadline
+    start.kernel(values)  # compiled: loaded from the cache
+    print(json.dumps({"runs": runs, "values": values.tolist(), "loaded": sum(start.kernel.stats.cache_hits.values()),
+                      "compiled": sum(start.kernel.stats.cache_misses.values()),
+                      "worker": getattr(start.compilation, "worker", None) is not None}))
+""")
+
+
+def claim_probe(tmp_path: Path, go: str) -> subprocess.Popen:
+    env = {key: value for key, value in os.environ.items() if key not in ("NUMBA_DISABLE_JIT", "PYTHONPATH")}
+    env.update(PYTHONPATH=os.pathsep.join([str(tmp_path), str(PACKAGE.parent)]), **{background_compile.SWITCH: "1"})
+    return subprocess.Popen(
+        [sys.executable, "-c", CLAIM_PROBE, go],
+        env=env,
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+
+
+def tiny_kernel(tmp_path: Path):
+    (tmp_path / "tiny_kernels.py").write_text(TINY_KERNELS)
+    sys.path.insert(0, str(tmp_path))
+    try:
+        return importlib.import_module("tiny_kernels").add_one
+    finally:
+        sys.path.remove(str(tmp_path))
+        sys.modules.pop("tiny_kernels", None)
+
+
+def compile_log_lines(kernel) -> list[str]:
+    log = Path(compilation.cache_location(kernel)) / background_compile.LOG_NAME
+    return [line.split(": ", 1)[1] for line in log.read_text().splitlines()]
+
+
+def test_a_process_starts_no_worker_while_another_holds_the_compile_lock(tmp_path):
+    """While the kernel's compile lock is held (as by a process compiling it), a process that needs the kernel
+    runs interpreted and starts no worker of its own; once the lock comes free with the kernel still not in the
+    cache (its holder died), it starts one, which compiles the kernel, and then it runs compiled."""
+    kernel = tiny_kernel(tmp_path)
+    signature = compilation.argument_types(kernel, (np.ones(3),))
+    lock = compilation.compile_lock(kernel, signature)
+    go = tmp_path / "go"
+    with lock:
+        probe = claim_probe(tmp_path, str(go))
+        first = json.loads(probe.stdout.readline())
+        assert compilation.compiling_elsewhere(kernel, signature)  # as the probe saw it
+    go.touch()
+    out, err = probe.communicate(timeout=600)
+    assert probe.returncode == 0, err
+    result = json.loads(out.strip().splitlines()[-1])
+    assert first == {"worker_at_start": False} and "another process holds its compile lock" in err
+    assert result["worker"] and result["runs"] >= 1 and result["loaded"] == 1 and result["compiled"] == 0
+    assert result["values"] == [result["runs"] + 2.0] * 3  # each interpreted run and the compiled one added 1
+    lines = compile_log_lines(kernel)  # one worker, started when the lock came free
+    assert (
+        len(lines) == 2 and lines[0].startswith("compiling kernel() for ") and lines[1].startswith("compiled kernel()")
+    )
+
+
+def test_processes_starting_together_compile_the_kernel_once_and_agree(tmp_path):
+    """Two processes needing the same kernel at once on an empty cache: one worker compiles it (any other
+    worker finds it in the cache), both switch to the compiled kernel with the same results, and a third
+    process loads it and compiles nothing."""
+    kernel = tiny_kernel(tmp_path)
+    probes = [claim_probe(tmp_path, "-") for _ in range(2)]
+    results = []
+    for probe in probes:
+        out, err = probe.communicate(timeout=600)
+        assert probe.returncode == 0, err
+        results.append(json.loads(out.strip().splitlines()[-1]))
+    compiled = [line for line in compile_log_lines(kernel) if line.startswith("compiled ")]
+    assert len(compiled) == 1 and all(r["compiled"] == 0 and r["loaded"] == 1 for r in results)
+    assert [r["values"] for r in results] == [[r["runs"] + 2.0] * 3 for r in results]
+    third = claim_probe(tmp_path, "-")
+    out, err = third.communicate(timeout=600)
+    assert third.returncode == 0, err
+    result = json.loads(out.strip().splitlines()[-1])
+    assert result == {"runs": 0, "values": [2.0] * 3, "loaded": 1, "compiled": 0, "worker": False}

@@ -328,6 +328,9 @@ def test_processes_throwing_at_once_compile_the_kernel_once(tmp_path):
         results.append(json.loads(out.strip().splitlines()[-1]))
     assert sorted(r["compiled"] for r in results) == [0, 0, 1]
     assert sorted(r["loaded"] for r in results) == [0, 1, 1]
+    later, _ = run_probe(probe_env(PYTHONPATH=PACKAGE.parent, NUMBA_CACHE_DIR=tmp_path / "cache"), cwd=tmp_path)
+    assert later["compiled"] == 0 and later["loaded"] == 1  # the cache they left is whole and valid
+    assert {r["reward"] for r in [*results, later]} == {later["reward"]}  # and every process threw alike
 
 
 EDIT_PROBE = textwrap.dedent("""
@@ -368,3 +371,43 @@ def test_an_edited_engine_file_reaches_the_cached_stages_that_call_it(tmp_path):
     assert bound in source
     broadphase.write_text(source.replace(bound, bound.replace("(abs(cos_a)", "(0.01 + abs(cos_a)")))  # 1 cm wider
     assert touch() == "True"
+
+
+EVERY_ID_PROBE = textwrap.dedent("""
+    import gc, json
+    import gymnasium as gym
+    import box_toss_env
+    from numba.core import event
+    from box_toss_env.physics.compile.compilation import EngineDispatcher
+    ids = sorted(env_id for env_id in gym.registry if env_id.startswith("BoxToss-"))
+    with event.install_recorder("numba:compile") as recorder:
+        for env_id in ids:
+            for env in (gym.make(env_id), gym.make_vec(env_id, num_envs=2)):
+                env.reset(seed=0)
+                env.step(env.action_space.sample())
+    compiled = [e.data["dispatcher"].py_func.__qualname__ for _, e in recorder.buffer if e.is_start]
+    loaded = [d.py_func.__qualname__ for d in gc.get_objects()
+              if isinstance(d, EngineDispatcher) and sum(d.stats.cache_hits.values())]
+    print(json.dumps({"ids": ids, "compiled": compiled, "loaded": sorted(loaded)}))
+""")
+
+
+def test_a_second_process_compiles_nothing_for_any_id(tmp_path):
+    """Every registered id, made alone and batched, throws in a fresh process (working folder elsewhere, numba's
+    cache wherever this test process has it): the first process compiles what the cache lacks (nothing, once the
+    suite has thrown with every id), and a second one compiles nothing and loads its kernels from the cache."""
+    env = probe_env(PYTHONPATH=PACKAGE.parent, BOX_TOSS_ENV_START_INTERPRETED=0)
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        env["NUMBA_CACHE_DIR"] = os.environ["NUMBA_CACHE_DIR"]
+    runs = []
+    for _ in range(2):
+        done = subprocess.run(
+            [sys.executable, "-c", EVERY_ID_PROBE], env=env, cwd=tmp_path, capture_output=True, text=True, timeout=1800
+        )
+        assert done.returncode == 0, done.stderr
+        runs.append(json.loads(done.stdout.strip().splitlines()[-1]))
+    second = runs[1]
+    assert second["ids"] == sorted(env_id for env_id in gym.registry if env_id.startswith("BoxToss-"))
+    assert second["compiled"] == []
+    kinds = {name.split(".<locals>.")[0] for name in second["loaded"]}
+    assert {"make_robust_kernel", "make_colliding_robust_kernel", "_grouped_kernel_source", "fill_uniform"} <= kinds

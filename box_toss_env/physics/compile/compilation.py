@@ -1,5 +1,5 @@
 """How the engine is compiled: the two numba decorators every compiled function uses, where the
-compiled code is cached on disk, and one compilation at a time across processes.
+compiled code is cached on disk and loaded from there, and one compilation of a kernel across processes.
 
 Compile cost is per compiled function, so the decorators keep the number of compilations down:
 
@@ -19,16 +19,20 @@ failing to import, which is what numba alone does. ``kernel_support.engine_cache
 A cached function is found again only under the digest of every engine source (``EngineCache``): numba
 alone checks a function's own file, and served stages of unedited files with their edited callees' old code.
 
-``ensure_compiled`` makes a kernel's first compilation for a set of argument types hold a file lock
-in the cache directory: processes started together (``SubprocVecEnv``, ``AsyncVectorEnv``) wait for
-the first one's compilation and then load its result from the cache, instead of each compiling
-(and racing to write the same cache files, numba issue #4807).
+A cached kernel loads without numba refreshing its compiler's context first (``EngineCache.load_overload``):
+loading needs none of it, and it was most of a warm process's first throw.
+
+``ensure_compiled`` makes a kernel's first compilation for a set of argument types hold that kernel's lock
+file in the cache directory (``compile_lock``): processes started together (``SubprocVecEnv``,
+``AsyncVectorEnv``) wait for the first one's compilation and then load its result from the cache, instead of
+each compiling (and racing to write the same cache files, numba issue #4807); different kernels compile at once.
 """
 
 from __future__ import annotations
 
 import functools
 import hashlib
+import logging
 import os
 import warnings
 from collections.abc import Callable
@@ -39,9 +43,13 @@ from numba.core import config, types
 from numba.core.caching import FunctionCache
 from numba.core.dispatcher import Dispatcher
 from numba.core.registry import CPUDispatcher
+from numba.core.runtime import rtsys
 
-LOCK_NAME = "box_toss_env-compile.lock"
+LOCK_PREFIX = "box_toss_env-compile-"  # + a digest of the kernel and its signature + ".lock"
 LOCK_TIMEOUT = 600.0  # [s] a compilation elsewhere holding the lock longer than this is not waited for
+
+
+LOG = logging.getLogger("box_toss_env.compile")
 
 
 class CacheWarning(UserWarning):
@@ -66,6 +74,21 @@ class EngineCache(FunctionCache):
 
     def _index_key(self, sig, codegen):
         return super()._index_key(sig, codegen), engine_source_digest()
+
+    def load_overload(self, sig, target_context):
+        """numba's load without its ``target_context.refresh()`` first: the refresh installs every typing and
+        lowering registry (and imports ``scipy.linalg`` where SciPy is installed), 0.28-0.31 s of CPU, three
+        quarters of a warm process's first throw, while rebuilding a cached function needs none of it (the
+        kernel loads in 0.01-0.07 s). What a loaded function needs at run time is numba's runtime (NRT: the arrays
+        a kernel allocates), initialized here as the refresh would. A miss compiles, and numba's compiler
+        refreshes the context itself."""
+        try:
+            rtsys.initialize(target_context)
+            guard = self._guard_against_spurious_io_errors()
+        except AttributeError:  # numba's internals changed: its own load, refresh included
+            return super().load_overload(sig, target_context)
+        with guard:
+            return self._load_overload(sig, target_context)
 
 
 class EngineDispatcher(CPUDispatcher):
@@ -177,12 +200,14 @@ def cached_on_disk(kernel, args: tuple) -> bool:
     """Whether numba's on-disk cache holds ``kernel`` compiled for ``args``'s types. Best effort,
     through numba's cache index (the key its loader looks up); False if it cannot tell."""
     try:
-        return _cached_signature(kernel, argument_types(kernel, args))
+        return cached_for(kernel, argument_types(kernel, args))
     except Exception:  # noqa: BLE001  (not a numba dispatcher)
         return False
 
 
-def _cached_signature(kernel, signature: tuple) -> bool:
+def cached_for(kernel, signature: tuple) -> bool:
+    """Whether numba's on-disk cache holds ``kernel`` compiled for the numba types ``signature`` (its index,
+    read as numba's loader reads it); False if it cannot tell."""
     try:
         cache = kernel._cache
         key = cache._index_key(signature, kernel.targetctx.codegen())
@@ -199,16 +224,57 @@ def ensure_compiled(kernel, args: tuple) -> None:
     compile_locked(kernel, argument_types(kernel, args))
 
 
-def compile_locked(kernel, signature: tuple) -> None:
-    """Compile ``kernel`` for the numba types ``signature``, or load it from the disk cache. A
-    compilation holds a lock file in the cache directory, so that of several processes needing the
-    same kernel at once one compiles and the others load its result."""
+def compile_lock(kernel, signature: tuple) -> filelock.FileLock | None:
+    """The lock file a compilation of ``kernel`` for the numba types ``signature`` holds, in its cache
+    directory (one lock a kernel and signature: different kernels compile at once, one kernel once); None
+    where nothing is cached."""
     directory = cache_location(kernel)
-    if directory is not None and not _cached_signature(kernel, signature):
+    if directory is None:
+        return None
+    name = f"{kernel.py_func.__module__}.{kernel.py_func.__qualname__}{signature!r}"
+    digest = hashlib.sha256(name.encode()).hexdigest()[:16]
+    return filelock.FileLock(os.path.join(directory, f"{LOCK_PREFIX}{digest}.lock"), timeout=LOCK_TIMEOUT)
+
+
+def compiling_elsewhere(kernel, signature: tuple) -> bool:
+    """Whether another process (or thread) holds ``kernel``'s compile lock for ``signature`` now."""
+    lock = compile_lock(kernel, signature)
+    if lock is None:
+        return False
+    try:
+        lock.acquire(timeout=0)
+    except filelock.Timeout:
+        return True
+    except OSError:  # the directory went away: nobody can be compiling into it
+        return False
+    lock.release()
+    return False
+
+
+def compile_locked(kernel, signature: tuple) -> bool:
+    """Compile ``kernel`` for the numba types ``signature``, or load it from the disk cache; returns
+    whether it was compiled here. A compilation holds the kernel's lock file (``compile_lock``), so
+    that of several processes needing the same kernel at once one compiles and the others load its
+    result (numba's cache files are written whole, but two processes compiling one function race to
+    write its index, numba issue #4807)."""
+    misses = sum(kernel.stats.cache_misses.values())
+    lock = None if cached_for(kernel, signature) else compile_lock(kernel, signature)
+    if lock is not None:
+        if compiling_elsewhere(kernel, signature):
+            LOG.info(
+                "waiting for another process compiling %s into %s", kernel.py_func.__qualname__, cache_location(kernel)
+            )
+        else:
+            LOG.info(
+                "compiling %s in this process (not in numba's cache %s yet)",
+                kernel.py_func.__qualname__,
+                cache_location(kernel),
+            )
         try:
-            with filelock.FileLock(os.path.join(directory, LOCK_NAME), timeout=LOCK_TIMEOUT):
+            with lock:
                 kernel.compile(signature)  # numba looks in the cache first: another process may have compiled it
-            return
+            return sum(kernel.stats.cache_misses.values()) > misses
         except (filelock.Timeout, OSError):  # held too long elsewhere, or the directory went away: compile anyway
             pass
     kernel.compile(signature)
+    return sum(kernel.stats.cache_misses.values()) > misses
