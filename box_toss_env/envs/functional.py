@@ -161,7 +161,7 @@ class BoxTossFunctional:
     def __init__(self, **kwargs: Any):
         self.arguments = args = apply_split(with_defaults(kwargs, CORE_ARGUMENTS, type(self).__name__))
         task_names = [name for name in CORE_ARGUMENTS if name not in ("solver", "dt", "split")]
-        self.config = config = task_config.make_task_config(**{name: args[name] for name in task_names})
+        self.config = config = task_config.make_task_config({name: args[name] for name in task_names})
         # the engine validates the solver settings (dt, solver, material) and names what is wrong; it is
         # sized for the largest box drawn
         largest_box = (config.box_length_range[1], config.box_width_range[1])

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, cast
 
@@ -282,77 +283,85 @@ def box_sizes(box_length, box_width, box_length_range, box_width_range) -> tuple
     return lengths, widths
 
 
-def make_task_config(
-    *,
-    box_length,
-    box_width,
-    gravity,
-    mass,
-    friction,
-    restitution,
-    penalty_stiffness,
-    mass_range,
-    friction_range,
-    restitution_range,
-    release_x_range,
-    release_height_range,
-    release_angle_range,
-    target_x_range,
-    target_face,
-    max_speed,
-    launch_angle_range,
-    max_spin,
-    position_tolerance,
-    distance_weight,
-    orientation_weight,
-    success_bonus,
-    observe_dynamics,
-    max_sim_time,
-    base_box=False,
-    base_length_range=None,
-    base_height_range=None,
-    base_mass=None,
-    box_length_range=None,
-    box_width_range=None,
-) -> TaskConfig:
-    """Validate the task's keyword arguments into a TaskConfig: a TypeError names an argument of the
-    wrong type, a ValueError one outside its range (``ENV_RANGES``). ``*_range=None`` fixes that
-    quantity at its scalar argument. ``base_*=None`` takes ``BASE_DEFAULTS`` with ``base_box=True``
+TASK_SCALARS = (
+    "gravity",
+    "penalty_stiffness",
+    "max_speed",
+    "max_spin",
+    "position_tolerance",
+    "distance_weight",
+    "orientation_weight",
+    "success_bonus",
+    "max_sim_time",
+)
+TASK_INTERVALS = (
+    "release_x_range",
+    "release_height_range",
+    "release_angle_range",
+    "target_x_range",
+    "launch_angle_range",
+)
+TASK_OPTIONAL = {
+    "base_box": False,
+    "base_length_range": None,
+    "base_height_range": None,
+    "base_mass": None,
+    "box_length_range": None,
+    "box_width_range": None,
+}
+TASK_ARGUMENTS = (
+    "box_length",
+    "box_width",
+    "mass",
+    "friction",
+    "restitution",
+    "mass_range",
+    "friction_range",
+    "restitution_range",
+    "target_face",
+    "observe_dynamics",
+    *TASK_SCALARS,
+    *TASK_INTERVALS,
+    *TASK_OPTIONAL,
+)
+"""The task's keyword arguments ``make_task_config`` reads (those of ``TASK_OPTIONAL`` may be left out)."""
+
+
+def make_task_config(arguments: Mapping[str, Any]) -> TaskConfig:
+    """Validate the task's keyword arguments (``TASK_ARGUMENTS``, a mapping) into a TaskConfig: a TypeError names an
+    argument of the wrong type or missing, a ValueError one outside its range (``ENV_RANGES``). ``*_range=None``
+    fixes that quantity at its scalar argument. ``base_*=None`` takes ``BASE_DEFAULTS`` with ``base_box=True``
     (they must stay None without it)."""
-    lengths, widths = box_sizes(box_length, box_width, box_length_range, box_width_range)
-    scalar = checked_scalars(
-        gravity=gravity,
-        penalty_stiffness=penalty_stiffness,
-        max_speed=max_speed,
-        max_spin=max_spin,
-        position_tolerance=position_tolerance,
-        distance_weight=distance_weight,
-        orientation_weight=orientation_weight,
-        success_bonus=success_bonus,
-        max_sim_time=max_sim_time,
+    given = {**TASK_OPTIONAL, **arguments}
+    unknown = set(given) - set(TASK_ARGUMENTS)
+    missing = [name for name in TASK_ARGUMENTS if name not in given]
+    if unknown or missing:
+        raise TypeError(f"make_task_config: unknown arguments {sorted(unknown)}, missing {missing}")
+    lengths, widths = box_sizes(
+        given["box_length"], given["box_width"], given["box_length_range"], given["box_width_range"]
     )
-    pairs = checked_intervals(
-        release_x_range=release_x_range,
-        release_height_range=release_height_range,
-        release_angle_range=release_angle_range,
-        target_x_range=target_x_range,
-        launch_angle_range=launch_angle_range,
-    )
+    scalar = checked_scalars(**{name: given[name] for name in TASK_SCALARS})
+    pairs = checked_intervals(**{name: given[name] for name in TASK_INTERVALS})
+    release_height_range = given["release_height_range"]
     corner_radius = clear_release_height(lengths, widths, pairs["release_height_range"], release_height_range)
     clear = (pairs["target_x_range"], pairs["release_x_range"], corner_radius)
-    base = check_base_box(base_box, base_length_range, base_height_range, base_mass, *clear)
+    base = check_base_box(
+        given["base_box"], given["base_length_range"], given["base_height_range"], given["base_mass"], *clear
+    )
+    ranges = {
+        name: check_scalar_or_interval(name, given[name], given[f"{name}_range"], ENV_RANGES[name])
+        for name in ("mass", "friction", "restitution")
+    }
     return TaskConfig(
         half_length=0.5 * lengths[1],  # the largest box's, with a drawn size (the episode's: task.box_half_sizes)
         half_width=0.5 * widths[1],
         box_length_range=lengths,
         box_width_range=widths,
-        mass_range=check_scalar_or_interval("mass", mass, mass_range, ENV_RANGES["mass"]),
-        friction_range=check_scalar_or_interval("friction", friction, friction_range, ENV_RANGES["friction"]),
-        restitution_range=check_scalar_or_interval(
-            "restitution", restitution, restitution_range, ENV_RANGES["restitution"]
-        ),
-        target_face=check_choice("target_face", target_face, TARGET_FACE_KINDS),
-        observe_dynamics=check_bool("observe_dynamics", observe_dynamics),
+        mass_range=ranges["mass"],
+        friction_range=ranges["friction"],
+        restitution_range=ranges["restitution"],
+        target_face=check_choice("target_face", given["target_face"], TARGET_FACE_KINDS),
+        observe_dynamics=check_bool("observe_dynamics", given["observe_dynamics"]),
         **scalar,
         **pairs,
         **base,

@@ -138,19 +138,18 @@ class SceneRenderer(SceneDrawing):
         """
         pygame = import_pygame()
         surface = self._draw_scene(
-            pygame,
             position,
             angle,
             half_extents,
-            target_x,
-            target_face,
-            target_tolerance_m,
-            target_label,
-            text_lines,
-            camera,
+            target_x=target_x,
+            target_face=target_face,
+            target_tolerance_m=target_tolerance_m,
+            target_label=target_label,
+            text_lines=text_lines,
             result_lines=result_lines,
             result_success=result_success,
             trace=trace,
+            camera=camera,
         )
         rgb_bytes = pygame.image.tobytes(surface, "RGB")
         return np.frombuffer(rgb_bytes, dtype=np.uint8).reshape(self.height_px, self.width_px, 3).copy()
@@ -161,38 +160,18 @@ class SceneRenderer(SceneDrawing):
         angle: np.ndarray,
         half_extents: np.ndarray,
         *,
-        target_x: float | None = None,
-        target_face: int | None = None,
-        target_tolerance_m: float | None = None,
-        target_label: str | None = None,
-        text_lines: Sequence[str] = (),
-        result_lines: Sequence[str] = (),
-        result_success: bool | None = None,
-        trace: np.ndarray | None = None,
-        camera: Camera | None = None,
         fps: float | None = None,
+        **scene: Any,
     ) -> bool:
         """Draw the scene into the window (opened on first call), waiting to hold ``fps`` if given.
 
-        Takes the same scene arguments as ``render_rgb``. Returns False once the user has asked to close the
+        ``scene``: ``render_rgb``'s keyword arguments (``target_x``, ``target_face``, ``target_tolerance_m``,
+        ``target_label``, ``text_lines``, ``result_lines``, ``result_success``, ``trace``, ``camera``); another
+        name is a TypeError. Returns False once the user has asked to close the
         window (the QUIT event is left in pygame's queue); the caller then calls ``close``.
         """
         pygame = import_pygame()
-        surface = self._draw_scene(
-            pygame,
-            position,
-            angle,
-            half_extents,
-            target_x,
-            target_face,
-            target_tolerance_m,
-            target_label,
-            text_lines,
-            camera,
-            result_lines=result_lines,
-            result_success=result_success,
-            trace=trace,
-        )
+        surface = self._draw_scene(position, angle, half_extents, **scene)
         return self._present(pygame, surface, fps)
 
     def show_frame(self, frame: np.ndarray, fps: float | None = None) -> bool:
@@ -225,22 +204,22 @@ class SceneRenderer(SceneDrawing):
 
     def _draw_scene(
         self,
-        pygame: ModuleType,
         position: np.ndarray,
         angle: np.ndarray,
         half_extents: np.ndarray,
-        target_x: float | None,
-        target_face: int | None,
-        target_tolerance_m: float | None,
-        target_label: str | None,
-        text_lines: Sequence[str],
-        camera: Camera | None,
         *,
+        target_x: float | None = None,
+        target_face: int | None = None,
+        target_tolerance_m: float | None = None,
+        target_label: str | None = None,
+        text_lines: Sequence[str] = (),
         result_lines: Sequence[str] = (),
         result_success: bool | None = None,
         trace: np.ndarray | None = None,
+        camera: Camera | None = None,
     ) -> Any:
         """Draw the whole scene onto the reused surface and return the surface."""
+        pygame = import_pygame()
         camera = self.camera if camera is None else camera
         self._check_camera_size(camera)
         position, angle, half_extents = as_box_arrays(position, angle, half_extents)
