@@ -70,6 +70,14 @@ def folder(text: str) -> Path:
     return Path(text)
 
 
+def json_file(text: str) -> Path:
+    """An argparse type: the path of a JSON file (``.json``), not a folder."""
+    path = Path(text)
+    if not text.strip() or path.suffix != ".json" or path.is_dir():
+        raise argparse.ArgumentTypeError(f"must be the path of a .json file, got {text!r}")
+    return path
+
+
 def single_name(text: str) -> str:
     """An argparse type: a single folder name (a run's ``--name``, an evaluation's ``--tag``)."""
     if text in ("", ".", "..") or "/" in text or "\0" in text:

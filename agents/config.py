@@ -34,6 +34,7 @@ import yaml
 from agents import algorithms, schema
 from agents.command_line import InputError, OneLineParser  # noqa: F401  (OneLineParser: re-exported)
 from agents.env_wrappers import read_env_wrapper
+from agents.recipe_options import check_initial_mean, read_stages
 
 HYPERPARAMS = Path(__file__).parent / "hyperparams"
 RAW_HYPERPARAMS = HYPERPARAMS / "raw"
@@ -55,6 +56,9 @@ PROJECT_KEYS = {
     "eval_freq": "env steps between evaluations (0: never)",
     "eval_targets": "validation targets per evaluation",
     "checkpoint_freq": "env steps between checkpoints (0: never)",
+    "initial_mean": "where the untrained policy throws: [a0, a1, a2], 'ballistic' or {ballistic: [c0, c1, c2]} "
+    "(agents.initial_mean)",
+    "curriculum": "stages of env kwargs while training: [{until: throws, env_kwargs: {...}}, ...] (agents.curriculum)",
 }
 EXPRESSION_KEYS = ("policy_kwargs", "normalize", "replay_buffer_kwargs")  # Zoo evaluates these strings
 
@@ -77,15 +81,17 @@ def load_hyperparams(algo: str, env_id: str, directory: str | Path = HYPERPARAMS
     if env_id not in table:
         raise ConfigError(f"{path} has no entry for {env_id!r}; it has {sorted(table)}")
     config = read_zoo_entry(table[env_id], f"{path}: {env_id}")
-    config.update(project_settings(algo, env_id, project_path(directory)))
+    for path in project_paths(directory):
+        config.update(project_settings(algo, env_id, path))
     return config
 
 
-def project_path(directory: str | Path) -> Path:
-    """``project.yml`` of ``directory``, or of its parent if it has none (``raw/`` shares the recipes' settings)."""
-    path = Path(directory) / PROJECT_FILE
-    parent = Path(directory).parent / PROJECT_FILE
-    return parent if not path.exists() and parent.exists() else path
+def project_paths(directory: str | Path) -> list[Path]:
+    """The ``project.yml`` files of ``directory``'s settings, applied in this order: its parent's where the parent
+    has one (``raw/`` shares the recipes' settings), then its own where it has one."""
+    own, parent = Path(directory) / PROJECT_FILE, Path(directory).parent / PROJECT_FILE
+    paths = [path for path in (parent, own) if path.exists()]
+    return paths or [own]
 
 
 def has_entry(algo: str, env_id: str, directory: str | Path) -> bool:
@@ -312,6 +318,11 @@ def check_config(config: dict[str, Any], algo: str = "ppo") -> None:
         read_env_wrapper(config.get("env_wrapper"))
     except ValueError as error:
         raise ConfigError(str(error)) from None
+    try:
+        check_initial_mean(config)
+        read_stages(config.get("curriculum"), config.get("n_timesteps"))
+    except ValueError as error:
+        raise ConfigError(str(error)) from None
     if config.get("noise_std") is not None and config.get("noise_type") is None:
         raise ConfigError("noise_std needs noise_type: normal (the action noise it is the size of)")
     if config.get("noise_type") == "normal" and config.get("noise_std") is None:
@@ -330,9 +341,10 @@ OBSERVATION_PARTS = {
     # policy: (the observations it reads, the classes its buffers and features extractor must be)
     "MlpPolicy": ("flat (Box)", {"ReplayBuffer", "RolloutBuffer", "FlattenExtractor"}),
     "MultiInputPolicy": ("Dict", {"DictReplayBuffer", "DictRolloutBuffer", "HerReplayBuffer", "CombinedExtractor"}),
+    "CnnPolicy": ("image", {"ReplayBuffer", "RolloutBuffer", "NatureCNN"}),
 }
 """Which buffers and features extractors each policy's observations take (SB3 asserts or fails on the others,
-after the run folder exists); ``CnnPolicy`` reads images, which no BoxToss env observes."""
+after the run folder exists); ``CnnPolicy`` reads the pixel ids' images (``BoxToss-*-Pixels-v0``)."""
 
 
 def check_policy_parts(config: dict[str, Any], algo: str) -> None:
@@ -341,8 +353,8 @@ def check_policy_parts(config: dict[str, Any], algo: str) -> None:
     policy = config["policy"]
     if policy not in OBSERVATION_PARTS:
         raise ConfigError(
-            f"policy must be one of {sorted(OBSERVATION_PARTS)} (BoxToss observations are flat or a Dict, "
-            f"never images), got {policy!r}"
+            f"policy must be one of {sorted(OBSERVATION_PARTS)} (BoxToss observations are flat, a Dict or "
+            f"images), got {policy!r}"
         )
     observations, fitting = OBSERVATION_PARTS[policy]
     policy_kwargs = config.get("policy_kwargs") or {}

@@ -23,14 +23,15 @@ SECTION_PAGES = {
     "headline": README,  # the headline figures (agents.figures, from docs/generated/figures.yml)
     "benchmark-goal": DOCS / "agents" / "benchmark.md",  # python -m agents.benchmark --envs BoxToss-Goal-v0 --readme
     "agents": METHODOLOGY / "main-command.md",  # python -m agents.main --full --readme
-    "variant-gifs": DOCS / "environment.md",  # python -m agents.variant_gifs
+    "variant-gifs": DOCS / "environment.md",  # python -m agents.variant_gifs --write-docs
     "tune": DOCS / "hyperparameter-search.md",  # python -m agents.tune ... --readme
     "engine-benchmark": METHODOLOGY / "engine-benchmark.md",  # python -m benchmarks.engine --readme
     "throughput": DOCS / "throughput.md",  # python -m benchmarks.throughput --readme
+    "throughput-pixels": DOCS / "throughput.md",  # python -m benchmarks.throughput --pixels-only --readme
     "vector-reset": METHODOLOGY / "vector-reset.md",  # python -m benchmarks.vector_reset --readme
     "cold-start": DOCS / "cold-start.md",  # python -m benchmarks.cold_start --readme
     "rllib-sampling": METHODOLOGY / "rllib.md",  # python -m benchmarks.rllib_sampling --readme
-    "reports": DOCS / "reports.md",  # python -m reports.precision / stability / collisions
+    "reports": DOCS / "reports.md",  # python -m reports.precision / stability / collisions --write-docs
     "raw-actions": METHODOLOGY / "raw-actions.md",  # python -m agents.raw_actions --readme
     # python -m agents.raw_actions --by-face --envs BoxToss-ThisSideUp-v0 --readme
     "raw-faces": METHODOLOGY / "raw-actions.md",
@@ -40,7 +41,8 @@ SECTION_PAGES = {
     "stack-ppo": DOCS / "stack.md",  # python -m agents.stack_planner --model RUN --readme
     "stack-throughput": DOCS / "stack.md",  # python -m benchmarks.stack_throughput --readme
     "hidden-physics": DOCS / "hidden_physics.md",  # python -m agents.hidden_physics_tier report --readme
-    "reality-impacts": DOCS / "reality.md",  # python -m reports.reality.impacts --data DIR --ellipse FILE
+    # python -m reports.reality.impacts --data DIR --ellipse FILE --write-docs
+    "reality-impacts": DOCS / "reality.md",
 }
 
 

@@ -7,7 +7,7 @@ Each group of the file is written by the command that measures it (``update``):
 group      written by                                                  what it holds
 ========== =========================================================== ======================================
 main       ``python -m agents.main --full --readme``                   the main command: success, time
-pretrained ``python -m agents.pretrained export RUN ...``              the trained agents' success
+pretrained ``python -m agents.pretrained export RUN ... --write-docs`` the trained agents' success
 throughput ``python -m benchmarks.throughput --readme``                throws per second, one env and batched
 ========== =========================================================== ======================================
 

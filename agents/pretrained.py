@@ -6,6 +6,7 @@
     obs, reward, terminated, truncated, info = env.step(agent.predict(obs))
 
     python -m agents.pretrained export runs/pretrained/BoxToss-v0 ...   # run folders -> models/, evaluated, carded
+    python -m agents.pretrained export RUN ... --write-docs             # and the docs' figures (figures.yml, README)
     python -m agents.pretrained check                                   # every file against models/SHA256SUMS
 
 A folder ``models/<algo>-<env id>/`` holds what huggingface_sb3 uploads for a model (``<algo>-<env id>.zip``, the
@@ -222,7 +223,11 @@ def main(argv: list[str] | None = None) -> None:
     export_parser = commands.add_parser("export", help="run folders -> models/, evaluated, with model cards")
     export_parser.add_argument("runs", type=Path, nargs="+", metavar="RUN")
     export_parser.add_argument("--models", type=Path, default=MODELS)
-    export_parser.add_argument("--no-figures", action="store_true", help="leave docs/generated/figures.yml alone")
+    export_parser.add_argument(
+        "--write-docs",
+        action="store_true",
+        help="also rewrite the agents' figures in docs/generated/figures.yml and the README (tracked files)",
+    )
     check_parser = commands.add_parser("check", help="every model's files against models/SHA256SUMS")
     check_parser.add_argument("--models", type=Path, default=MODELS)
     args = parser.parse_args(argv)
@@ -239,7 +244,7 @@ def main(argv: list[str] | None = None) -> None:
         results = json.loads((folder / "results.json").read_text())
         low, high = results["success_interval"]
         print(f"{folder}: success {results['success_rate']:.1%} ({low:.1%}-{high:.1%}) on {results['n']:,}")
-    if not args.no_figures:
+    if args.write_docs:
         figures.update("pretrained", headline_figures(args.models))
 
 

@@ -15,7 +15,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import error as gym_error
 
-from agents import figures
+from agents import benchmark_store, figures
 from agents.ceiling import ceiling_of
 from agents.config import load_yaml
 from agents.doc_sections import page_for, replace_section
@@ -37,7 +37,6 @@ AGENT_LABELS = {
     # the oracle at its default search budget, which is not the ceiling (agents.ceiling)
     "oracle": f"oracle, default search (at most {ORACLE_MAX_THROWS} simulated throws per target)",
 }
-CEILING_ROOT = RUNS / "benchmark"  # agents.benchmark keeps each variant's ceiling sweep here
 COLOURS = {"random": "tab:gray", "short": "tab:orange", "full": "tab:blue", "oracle": "tab:green"}
 
 
@@ -125,20 +124,21 @@ def breakdown_table(rows: list[dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
-def ceiling_note(env_id: str, root: Path = CEILING_ROOT) -> str:
+def ceiling_note(env_id: str, store: Path | None = None) -> str:
     """What the oracle row is and where the ceiling is: the ceiling's figures if ``agents.benchmark`` has
-    saved the variant's sweep under ``root``, else the command that measures it."""
+    stored the variant's sweep (``docs/agents/benchmark_runs.json``, or ``store``), else the command that measures
+    it."""
     note = (
         f"oracle: the default search, at most {ORACLE_MAX_THROWS} simulated throws per target; it is not the "
         "ceiling, which the search reaches as it grows"
     )
-    path = Path(root) / env_id / "ceiling.json"
-    if not path.exists():
+    path = benchmark_store.STORE if store is None else Path(store)
+    sweep = benchmark_store.load(path)["ceilings"].get(env_id, {}).get("default")
+    if not sweep:
         return f"{note} (python -m agents.benchmark --envs {env_id}; docs/agents/benchmark.md)"
-    sweep = json.loads(path.read_text())
     top, first = ceiling_of(sweep), sweep[0]
     return (
-        f"{note}.\nceiling ({path}): {top['success_rate']:.1%} with {top['throws_per_target']:,.0f} simulated "
+        f"{note}.\nceiling ({path.name}): {top['success_rate']:.1%} with {top['throws_per_target']:,.0f} simulated "
         f"throws per target, on the first {top['n']} targets (the first budget of its sweep: "
         f"{first['success_rate']:.1%} with {first['throws_per_target']:,.0f})"
     )

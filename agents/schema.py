@@ -351,6 +351,10 @@ def zoo_rules() -> dict[str, Rule]:
         "eval_freq": Rule(integer, RANGES["eval_freq"]),
         "eval_targets": Rule(integer, RANGES["eval_targets"]),
         "checkpoint_freq": Rule(integer, RANGES["checkpoint_freq"]),
+        "initial_mean": Rule(
+            {"sequence", "str", "mapping", "none"}, open=True
+        ),  # agents.recipe_options.check_initial_mean
+        "curriculum": Rule({"sequence", "none"}),  # agents.recipe_options.read_stages
     }
 
 

@@ -154,9 +154,13 @@ def resolve(args: argparse.Namespace) -> TrainingPlan:
                 f"--env {env_id}: its observations are a {type(env.observation_space).__name__}; this command "
                 "trains on flat ones (the goal env's agents: python -m agents.benchmark --envs BoxToss-Goal-v0)"
             )
-        if config["policy"] != "MlpPolicy":
+        from stable_baselines3.common.preprocessing import is_image_space
+
+        images = is_image_space(env.observation_space)
+        wanted, kind = ("CnnPolicy", "image") if images else ("MlpPolicy", "flat (Box)")
+        if config["policy"] != wanted:
             raise configuration.ConfigError(
-                f"policy {config['policy']} does not read {env_id}'s flat (Box) observations: use MlpPolicy"
+                f"policy {config['policy']} does not read {env_id}'s {kind} observations: use {wanted}"
             )
         check_env_wrapper(env, env_id, config)
         shape = tuple(env.observation_space.shape)

@@ -31,7 +31,7 @@ import yaml
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.logger import Logger, TensorBoardOutputFormat
 
-from agents import algorithms, command_line
+from agents import algorithms, command_line, curriculum, initial_mean
 from agents import config as configuration
 from agents.checkpoints import (  # noqa: F401  (latest_checkpoint, model_timesteps: re-exported)
     BEST_FILES,
@@ -404,6 +404,20 @@ def resume_model(run_dir: Path, algo: str, checkpoint: Checkpoint, venv, off_pol
     return model
 
 
+def new_model(venv, config: dict[str, Any], env_id: str, seed: int, algo: str, run_dir: Path | None = None):
+    """The untrained model a run starts from: ``algo`` with the recipe's arguments on ``venv``, seeded, its starting
+    mean moved as the recipe's ``initial_mean`` says (``agents.initial_mean``; its fit reported in ``run_dir``)."""
+    model = algorithms.algorithm_class(algo)(
+        env=venv,
+        seed=seed,
+        device="cpu",
+        verbose=0,
+        **configuration.algorithm_kwargs(config, algo, cast(tuple[int, ...], venv.action_space.shape)[0]),
+    )
+    initial_mean.apply(model, config, env_id, seed, run_dir)
+    return model
+
+
 def train(
     run_dir: Path,
     config: dict[str, Any],
@@ -430,7 +444,7 @@ def train(
         env_id,
         config["n_envs"],
         seed=env_seed,
-        env_kwargs=config["env_kwargs"],
+        env_kwargs=curriculum.env_kwargs_at(config, checkpoint.steps if checkpoint else 0),  # a stage's or the recipe's
         vec_env_kwargs=config.get("vec_env_kwargs"),
         normalize=config.get("normalize", True),
         statistics=read_normalizer(checkpoint.statistics, observation_shape(env_id, config))
@@ -438,19 +452,12 @@ def train(
         else None,
         env_wrapper=config.get("env_wrapper"),
     )
-    cls = algorithms.algorithm_class(algo)
     off_policy = algorithms.is_off_policy(algo)
     (run_dir / "logs").mkdir(exist_ok=True)
     if checkpoint:
         model = resume_model(run_dir, algo, checkpoint, venv, off_policy)
     else:
-        model = cls(
-            env=venv,
-            seed=seed,
-            device="cpu",
-            verbose=0,
-            **configuration.algorithm_kwargs(config, algo, cast(tuple[int, ...], venv.action_space.shape)[0]),
-        )
+        model = new_model(venv, config, env_id, seed, algo, run_dir)
     model.set_logger(
         Logger(
             str(run_dir / "logs"),
@@ -462,6 +469,8 @@ def train(
     clock.timed = find_wrapper(venv, TimedVecEnv)
     validation = ValidationCallback(run_dir, config, env_id, clock, on_validation)
     callbacks = [validation, ClockCallback(clock)]
+    if config.get("curriculum"):
+        callbacks.append(curriculum.CurriculumCallback(env_id, config, seed))
     if config.get("checkpoint_freq"):
         callbacks.insert(0, AtomicCheckpointCallback(int(config["checkpoint_freq"]), run_dir, algo, clock, off_policy))
     remaining = max(int(config["n_timesteps"]) - model.num_timesteps, 0)

@@ -41,9 +41,16 @@ SEQUENTIAL = ("BoxToss-Stack-v0", "BoxToss-HiddenPhysics-v0")
 """Ids whose episodes are several throws (docs/stack.md, docs/hidden_physics.md): no one-throw GIF."""
 
 
+def pixel_ids() -> list[str]:
+    """The pixel-observation ids (``BoxToss-*-Pixels-v0``): their throws are their state variant's, whose GIF shows
+    them."""
+    return [env_id for env_id in gym.registry if env_id.startswith("BoxToss-") and env_id.endswith("-Pixels-v0")]
+
+
 def variant_ids() -> list[str]:
-    """Every registered one-throw BoxToss id, in registration order."""
-    return [env_id for env_id in gym.registry if env_id.startswith("BoxToss-") and env_id not in SEQUENTIAL]
+    """Every registered one-throw BoxToss id observing the state, in registration order."""
+    left_out = {*SEQUENTIAL, *pixel_ids()}
+    return [env_id for env_id in gym.registry if env_id.startswith("BoxToss-") and env_id not in left_out]
 
 
 def throw_env(env: gym.Env) -> gym.Env:

@@ -19,13 +19,11 @@ import time
 import numpy as np
 
 from agents.doc_sections import replace_section
-from benchmarks.other_scenes import UnsupportedScene, available_scene_engines, simulate_scene
+from benchmarks.other_scenes import available_scene_engines
 from box_toss_env.physics import (
     Box,
-    NonFiniteStateError,
     Scene,
     Simulator,
-    check_finite_stats,
     layout,
     make_settings,
     scenes,
@@ -148,82 +146,56 @@ def pile_cost(n: int, solver: str = "robust", settle: float = 2.0, steps: int = 
     }
 
 
-NEVER_SLEEP = 1e6  # [s] a sleep_time no pile run reaches
 PILE_SETTLE = 2.0  # [s] as ``pile_cost``
-PILE_STEPS, QUICK_PILE_STEPS = 256, 64
+PILE_STEPS, QUICK_PILE_STEPS = 256, 64  # at 1/256 s: the window each method steps at its own dt
+PILE_BUDGET = 10.0  # [s] of CPU per method and pile
+PILE_METHODS = ("robust", "seed", "robust, sleeping")
+BLOWN = 0.1  # a method whose energy rose above 1.1 times the dropped pile's, settling or in the window, blew it apart
 
 
-def pile_energy(scene: Scene, state: np.ndarray) -> float:
-    """Total energy of every box, 0.5 m |v|^2 + 0.5 I w^2 - m g y [J] (floor at y = 0, g < 0)."""
-    mass = np.array([box.mass for box in scene.boxes])
-    inertia = np.array([box.inertia for box in scene.boxes])
-    return float(
-        0.5 * mass @ (state[:, 3:5] ** 2).sum(axis=1)
-        + 0.5 * inertia @ state[:, 5] ** 2
-        - scene.gravity * mass @ state[:, 1]
-    )
+def our_pile_builders() -> dict:
+    """Our methods on a pile: the robust solver (the scene's defaults, sleeping off), the seed scheme, and the robust
+    solver letting the pile sleep (``until_rest``)."""
+    from benchmarks.suite_runs import OurWorld
 
-
-def time_from(scene: Scene, start: np.ndarray, steps: int, repeats: int) -> tuple[float, np.ndarray, np.ndarray]:
-    """(best wall time [s] of ``steps`` steps of ``scene`` from the state ``start``, single thread, the state
-    reached and the stats)."""
-    simulator = Simulator.for_scene(scene, parallel=False)
-    params, settings = scene.body_params(), make_settings(scene, steps, until_rest=False)
-    stats = np.zeros((scene.n_bodies, layout.STATS_SIZE))
-    state = start.copy()
-
-    def run():
-        state[:] = start
-        simulator.run(state, params, settings, stats)
-
-    return best_time(run, repeats), state, stats
+    return {
+        "robust": lambda case, sleep: OurWorld(case.scene, sleep),
+        "seed": lambda case, sleep: OurWorld(case.scene, sleep, solver="seed"),
+        "robust, sleeping": lambda case, sleep: OurWorld(case.scene, True, until_rest=True),
+    }
 
 
 def pile_comparison(
     sizes=PILE_SIZES, steps: int = PILE_STEPS, settle: float = PILE_SETTLE, repeats: int = 3
 ) -> list[tuple]:
-    """(method, boxes, ns per body-step or nan, note) on the same piles in every engine: ``scenes.pile(n)``
-    settled for ``settle`` s by our robust solver with nobody sleeping, then ``steps`` steps from that state
-    timed in each method, nobody sleeping (``sleep_time`` NEVER_SLEEP, Box2D's sleeping off), so every step
-    solves the pile's contacts (every engine at the scene's dt; ``benchmarks.engine_scale`` runs each at its own).
-    Ours: single thread on raw arrays; pymunk, Box2D 2.3 and v3 stepped from Python as
-    their users would (the loop alone, a fresh world per repeat). A method that blows the pile apart (its
-    energy at the end above 1.1 times the settled pile's) has no figure: it has no contacts left to solve.
-    Beside them, ``pile_cost``: the robust solver with its default sleeping."""
+    """(method, boxes, ns per body-step or nan, note) of ``scenes.pile(n)`` in every method, each settling its own pile
+    for ``settle`` s (untimed, sleeping off), then timed for ``steps`` steps of 1/256 s of simulated time at its own
+    step (``benchmarks.suite_runs``: thread CPU time, the stepping loop alone, repeats interleaved across methods,
+    the median). A method whose energy rose above 1 + BLOWN times the pile's as it was dropped (it can only lose
+    energy), by the window's start or in it (``scene_quality``), has no figure: it blows the pile apart. The
+    comparison across scenes and windows is ``benchmarks.engine_scale``."""
+    from benchmarks.scene_quality import box_arrays, energy
+    from benchmarks.scene_suite import Case, Plan, Segment
+    from benchmarks.suite_runs import run_case
+
+    builders = our_pile_builders()
+    methods = [*PILE_METHODS, *available_scene_engines()]
+    window = steps / 256
     rows = []
     for n in sizes:
-        scene = scenes.pile(n, sleep_time=NEVER_SLEEP)
-        settled = simulate(scene, duration=settle).final_state
-        start = pile_energy(scene, settled)
-        for solver in ("robust", "seed"):
-            ours = scene.replace(solver=solver)
-            seconds, state, stats = time_from(ours, settled, steps, repeats)
-            try:
-                check_finite_stats(stats, solver)
-            except NonFiniteStateError as error:
-                rows.append((solver, n, math.nan, f"non-finite at step {error.step}"))
-                continue
-            gain = pile_energy(ours, state) / start
-            if gain > 1.1:
-                rows.append((solver, n, math.nan, f"blows the pile apart (energy x{gain:.3g} in {steps} steps)"))
-                continue
-            rows.append((solver, n, seconds / (steps * n) * 1e9, ""))
-        default = pile_cost(n, settle=settle, steps=steps, repeats=repeats)
-        rows.append(
-            ("robust, sleeping", n, default["ns_per_body_step"], f"{default['moving_at_end']} boxes moving at the end")
-        )
-        for engine in available_scene_engines():
-            try:
-                runs = [
-                    simulate_scene(engine, scene, steps, record=False, sleep=False, state=settled)
-                    for _ in range(repeats + 1)
-                ]
-            except UnsupportedScene as error:
-                rows.append((engine, n, math.nan, str(error)))
-                continue
-            gain = pile_energy(scene, runs[-1].final_state) / start
-            note = f"blows the pile apart (energy x{gain:.3g})" if gain > 1.1 else ""
-            rows.append((engine, n, math.nan if note else min(r.ns_per_body_step for r in runs[1:]), note))
+        plan = Plan(False, (Segment(settle), Segment(window, "awake")))
+        case = Case(f"pile {n}", "pile", lambda n=n: scenes.pile(n), (plan,))
+        windows, _ = run_case(case, methods, repeats, PILE_BUDGET, builders=builders)
+        dropped = energy(case.scene.initial_state(), *box_arrays(case.scene)[1:], case.scene.gravity)
+        for w in windows:
+            ns = 1e9 * w.cpu / (w.steps * n) if w.steps and w.seconds else math.nan
+            note = w.note
+            highest = w.quality.energy_start + w.quality.energy_gain
+            if highest > (1 + BLOWN) * dropped:
+                ns, note = math.nan, f"blows the pile apart (energy x{highest / dropped:.3g} its drop's)"
+            elif w.engine == "robust, sleeping":
+                note = f"{w.quality.asleep_end} of {n} boxes asleep at the end"
+            rows.append((w.engine, n, ns, note))
     return rows
 
 
@@ -301,10 +273,10 @@ def main() -> None:
     pile_steps = QUICK_PILE_STEPS if args.quick else PILE_STEPS
     lines += [
         "",
-        f"boxes that collide: ns per body-step of a settled pile (scenes.pile, dt = 1/256 s, settled "
-        f"{PILE_SETTLE:g} s by the robust solver, then {pile_steps} steps timed from that same state in every "
-        "method, nobody sleeping but in 'robust, sleeping' (pile_cost); ours single-thread on raw arrays, "
-        f"pymunk and Box2D stepped from Python, the loop alone; best of {repeats})",
+        f"boxes that collide: ns per body-step of a pile (scenes.pile) each method settled itself for {PILE_SETTLE:g} "
+        f"s, then {pile_steps / 256:g} s timed at the method's own step (ours 1/256 s, the others 60 Hz), nobody "
+        "sleeping but in 'robust, sleeping'; one thread, thread CPU time, the stepping loop alone, pymunk and Box2D "
+        f"stepped from Python; median of {repeats} repeats interleaved across methods)",
     ]
     lines += pile_lines(pile_comparison(steps=pile_steps, repeats=repeats))
     imported, cold, warm = compile_times()

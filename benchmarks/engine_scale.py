@@ -1,363 +1,152 @@
-"""Every engine side by side in one run, from one box to 5,000: cost per body-step and per body per
-simulated second, awake, settling and asleep, with the quality bought (penetration, the top box's drift).
-Prints one table; asserts nothing.
+"""Every engine side by side on a suite of named scenes (``benchmarks.scene_suite``): piles of 16 to 5,000 boxes
+dropped, at rest and kept awake, structures, thin, tiny and huge boxes, throws into a pile, and Box2D's own
+benchmark scenes; each engine at its own defaults, from its own start; cost per body per simulated second in thread
+CPU time and what each engine did (penetration, energy, tunnelling, sleep, jitter, standing). Prints the tables;
+writes nothing unless asked.
 
-    python -m benchmarks.engine_scale [--quick] [--budget SECONDS] [--write-docs]
+    python -m benchmarks.engine_scale [--quick] [--cases NAMES] [--engines NAMES] [--budget S] [--repeats N]
+                                      [--json PATH] [--write-docs]
 
-Cases: piles of 1, 10 and 100 boxes (``scenes.pile(n)``), of 1,000 and 5,000 boxes laid out wide
-(``wide_pile``: ``WIDE_LAYERS`` layers, so the pile is not a 10 m column), the 210-box pyramid
-(``scenes.pyramid(rows=20)``), and the OnBox throw (ours only: the engine kernel per throw of
-``BoxToss-OnBox-v0`` beside ``BoxToss-v0``).
-
-Method. A pile is first settled for ``SETTLE`` s (untimed) by our engine at its scene defaults and ``SETTLE_DT``, up
-to ``OUR_SETTLE_MAX`` boxes (it leaves almost no overlap, which every engine accepts; starting ours from another
-engine's pile, with its millimetre overlaps, makes ours work harder; 1,000 boxes take under a second) and above
-that by the first available of Box2D v3, pymunk, Box2D 2.3; every engine then starts from that same state
-(the pyramid from its exact initial state) and is timed over ``WINDOW`` s of simulated time, its stepping loop
-alone, best of ``REPEATS`` runs as far as the budget allows:
-
-- **awake**: nobody may sleep (ours ``sleep_time`` 1e6 s; Box2D sleeping off on the world and on every
-  body; pymunk never sleeps), so every step solves every contact; timed after ``LEAD_IN`` s untimed in the
-  same world, so that every engine's contacts are warm;
-- **settled**: each engine's own sleeping allowed (ours ``until_rest=True``: the run stops once every box
-  has lain still ``sleep_time``, and its figures divide by the whole window, the steps skipped at rest
-  included, as a sleeping Box2D island's steps are; Box2D's islands sleep after 0.5 s; pymunk does not
-  sleep by default), from a fresh start: what falling asleep costs;
-- **asleep**: the same, once the scene has fallen asleep: each engine first runs ``LEAD_IN`` s untimed
-  (Box2D's world stepped on, ours a run until rest with a warm start, ``warm_start_memory``, which carries
-  the islands' sleep into the timed run, as one long run would), then the window is timed: what a pile
-  that lies still costs while a scene goes on.
-
-Figures: ns per body-step = wall / (steps n); us per body per simulated second = wall / (n T), T the
-simulated time covered, which puts engines with different steps on one scale. Each engine runs at its
-own default step (``DEFAULT_DT``: 60 Hz for the others, Box2D v3 with 4 substeps), ours at ``OUR_DT`` with
-the Gauss-Seidel stop ``OUR_SOLVER``.
-Per-case budget: an engine whose window would take longer than ``--budget`` s is timed over fewer steps
-(at least ``MIN_STEPS``; the table's ``steps`` column says how many, and the text which runs were cut).
-Quality, at the end of the awake run: max penetration (deepest box corner below the floor or inside another
-box, m) and how far the top box (the highest at the start) moved (m) since the start, lead-in included.
+``--write-docs`` writes the page (docs/engine_scale.md: its method and tables), the figure
+(docs/figures/engine_scale.png) and the README's summary; without it no file changes (``--json`` writes the
+measured windows where told). The method is written by the command with the page (``method``).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
-from functools import partial
+from dataclasses import asdict
+from importlib import metadata
 from pathlib import Path
 
 import numpy as np
 
+from benchmarks import scale_report
 from benchmarks.engine import load_text
 from benchmarks.other_scenes import (
+    BOX2D3_CONTACT,
+    BOX2D3_SUBSTEPS,
+    BOX2D_ITERATIONS,
     DEFAULT_DT,
-    UnsupportedScene,
+    PYMUNK_COLLISION_SLOP,
+    PYMUNK_ITERATIONS,
     available_scene_engines,
-    simulate_scene,
 )
-from box_toss_env.files import save_figure
-from box_toss_env.physics import Box, Scene, Simulator, layout, make_settings, scenes, simulate, warm_start_memory
+from benchmarks.scene_quality import DEEP, ENERGY_SHARE, JITTER_SPEED, STAND_DRIFT
+from benchmarks.scene_suite import AWAKE_LEAD_IN, SETTLE, WINDOW, Case, suite, wide_pile
+from benchmarks.suite_runs import (
+    BUDGET,
+    NEVER_SLEEP,
+    OUR_TUNED,
+    OURS,
+    OURS_TUNED,
+    QUICK_BUDGET,
+    QUICK_REPEATS,
+    REPEATS,
+    Window,
+    loop_overhead,
+    run_case,
+    until_rest_default,
+)
+from box_toss_env.files import write_atomic
+from box_toss_env.physics import layout, scenes
 
-OUR_DT: dict[str, float] = {"pile": 1 / 60, "wide pile": 1 / 60, "pyramid": 1 / 60}
-"""[s] our engine's step per kind of scene: the one place to edit when the engine picks its own. The cheapest of
-1/60, 1/90 and 1/120 at which the awake scene's deepest penetration stays under 1 mm throughout (the bound the
-engine issue sets); a user who wants every contact under 0.5 mm takes 1/90. The measurements that chose it are on
-docs/engine_scale.md ("How our settings were chosen")."""
-OUR_SOLVER = {"solver_tolerance": 1e-4, "solver_iterations": 32, "penetration_slop": 5e-5}
-"""Our solver settings for these scenes: the Gauss-Seidel stop (``Scene.solver_tolerance``, ``solver_iterations``;
-sweeps stop once they change the impulses by less than 1e-4 of their sum, after 32 at most) and
-``penetration_slop`` 50 um (the penalty starts once a contact is twice that deep and leaves up to that alone;
-Box2D's slop is 5 mm). The stop spares the sweeps that do not converge on a column of boxes, the slop lets the
-penalty rest instead of running at every step; a looser stop lets more contacts sink into the penalty's band,
-and a settled pile kept awake creeps at this stop, which the settled runs' sleeping ends. What each setting costs
-and buys, measured: docs/engine_scale.md ("How our settings were chosen"); ``benchmarks.pile_pareto`` turns the
-tolerance and the slop."""
-
-
-OURS = "ours"
-ENGINE_ORDER = (OURS, "box2d3", "box2d", "pymunk")
-SETTLER_ORDER = ("box2d3", "pymunk", "box2d")  # who settles a pile for everyone (ours if none is installed)
-PILE_SIZES = (1, 10, 100, 1000, 5000)
-QUICK_SIZES = (1, 10, 100, 1000)
-WIDE_FROM = 1000  # piles of this many boxes or more are laid out wide
-WIDE_LAYERS = 8
-PYRAMID_ROWS = 20  # 210 boxes
-SETTLE = 2.0  # [s] untimed settling of a pile
-SETTLE_DT = 1 / 90
-"""[s] the step of our settling of a pile, whatever step the pile is timed at (``OUR_DT``), so that every engine and
-every timed step start from one state; at 1/60 the wide piles keep boxes awake after the asleep runs' lead-in."""
-WINDOW, QUICK_WINDOW = 2.0, 1.0  # [s] simulated time timed per case
-MIN_STEPS = 4
-REPEATS = 3  # best of this many timed runs, as far as the budget allows
-OUR_SETTLE_MAX = 10_000  # piles up to this many boxes are settled by our engine
-BUDGET, QUICK_BUDGET = 5.0, 1.5  # [s] of wall time per (case, engine, mode)
-NEVER_SLEEP = 1e6  # [s] our sleep_time in awake runs
-MODES = ("awake", "settled", "asleep")
-LEAD_IN = {"awake": 0.5, "settled": 0.0, "asleep": 2.0}
-"""[s] simulated untimed before the window, per mode, in the same world (ours: a run whose warm start carries its
-contacts' impulses and its sleep into the timed one): awake, so that every engine is timed with its contacts warm,
-as a scene that goes on is (ours pays its cold start once, in the lead-in: docs/engine_scale.md says what it
-costs); asleep, so that Box2D's islands (0.5 s still) and ours have fallen asleep; settled from a fresh start: what
-falling asleep costs."""
+ENGINE_ORDER = (OURS, OURS_TUNED, "box2d3", "box2d", "pymunk")
+QUICK_WINDOW, QUICK_SETTLE = 0.5, 1.0  # [s]
 ONBOX_THROWS, QUICK_ONBOX_THROWS = 400, 100
 BATCH, BATCHES, QUICK_BATCHES = 256, 3, 1  # make_vec(BATCH, threads=1), batch steps timed
+ONBOX_REPEATS = 3
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 DOCS_PAGE = DOCS / "engine_scale.md"
 FIGURE = DOCS / "figures" / "engine_scale.png"
 MARKER = "engine-scale"
 README_MARKER = "engine-scale-summary"  # the README's few lines of it (agents.doc_sections.SECTION_PAGES)
-README_CASES = ("pile 100", "pile 1000", "pyramid 210")  # the cases of the awake goals, in the README
+
+__all__ = ["NEVER_SLEEP", "pile_case", "wide_pile"]
 
 
-def wide_pile(n: int, layers: int = WIDE_LAYERS, seed: int = 0) -> Scene:
-    """``scenes.pile(n)`` laid out ``layers`` rows high and ceil(n / layers) columns wide (the same 40 x 20 cm
-    boxes, 0.6 m and 0.3 m apart, shifted and tilted at random), so that a big pile stays low."""
-    template = scenes.pile(1)
-    rng = np.random.default_rng(seed)
-    columns = math.ceil(n / layers)
-    boxes = []
-    for k in range(n):
-        row, column = divmod(k, columns)
-        boxes.append(
-            Box(
-                length=0.4,
-                width=0.2,
-                mass=2.0,
-                position=(0.6 * (column - 0.5 * (columns - 1)) + float(rng.uniform(-0.08, 0.08)), 0.15 + 0.3 * row),
-                angle=float(rng.uniform(-0.2, 0.2)),
-            )
-        )
-    return template.replace(boxes=tuple(boxes))
+def pile_case(n: int):
+    """(kind, scene) of the pile of ``n`` boxes as the suite builds it, every setting at the scene defaults
+    (``benchmarks.substep_groups`` starts from it)."""
+    return ("wide pile", wide_pile(n)) if n >= 1000 else ("pile", scenes.pile(n))
 
 
-def pile_case(n: int) -> tuple[str, Scene]:
-    """(kind, scene) of the pile of ``n`` boxes, at our step for that kind."""
-    kind = "wide pile" if n >= WIDE_FROM else "pile"
-    scene = wide_pile(n) if kind == "wide pile" else scenes.pile(n)
-    return kind, scene.replace(dt=OUR_DT[kind], **OUR_SOLVER)
+def select(cases: list[Case], names: list[str] | None) -> list[Case]:
+    """The cases named (all if None); a ValueError names the unknown ones and the choices."""
+    if names is None:
+        return cases
+    known = {case.name: case for case in cases}
+    unknown = [name for name in names if name not in known]
+    if unknown:
+        raise ValueError(f"--cases: unknown {unknown}; choose from {list(known)}")
+    return [known[name] for name in names]
 
 
-def pyramid_case() -> Scene:
-    return scenes.pyramid(rows=PYRAMID_ROWS).replace(dt=OUR_DT["pyramid"], **OUR_SOLVER)
+def run_suite(
+    cases: list[Case], engines: list[str], repeats: int, budget: float, log: Callable[[str], None]
+) -> tuple[list[Window], list[tuple[str, str, str]]]:
+    """Every window of every case in every engine, and the order the timed runs ran in (case, engine, window)."""
+    windows, order = [], []
+    for case in cases:
+        found, ran = run_case(case, engines, repeats, budget, log)
+        windows += found
+        order += [(case.name, engine, label) for engine, label in ran]
+    return windows, order
 
 
-# -- quality -------------------------------------------------------------------------------------
-def corners(scene: Scene, state: np.ndarray) -> np.ndarray:
-    """(n, 4, 2) world corners of every box."""
-    half = np.array([[0.5 * b.length, 0.5 * b.width] for b in scene.boxes])
-    signs = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], dtype=float)
-    local = signs[None] * half[:, None]
-    c, s = np.cos(state[:, 2]), np.sin(state[:, 2])
-    x = c[:, None] * local[..., 0] - s[:, None] * local[..., 1] + state[:, None, 0]
-    y = s[:, None] * local[..., 0] + c[:, None] * local[..., 1] + state[:, None, 1]
-    return np.stack([x, y], axis=-1)
-
-
-def max_penetration(scene: Scene, state: np.ndarray) -> float:
-    """Deepest penetration [m]: a corner below the floor (-y), or a corner of one box inside another
-    (its distance to the nearest face of that box). Pairs come from overlapping bounding boxes."""
-    points = corners(scene, state)
-    depth = max(0.0, float(-points[..., 1].min()))
-    if not scene.boxes_collide or scene.n_bodies < 2:
-        return depth
-    low, high = points.min(axis=1), points.max(axis=1)
-    order = np.argsort(low[:, 0])
-    half = np.array([[0.5 * b.length, 0.5 * b.width] for b in scene.boxes])
-    for a_rank, i in enumerate(order):
-        for j in order[a_rank + 1 :]:
-            if low[j, 0] > high[i, 0]:
-                break
-            if low[j, 1] > high[i, 1] or low[i, 1] > high[j, 1]:
-                continue
-            for inner, outer in ((i, j), (j, i)):
-                c, s = math.cos(state[outer, 2]), math.sin(state[outer, 2])
-                d = points[inner] - state[outer, :2]
-                local = np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=1)
-                inside = half[outer] - np.abs(local)  # > 0 on both axes: the corner is inside
-                depth = max(depth, float(np.max(np.where((inside > 0).all(axis=1), inside.min(axis=1), 0.0))))
-    return depth
-
-
-# -- timing --------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class Row:
-    case: str
-    n: int
-    engine: str
-    dt: float  # [s] the engine's step
-    mode: str  # one of MODES
-    steps: int  # steps timed
-    wall: float  # [s]
-    penetration: float = math.nan  # [m]
-    drift: float = math.nan  # [m]
-    note: str = ""
-
-    @property
-    def ns_per_body_step(self) -> float:
-        return 1e9 * self.wall / (self.steps * self.n) if self.steps else math.nan
-
-    @property
-    def us_per_body_second(self) -> float:
-        """wall / (n T), T = steps dt the simulated time covered [us per body per simulated second]."""
-        return 1e6 * self.wall / (self.n * self.steps * self.dt) if self.steps else math.nan
-
-
-def budget_steps(step_seconds: float, dt: float, window: float, budget: float) -> int:
-    """Steps to time: the window's, or fewer (at least MIN_STEPS) if they would take over ``budget`` s."""
-    full = max(1, round(window / dt))
-    return int(min(full, max(MIN_STEPS, budget / max(step_seconds, 1e-9))))
-
-
-def run_ours(scene: Scene, start: np.ndarray, steps: int, mode: str) -> tuple[float, np.ndarray, str]:
-    """(wall s, final state, note) of our engine from ``start``, single thread, in ``mode`` (MODES): awake runs
-    never sleep, the others stop once every box is at rest (``until_rest``); the timed run follows an untimed one
-    of LEAD_IN[mode] s whose warm start it carries (the note says how many boxes were asleep when an asleep
-    run's timing began, if not all)."""
-    scene = scene.replace(sleep_time=NEVER_SLEEP) if mode == "awake" else scene
-    simulator = Simulator.for_scene(scene, parallel=False)
-    params = scene.body_params()
-    stats = np.zeros((scene.n_bodies, layout.STATS_SIZE))
-    simulator.run(start.copy(), params, make_settings(scene, 1, False), stats)  # compile / load, untimed
-    state, warm, note = start.copy(), warm_start_memory(scene.n_bodies), ""
-    until_rest = mode != "awake"
-    lead_in = round(LEAD_IN[mode] / scene.dt)
-    if lead_in:
-        simulator.run(state, params, make_settings(scene, lead_in, until_rest), stats, warm_start=warm)
-    if mode == "asleep":
-        asleep = int(np.count_nonzero(~np.isnan(stats[:, layout.REST_TIME])))
-        note = "" if asleep == scene.n_bodies else f"{asleep:,} of {scene.n_bodies:,} boxes asleep when timing began"
-    settings = make_settings(scene, steps, until_rest)
-    begin = time.perf_counter()
-    simulator.run(state, params, settings, stats, warm_start=warm)
-    return time.perf_counter() - begin, state, note
-
-
-def best_of(run: Callable[[], tuple[float, np.ndarray]], budget: float) -> tuple[float, np.ndarray]:
-    """(least wall time, final state) of up to REPEATS calls of ``run``, fewer if they would exceed ``budget``."""
-    wall, state = run()
-    spent, best = wall, wall
-    for _ in range(REPEATS - 1):
-        if spent + wall > budget:
-            break
-        wall, state = run()
-        spent, best = spent + wall, min(best, wall)
-    return best, state
-
-
-def time_ours(case: str, scene: Scene, start: np.ndarray, mode: str, window: float, budget: float) -> Row:
-    probe, _, _ = run_ours(scene, start, MIN_STEPS, "awake")
-    steps = budget_steps(probe / MIN_STEPS, scene.dt, window, budget)
-    notes = []
-
-    def run() -> tuple[float, np.ndarray]:
-        wall, state, note = run_ours(scene, start, steps, mode)
-        notes.append(note)
-        return wall, state
-
-    wall, state = best_of(run, budget)
-    # until_rest stops early: the rest of the window is simulated for free, so the figure is per ``steps``
-    return Row(case, scene.n_bodies, OURS, scene.dt, mode, steps, wall, *quality(scene, start, state), note=notes[-1])
-
-
-def time_other(engine: str, case: str, scene: Scene, start: np.ndarray, mode: str, window: float, budget: float) -> Row:
-    dt = DEFAULT_DT[engine]
-    sleep = mode != "awake"
-    untimed = round(LEAD_IN[mode] / dt)
-    try:
-        probe = simulate_scene(engine, scene, MIN_STEPS, record=False, sleep=False, state=start, dt=dt)
-    except UnsupportedScene as error:
-        return Row(case, scene.n_bodies, engine, dt, mode, 0, math.nan, note=str(error))
-    steps = budget_steps(probe.wall_seconds / MIN_STEPS, dt, window, budget)
-
-    def run() -> tuple[float, np.ndarray]:
-        done = simulate_scene(engine, scene, steps, record=False, sleep=sleep, state=start, dt=dt, untimed=untimed)
-        return done.wall_seconds, done.final_state
-
-    wall, state = best_of(run, budget)
-    return Row(case, scene.n_bodies, engine, dt, mode, steps, wall, *quality(scene, start, state))
-
-
-def quality(scene: Scene, start: np.ndarray, final: np.ndarray) -> tuple[float, float]:
-    """(max penetration [m], drift of the top box [m]: the one highest at the start)."""
-    top = int(np.argmax(start[:, 1]))
-    return max_penetration(scene, final), float(np.hypot(*(final[top, :2] - start[top, :2])))
-
-
-def settle(scene: Scene, engines: list[str], our_max: int = OUR_SETTLE_MAX) -> tuple[np.ndarray, str]:
-    """(the pile after SETTLE s, who settled it): ours up to ``our_max`` boxes, at the scene defaults of the
-    settings in OUR_SOLVER (the most exact: every setting measured starts from the same pile), else the first
-    available of SETTLER_ORDER (ours if none is)."""
-    for engine in SETTLER_ORDER if scene.n_bodies > our_max else ():
-        if engine in engines:
-            steps = round(SETTLE / DEFAULT_DT[engine])
-            return simulate_scene(engine, scene, steps, record=False, dt=DEFAULT_DT[engine]).final_state, engine
-    defaults = Scene()
-    exact = scene.replace(**{name: getattr(defaults, name) for name in OUR_SOLVER})
-    return simulate(exact.replace(dt=SETTLE_DT), duration=SETTLE).final_state, OURS
-
-
-def scale_rows(
-    sizes=PILE_SIZES,
-    engines: list[str] | None = None,
-    window: float = WINDOW,
-    budget: float = BUDGET,
-    log: Callable[[str], None] = lambda _: None,
-    our_settle_max: int = OUR_SETTLE_MAX,
-    pyramid: bool = True,
-) -> tuple[list[Row], dict[str, str]]:
-    """Every case in every engine, in every mode (MODES): (rows, who settled each case)."""
-    engines = [OURS, *available_scene_engines()] if engines is None else engines
-    others = [e for e in engines if e != OURS]
-    cases = [(f"pile {n}", *pile_case(n)[1:], True) for n in sizes]
-    cases += [(f"pyramid {pyramid_case().n_bodies}", pyramid_case(), False)] if pyramid else []
-    rows, settlers = [], {}
-    for name, scene, needs_settling in cases:
-        if needs_settling:
-            log(f"{name}: settling")
-            start, settlers[name] = settle(scene, others, our_settle_max)
-        else:
-            start = scene.initial_state()
-        for engine in engines:
-            for mode in MODES:
-                log(f"{name}: {engine}, {mode}")
-                timer = time_ours if engine == OURS else partial(time_other, engine)
-                rows.append(timer(name, scene, start, mode, window, budget))
-    return rows, settlers
+# -- ours per throw (the env path) ---------------------------------------------------------------
+ONBOX_ENVS = ("BoxToss-v0", "BoxToss-OnBox-v0")
 
 
 def onbox_rows(throws: int, batches: int) -> list[tuple[str, float, float, float, float]]:
     """(env id, bodies, engine kernel us per throw, us per body per simulated second, us per throw of a
     ``make_vec(256, threads=1)`` batch, env included) for BoxToss-v0 and BoxToss-OnBox-v0 at their defaults,
-    random actions, until rest (``env_throughput.kernel_seconds_per_throw``, the best of REPEATS runs over the same
-    throws, as the scenes' timings; ``batches`` batch steps timed)."""
+    random actions, until rest: ``env_throughput.kernel_seconds_per_throw`` in thread CPU time, the best of
+    ONBOX_REPEATS runs over the same throws, the two envs' runs interleaved; ``batches`` batch steps timed, thread
+    CPU time (``threads=1``: the calling thread steps the batch)."""
     import gymnasium as gym
 
     from benchmarks.env_throughput import kernel_seconds_per_throw
 
-    out = []
     actions = np.random.default_rng(0).uniform(-1.0, 1.0, (max(throws, BATCH * (batches + 1)), 3)).astype(np.float32)
-    for env_id in ("BoxToss-v0", "BoxToss-OnBox-v0"):
-        env = gym.make(env_id)
+    envs = {env_id: gym.make(env_id) for env_id in ONBOX_ENVS}
+    for env in envs.values():
         env.reset(seed=0)
         kernel_seconds_per_throw(env, actions[:20])  # compile / load, untimed
-        seconds = min(kernel_seconds_per_throw(env, actions[:throws]) for _ in range(REPEATS))
+    best = dict.fromkeys(ONBOX_ENVS, math.inf)
+    for _ in range(ONBOX_REPEATS):
+        for env_id, env in envs.items():
+            best[env_id] = min(best[env_id], kernel_seconds_per_throw(env, actions[:throws], time.thread_time))
+    out = []
+    for env_id, env in envs.items():
         simulated = simulated_seconds_per_throw(env, actions[:throws])
         bodies = env.unwrapped._state.shape[0]
         env.close()
-        envs = gym.make_vec(env_id, num_envs=BATCH, vectorization_mode="vector_entry_point", threads=1)
-        envs.reset(seed=0)
-        batch_actions = actions[: BATCH * (batches + 1)].reshape(-1, BATCH, 3)
-        envs.step(batch_actions[0])  # warm-up
-        begin = time.perf_counter()
-        for step_actions in batch_actions[1:]:
-            envs.step(step_actions)
-        batched = (time.perf_counter() - begin) / (batches * BATCH)
-        envs.close()
+        seconds = best[env_id]
+        batched = batch_seconds_per_throw(env_id, actions, batches)
         out.append((env_id, bodies, 1e6 * seconds, 1e6 * seconds / (bodies * simulated), 1e6 * batched))
     return out
+
+
+def batch_seconds_per_throw(env_id: str, actions: np.ndarray, batches: int) -> float:
+    """Thread CPU seconds per throw of ``make_vec(BATCH, threads=1)`` over ``batches`` batch steps after one."""
+    import gymnasium as gym
+
+    envs = gym.make_vec(env_id, num_envs=BATCH, vectorization_mode="vector_entry_point", threads=1)
+    envs.reset(seed=0)
+    batch_actions = actions[: BATCH * (batches + 1)].reshape(-1, BATCH, 3)
+    envs.step(batch_actions[0])  # warm-up
+    begin = time.thread_time()
+    for step_actions in batch_actions[1:]:
+        envs.step(step_actions)
+    seconds = (time.thread_time() - begin) / (batches * BATCH)
+    envs.close()
+    return seconds
 
 
 def simulated_seconds_per_throw(env, actions: np.ndarray) -> float:
@@ -371,98 +160,9 @@ def simulated_seconds_per_throw(env, actions: np.ndarray) -> float:
     return total / len(actions)
 
 
-# -- output --------------------------------------------------------------------------------------
-def fmt(value: float, spec: str) -> str:
-    return "-" if not math.isfinite(value) else format(value, spec)
-
-
-def table(rows: list[Row]) -> list[str]:
-    """One markdown table: a line per (case, engine), the modes side by side."""
-    by = {(r.case, r.engine, r.mode): r for r in rows}
-    keys = list(dict.fromkeys((r.case, r.engine) for r in rows))
+def onbox_lines(onbox) -> tuple[list[str], str]:
+    """(the page's table of ours per throw, the README's sentence about it)."""
     lines = [
-        "| case | boxes | engine | dt [s] | awake ns/body-step | awake us/body/sim-s | steps | "
-        "settled us/body/sim-s | asleep us/body/sim-s | max penetration [m] | top drift [m] |",
-        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|",
-    ]
-    for case, engine in keys:
-        awake, rest, asleep = (by[(case, engine, mode)] for mode in MODES)
-        drift = fmt(awake.drift, ".2e")
-        lines.append(
-            f"| {case} | {awake.n} | {engine} | {dt_text(awake.dt)} | "
-            f"{fmt(awake.ns_per_body_step, ',.0f')} | {fmt(awake.us_per_body_second, ',.1f')} | "
-            f"{awake.steps} | {fmt(rest.us_per_body_second, ',.1f')} | {fmt(asleep.us_per_body_second, ',.2f')} | "
-            f"{fmt(awake.penetration, '.2e')} | {drift} |"
-        )
-    notes = [r for r in rows if r.note and (r.mode == "awake" or r.engine == OURS)]
-    return lines + [f"- {r.engine}, {r.case}, {r.mode}: {r.note}" for r in notes]
-
-
-def dt_text(dt: float) -> str:
-    return f"1/{round(1 / dt)}" if abs(1 / dt - round(1 / dt)) < 1e-9 else f"{dt:g}"
-
-
-def plot(rows: list[Row], path: Path = FIGURE) -> None:
-    """Log-log: us per body per simulated second against boxes, one line per engine and mode (solid awake,
-    dashed settled, dotted asleep), piles only."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 4.5))
-    piles = [r for r in rows if r.case.startswith("pile") and r.steps]
-    for k, engine in enumerate(dict.fromkeys(r.engine for r in piles)):
-        for mode, style in zip(MODES, ("-", "--", ":"), strict=True):
-            points = sorted((r.n, r.us_per_body_second) for r in piles if r.engine == engine and r.mode == mode)
-            if points:
-                ax.loglog(*zip(*points, strict=True), style, marker="o", color=f"C{k}", label=f"{engine}, {mode}")
-    ax.set_xlabel("boxes in the pile")
-    ax.set_ylabel("wall time per body per simulated second [us]")
-    ax.set_title("Cost of a settled pile, one thread, each engine at its own step")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.tight_layout()
-    save_figure(fig, path, dpi=120)
-    plt.close(fig)
-
-
-def write_docs(text: str, page: Path = DOCS_PAGE, marker: str = MARKER) -> None:
-    """Put ``text`` between the page's ``marker`` markers."""
-    from agents.doc_sections import replace_section
-
-    replace_section(marker, text, readme=page)
-
-
-def report(args: argparse.Namespace, log: Callable[[str], None]) -> tuple[str, str]:
-    """(the page's generated text, the README's summary of it)."""
-    import numba
-
-    quick = args.quick
-    sizes = QUICK_SIZES if quick else PILE_SIZES
-    window = QUICK_WINDOW if quick else WINDOW
-    budget = args.budget if args.budget is not None else (QUICK_BUDGET if quick else BUDGET)
-    engines = [e for e in ENGINE_ORDER if e == OURS or e in available_scene_engines()]
-    rows, settlers = scale_rows(sizes, engines, window, budget, log)
-    log("OnBox throws")
-    onbox = onbox_rows(QUICK_ONBOX_THROWS if quick else ONBOX_THROWS, QUICK_BATCHES if quick else BATCHES)
-    lines = [
-        f"`python -m benchmarks.engine_scale{' --quick' if quick else ''}`: numba {numba.__version__}, "
-        f"one thread for every engine; {load_text()}.",
-        "",
-        f"Window {window:g} s of simulated time per case, per-case budget {budget:g} s of wall time: "
-        f"where the window would take longer, fewer steps are timed (`steps`, at least {MIN_STEPS}): "
-        f"{shortened_text(rows, window)}. "
-        "Settled: sleeping allowed, from a fresh start (ours until rest, so fewer steps when everyone sleeps). "
-        f"Asleep: the same after {LEAD_IN['asleep']:g} s untimed; awake after {LEAD_IN['awake']:g} s untimed, every "
-        "engine in its own world (ours carrying its contacts and sleep in a warm start). Piles settled "
-        f"{SETTLE:g} s first by " + ", ".join(f"{case}: {who}" for case, who in settlers.items()) + ".",
-        "",
-    ]
-    lines += table(rows)
-    lines += [
-        "",
         "Our engine per throw (until rest, random actions): the kernel alone, one env, and a batch of "
         f"`make_vec({BATCH}, threads=1)` with the env's own work included:",
         "",
@@ -473,98 +173,197 @@ def report(args: argparse.Namespace, log: Callable[[str], None]) -> tuple[str, s
         f"| {env_id} | {bodies} | {micros:,.0f} | {per:,.1f} | {batched:,.0f} |"
         for env_id, bodies, micros, per, batched in onbox
     ]
-    if quick:
-        lines += ["", "(quick run: shorter window, smaller budget, no 5,000-box pile)"]
-    if getattr(args, "write_docs", False):  # the figure is the docs' (a tracked file): written only when asked
-        plot(rows)
-    return "\n".join(lines), readme_summary(rows, onbox, lines[0])
-
-
-def readme_summary(rows: list[Row], onbox, header: str) -> str:
-    """Ours beside Box2D v3 awake on the README_CASES, and the throw onto a box beside a floor throw: the README's
-    lines, from the same run as the page."""
-    awake = {(row.case, row.engine): row for row in rows if row.mode == "awake"}
-    lines = [
-        "| awake, us per box per simulated second | ours | Box2D v3 | ours / Box2D v3 | penetration [m]: ours "
-        "| Box2D v3 | top drift [m]: ours | Box2D v3 |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|",
-    ]
-    for case in README_CASES:
-        ours, other = awake.get((case, OURS)), awake.get((case, "box2d3"))
-        if ours is None or other is None:
-            continue
-        ratio = ours.us_per_body_second / other.us_per_body_second
-        drifts = [fmt(row.drift, ".1e") for row in (ours, other)]
-        lines.append(
-            f"| {case} | {ours.us_per_body_second:,.1f} | {other.us_per_body_second:,.1f} | {ratio:.1f} | "
-            f"{fmt(ours.penetration, '.1e')} | {fmt(other.penetration, '.1e')} | {drifts[0]} | {drifts[1]} |"
-        )
     kernel = {env_id: micros for env_id, _, micros, _, _ in onbox}
-    throw = ""
-    if {"BoxToss-v0", "BoxToss-OnBox-v0"} <= set(kernel):
-        throw = (
-            f" A throw onto a box (`BoxToss-OnBox-v0`) costs the engine {kernel['BoxToss-OnBox-v0']:,.0f} us, "
-            f"{kernel['BoxToss-OnBox-v0'] / kernel['BoxToss-v0']:.1f} times a floor throw's "
-            f"{kernel['BoxToss-v0']:,.0f} us."
-        )
-    rest = {(row.case, row.engine, row.mode): row for row in rows if row.mode != "awake"}
-    still = [
-        f"{case}: ours {rest[(case, OURS, 'settled')].us_per_body_second:,.1f} and "
-        f"{rest[(case, OURS, 'asleep')].us_per_body_second:,.2f}, Box2D v3 "
-        f"{rest[(case, 'box2d3', 'settled')].us_per_body_second:,.1f} and "
-        f"{rest[(case, 'box2d3', 'asleep')].us_per_body_second:,.2f}"
-        for case in README_CASES
-        if all((case, engine, mode) in rest for engine in (OURS, "box2d3") for mode in ("settled", "asleep"))
-    ]
-    sleeping = (
-        f" Falling asleep from a fresh start, and asleep, us per box per simulated second: {'; '.join(still)}."
-        if still
-        else ""
+    if {"BoxToss-v0", "BoxToss-OnBox-v0"} > set(kernel):
+        return lines, ""
+    sentence = (
+        f" A throw onto a box (`BoxToss-OnBox-v0`) costs the engine {kernel['BoxToss-OnBox-v0']:,.0f} us, "
+        f"{kernel['BoxToss-OnBox-v0'] / kernel['BoxToss-v0']:.1f} times a floor throw's {kernel['BoxToss-v0']:,.0f} us."
     )
-    return "\n".join([*lines, "", f"{header}{sleeping} Every engine: [the page](docs/engine_scale.md).{throw}"])
+    return lines, sentence
 
 
-def shortened_text(rows: list[Row], window: float) -> str:
-    """Which awake runs the budget cut short, for the generated text."""
-    cut = [
-        f"{row.engine} on {row.case}"
-        for row in rows
-        if row.mode == "awake" and row.steps and row.steps < round(window / row.dt)
+# -- the page ------------------------------------------------------------------------------------
+def version(package: str) -> str:
+    try:
+        return metadata.version(package)
+    except metadata.PackageNotFoundError:
+        return "not installed"
+
+
+def our_settings_text(case: Case) -> str:
+    scene = case.scene
+    names = ("dt", "solver_tolerance", "solver_iterations", "penetration_slop", "sleep_speed", "sleep_time")
+    return ", ".join(f"{name} {getattr(scene, name):g}" for name in names)
+
+
+def method(cases: list[Case], window: float, settle: float, repeats: int, budget: float) -> list[str]:
+    """The method, written with the figures by the command (every constant from the code that used it)."""
+    b2_hz, b2_damping, b2_push = BOX2D3_CONTACT.values()
+    tuned = ", ".join(f"{k} {v:g}" for k, v in OUR_TUNED.items())
+    return [
+        "### Method (written by the command)",
+        "",
+        f"- **Engines**, each at its own defaults, one thread. Ours (box_toss_env {version('box_toss_env')}, numba "
+        f"{version('numba')}): each scene exactly as `scenes.*` builds it (for the pile of 16: "
+        f"{our_settings_text(cases[0])}), run by `Simulator.for_scene` with `until_rest` at `simulate`'s default "
+        f"({until_rest_default()}), its warm start (`warm_start_memory`) carried from run to run. Box2D v3 (pyb2d3 "
+        f"{version('pyb2d3')}): {1 / DEFAULT_DT['box2d3']:g} Hz, {BOX2D3_SUBSTEPS} substeps, contact hertz "
+        f"{b2_hz:g}, damping ratio {b2_damping:g}, push {b2_push:g} m/s, sleeping and continuous collision on. "
+        f"Box2D 2.3 (box2d {version('box2d')}): {1 / DEFAULT_DT['box2d']:g} Hz, {BOX2D_ITERATIONS[0]} velocity and "
+        f"{BOX2D_ITERATIONS[1]} position iterations, sleeping on. pymunk ({version('pymunk')}): "
+        f"{1 / DEFAULT_DT['pymunk']:g} Hz, {PYMUNK_ITERATIONS} iterations, collision slop "
+        f"{PYMUNK_COLLISION_SLOP * 1e3:g} mm (its default 0.1 is meant for pixels), no sleeping (its default). "
+        f"`ours, tuned` is ours at settings a user can pick ({tuned}, `until_rest=True`): its column stands beside "
+        "the defaults', never instead.",
+        "- **Scenes** (`benchmarks/scene_suite.py`): "
+        + "; ".join(f"{c.name} ({c.scene.n_bodies:,} boxes{', ' + c.note if c.note else ''})" for c in cases)
+        + ". Every engine starts from the scene's own start (boxes apart, or a structure built at rest) and "
+        "settles its own pile.",
+        f"- **Windows**, {window:g} s of simulated time each: *dropped*, from the start, each engine's default "
+        f"sleeping; *at rest*, the same world after {settle:g} s; *kept awake*, sleeping off (ours `sleep_time` "
+        f"{NEVER_SLEEP:g} s), after {settle:g} s; *standing*, a built structure from its start, and kept awake after "
+        f"{AWAKE_LEAD_IN:g} s; *thrown in*, a box thrown level into the pile that settled {settle:g} s; *as "
+        "published*, Box2D's benchmark: sleeping off, the first 60 Hz step untimed, the rest timed.",
+        "- **Timing**: a first, observed run steps each world one step a call and reads its states after every step "
+        "(the measures below); it also fixes how many steps each window runs: a window whose steps pass the budget "
+        f"of {budget:g} s of CPU stops there (the window's `steps`, and the notes). Then {repeats} timed repeats, "
+        "interleaved across engines and windows (ABAB, not AAA BBB), time the stepping loop alone in thread CPU "
+        "time (`time.thread_time`), reading states only at the end: ours in one call from the observed run's state "
+        "and warm start at the window's start; the others in a fresh world stepped, untimed, up to the window. "
+        "Cost: the median of the repeats, per body per simulated second (CPU / (bodies x steps x dt)), which "
+        "puts engines with different steps on one scale; a window of sleeping bodies counts its whole span.",
+        f"- **Measures**, every step of the observed window: penetration, box into box (separating-axis depth) or "
+        "into the floor, deepest over the window and at its end; energy gain, the total's highest rise above its "
+        f"start (gained: above {ENERGY_SHARE:g} of the energy above the lowest pose); max rise, the most a box rose "
+        f"above its start; tunnelled, boxes found more than {DEEP:g} of the thinner box's thickness inside another or "
+        "with their centre below the floor (and a thrown box that passed the pile's far side below its top); all "
+        "asleep at, from the window's start; moving at the end, awake boxes faster than "
+        f"{JITTER_SPEED * 100:g} cm/s (centre or corner); drift, the most a box moved, and a structure holds (stands) "
+        f"while every box stays within {STAND_DRIFT * 100:g} cm of where it was built. Lengths scale with the boxes "
+        "(tiny: 1/400, huge: 250), speeds with the square root.",
+        f"- **Goals** (the engine issue's): cost <= Box2D v3's; penetration <= {scale_report.PENETRATION_LIMIT * 1e3:g}"
+        f" mm throughout and <= {scale_report.REST_PENETRATION_LIMIT * 1e3:g} mm at the end of a window at rest; "
+        "every structure standing; nothing tunnelling, gaining energy or jittering; every box asleep by the end of a "
+        "window with sleeping at the defaults.",
+        "- pyb2d3 binds Box2D 3.1; Box2D's later releases publish faster steps, so the ratios against Box2D v3 here "
+        "flatter ours.",
     ]
-    return "so were " + ", ".join(cut) if cut else "no run was cut short"
+
+
+def page_text(args, cases, windows, onbox, header: str, window: float, settle: float, overhead=None) -> str:
+    cases_by = {c.name: c for c in cases}
+    lines = [header, ""]
+    lines += method(cases, window, settle, args.repeats, args.budget)
+    lines += scale_report.loop_note(overhead or {}, windows)
+    lines += ["", "### Cost at the defaults: us per body per simulated second, one thread", ""]
+    lines += scale_report.cost_table(windows)
+    lines += ["", "### Ours at the defaults against the engine goals", ""]
+    lines += scale_report.goals_table(windows, cases_by)
+    lines += ["", "### What each engine did", ""]
+    lines += scale_report.quality_table(windows, cases_by)
+    notes = scale_report.notes(windows)
+    lines += ["", "Notes:", "", *notes] if notes else []
+    if onbox:
+        lines += ["", *onbox_lines(onbox)[0]]
+    return "\n".join(lines)
+
+
+def write_docs(text: str, page: Path = DOCS_PAGE, marker: str = MARKER) -> None:
+    """Put ``text`` between the page's ``marker`` markers."""
+    from agents.doc_sections import replace_section
+
+    replace_section(marker, text, readme=page)
+
+
+def write_json(path: Path, windows: list[Window], order) -> None:
+    rows = []
+    for w in windows:
+        row = asdict(w)
+        row.pop("snapshot", None)
+        row["us_per_body_second"] = w.us_per_body_second
+        rows.append(row)
+    text = json.dumps({"windows": rows, "order": order}, indent=1, default=float)
+    write_atomic(path, text.replace("NaN", "null"))
+
+
+# -- the command ---------------------------------------------------------------------------------
+def positive(low: float, high: float, kind=float):
+    def check(text: str):
+        try:
+            value = kind(text)
+        except ValueError:
+            value = math.nan
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"must be in [{low:g}, {high:g}], got {text}")
+        return value
+
+    return check
+
+
+def parse(argv) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="small scenes, 0.5 s windows, 2 s budget")
+    parser.add_argument("--cases", type=lambda t: t.split(","), help="comma-separated case names (default: all)")
+    parser.add_argument("--engines", type=lambda t: t.split(","), help=f"comma-separated, of {list(ENGINE_ORDER)}")
+    parser.add_argument("--budget", type=positive(0.01, 3600), help="CPU seconds per window, in [0.01, 3600]")
+    parser.add_argument("--repeats", type=positive(1, 100, int), help="timed repeats, in [1, 100]")
+    parser.add_argument("--no-onbox", action="store_true", help="leave out ours per throw of the envs")
+    parser.add_argument("--json", type=Path, help="also write the measured windows to this file")
+    parser.add_argument("--write-docs", action="store_true", help="write docs/engine_scale.md, its figure, README")
+    args = parser.parse_args(argv)
+    args.budget = args.budget if args.budget is not None else (QUICK_BUDGET if args.quick else BUDGET)
+    args.repeats = args.repeats if args.repeats is not None else (QUICK_REPEATS if args.quick else REPEATS)
+    available = [e for e in ENGINE_ORDER if e in (OURS, OURS_TUNED) or e in available_scene_engines()]
+    engines = args.engines if args.engines is not None else available
+    wrong = [e for e in engines if e not in available]
+    if wrong:
+        parser.error(f"--engines: {wrong} not available; choose from {available}")
+    args.engines = [e for e in ENGINE_ORDER if e in engines]
+    window, settle = (QUICK_WINDOW, QUICK_SETTLE) if args.quick else (WINDOW, SETTLE)
+    try:
+        args.suite = select(suite(args.quick, window, settle), args.cases)
+    except ValueError as error:
+        parser.error(str(error))
+    args.window, args.settle = window, settle
+    return args
 
 
 def main(argv=None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--quick", action="store_true", help="1 s window, 1.5 s budget, piles up to 1,000 boxes")
-    parser.add_argument(
-        "--budget", type=budget_seconds, default=None, help="wall seconds per (case, engine, mode), in [0.1, 600]"
-    )
-    parser.add_argument(
-        "--write-docs",
-        action="store_true",
-        help=f"write the table into {DOCS_PAGE.name} and its summary into README.md",
-    )
-    args = parser.parse_args(argv)
+    args = parse(argv)
+    import numba
+
+    numba.set_num_threads(1)
     began = time.perf_counter()
-    text, summary = report(args, log=lambda line: print(f"[{time.perf_counter() - began:6.1f} s] {line}", flush=True))
+
+    def log(line: str) -> None:
+        print(f"[{time.perf_counter() - began:7.1f} s] {line}", flush=True)
+
+    header = (
+        f"`python -m benchmarks.engine_scale{' --quick' if args.quick else ''}`: one thread for every engine; "
+        f"{load_text()}."
+    )
+    windows, order = run_suite(args.suite, args.engines, args.repeats, args.budget, log)
+    log("the Python loop that steps the other engines")
+    overhead = loop_overhead()
+    onbox = []
+    if not args.no_onbox and OURS in args.engines:
+        log("ours per throw of BoxToss-v0 and BoxToss-OnBox-v0")
+        onbox = onbox_rows(*((QUICK_ONBOX_THROWS, QUICK_BATCHES) if args.quick else (ONBOX_THROWS, BATCHES)))
+    text = page_text(args, args.suite, windows, onbox, header, args.window, args.settle, overhead)
+    text += (
+        f"\n\nThe run took {(time.perf_counter() - began) / 60:.1f} min of wall time, "
+        f"{time.process_time() / 60:.1f} min of this process's CPU."
+    )
     print(text)
+    if args.json is not None:
+        write_json(args.json, windows, order)
     if args.write_docs:
         from agents.doc_sections import README
 
-        write_docs(text)
-        write_docs(summary, page=README, marker=README_MARKER)
-
-
-def budget_seconds(text: str) -> float:
-    """--budget's type: seconds in [0.1, 600] (argparse prints the message with the option's name)."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not 0.1 <= value <= 600:
-        raise argparse.ArgumentTypeError(f"must be in [0.1, 600] s, got {text}")
-    return value
+        write_docs(text, DOCS_PAGE)
+        write_docs(scale_report.readme_summary(windows, header, onbox_lines(onbox)[1]), README, README_MARKER)
+        scale_report.plot(windows, FIGURE)
 
 
 if __name__ == "__main__":

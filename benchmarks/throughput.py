@@ -9,7 +9,8 @@ Measured on this machine in one run:
   for N in {1, 16, 256, 4096} on 1 and 2 engine threads, and of Gymnasium's own sync vector env;
 - the same toss (the engine's named scene ``toss``, simulated until it rests) in pymunk, Box2D and
   MuJoCo at the same time step, per throw, with the ratio to ours (those missing are named);
-- memory per env of the batched env beyond its observation buffers.
+- memory per env of the batched env beyond its observation buffers;
+- the env cost per throw of pixel observations (``observation_mode="pixels"``) against the state's, batch of 256.
 Random actions are drawn before timing; every figure is the best of a few repeats after a warm-up.
 """
 
@@ -90,6 +91,70 @@ def toss_per_throw(repeats: int) -> tuple[float, float, float, int]:
     return per_throw, 1.0 / best_rate(run_batch, 256, repeats), rest, steps
 
 
+def pixel_cost(steps: int, repeats: int, n: int = 256) -> tuple[float, float]:
+    """Thread CPU seconds per throw of the batched env (``n`` envs, one engine thread) observing the state and
+    observing pixels (``observation_mode="pixels"``), the two stepped in turn on the same actions; the median
+    over ``repeats`` x ``steps`` steps of each."""
+    envs = {mode: gym.make_vec("BoxToss-v0", num_envs=n, threads=1, observation_mode=mode) for mode in PIXEL_MODES}
+    rng = np.random.default_rng(0)
+    times: dict[str, list[float]] = {mode: [] for mode in envs}
+    for env in envs.values():
+        env.reset(seed=0)
+        env.step(rng.uniform(-1, 1, (n, 3)).astype(np.float32))  # warm-up: kernels compiled or loaded
+    for _ in range(repeats * steps):
+        actions = rng.uniform(-1, 1, (n, 3)).astype(np.float32)
+        for mode, env in envs.items():
+            start = time.thread_time()
+            env.step(actions)
+            times[mode].append((time.thread_time() - start) / n)
+    state, pixels = (float(np.median(times[mode])) for mode in PIXEL_MODES)
+    return state, pixels
+
+
+def batched_rates(quick: bool, repeats: int) -> dict[tuple[int, int], float]:
+    """Throws per second of the batched env per (envs, engine threads)."""
+    batched = {}
+    for n in (1, 16, 256, 4096):
+        steps = max(2, 4096 // n) if not quick else max(1, 512 // n)
+        for threads in (1, 2):
+            env = gym.make_vec("BoxToss-v0", num_envs=n, threads=threads)
+            batched[n, threads] = vector_rate(env, steps, repeats)
+    return batched
+
+
+def load_average() -> str:
+    """The machine's load averages (1, 5, 15 min), or n/a."""
+    return ", ".join(f"{value:.1f}" for value in os.getloadavg()) if hasattr(os, "getloadavg") else "n/a"
+
+
+def pixel_section(steps: int, repeats: int, readme: bool) -> None:
+    """Measure the pixel observations' cost (``pixel_cost``), print it and, with ``readme``, write its section."""
+    text = "\n".join(pixel_lines(*pixel_cost(steps, repeats))[1:])
+    print(text)
+    if readme:
+        replace_section("throughput-pixels", text)
+
+
+def pixel_lines(state: float, pixels: float) -> list[str]:
+    """The section of pixel observations' cost: ``state`` and ``pixels`` seconds per throw (``pixel_cost``)."""
+    return [
+        "",
+        "Measured by `python -m benchmarks.throughput --pixels-only` (and every full run): pixel observations "
+        '(`observation_mode="pixels"`, 96 x 40 RGB, `envs.pixels`) against the state, '
+        '`make_vec("BoxToss-v0", num_envs=256)`, one engine thread, stepped in turn on the same random actions, '
+        f"thread CPU time per throw (median); load average {load_average()} at the end:",
+        "",
+        "| observation | us per throw | against the state |",
+        "|---|---:|---:|",
+        f"| state (12 numbers) | {state * 1e6:.1f} | 1.00x |",
+        f"| pixels (the image before the throw and where the box came to rest) | {pixels * 1e6:.1f} | "
+        f"{pixels / state:.2f}x |",
+    ]
+
+
+PIXEL_MODES = ("state", "pixels")
+
+
 def other_engine_rows(duration: float, dt: float, repeats: int) -> list[tuple[str, float]]:
     """Seconds per throw of the same toss in each available engine, simulated for ``duration``."""
     box = scenes.toss().boxes[0]
@@ -144,10 +209,16 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="fewer repeats and throws")
     parser.add_argument(
+        "--pixels-only", action="store_true", help="only the pixel observations' cost against the state's"
+    )
+    parser.add_argument(
         "--readme", action="store_true", help="also write docs/throughput.md's section and the headline figures"
     )
     args = parser.parse_args()
     repeats = 2 if args.quick else 5
+    pixel_section(8 if args.quick else 40, repeats, args.readme)
+    if args.pixels_only:
+        return
     import numba
 
     lines = [
@@ -158,16 +229,9 @@ def main() -> None:
     lines += ["| setting | throws/s |", "|---|---:|"]
     single = single_env_rate(1000 if args.quick else 5000, repeats)
     lines.append(f"| one `BoxToss-v0` via `gymnasium.make` | {single:,.0f} |")
-    batched = {}
-    for n in (1, 16, 256, 4096):
-        steps = max(2, 4096 // n) if not args.quick else max(1, 512 // n)
-        for threads in (1, 2):
-            rate = batched[n, threads] = vector_rate(
-                gym.make_vec("BoxToss-v0", num_envs=n, threads=threads), steps, repeats
-            )
-            lines.append(
-                f'| `make_vec("BoxToss-v0", num_envs={n})`, {threads} thread{"s" * (threads > 1)} | {rate:,.0f} |'
-            )
+    batched = batched_rates(args.quick, repeats)
+    for (n, threads), rate in batched.items():
+        lines.append(f'| `make_vec("BoxToss-v0", num_envs={n})`, {threads} thread{"s" * (threads > 1)} | {rate:,.0f} |')
     sync = gym.make_vec(
         "BoxToss-v0", num_envs=16, vectorization_mode="sync", vector_kwargs={"autoreset_mode": AutoresetMode.SAME_STEP}
     )
@@ -201,8 +265,9 @@ def main() -> None:
         f"Memory of the batched env: {per_env:,.0f} bytes per env, {beyond_obs:,.0f} beyond the "
         "observation buffers (growth from 256 to 4,096 envs, measured with tracemalloc).",
     ]
-    load = ", ".join(f"{value:.1f}" for value in os.getloadavg()) if hasattr(os, "getloadavg") else "n/a"
-    lines[0] = lines[0][:-1] + f"; load average {load} at the end (a shared machine: other jobs' load lowers these)."
+    lines[0] = (
+        lines[0][:-1] + f"; load average {load_average()} at the end (a shared machine: other jobs' load lowers these)."
+    )
     report = "\n".join(lines)
     print(report)
     if args.readme:

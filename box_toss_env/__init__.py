@@ -20,7 +20,12 @@ def _register_envs() -> None:
         "BoxToss-Mixed-v0": {"target_face": "mixed"},
         "BoxToss-OnBox-v0": {"base_box": True},  # come to rest on a base box drawn per episode
     }
-    for env_id, kwargs in variants.items():
+    # each variant observed as an image of its scene (envs.pixels): BoxToss-Pixels-v0, BoxToss-ShortEnd-Pixels-v0, ...
+    pixels = {
+        env_id.replace("-v0", "-Pixels-v0"): {**kwargs, "observation_mode": "pixels"}
+        for env_id, kwargs in variants.items()
+    }
+    for env_id, kwargs in {**variants, **pixels}.items():
         if env_id in gymnasium.registry:  # importlib.reload: keep the existing registration
             continue
         gymnasium.register(

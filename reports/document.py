@@ -116,21 +116,42 @@ def update_readme(name: str, body: str, readme: Path = README) -> None:
     write_atomic(readme, f"{text[:start]}{SECTION_START}\n{SECTION_TITLE}\n\n{inner}\n{text[end:]}")
 
 
-def report_command(name: str, doc: str, run, write_report, argv=None) -> int:
-    """The command line of ``python -m reports.NAME``: run the report (``--quick``: a few points, as the
-    tests do) and write it to docs/ (and its block of docs/reports.md) or to ``--out``."""
+def report_parser(name: str, doc: str) -> argparse.ArgumentParser:
+    """The options of ``python -m reports.NAME``."""
     parser = argparse.ArgumentParser(prog=f"python -m reports.{name}", description=doc.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="a few points of each part (what the tests run)")
     parser.add_argument(
         "--out",
         type=Path,
         default=None,
-        help=f"output folder (default: docs/, or {QUICK_OUT.relative_to(REPO)} with --quick); the "
-        "section of docs/reports.md is rewritten only for the full report written to docs/",
+        help=f"output folder (default: {QUICK_OUT.relative_to(REPO)}, ignored by git)",
     )
+    parser.add_argument(
+        "--write-docs",
+        action="store_true",
+        help=f"write the full report into docs/ and its block of {README.relative_to(REPO)} (tracked files)",
+    )
+    return parser
+
+
+def report_destination(parser: argparse.ArgumentParser, args: argparse.Namespace) -> tuple[Path, Path | None]:
+    """The folder the report is written to and the page whose block it rewrites (None: no block): docs/ and
+    docs/reports.md only with ``--write-docs``, else ``--out`` or build/reports/, which git ignores."""
+    if args.write_docs and (args.quick or args.out is not None):
+        parser.error("--write-docs writes the full report into docs/: drop " + ("--quick" if args.quick else "--out"))
+    if args.write_docs:
+        return DOCS, README
+    return args.out or QUICK_OUT, None
+
+
+def report_command(name: str, doc: str, run, write_report, argv=None) -> int:
+    """The command line of ``python -m reports.NAME``: run the report (``--quick``: a few points, as the
+    tests do) and write it to build/reports/ or ``--out``; docs/ and its block of docs/reports.md only with
+    ``--write-docs``."""
+    parser = report_parser(name, doc)
     args = parser.parse_args(argv)
-    out = args.out or (QUICK_OUT if args.quick else DOCS)
+    out, readme = report_destination(parser, args)
     report = run(quick=args.quick)
-    path = write_report(report, out, README if not args.quick and out.resolve() == DOCS else None)
+    path = write_report(report, out, readme)
     print(f"wrote {path} in {report.run_seconds:.0f} s")
     return 0

@@ -1,7 +1,8 @@
 """Error against run time (work-precision) of the seed scheme, the robust default and other engines.
 
-    python -m reports.precision            # the full report: docs/precision.md, docs/figures/precision_*.png
-    python -m reports.precision --quick    # a few points of each part, into build/reports/ (the tests run this)
+    python -m reports.precision --write-docs   # the full report: docs/precision.md, docs/figures/precision_*.png
+    python -m reports.precision                # the full report into build/reports/ (ignored by git), or --out DIR
+    python -m reports.precision --quick        # a few points of each part, into build/reports/ (the tests run this)
 
 Three stages, each a function:
 

@@ -1,8 +1,9 @@
 """Stability on stiff and extreme cases: a matrix of scenes, each with a measurable pass criterion,
 run for the seed scheme and the robust default.
 
-    python -m reports.stability            # the full report: docs/stability.md, docs/figures/stability_map.png
-    python -m reports.stability --quick    # a few points of each row, into build/reports/ (the tests run this)
+    python -m reports.stability --write-docs   # the full report: docs/stability.md, docs/figures/stability_map.png
+    python -m reports.stability                # the full report into build/reports/ (ignored by git), or --out DIR
+    python -m reports.stability --quick        # a few points of each row, into build/reports/ (the tests run this)
 
 Each row is a function returning a ``Row``: its criterion, the robust solver's declared range for it,
 and one ``Check`` per parameter point and solver. Every point of every row lies inside the robust

@@ -114,6 +114,7 @@ def test_throughput_writes_the_docs_only_when_told(monkeypatch):
     monkeypatch.setattr(throughput, "other_engine_rows", lambda *a: [])
     monkeypatch.setattr(throughput, "missing_engines", lambda: [])
     monkeypatch.setattr(throughput, "memory_per_env", lambda: (100.0, 50.0))
+    monkeypatch.setattr(throughput, "pixel_cost", lambda *a: (1e-5, 1.5e-5))
     monkeypatch.setattr(throughput, "replace_section", lambda name, *a, **k: written.append(name))
     monkeypatch.setattr(throughput.figures, "update", lambda name, *a, **k: written.append(name))
     monkeypatch.setattr(sys, "argv", ["box-toss bench throughput", "--quick"])
@@ -121,4 +122,4 @@ def test_throughput_writes_the_docs_only_when_told(monkeypatch):
     assert written == []
     monkeypatch.setattr(sys, "argv", ["box-toss bench throughput", "--quick", "--readme"])
     throughput.main()
-    assert written == ["throughput", "throughput"]
+    assert written == ["throughput-pixels", "throughput", "throughput"]

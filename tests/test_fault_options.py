@@ -19,7 +19,7 @@ from pathlib import Path
 import pytest
 
 from agents import algorithms, benchmark, evaluate, main, schema, train
-from agents.command_line import MAX_SEED, Integer, folder, single_name
+from agents.command_line import MAX_SEED, Integer, folder, json_file, single_name
 from agents.config import ConfigError, check_config, load_hyperparams
 from agents.evaluation import make_baseline_run
 
@@ -132,7 +132,7 @@ def test_the_schema_is_the_algorithms_signature_and_every_number_has_its_range_d
         ("n_timesteps=", "--set: n_timesteps: an empty value"),
         ("n_timesteps=99999999999999999999", "n_timesteps must be an integer >= 1 and <= 9223372036854775807"),
         # keys that must fit the observations: SB3 checked them only when building the model, in a made folder
-        ("policy=CnnPolicy", "policy must be one of ['MlpPolicy', 'MultiInputPolicy']"),
+        ("policy=CnnPolicy", "policy CnnPolicy does not read BoxToss-v0's flat (Box) observations"),
         ("policy=MultiInputPolicy", "policy MultiInputPolicy does not read BoxToss-v0's flat (Box) observations"),
         ("rollout_buffer_class=DictRolloutBuffer", "rollout_buffer_class DictRolloutBuffer does not take MlpPolicy"),
         ("policy_kwargs.features_extractor_class=NatureCNN", "features_extractor_class NatureCNN does not take"),
@@ -176,6 +176,8 @@ def option_values(action: argparse.Action) -> dict[str, list[str]]:
         values["out of range"] = [str(kind.low - 1)] + ([str(kind.high + 1)] if kind.high is not None else [])
     elif kind is folder:
         values["out of range"] = [A_FILE]  # a file where a folder must be
+    elif kind is json_file:
+        values["out of range"] = ["runs.txt", str(Path.cwd())]  # not JSON, a folder
     elif kind is single_name:
         values["out of range"] = ["a/b", ".."]
     elif action.choices:
@@ -232,9 +234,10 @@ def no_work(monkeypatch):
         (train, "prepare_resume"),
         (agents.evaluation, "evaluate_run"),
         (main, "baseline"),
-        (benchmark, "train_missing"),
-        (benchmark, "goal_document"),
-        (benchmark, "document"),
+        (benchmark, "collect"),
+        (benchmark, "train_variant"),
+        (benchmark.benchmark_goal, "goal_document"),
+        (benchmark.benchmark_page, "write"),
     ):
         monkeypatch.setattr(module, name, reached)
 

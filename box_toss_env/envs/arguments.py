@@ -33,7 +33,8 @@ class Argument:
         doc: what it means, with its unit.
         allowed: the range a number (or each end of a pair) must lie in; None for choices and flags.
         shown: how the docs write the default (``repr(default)`` when empty).
-        group: "task" (what is thrown and scored), "engine" (how it is simulated) or "render".
+        group: "task" (what is thrown and scored), "engine" (how it is simulated), "observation" (what the agent
+            sees) or "render".
     """
 
     name: str
@@ -110,7 +111,28 @@ ENV_ARGUMENTS: tuple[Argument, ...] = (
         "(low, high): draw the restitution per episode",
         ENGINE_RANGES["restitution"],
     ),
+    Argument(
+        "box_length_range",
+        OPTIONAL_PAIR,
+        None,
+        "(low, high) [m]: draw the box length per episode (replaces ``box_length``; observed)",
+        LENGTH,
+    ),
+    Argument(
+        "box_width_range",
+        OPTIONAL_PAIR,
+        None,
+        "(low, high) [m]: draw the box width per episode (replaces ``box_width``; observed)",
+        WIDTH,
+    ),
     Argument("observe_dynamics", "bool", False, "append mass, friction, restitution to the observation"),
+    Argument(
+        "split",
+        "str | None",
+        None,
+        '"train" or "test": the held-out split (``SPLITS``): box size, mass, friction, restitution and target x '
+        "drawn per episode from the split's ranges, all observed",
+    ),
     Argument("base_box", "bool", False, 'a base box to come to rest on (see "A base box to land on")'),
     Argument(
         "base_length_range",
@@ -157,6 +179,20 @@ ENV_ARGUMENTS: tuple[Argument, ...] = (
         group="engine",
     ),
     Argument(
+        "observation_mode",
+        "str",
+        "state",
+        '"state" (the vector below) or "pixels" (an image of the scene, ``envs.pixels``)',
+        group="observation",
+    ),
+    Argument(
+        "pixel_size",
+        "(int, int)",
+        (96, 40),
+        'width and height of a "pixels" observation [px], each in [16, 1024]',
+        group="observation",
+    ),
+    Argument(
         "render_fps",
         "float",
         30,
@@ -170,11 +206,55 @@ ENV_ARGUMENTS: tuple[Argument, ...] = (
 """The keyword arguments of ``BoxToss-v0`` (and of ``gymnasium.make_vec``'s batched env), in the order
 the docs list them. ``render_mode`` is Gymnasium's and not among them."""
 
+SPLITS: dict[str, dict[str, Any]] = {
+    "train": {
+        "box_length_range": (0.3, 0.5),
+        "box_width_range": (0.15, 0.25),
+        "mass_range": (1.0, 3.0),
+        "friction_range": (0.4, 0.6),
+        "restitution_range": (0.2, 0.4),
+        "target_x_range": (1.0, 3.5),
+        "observe_dynamics": True,
+    },
+    "test": {
+        "box_length_range": (0.28, 0.6),
+        "box_width_range": (0.12, 0.28),
+        "mass_range": (0.5, 4.0),
+        "friction_range": (0.3, 0.8),
+        "restitution_range": (0.1, 0.5),
+        "target_x_range": (1.5, 4.0),
+        "observe_dynamics": True,
+    },
+}
+"""The held-out split of every one-throw variant (``split="train"`` or ``"test"``): what each episode draws. The test
+ranges hold the training ones and reach past them (shorter and longer, thinner and thicker boxes; lighter and heavier;
+slipperier and grippier; deader and bouncier), and its targets lie partly beyond the farthest training target
+(3.5-4.0 m) while the nearest training ones (1.0-1.5 m) are left out. The task's default box and dynamics (0.4 x
+0.2 m, 2 kg, friction 0.5, restitution 0.3) lie inside both."""
+
+
+def apply_split(args: dict[str, Any]) -> dict[str, Any]:
+    """``args`` (every argument, defaults filled in) with its ``split``'s settings; a ValueError names a setting the
+    split makes that was also given (at another value than its default), or a split that does not exist."""
+    split = args.get("split")
+    if split is None:
+        return args
+    if split not in SPLITS:
+        raise ValueError(f"split must be None, 'train' or 'test', got {split!r}")
+    for name in SPLITS[split]:
+        if args[name] != ARGUMENTS[name].default:
+            raise ValueError(
+                f"split={split!r} sets {name} ({SPLITS[split][name]!r}); got {name}={args[name]!r} as well: give one "
+                "or the other"
+            )
+    return {**args, **SPLITS[split]}
+
+
 ARGUMENTS = {argument.name: argument for argument in ENV_ARGUMENTS}
 ENV_DEFAULTS = {argument.name: argument.default for argument in ENV_ARGUMENTS}
 """Every argument's default, by name."""
-CORE_ARGUMENTS = tuple(argument.name for argument in ENV_ARGUMENTS if argument.group != "render")
-"""The arguments of the throw itself (``BoxTossFunctional``): all but the rendering ones."""
+CORE_ARGUMENTS = tuple(argument.name for argument in ENV_ARGUMENTS if argument.group not in ("render", "observation"))
+"""The arguments of the throw itself (``BoxTossFunctional``): all but the observation's and the rendering ones."""
 
 
 def with_defaults(kwargs: dict[str, Any], names=tuple(ARGUMENTS), owner: str = "BoxTossEnv") -> dict[str, Any]:

@@ -108,7 +108,11 @@ def ballistic_throws(
     flight_time = t_low + (t_high - t_low) * 0.5 * (c[:, 0] + 1.0)
     landing_x = obs[:, task_columns.OBS_TARGET_X] + offset_range * c[:, 1]
     phi = face_angles(theta0, obs[:, task_columns.OBS_TARGET_FACES]) + turn_range * c[:, 2]
-    height = config.half_length * np.abs(np.sin(phi)) + config.half_width * np.abs(np.cos(phi))
+    if config.draws_box_size:  # the episode's box, observed
+        half_length, half_width = (0.5 * obs[:, column] for column in config.box_size_observed)
+    else:
+        half_length, half_width = np.full(len(obs), config.half_length), np.full(len(obs), config.half_width)
+    height = half_length * np.abs(np.sin(phi)) + half_width * np.abs(np.cos(phi))
     if config.base_box:  # touch down on the base box's top
         height = height + observed_base_top(obs)
     vx = (landing_x - x0) / flight_time

@@ -16,10 +16,11 @@ from gymnasium.error import ResetNeeded
 from box_toss_env.envs import task, task_columns, task_config
 from box_toss_env.envs.arguments import CORE_ARGUMENTS, ENV_ARGUMENTS, arguments_table, with_defaults
 from box_toss_env.envs.functional import BoxTossFunctional, first_of
+from box_toss_env.envs.pixels import OBSERVATION_MODES, PixelRenderer
 from box_toss_env.envs.random_streams import check_seed
 from box_toss_env.physics import Simulator, layout
 from box_toss_env.physics.grouped import GroupedSimulator
-from box_toss_env.physics.validation import check_integer
+from box_toss_env.physics.validation import check_choice, check_integer
 
 RENDER_MODES = ("human", "rgb_array", "rgb_array_list")
 
@@ -104,6 +105,24 @@ class BoxTossEnv(gym.Env):
     defaults). Nothing is clipped: a throw ending outside the bounds raises ``EnergyGainError`` (see
     Episode End). A column whose value is fixed (``target_x_range``, or a dynamics quantity that is not
     drawn) has bounds one float32 step either side of its value, so no bound pair is degenerate.
+
+    With a drawn box size (``box_length_range``, ``box_width_range``) the box's length and width [m] follow the
+    dynamics' columns (or the target faces', without ``observe_dynamics``), bounded by their ranges; the energy
+    bounds then take the largest box's I/m, the spin's the smallest box's.
+
+    ``observation_mode="pixels"`` (the ``BoxToss-*-Pixels-v0`` ids) observes instead an image of the scene,
+    ``Box(0, 255, (height, width, 3), uint8)`` at ``pixel_size`` ((96, 40) by default): the thrown box in red, the
+    target in green (a band of full height whose edges are the target x -+ ``position_tolerance``, and a strip along
+    each face of the box that may end down), other boxes (the base) in blue, antialiased, in a view fixed by the
+    task's ranges (``envs.pixels``). Before the throw it shows the box in the hand, after it where the box came to
+    rest; the bounds are still checked on the state.
+
+    ## Held-out split
+
+    ``split="train"`` or ``"test"`` draws, per episode, the box's length and width, its mass, friction and
+    restitution and the target x from the split's ranges (``envs.arguments.SPLITS``), all observed; the test ranges
+    reach past the training ones. It sets those arguments (and ``observe_dynamics=True``), which must then be left
+    at their defaults. ``python -m agents.benchmark --heldout`` trains on the train split and scores on both.
 
     ## Rewards
 
@@ -247,7 +266,12 @@ class BoxTossEnv(gym.Env):
         self.metadata = {**self.metadata, "render_fps": self.render_fps}
 
         self.action_space = spaces.Box(-1.0, 1.0, shape=(task_columns.ACTION_SIZE,), dtype=np.float32)
-        self.observation_space = spaces.Box(self.core.observation_low, self.core.observation_high, dtype=np.float32)
+        self.pixels = pixel_renderer(config, args["observation_mode"], args["pixel_size"])
+        self.observation_space = (
+            spaces.Box(self.core.observation_low, self.core.observation_high, dtype=np.float32)
+            if self.pixels is None
+            else spaces.Box(0, 255, self.pixels.shape, dtype=np.uint8)
+        )
 
         # per-episode arrays, allocated once: a throw only writes its six initial numbers. The engine's
         # arrays hold the thrown box in row 0 and, with base_box, the base box in row 1
@@ -289,10 +313,16 @@ class BoxTossEnv(gym.Env):
         self._hand_unseen, self._throw_unseen, self._outcome = self.render_mode == "rgb_array_list", False, None
         if self.render_mode == "human":
             self.render()
-        return self._observe()[0], first_of(self.core.reset_info(self._batch))
+        return self._seen(self._observe())[0], first_of(self.core.reset_info(self._batch))
 
     def _observe(self) -> np.ndarray:
+        """The state observation (1, obs) of the batch of one; ``_seen`` makes it what the agent observes."""
         return self.core.observation(self._batch)
+
+    def _seen(self, state: np.ndarray) -> np.ndarray:
+        """What the agent observes: the state observation, or with ``observation_mode="pixels"`` the image
+        (``envs.pixels``) of the scene as it is now, (1, ...)."""
+        return state if self.pixels is None else self.pixels.draw(self._batch)
 
     def step(self, action):
         """Throw the box with ``action`` and simulate until it rests (or ``max_sim_time``)."""
@@ -314,7 +344,7 @@ class BoxTossEnv(gym.Env):
                 self.render()
         observation = self._observe()
         core.check_bounds(observation)  # raises EnergyGainError
-        return observation[0], reward, True, False, info
+        return self._seen(observation)[0], reward, True, False, info
 
     def _bounds_message(self, observation: np.ndarray) -> str:
         """What the throw that ended in ``observation`` (outside the bounds) did, for the solver that ran."""
@@ -393,6 +423,8 @@ class BoxTossEnv(gym.Env):
             self._renderer = ThrowRenderer(self.config, *self.render_size, fps=self.render_fps)
         if self.config.base_box:  # this episode's base box is drawn too
             self._renderer.other_boxes = 0.5 * self._episodes.base_size[:1]
+        if self.config.draws_box_size:  # this episode's box
+            self._renderer.half_extents = task.box_half_sizes(self._episodes, self.config)[0].copy()
         return self._renderer
 
     def _drawn_state(self) -> np.ndarray:
@@ -426,6 +458,16 @@ class BoxTossEnv(gym.Env):
 
 def _check_pixels(name: str, value) -> int:
     return check_integer(name, value, 16, 8192)
+
+
+def pixel_renderer(config: task.TaskConfig, mode, size) -> PixelRenderer | None:
+    """The renderer of ``observation_mode="pixels"`` observations at ``pixel_size`` (None for "state"), both
+    checked: a ValueError or TypeError names the argument."""
+    mode = check_choice("observation_mode", mode, OBSERVATION_MODES)
+    if not isinstance(size, (tuple, list)) or len(size) != 2:
+        raise TypeError(f"pixel_size must be a (width, height) pair of integers, got {size!r}")
+    width, height = (check_integer(f"pixel_size[{k}]", value, 16, 1024) for k, value in enumerate(size))
+    return PixelRenderer(config, width, height) if mode == "pixels" else None
 
 
 def _document_arguments(env_class: type) -> None:

@@ -128,7 +128,13 @@ class BoxTossVectorEnv(VectorEnv):
         return self.core.reset_info(self._batch)
 
     def _observe(self) -> np.ndarray:
+        """Every env's state observation (n, obs); ``_seen`` makes it what the agents observe."""
         return self.core.observation(self._batch)
+
+    def _seen(self, state: np.ndarray) -> np.ndarray:
+        """What the agents observe: the state observations, or with ``observation_mode="pixels"`` the images of
+        every env's scene as it is now (``envs.pixels``, one compiled call for the batch)."""
+        return state if self.env.pixels is None else self.env.pixels.draw(self._batch)
 
     # -- the Gymnasium API ------------------------------------------------------------------------
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None):
@@ -136,7 +142,7 @@ class BoxTossVectorEnv(VectorEnv):
         self._seed(seed)
         info = self._new_episodes()
         self._needs_reset = False
-        return self._observe(), with_masks(info, self.num_envs)
+        return self._seen(self._observe()), with_masks(info, self.num_envs)
 
     def step(self, actions):
         """Throw every box, simulate all throws together until each rests (or ``max_sim_time``),
@@ -149,10 +155,11 @@ class BoxTossVectorEnv(VectorEnv):
         core.check_finite(batch)  # raises NonFiniteStateError
         final_obs = self._observe()
         core.check_bounds(final_obs, name_envs=True)  # raises EnergyGainError
+        final_obs = self._seen(final_obs)
         reward, final_info = core.score(batch)
         # every episode ended: start the next ones
         info = self._new_episodes()
-        observations = self._observe()
+        observations = self._seen(self._observe())
         n = self.num_envs
         info = with_masks(info, n)
         info["final_obs"] = final_obs
@@ -172,6 +179,8 @@ class BoxTossVectorEnv(VectorEnv):
         for i in range(self.num_envs):
             if self.config.base_box:  # env i's base box is drawn too
                 renderer.other_boxes = 0.5 * self._episodes.base_size[i : i + 1]
+            if self.config.draws_box_size:  # env i's box
+                renderer.half_extents = task.box_half_sizes(self._episodes, self.config)[i].copy()
             state = self._state[bodies * i : bodies * (i + 1)] if self.config.base_box else self._state[i]
             frames.append(
                 renderer.frame(state, float(self._episodes.target_x[i]), self._episodes.target_faces[i], f"env {i}")

@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from box_toss_env.envs import task, task_columns, task_config
-from box_toss_env.envs.arguments import CORE_ARGUMENTS, with_defaults
+from box_toss_env.envs.arguments import CORE_ARGUMENTS, apply_split, with_defaults
 from box_toss_env.envs.engine import EngineConfig, make_engine
 from box_toss_env.physics import Simulator, check_finite_stats, layout
 from box_toss_env.physics.grouped import GroupedSimulator
@@ -62,6 +62,7 @@ RESET_INFO_WITH_BASE = _columns(
     ("base_length", task_columns.EP_BASE_LENGTH),
     ("base_height", task_columns.EP_BASE_HEIGHT),
 )
+BOX_SIZE_INFO = ("box_length", "box_width")  # with a drawn box size: after all the others
 STEP_STATS = np.array(
     [layout.FIRST_CONTACT_TIME, layout.END_TIME, layout.MAX_PENETRATION, layout.N_IMPACTS, layout.N_STEPS],
     dtype=np.intp,
@@ -158,11 +159,13 @@ class BoxTossFunctional:
     """
 
     def __init__(self, **kwargs: Any):
-        self.arguments = args = with_defaults(kwargs, CORE_ARGUMENTS, type(self).__name__)
-        task_names = [name for name in CORE_ARGUMENTS if name not in ("solver", "dt")]
+        self.arguments = args = apply_split(with_defaults(kwargs, CORE_ARGUMENTS, type(self).__name__))
+        task_names = [name for name in CORE_ARGUMENTS if name not in ("solver", "dt", "split")]
         self.config = config = task_config.make_task_config(**{name: args[name] for name in task_names})
-        # the engine validates the solver settings (dt, solver, material) and names what is wrong
-        self.engine_config = engine_config(config, args["box_length"], args["box_width"], args["solver"], args["dt"])
+        # the engine validates the solver settings (dt, solver, material) and names what is wrong; it is
+        # sized for the largest box drawn
+        largest_box = (config.box_length_range[1], config.box_width_range[1])
+        self.engine_config = engine_config(config, *largest_box, args["solver"], args["dt"])
         engine = make_engine(self.engine_config)
         self.solver, self.dt, self.max_steps = engine.solver, engine.dt, engine.max_steps
         self.flags, self.settings = engine.flags, engine.settings
@@ -239,6 +242,8 @@ class BoxTossFunctional:
         """The reset's info as (n,) arrays (``target_faces`` (n, 4) int8): ``BoxTossEnv.reset``'s keys."""
         data = batch.episodes.data
         names, columns = RESET_INFO_WITH_BASE if self.config.base_box else RESET_INFO
+        if self.config.draws_box_size:
+            names, columns = (*names, *BOX_SIZE_INFO), np.concatenate([columns, self.config.box_size_columns])
         rows = data.take(columns, axis=1).T  # one copy, a row per key
         info = {"target_x": rows[0], "target_faces": data[:, task_columns.EP_TARGET_FACES].astype(np.int8)}
         info.update(zip(names[1:], rows[1:], strict=True))
@@ -431,9 +436,11 @@ def episodes_from_reset_infos(reset_infos: list[dict[str, Any]]) -> task_config.
     the inverse of ``BoxTossFunctional.reset_info``."""
     base_box = bool(reset_infos) and "base_length" in reset_infos[0]
     names, columns = RESET_INFO_WITH_BASE if base_box else RESET_INFO
-    episodes = task_config.Episodes.empty(
-        len(reset_infos), task_columns.EPISODE_SIZE_WITH_BASE if base_box else task_columns.EPISODE_SIZE
-    )
+    size = task_columns.EPISODE_SIZE_WITH_BASE if base_box else task_columns.EPISODE_SIZE
+    if reset_infos and "box_length" in reset_infos[0]:  # a drawn box size: its columns after all the others
+        names, columns = (*names, *BOX_SIZE_INFO), np.concatenate([columns, [size, size + 1]])
+        size += len(BOX_SIZE_INFO)
+    episodes = task_config.Episodes.empty(len(reset_infos), size)
     for row, info in zip(episodes.data, reset_infos, strict=True):
         row[columns] = [info[name] for name in names]
         row[task_columns.EP_TARGET_FACES] = info["target_faces"]

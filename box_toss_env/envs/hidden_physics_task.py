@@ -39,6 +39,7 @@ a long side down) and the dynamics, drawn wide per episode."""
 
 _LEFT_OUT: tuple[str, ...] = ("mass", "friction", "restitution", "observe_dynamics", "base_box")
 _LEFT_OUT += ("base_length_range", "base_height_range", "base_mass", "render_fps")
+_LEFT_OUT += ("observation_mode", "pixel_size", "split", "box_length_range", "box_width_range")  # one-throw only
 
 
 def _argument(name: str) -> Argument:

@@ -34,7 +34,6 @@ import numpy as np
 from box_toss_env.envs.task_columns import (
     _FACE_SET_TABLE,
     ACTION_SIZE,
-    BASE_OBS_SIZE,
     ENERGY_MARGIN,
     EP_BASE_HEIGHT,
     EP_BASE_LENGTH,
@@ -125,10 +124,11 @@ def write_body_params(params: np.ndarray, episodes: Episodes, config: TaskConfig
     dynamics (and base boxes: same friction, restitution and stiffness as the thrown box)."""
     mass = episodes.data[:, EP_MASS]
     thrown = thrown_rows(params, config)
-    thrown[:, layout.HALF_LENGTH] = config.half_length
-    thrown[:, layout.HALF_WIDTH] = config.half_width
+    half = box_half_sizes(episodes, config)
+    thrown[:, layout.HALF_LENGTH] = half[:, 0]
+    thrown[:, layout.HALF_WIDTH] = half[:, 1]
     thrown[:, layout.MASS] = mass
-    thrown[:, layout.INERTIA] = mass * config.gyration_radius_squared
+    thrown[:, layout.INERTIA] = mass * (half[:, 0] ** 2 + half[:, 1] ** 2) / 3.0
     thrown[:, layout.RESTITUTION] = episodes.data[:, EP_RESTITUTION]
     thrown[:, layout.FRICTION] = episodes.data[:, EP_FRICTION]
     thrown[:, layout.STIFFNESS] = config.penalty_stiffness
@@ -141,6 +141,14 @@ def write_body_params(params: np.ndarray, episodes: Episodes, config: TaskConfig
         base[:, layout.INERTIA] = config.base_mass * (half[:, 0] ** 2 + half[:, 1] ** 2) / 3.0
         base[:, layout.RESTITUTION : layout.STIFFNESS + 1] = thrown[:, layout.RESTITUTION : layout.STIFFNESS + 1]
     return params
+
+
+def box_half_sizes(episodes: Episodes, config: TaskConfig) -> np.ndarray:
+    """(n, 2) half the thrown box's length and width [m] in each episode: drawn (``config.draws_box_size``), or the
+    task's one size."""
+    if config.draws_box_size:
+        return 0.5 * episodes.data[:, list(config.box_size_columns)]
+    return np.broadcast_to(np.array([config.half_length, config.half_width]), (len(episodes.data), 2))
 
 
 def write_base_states(states: np.ndarray, episodes: Episodes) -> np.ndarray:
@@ -224,10 +232,11 @@ def observe(
     states: np.ndarray, episodes: Episodes, config: TaskConfig, base_states: np.ndarray | None = None
 ) -> np.ndarray:
     """A new float32 (n, obs_size) array: x, y, cos(angle), sin(angle), vx, vy, spin, target x,
-    the four target-face flags, with ``observe_dynamics`` the mass, friction and restitution, and with
-    ``base_box`` the base box's x, y, cos(angle), sin(angle) (from ``base_states`` (n, 6)), length and height."""
+    the four target-face flags, with ``observe_dynamics`` the mass, friction and restitution, with a drawn box size
+    the box's length and width, and with ``base_box`` the base box's x, y, cos(angle), sin(angle) (from
+    ``base_states`` (n, 6)), length and height."""
     angles = states[:, layout.ANGLE : layout.ANGLE + 1]
-    size = config.obs_size - (BASE_OBS_SIZE if config.base_box else 0)
+    size = OBS_SIZE_WITH_DYNAMICS if config.observe_dynamics else OBS_SIZE
     parts = [
         states[:, layout.X : layout.Y + 1],
         np.cos(angles),
@@ -235,6 +244,8 @@ def observe(
         states[:, layout.VX :],
         episodes.data[:, EP_TARGET_X : EP_TARGET_X + size - OBS_TARGET_X],
     ]
+    if config.draws_box_size:
+        parts.append(episodes.data[:, list(config.box_size_columns)])
     if config.base_box:
         assert base_states is not None  # given with a base box
         base_angles = base_states[:, layout.ANGLE : layout.ANGLE + 1]
@@ -250,8 +261,9 @@ def observation_bounds(config: TaskConfig, horizon: float) -> tuple[np.ndarray, 
         e = max_speed^2 / 2 + (I/m) max_spin^2 / 2 + g y_release_max,
     and contacts never add energy, so every speed is below sqrt(2 e), the spin below
     sqrt(2 e) / sqrt(I/m), the height below e / g, and the box cannot travel further than
-    sqrt(2 e) horizon from where it was released. Each bound is ``ENERGY_MARGIN`` times that.
-    The centre cannot be lower than one corner radius below the floor (the whole box under it).
+    sqrt(2 e) horizon from where it was released. Each bound is ``ENERGY_MARGIN`` times that. With a drawn box
+    size, I/m is the largest box's in e and the smallest box's under the spin's root, and the corner radius the
+    largest box's. The centre cannot be lower than one corner radius below the floor (the whole box under it).
     A column whose value is fixed (low == high) gets bounds one float32 step either side of it.
     """
     energy = (
@@ -260,7 +272,7 @@ def observation_bounds(config: TaskConfig, horizon: float) -> tuple[np.ndarray, 
         + config.gravity * config.release_height_range[1]
     )
     speed = ENERGY_MARGIN * math.sqrt(2.0 * energy)
-    spin = speed / math.sqrt(config.gyration_radius_squared)
+    spin = speed / math.sqrt(config.min_gyration_radius_squared)  # the smallest box spins fastest
     reach = speed * horizon
     low = [
         config.release_x_range[0] - reach,
@@ -293,28 +305,12 @@ def observation_bounds(config: TaskConfig, horizon: float) -> tuple[np.ndarray, 
     if config.observe_dynamics:
         low += [config.mass_range[0], config.friction_range[0], config.restitution_range[0]]
         high += [config.mass_range[1], config.friction_range[1], config.restitution_range[1]]
+    if config.draws_box_size:
+        low += [config.box_length_range[0], config.box_width_range[0]]
+        high += [config.box_length_range[1], config.box_width_range[1]]
     if config.base_box:
-        # the base box starts at rest in its lowest pose, so it can take at most the thrown box's energy
-        # m e: its speed stays below sqrt(2 e m / m_base), its height gain below e m / (m_base g)
-        share = config.mass_range[1] / config.base_mass
-        base_speed = ENERGY_MARGIN * math.sqrt(2.0 * energy * share)
-        base_radius = 0.5 * math.hypot(config.base_length_range[1], config.base_height_range[1])
-        low += [
-            config.target_x_range[0] - base_speed * horizon,
-            -base_radius,
-            -1.0,
-            -1.0,
-            config.base_length_range[0],
-            config.base_height_range[0],
-        ]
-        high += [
-            config.target_x_range[1] + base_speed * horizon,
-            base_radius + ENERGY_MARGIN * energy * share / config.gravity,
-            1.0,
-            1.0,
-            config.base_length_range[1],
-            config.base_height_range[1],
-        ]
+        base_low, base_high = base_bounds(config, energy, horizon)
+        low, high = low + base_low, high + base_high
     lows, highs = np.array(low, dtype=np.float32), np.array(high, dtype=np.float32)
     # a fixed quantity (target x, mass, friction or restitution not drawn) would have equal bounds, which
     # Gymnasium's checker flags as a degenerate space: its bounds are one float32 step either side instead
@@ -322,6 +318,32 @@ def observation_bounds(config: TaskConfig, horizon: float) -> tuple[np.ndarray, 
     lows[fixed] = np.nextafter(lows[fixed], np.float32(-np.inf))
     highs[fixed] = np.nextafter(highs[fixed], np.float32(np.inf))
     return lows, highs
+
+
+def base_bounds(config: TaskConfig, energy: float, horizon: float) -> tuple[list[float], list[float]]:
+    """The base box's observation bounds (``observation_bounds``): it starts at rest in its lowest pose, so it can
+    take at most the thrown box's energy m e: its speed stays below sqrt(2 e m / m_base), its height gain below
+    e m / (m_base g)."""
+    share = config.mass_range[1] / config.base_mass
+    base_speed = ENERGY_MARGIN * math.sqrt(2.0 * energy * share)
+    base_radius = 0.5 * math.hypot(config.base_length_range[1], config.base_height_range[1])
+    low = [
+        config.target_x_range[0] - base_speed * horizon,
+        -base_radius,
+        -1.0,
+        -1.0,
+        config.base_length_range[0],
+        config.base_height_range[0],
+    ]
+    high = [
+        config.target_x_range[1] + base_speed * horizon,
+        base_radius + ENERGY_MARGIN * energy * share / config.gravity,
+        1.0,
+        1.0,
+        config.base_length_range[1],
+        config.base_height_range[1],
+    ]
+    return low, high
 
 
 OBSERVATION_NAMES = (
@@ -342,12 +364,14 @@ OBSERVATION_NAMES = (
     "restitution",
 )
 BASE_OBSERVATION_NAMES = ("base x", "base y", "base cos(angle)", "base sin(angle)", "base length", "base height")
+BOX_SIZE_NAMES = ("box length", "box width")
 
 
 def observation_names(config: TaskConfig) -> tuple[str, ...]:
     """The name of each observation column."""
     size = OBS_SIZE_WITH_DYNAMICS if config.observe_dynamics else OBS_SIZE
-    return OBSERVATION_NAMES[:size] + (BASE_OBSERVATION_NAMES if config.base_box else ())
+    box = BOX_SIZE_NAMES if config.draws_box_size else ()
+    return OBSERVATION_NAMES[:size] + box + (BASE_OBSERVATION_NAMES if config.base_box else ())
 
 
 def outside_bounds(obs: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
@@ -409,7 +433,8 @@ def landing_offsets(
         return states[:, layout.X] - episodes.data[:, EP_TARGET_X], np.zeros(len(states))
     assert base_states is not None  # given with a base box
     top_x, top_y, _ = base_top(base_states, episodes)
-    _, half_y = half_extents_along_axes(states[:, layout.ANGLE], config.half_length, config.half_width)
+    half = box_half_sizes(episodes, config)
+    _, half_y = half_extents_along_axes(states[:, layout.ANGLE], half[:, 0], half[:, 1])
     return states[:, layout.X] - top_x, states[:, layout.Y] - half_y - top_y
 
 

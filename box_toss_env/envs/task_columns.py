@@ -57,6 +57,9 @@ OBS_SIZE_WITH_DYNAMICS = 15
 # with base_box, six columns after all the others: the base box's pose and size
 BASE_OBS_SIZE = 6  # base x [m], base y [m], cos and sin of its angle, its length and height [m]
 OBS_BASE_X, OBS_BASE_Y, OBS_BASE_COS, OBS_BASE_SIN, OBS_BASE_LENGTH, OBS_BASE_HEIGHT = range(-6, 0)
+# with a drawn box size (box_length_range, box_width_range, split), its length and width [m]: in the observation
+# after the dynamics (before a base box's columns), and in the episode's row after all the others
+BOX_SIZE_OBS = 2
 # the observation's target and dynamics columns are the episode's columns from EP_TARGET_X on
 assert OBS_SIZE - OBS_TARGET_X == EP_MASS - EP_TARGET_X
 

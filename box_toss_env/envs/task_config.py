@@ -13,6 +13,7 @@ import numpy as np
 from box_toss_env.envs.arguments import BASE_DEFAULTS, ENV_ARGUMENTS
 from box_toss_env.envs.task_columns import (
     BASE_OBS_SIZE,
+    BOX_SIZE_OBS,
     EP_BASE_HEIGHT,
     EP_BASE_LENGTH,
     EP_DYNAMICS,
@@ -67,6 +68,34 @@ class TaskConfig:
     base_length_range: tuple[float, float] = (0.0, 0.0)  # [m] of the base box, with base_box
     base_height_range: tuple[float, float] = (0.0, 0.0)  # [m] of the base box, with base_box
     base_mass: float = 0.0  # [kg] of the base box, with base_box
+    box_length_range: tuple[float, float] = (0.0, 0.0)  # [m] of the thrown box (low == high: not drawn)
+    box_width_range: tuple[float, float] = (0.0, 0.0)  # [m]
+
+    def __post_init__(self):
+        if self.box_length_range == (0.0, 0.0):  # not given: the fixed size of half_length, half_width
+            object.__setattr__(self, "box_length_range", (2.0 * self.half_length,) * 2)
+            object.__setattr__(self, "box_width_range", (2.0 * self.half_width,) * 2)
+
+    @functools.cached_property
+    def draws_box_size(self) -> bool:
+        """Whether the thrown box's length or width is drawn per episode (and observed)."""
+        return (
+            self.box_length_range[0] != self.box_length_range[1] or self.box_width_range[0] != self.box_width_range[1]
+        )
+
+    @property
+    def box_size_columns(self) -> tuple[int, int]:
+        """The columns of ``Episodes.data`` holding the box's length and width (with ``draws_box_size``): after all
+        the others."""
+        first = EPISODE_SIZE_WITH_BASE if self.base_box else EPISODE_SIZE
+        return first, first + 1
+
+    @property
+    def box_size_observed(self) -> tuple[int, int]:
+        """The observation's columns of the box's length and width (with ``draws_box_size``): after the dynamics,
+        before a base box's."""
+        first = OBS_SIZE_WITH_DYNAMICS if self.observe_dynamics else OBS_SIZE
+        return first, first + 1
 
     @functools.cached_property
     def randomises_dynamics(self) -> bool:
@@ -75,22 +104,25 @@ class TaskConfig:
 
     @functools.cached_property
     def draws_body_params(self) -> bool:
-        """Whether the engine's body parameters change from episode to episode: drawn dynamics, or the
-        base box's drawn size."""
+        """Whether the engine's body parameters change from episode to episode: drawn dynamics, the thrown box's
+        drawn size, or the base box's."""
         base_drawn = self.base_length_range[0] != self.base_length_range[1] or (
             self.base_height_range[0] != self.base_height_range[1]
         )
-        return self.randomises_dynamics or (self.base_box and base_drawn)
+        return self.randomises_dynamics or self.draws_box_size or (self.base_box and base_drawn)
 
     @property
     def obs_size(self) -> int:
         size = OBS_SIZE_WITH_DYNAMICS if self.observe_dynamics else OBS_SIZE
+        size += BOX_SIZE_OBS if self.draws_box_size else 0
         return size + BASE_OBS_SIZE if self.base_box else size
 
     @property
     def episode_size(self) -> int:
-        """Columns of ``Episodes.data`` (and variates drawn per episode)."""
-        return EPISODE_SIZE_WITH_BASE if self.base_box else EPISODE_SIZE
+        """Columns of ``Episodes.data`` (and variates drawn per episode): a drawn box size's two come last, so a task
+        that draws none draws what it always drew."""
+        size = EPISODE_SIZE_WITH_BASE if self.base_box else EPISODE_SIZE
+        return size + BOX_SIZE_OBS if self.draws_box_size else size
 
     @property
     def bodies_per_env(self) -> int:
@@ -99,13 +131,24 @@ class TaskConfig:
 
     @property
     def corner_radius(self) -> float:
-        """Distance from the centre to a corner [m]."""
-        return math.hypot(self.half_length, self.half_width)
+        """Distance from the centre to a corner [m] (of the largest box thrown, with a drawn size)."""
+        return math.hypot(0.5 * self.box_length_range[1], 0.5 * self.box_width_range[1])
+
+    @property
+    def max_corner_radius(self) -> float:
+        """The largest distance from the centre to a corner of any box thrown [m]."""
+        return self.corner_radius
 
     @property
     def gyration_radius_squared(self) -> float:
-        """I / m = (L^2 + W^2) / 12 [m^2] for a uniform box, whatever its mass."""
-        return (self.half_length**2 + self.half_width**2) / 3.0
+        """I / m = (L^2 + W^2) / 12 [m^2] for a uniform box, whatever its mass (the largest box's, with a drawn
+        size)."""
+        return (self.box_length_range[1] ** 2 + self.box_width_range[1] ** 2) / 12.0
+
+    @property
+    def min_gyration_radius_squared(self) -> float:
+        """I / m of the smallest box thrown [m^2]."""
+        return (self.box_length_range[0] ** 2 + self.box_width_range[0] ** 2) / 12.0
 
     # constant arrays, computed once (the functions below run per step and stay cheap on small batches)
     @functools.cached_property
@@ -123,6 +166,8 @@ class TaskConfig:
         ]
         if self.base_box:
             columns += [(EP_BASE_LENGTH, self.base_length_range), (EP_BASE_HEIGHT, self.base_height_range)]
+        if self.draws_box_size:
+            columns += list(zip(self.box_size_columns, (self.box_length_range, self.box_width_range), strict=True))
         for column, (a, b) in columns:
             low[column], span[column] = a, b - a
         return low, span
@@ -218,16 +263,23 @@ def checked_intervals(**values: Any) -> dict[str, Any]:
     return {name: check_interval(name, value, ENV_RANGES[name]) for name, value in values.items()}
 
 
-def clear_release_height(scalar: dict[str, Any], heights: tuple[float, float], given: Any) -> float:
-    """The box's corner radius, after checking that every release height lies above it (so the box starts clear
-    of the floor at any angle)."""
-    corner_radius = math.hypot(scalar["box_length"], scalar["box_width"]) / 2
+def clear_release_height(lengths: tuple[float, float], widths: tuple[float, float], heights, given: Any) -> float:
+    """The largest box's corner radius, after checking that every release height lies above it (so the box starts
+    clear of the floor at any angle)."""
+    corner_radius = math.hypot(lengths[1], widths[1]) / 2
     if heights[0] <= corner_radius:
         raise ValueError(
             f"release_height_range must lie above the box's corner radius {corner_radius:g} m (so the box "
             f"starts clear of the floor at any angle), got {given!r}"
         )
     return corner_radius
+
+
+def box_sizes(box_length, box_width, box_length_range, box_width_range) -> tuple[tuple[float, float], ...]:
+    """The thrown box's (low, high) length and width [m], checked: a drawn range, or the fixed size twice."""
+    lengths = check_scalar_or_interval("box_length", box_length, box_length_range, ENV_RANGES["box_length"])
+    widths = check_scalar_or_interval("box_width", box_width, box_width_range, ENV_RANGES["box_width"])
+    return lengths, widths
 
 
 def make_task_config(
@@ -260,14 +312,15 @@ def make_task_config(
     base_length_range=None,
     base_height_range=None,
     base_mass=None,
+    box_length_range=None,
+    box_width_range=None,
 ) -> TaskConfig:
     """Validate the task's keyword arguments into a TaskConfig: a TypeError names an argument of the
     wrong type, a ValueError one outside its range (``ENV_RANGES``). ``*_range=None`` fixes that
     quantity at its scalar argument. ``base_*=None`` takes ``BASE_DEFAULTS`` with ``base_box=True``
     (they must stay None without it)."""
+    lengths, widths = box_sizes(box_length, box_width, box_length_range, box_width_range)
     scalar = checked_scalars(
-        box_length=box_length,
-        box_width=box_width,
         gravity=gravity,
         penalty_stiffness=penalty_stiffness,
         max_speed=max_speed,
@@ -285,19 +338,14 @@ def make_task_config(
         target_x_range=target_x_range,
         launch_angle_range=launch_angle_range,
     )
-    corner_radius = clear_release_height(scalar, pairs["release_height_range"], release_height_range)
-    base = check_base_box(
-        base_box,
-        base_length_range,
-        base_height_range,
-        base_mass,
-        pairs["target_x_range"],
-        pairs["release_x_range"],
-        corner_radius,
-    )
+    corner_radius = clear_release_height(lengths, widths, pairs["release_height_range"], release_height_range)
+    clear = (pairs["target_x_range"], pairs["release_x_range"], corner_radius)
+    base = check_base_box(base_box, base_length_range, base_height_range, base_mass, *clear)
     return TaskConfig(
-        half_length=0.5 * scalar.pop("box_length"),
-        half_width=0.5 * scalar.pop("box_width"),
+        half_length=0.5 * lengths[1],  # the largest box's, with a drawn size (the episode's: task.box_half_sizes)
+        half_width=0.5 * widths[1],
+        box_length_range=lengths,
+        box_width_range=widths,
         mass_range=check_scalar_or_interval("mass", mass, mass_range, ENV_RANGES["mass"]),
         friction_range=check_scalar_or_interval("friction", friction, friction_range, ENV_RANGES["friction"]),
         restitution_range=check_scalar_or_interval(

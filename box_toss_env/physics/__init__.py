@@ -10,7 +10,7 @@ Two solvers share one scene description:
 ``simulate(scene, ...)`` runs a scene; ``Simulator`` runs compiled kernels on raw arrays.
 
 ``Scene(boxes_collide=True)`` makes the boxes of a scene collide with one another too (``narrowphase``,
-``colliding_solver``, ``colliding_reference``; docs/box_collisions.md); by default they meet only the floor
+``colliding``, ``colliding_reference``; docs/box_collisions.md); by default they meet only the floor
 and none of that is compiled.
 """
 

@@ -36,10 +36,12 @@ def lowest_pair(height0, height1, height2, height3):
 @jit_stage
 def lowest_face(cos_a, sin_a, half_length, half_width):
     """``lowest_pair`` of a box at the angle whose cosine and sine are given."""
-    return lowest_pair(sin_a * SIGN_X[0] * half_length + cos_a * SIGN_Y[0] * half_width,
-                       sin_a * SIGN_X[1] * half_length + cos_a * SIGN_Y[1] * half_width,
-                       sin_a * SIGN_X[2] * half_length + cos_a * SIGN_Y[2] * half_width,
-                       sin_a * SIGN_X[3] * half_length + cos_a * SIGN_Y[3] * half_width)
+    return lowest_pair(
+        sin_a * SIGN_X[0] * half_length + cos_a * SIGN_Y[0] * half_width,
+        sin_a * SIGN_X[1] * half_length + cos_a * SIGN_Y[1] * half_width,
+        sin_a * SIGN_X[2] * half_length + cos_a * SIGN_Y[2] * half_width,
+        sin_a * SIGN_X[3] * half_length + cos_a * SIGN_Y[3] * half_width,
+    )
 
 
 def face_down(angle: float) -> int:

@@ -55,8 +55,15 @@ def _grouped_kernel_source(SOLVER, IMPULSES, PENALTY, FRICTION, DIGEST):
         for group in range(state.shape[0] // group_size):
             first = group * group_size
             last = first + group_size
-            colliding_kernel(state[first:last], params[first:last], settings, stats[first:last],  # noqa: F821
-                             trajectory, events, warm[group] if warm.shape[0] > 0 else cold)
+            colliding_kernel(  # noqa: F821
+                state[first:last],
+                params[first:last],
+                settings,
+                stats[first:last],
+                trajectory,
+                events,
+                warm[group] if warm.shape[0] > 0 else cold,
+            )
 
     return run_groups
 
@@ -66,13 +73,26 @@ def make_grouped_kernel(solver: str, use_impulses: bool, use_penalty: bool, use_
     """``run_groups(state, params, settings, stats, group_size, warm)``: the colliding kernel of these flags
     (no recording) run on each consecutive group of ``group_size`` rows of the body arrays, group g with the
     warm start ``warm[g]`` (``warm`` (n_groups, rows, WARM_START_SIZE), or (0, 0, WARM_START_SIZE): none)."""
-    kernel = make_kernel(KernelFlags(solver=solver, use_impulses=use_impulses, use_penalty=use_penalty,
-                                     use_friction=use_friction, record=False, boxes_collide=True))
+    kernel = make_kernel(
+        KernelFlags(
+            solver=solver,
+            use_impulses=use_impulses,
+            use_penalty=use_penalty,
+            use_friction=use_friction,
+            record=False,
+            boxes_collide=True,
+        )
+    )
     function = _grouped_kernel_source(solver, use_impulses, use_penalty, use_friction, source_digest())
     # the same code and closure with the colliding kernel as a global (a dispatcher in the closure would
     # enter numba's cache key as its pickle, which differs in every process: a new cache entry each time)
-    bound = types.FunctionType(function.__code__, {**globals(), "colliding_kernel": kernel}, function.__name__,
-                               function.__defaults__, function.__closure__)
+    bound = types.FunctionType(
+        function.__code__,
+        {**globals(), "colliding_kernel": kernel},
+        function.__name__,
+        function.__defaults__,
+        function.__closure__,
+    )
     bound.__qualname__ = function.__qualname__
     return jit_kernel(bound)
 
@@ -92,26 +112,36 @@ class GroupedSimulator:
     step take the whole compile, 175 s at load 5), and each group's result is the same either way.
     """
 
-    def __init__(self, flags: KernelFlags, group_size: int, threads: int | None = None,
-                 start_interpreted: bool = False):
+    def __init__(
+        self, flags: KernelFlags, group_size: int, threads: int | None = None, start_interpreted: bool = False
+    ):
         if not flags.boxes_collide:
-            raise ValueError("GroupedSimulator runs scenes whose boxes collide (flags.boxes_collide=True); "
-                             "independent boxes run on Simulator")
+            raise ValueError(
+                "GroupedSimulator runs scenes whose boxes collide (flags.boxes_collide=True); "
+                "independent boxes run on Simulator"
+            )
         if flags.record:
-            raise ValueError("GroupedSimulator does not record trajectories (flags.record must be False); "
-                             "run one recorded scene on Simulator")
+            raise ValueError(
+                "GroupedSimulator does not record trajectories (flags.record must be False); "
+                "run one recorded scene on Simulator"
+            )
         self.flags = flags
         self.group_size = check_integer("group_size", group_size, 1, MAX_GROUP_SIZE)
         self.threads = None if threads is None else check_threads(threads)
-        recipe = {"solver": flags.solver, "use_impulses": flags.use_impulses, "use_penalty": flags.use_penalty,
-                  "use_friction": flags.use_friction}
+        recipe = {
+            "solver": flags.solver,
+            "use_impulses": flags.use_impulses,
+            "use_penalty": flags.use_penalty,
+            "use_friction": flags.use_friction,
+        }
         self.kernel = make_grouped_kernel(**recipe)
         self._no_warm_start = np.zeros((0, 0, layout.WARM_START_SIZE))
         self._ready = False
         recipe_call = (__name__, "make_grouped_kernel", recipe)
         # a call of the copy is one chunk of whole groups (``_run_interpreted``): any one group may run interpreted
-        self._start = (background_compile.InterpretedStart(self.kernel, recipe_call, MAX_GROUP_SIZE)
-                       if start_interpreted else None)
+        self._start = (
+            background_compile.InterpretedStart(self.kernel, recipe_call, MAX_GROUP_SIZE) if start_interpreted else None
+        )
         self.interpreted = False  # whether the last run used the kernel's interpreted copy (for some groups)
 
     @property
@@ -120,9 +150,16 @@ class GroupedSimulator:
             return 1
         return self.threads if self.threads is not None else numba.config.NUMBA_NUM_THREADS
 
-    def run(self, state: np.ndarray, params: np.ndarray, settings: np.ndarray, stats: np.ndarray,
-            trajectory: np.ndarray | None = None, events: np.ndarray | None = None,
-            warm_start: np.ndarray | None = None) -> None:
+    def run(
+        self,
+        state: np.ndarray,
+        params: np.ndarray,
+        settings: np.ndarray,
+        stats: np.ndarray,
+        trajectory: np.ndarray | None = None,
+        events: np.ndarray | None = None,
+        warm_start: np.ndarray | None = None,
+    ) -> None:
         """Advance ``state`` (n_groups * group_size, 6) in place and fill ``stats``; ``trajectory``
         and ``events`` must be None (kept for ``Simulator``'s signature). ``warm_start``: one
         ``warm_start_memory`` a group, stacked (n_groups, rows, WARM_START_SIZE) (``Simulator.run``'s, group by
@@ -195,18 +232,27 @@ class GroupArrays(NamedTuple):
 def check_group_warm_starts(warm_start, groups: int) -> np.ndarray:
     """``warm_start`` if it is a C-contiguous float64 array (groups, rows >= 1, WARM_START_SIZE) (a
     ``warm_start_memory`` a group), else a ValueError naming it."""
-    if (not isinstance(warm_start, np.ndarray) or warm_start.dtype != np.float64 or warm_start.ndim != 3
-            or warm_start.shape[0] != groups or warm_start.shape[1] < 1
-            or warm_start.shape[2] != layout.WARM_START_SIZE or not warm_start.flags.c_contiguous):
+    if (
+        not isinstance(warm_start, np.ndarray)
+        or warm_start.dtype != np.float64
+        or warm_start.ndim != 3
+        or warm_start.shape[0] != groups
+        or warm_start.shape[1] < 1
+        or warm_start.shape[2] != layout.WARM_START_SIZE
+        or not warm_start.flags.c_contiguous
+    ):
         shape = getattr(warm_start, "shape", None)
-        raise ValueError(f"warm_start must be a C-contiguous float64 array of shape ({groups} groups, rows >= 1, "
-                         f"{layout.WARM_START_SIZE}), a warm_start_memory a group, got {type(warm_start).__name__} "
-                         f"{shape}")
+        raise ValueError(
+            f"warm_start must be a C-contiguous float64 array of shape ({groups} groups, rows >= 1, "
+            f"{layout.WARM_START_SIZE}), a warm_start_memory a group, got {type(warm_start).__name__} "
+            f"{shape}"
+        )
     return warm_start
 
 
-def make_simulator(flags: KernelFlags, group_size: int = 1, threads: int | None = None,
-                   start_interpreted: bool = False):
+def make_simulator(
+    flags: KernelFlags, group_size: int = 1, threads: int | None = None, start_interpreted: bool = False
+):
     """The simulator for a batch of scenes of ``group_size`` bodies each: ``Simulator`` (the plain
     kernel, its bodies independent, unchanged; ``start_interpreted`` as there) when the boxes cannot
     meet, ``GroupedSimulator`` when they can (with ``flags.record``, the plain ``Simulator`` on one scene)."""

@@ -8,9 +8,7 @@ import numpy as np
 from . import layout
 from .compile.compilation import cache_location, jit_stage
 from .geometry import lowest_face, vertex_offset
-
-FLAT_TOLERANCE = 1e-3  # [rad] a face this close to level counts as lying on the floor
-TOUCH_TOLERANCE = 1e-3  # [-] of hx + hy: a corner this close to y = 0 touches the floor
+from .tunables import FLAT_TOLERANCE, TOUCH_TOLERANCE
 
 
 @jit_stage
@@ -55,8 +53,14 @@ def rest_timer(still, still_for, h, sleep_time):
 @jit_stage(inline="always")
 def is_finite_state(x, y, angle, vx, vy, spin):
     """Whether every coordinate of the state is finite."""
-    return (math.isfinite(x) and math.isfinite(y) and math.isfinite(angle) and math.isfinite(vx)
-            and math.isfinite(vy) and math.isfinite(spin))
+    return (
+        math.isfinite(x)
+        and math.isfinite(y)
+        and math.isfinite(angle)
+        and math.isfinite(vx)
+        and math.isfinite(vy)
+        and math.isfinite(spin)
+    )
 
 
 @jit_stage
@@ -64,9 +68,16 @@ def read_settings(settings):
     """The scene-wide settings array as (dt, gravity, max_steps, until_rest, restitution_threshold,
     sleep_speed, sleep_time, penetration_slop); the colliding solver reads its two more itself
     (``colliding.solve.solver_settings``)."""
-    return (settings[layout.DT], settings[layout.GRAVITY], np.int64(settings[layout.MAX_STEPS]),
-            settings[layout.UNTIL_REST] != 0.0, settings[layout.RESTITUTION_THRESHOLD], settings[layout.SLEEP_SPEED],
-            settings[layout.SLEEP_TIME], settings[layout.PENETRATION_SLOP])
+    return (
+        settings[layout.DT],
+        settings[layout.GRAVITY],
+        np.int64(settings[layout.MAX_STEPS]),
+        settings[layout.UNTIL_REST] != 0.0,
+        settings[layout.RESTITUTION_THRESHOLD],
+        settings[layout.SLEEP_SPEED],
+        settings[layout.SLEEP_TIME],
+        settings[layout.PENETRATION_SLOP],
+    )
 
 
 @jit_stage
@@ -88,8 +99,9 @@ def record_event(events, body, index, time, approach_speed, n_contacts):
 
 
 @jit_stage
-def write_stats(stats, body, first_contact, n_impacts, n_steps, max_penetration, rest_time, end_time,
-                status, fail_step, n_recorded):
+def write_stats(
+    stats, body, first_contact, n_impacts, n_steps, max_penetration, rest_time, end_time, status, fail_step, n_recorded
+):
     stats[body, layout.FIRST_CONTACT_TIME] = first_contact
     stats[body, layout.N_IMPACTS] = n_impacts
     stats[body, layout.N_STEPS] = n_steps

@@ -10,8 +10,8 @@ stage recompiles its callers.
 
 ``boxes_collide`` picks a different kernel, not a branch in one: with it False (every scene that does
 not ask for box-box contact) ``make_kernel`` returns the very kernel it returned before box-box contact
-existed, and nothing of ``narrowphase``, ``colliding_solver`` or ``colliding_reference`` is compiled; with
-it True the bodies of the scene are stepped together (``colliding_solver``, ``colliding_reference``).
+existed, and nothing of ``colliding`` or ``colliding_reference`` is compiled; with it True the bodies of the scene
+are stepped together (``colliding.kernel``, ``colliding_reference``).
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from __future__ import annotations
 import functools
 from dataclasses import dataclass
 
-from .colliding.step import make_colliding_robust_kernel
+from .colliding.kernel import make_colliding_robust_kernel
 from .compile.compilation import engine_source_digest
 from .reference.colliding_reference import make_colliding_reference_kernel
 from .reference.reference_solver import make_reference_kernel
@@ -50,8 +50,9 @@ def make_kernel(flags: KernelFlags):
     """The numba kernel ``run(state, params, settings, stats, trajectory, events)`` for ``flags``
     (the same kernel whatever ``flags.parallel``)."""
     if flags.boxes_collide:
-        return _make_colliding_kernel(flags.solver, flags.use_impulses, flags.use_penalty, flags.use_friction,
-                                      flags.record)
+        return _make_colliding_kernel(
+            flags.solver, flags.use_impulses, flags.use_penalty, flags.use_friction, flags.record
+        )
     return _make_kernel(flags.solver, flags.use_impulses, flags.use_penalty, flags.use_friction, flags.record)
 
 

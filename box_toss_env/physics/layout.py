@@ -14,13 +14,22 @@ HALF_LENGTH, HALF_WIDTH, MASS, INERTIA, RESTITUTION, FRICTION, STIFFNESS = 0, 1,
 PARAM_SIZE = 7  # [m], [m], [kg], [kg m^2], [-], [-], [N/m]
 
 # scene settings (SETTINGS_SIZE,): shared by every body of a run
-(DT, GRAVITY, MAX_STEPS, UNTIL_REST, RESTITUTION_THRESHOLD, SLEEP_SPEED, SLEEP_TIME,
- PENETRATION_SLOP, SOLVER_TOLERANCE, SOLVER_ITERATIONS) = range(10)
+(
+    DT,
+    GRAVITY,
+    MAX_STEPS,
+    UNTIL_REST,
+    RESTITUTION_THRESHOLD,
+    SLEEP_SPEED,
+    SLEEP_TIME,
+    PENETRATION_SLOP,
+    SOLVER_TOLERANCE,
+    SOLVER_ITERATIONS,
+) = range(10)
 SETTINGS_SIZE = 10  # [s], [m/s^2], [-], [0/1], [m/s], [m/s], [s], [m], [-], [-]
 
 # per-body statistics (n_bodies, STATS_SIZE) written by every kernel
-(FIRST_CONTACT_TIME, N_IMPACTS, N_STEPS, MAX_PENETRATION, REST_TIME, END_TIME, STATUS,
- FAIL_STEP, N_RECORDED) = range(9)
+(FIRST_CONTACT_TIME, N_IMPACTS, N_STEPS, MAX_PENETRATION, REST_TIME, END_TIME, STATUS, FAIL_STEP, N_RECORDED) = range(9)
 STATS_SIZE = 9
 # FIRST_CONTACT_TIME [s] (nan: never touched), N_IMPACTS, N_STEPS (time steps actually
 # integrated), MAX_PENETRATION [m], REST_TIME [s] (nan: never fell asleep), END_TIME [s],

@@ -41,9 +41,12 @@ def check_step_count(duration_name: str, duration: float, dt: float) -> int:
     """The whole steps ``ceil(duration / dt)`` of a run, or a ValueError if there are more than MAX_STEPS."""
     count = math.ceil(duration / dt - 1e-9)
     if count > MAX_STEPS:
-        raise ValueError(f"{duration_name} / dt must be at most {fmt(MAX_STEPS)} steps, got {duration:g} s / "
-                         f"{dt:g} s = {count:.3g} steps (a larger dt or a shorter {duration_name})")
+        raise ValueError(
+            f"{duration_name} / dt must be at most {fmt(MAX_STEPS)} steps, got {duration:g} s / "
+            f"{dt:g} s = {count:.3g} steps (a larger dt or a shorter {duration_name})"
+        )
     return int(count)
+
 
 ENGINE_RANGES = {
     "length": Range(1e-4, 1e3, "m"),  # Box, each side

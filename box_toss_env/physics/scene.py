@@ -64,7 +64,7 @@ class Scene:
     ``restitution_threshold`` are inelastic, a box lying on a face slower than ``sleep_speed``
     for ``sleep_time`` is put to sleep, and ``penetration_slop`` is left uncorrected (the penalty starts once a
     corner is twice that deep, island by island, then removes what lies beyond it). The last two
-    belong to its colliding scenes with more contacts than it solves exactly (``colliding_solver``:
+    belong to its colliding scenes with more contacts than it solves exactly (``colliding.solve``:
     over 64 in a substep, a pile): their projected Gauss-Seidel sweeps stop once a sweep changes the
     impulses by less than ``solver_tolerance`` of their sum (and none by more than 100 times that share of
     their mean), after ``solver_iterations`` sweeps at most
@@ -77,7 +77,7 @@ class Scene:
 
     ``boxes_collide``: False (default), every box meets only the floor and the boxes are independent
     (a batch of them runs on threads); True, the boxes of the scene also collide with one another and
-    are stepped together (``colliding_solver``, ``colliding_reference``). A colliding scene must start with no
+    are stepped together (``colliding``, ``colliding_reference``). A colliding scene must start with no
     two boxes overlapping by more than 1% of the thinner one's smaller half extent (a ValueError names
     them); smaller overlaps, and those that arise during a run, are resolved by the penalty.
     """
@@ -108,12 +108,25 @@ class Scene:
             if not isinstance(box, Box):
                 raise TypeError(f"boxes[{k}] must be a Box, got {type(box).__name__}")
         set_(self, "boxes", boxes)
-        for name in ("dt", "gravity", "restitution", "friction", "penalty_stiffness", "restitution_threshold",
-                     "sleep_speed", "sleep_time", "penetration_slop", "solver_tolerance"):
+        for name in (
+            "dt",
+            "gravity",
+            "restitution",
+            "friction",
+            "penalty_stiffness",
+            "restitution_threshold",
+            "sleep_speed",
+            "sleep_time",
+            "penetration_slop",
+            "solver_tolerance",
+        ):
             set_(self, name, ENGINE_RANGES[name].check(name, getattr(self, name)))
         iterations = ENGINE_RANGES["solver_iterations"]
-        set_(self, "solver_iterations",
-             check_integer("solver_iterations", self.solver_iterations, int(iterations.low), int(iterations.high)))
+        set_(
+            self,
+            "solver_iterations",
+            check_integer("solver_iterations", self.solver_iterations, int(iterations.low), int(iterations.high)),
+        )
         for name in ("use_impulses", "use_penalty", "boxes_collide"):
             set_(self, name, check_bool(name, getattr(self, name)))
         check_choice("solver", self.solver, SOLVERS)
@@ -126,9 +139,11 @@ class Scene:
             overlap = overlapping_boxes(boxes)
             if overlap is not None:
                 i, j, depth = overlap
-                raise ValueError(f"boxes[{i}] and boxes[{j}] overlap by {depth:.3g} m at the start; with "
-                                 "boxes_collide=True the boxes must start apart or touching (an overlap of at most "
-                                 "1% of the thinner box's half width is resolved by the penalty)")
+                raise ValueError(
+                    f"boxes[{i}] and boxes[{j}] overlap by {depth:.3g} m at the start; with "
+                    "boxes_collide=True the boxes must start apart or touching (an overlap of at most "
+                    "1% of the thinner box's half width is resolved by the penalty)"
+                )
 
     # -- what the scene has: these decide which kernel stages are compiled in -------------------
     @property
@@ -169,4 +184,3 @@ class Scene:
                 self.penalty_stiffness,
             )
         return params
-

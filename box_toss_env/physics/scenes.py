@@ -24,8 +24,9 @@ def seed_demo(seed: int = 0, boxes_collide: bool = False, **scene) -> Scene:
     the seed scheme unless ``solver`` says otherwise. ``boxes_collide=True`` lets the boxes collide with
     one another too (the demo's boxes meet only the floor)."""
     angles = np.random.default_rng(seed).uniform(0.0, math.pi, size=5)
-    boxes = tuple(Box(length=2.0, width=1.0, mass=1.0, position=(3.0 * j - 5.0, 5.0), angle=float(angles[j]))
-                  for j in range(5))
+    boxes = tuple(
+        Box(length=2.0, width=1.0, mass=1.0, position=(3.0 * j - 5.0, 5.0), angle=float(angles[j])) for j in range(5)
+    )
     return Scene(boxes=boxes, boxes_collide=boxes_collide, **{"solver": "seed", **scene})
 
 
@@ -41,16 +42,15 @@ def flat_drop(height: float = 1.0, restitution: float = 0.5, **scene) -> Scene:
     return Scene(boxes=(box,), restitution=restitution, **{"friction": 0.0, **scene})
 
 
-def corner_impact(angle: float = 0.4, velocity=(0.0, -3.0), spin: float = 0.0, restitution: float = 0.5,
-                  **scene) -> Scene:
+def corner_impact(
+    angle: float = 0.4, velocity=(0.0, -3.0), spin: float = 0.0, restitution: float = 0.5, **scene
+) -> Scene:
     """A tilted 2 x 1 m box whose lowest corner is 1 mm above the floor, moving down: a single
     corner impact (frictionless by default)."""
     box = Box(length=2.0, width=1.0, mass=1.0, angle=angle, velocity=velocity, spin=spin)
     half = 0.5 * np.array([box.length, box.width])
-    lowest = min(math.sin(angle) * sx * half[0] + math.cos(angle) * sy * half[1]
-                 for sx in (-1, 1) for sy in (-1, 1))
-    box = Box(length=2.0, width=1.0, mass=1.0, position=(0.0, 1e-3 - lowest), angle=angle, velocity=velocity,
-              spin=spin)
+    lowest = min(math.sin(angle) * sx * half[0] + math.cos(angle) * sy * half[1] for sx in (-1, 1) for sy in (-1, 1))
+    box = Box(length=2.0, width=1.0, mass=1.0, position=(0.0, 1e-3 - lowest), angle=angle, velocity=velocity, spin=spin)
     return Scene(boxes=(box,), restitution=restitution, **{"friction": 0.0, "gravity": 0.0, **scene})
 
 
@@ -96,8 +96,7 @@ def stack(n: int = 10, masses=None, length: float = 0.4, width: float = 0.2, **s
     masses = (2.0,) * n if masses is None else tuple(masses)
     if len(masses) != n:
         raise ValueError(f"masses must hold one mass per box (n = {n}), got {len(masses)}")
-    boxes = tuple(Box(length=length, width=width, mass=masses[k], position=(0.0, (k + 0.5) * width))
-                  for k in range(n))
+    boxes = tuple(Box(length=length, width=width, mass=masses[k], position=(0.0, (k + 0.5) * width)) for k in range(n))
     return Scene(boxes=boxes, boxes_collide=True, **{**STACK_MATERIAL, **scene})
 
 
@@ -110,8 +109,14 @@ def pyramid(rows: int = 5, length: float = 0.4, width: float = 0.2, spacing: flo
     for row in range(rows):
         count = rows - row
         for k in range(count):
-            boxes.append(Box(length=length, width=width, mass=2.0,
-                             position=((k - 0.5 * (count - 1)) * pitch, (row + 0.5) * width)))
+            boxes.append(
+                Box(
+                    length=length,
+                    width=width,
+                    mass=2.0,
+                    position=((k - 0.5 * (count - 1)) * pitch, (row + 0.5) * width),
+                )
+            )
     return Scene(boxes=tuple(boxes), boxes_collide=True, **{**STACK_MATERIAL, **scene})
 
 
@@ -123,32 +128,61 @@ def drop_on_box(height: float = 0.5, offset: float = 0.05, angle: float = 0.1, *
     return Scene(boxes=(lower, upper), boxes_collide=True, **{**STACK_MATERIAL, **scene})
 
 
-def flight_collision(speed: float = 2.0, angle: float = 0.4, offset: float = 0.0, gap: float = 0.2,
-                     spin: float = 0.0, masses=(1.0, 3.0), restitution: float = 0.5, **scene) -> Scene:
+def flight_collision(
+    speed: float = 2.0,
+    angle: float = 0.4,
+    offset: float = 0.0,
+    gap: float = 0.2,
+    spin: float = 0.0,
+    masses=(1.0, 3.0),
+    restitution: float = 0.5,
+    **scene,
+) -> Scene:
     """Two boxes colliding in flight without gravity, 10 m above the floor: a 1 x 0.5 m box tilted by
     ``angle`` moving at ``speed`` along +x (spinning at ``spin``) hits with its right-most corner, ``gap``
     away at the start, the left face of a 2 x 1 m box at rest, ``offset`` above that face's middle
     (frictionless by default: a corner-on-face impact with a closed form)."""
     half_length, half_width = 0.5, 0.25
-    corners = [(math.cos(angle) * sx * half_length - math.sin(angle) * sy * half_width,
-                math.sin(angle) * sx * half_length + math.cos(angle) * sy * half_width)
-               for sx in (-1, 1) for sy in (-1, 1)]
+    corners = [
+        (
+            math.cos(angle) * sx * half_length - math.sin(angle) * sy * half_width,
+            math.sin(angle) * sx * half_length + math.cos(angle) * sy * half_width,
+        )
+        for sx in (-1, 1)
+        for sy in (-1, 1)
+    ]
     rx, ry = max(corners)
-    moving = Box(length=1.0, width=0.5, mass=masses[0], position=(-1.0 - gap - rx, 10.0 + offset - ry),
-                 angle=angle, velocity=(speed, 0.0), spin=spin)
+    moving = Box(
+        length=1.0,
+        width=0.5,
+        mass=masses[0],
+        position=(-1.0 - gap - rx, 10.0 + offset - ry),
+        angle=angle,
+        velocity=(speed, 0.0),
+        spin=spin,
+    )
     still = Box(length=2.0, width=1.0, mass=masses[1], position=(0.0, 10.0))
-    return Scene(boxes=(moving, still), boxes_collide=True, restitution=restitution,
-                 **{"gravity": 0.0, "friction": 0.0, "dt": 1 / 256, **scene})
+    return Scene(
+        boxes=(moving, still),
+        boxes_collide=True,
+        restitution=restitution,
+        **{"gravity": 0.0, "friction": 0.0, "dt": 1 / 256, **scene},
+    )
 
 
 def newton_row(n: int = 5, speed: float = 1.0, spacing: float = 0.1, **scene) -> Scene:
     """``n`` equal 40 x 20 cm boxes lying in a row on a frictionless floor, ``spacing`` apart, with e = 1
     and mu = 0; the first slides into the second at ``speed``: momentum passes along the row."""
     n = check_integer("n", n, 1)
-    boxes = tuple(Box(**STACK_BOX, mass=2.0, position=(k * (0.4 + spacing), 0.1),
-                      velocity=(speed if k == 0 else 0.0, 0.0)) for k in range(n))
-    return Scene(boxes=boxes, boxes_collide=True,
-                 **{"restitution": 1.0, "friction": 0.0, "penalty_stiffness": 1e5, "dt": 1 / 256, **scene})
+    boxes = tuple(
+        Box(**STACK_BOX, mass=2.0, position=(k * (0.4 + spacing), 0.1), velocity=(speed if k == 0 else 0.0, 0.0))
+        for k in range(n)
+    )
+    return Scene(
+        boxes=boxes,
+        boxes_collide=True,
+        **{"restitution": 1.0, "friction": 0.0, "penalty_stiffness": 1e5, "dt": 1 / 256, **scene},
+    )
 
 
 def pile(n: int = 10, seed: int = 0, **scene) -> Scene:
@@ -161,10 +195,14 @@ def pile(n: int = 10, seed: int = 0, **scene) -> Scene:
     boxes = []
     for k in range(n):
         row, column = divmod(k, columns)
-        boxes.append(Box(**STACK_BOX, mass=2.0,
-                         position=(0.6 * (column - 0.5 * (columns - 1)) + float(rng.uniform(-0.08, 0.08)),
-                                   0.15 + 0.3 * row),
-                         angle=float(rng.uniform(-0.2, 0.2))))
+        boxes.append(
+            Box(
+                **STACK_BOX,
+                mass=2.0,
+                position=(0.6 * (column - 0.5 * (columns - 1)) + float(rng.uniform(-0.08, 0.08)), 0.15 + 0.3 * row),
+                angle=float(rng.uniform(-0.2, 0.2)),
+            )
+        )
     return Scene(boxes=tuple(boxes), boxes_collide=True, **{**STACK_MATERIAL, **scene})
 
 

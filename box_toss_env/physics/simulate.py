@@ -26,15 +26,17 @@ class NonFiniteStateError(FloatingPointError):
         self.body = body
         self.step = step
         self.solver = solver
-        super().__init__(f"body {body} went non-finite at step {step} with solver={solver!r}. Nothing was "
-                         f"clipped: {DIVERGENCE_CAUSES.get(solver, DIVERGENCE_CAUSES['robust'])}")
+        super().__init__(
+            f"body {body} went non-finite at step {step} with solver={solver!r}. Nothing was "
+            f"clipped: {DIVERGENCE_CAUSES.get(solver, DIVERGENCE_CAUSES['robust'])}"
+        )
 
 
 DIVERGENCE_CAUSES = {
     "seed": "the explicit seed scheme gains energy where dt * sqrt(penalty_stiffness / effective mass) > 2 "
-            "(reduce dt or the stiffness, or use solver='robust')",
+    "(reduce dt or the stiffness, or use solver='robust')",
     "robust": "the robust solver overflowed on this scene's values, which it should not do inside the ranges "
-              "of docs/ranges.md: please report the scene",
+    "of docs/ranges.md: please report the scene",
 }
 """What makes each solver's state non-finite, as its ``NonFiniteStateError`` says."""
 
@@ -49,7 +51,7 @@ class Trajectory:
 
     @property
     def position(self) -> np.ndarray:  # (T, n, 2) [m]
-        return self.state[:, :, layout.X:layout.Y + 1]
+        return self.state[:, :, layout.X : layout.Y + 1]
 
     @property
     def angle(self) -> np.ndarray:  # (T, n) [rad]
@@ -57,7 +59,7 @@ class Trajectory:
 
     @property
     def velocity(self) -> np.ndarray:  # (T, n, 2) [m/s]
-        return self.state[:, :, layout.VX:layout.VY + 1]
+        return self.state[:, :, layout.VX : layout.VY + 1]
 
     @property
     def spin(self) -> np.ndarray:  # (T, n) [rad/s]
@@ -105,18 +107,28 @@ class Simulator:
         self._no_events = np.zeros((0, 0, layout.EVENT_SIZE))
         self._no_warm_start = np.zeros((0, layout.WARM_START_SIZE))
         self._ready = False  # compiled or loaded for the arrays of the first run
-        self._start = (background_compile.InterpretedStart(self.kernel, background_compile.kernel_recipe(flags))
-                       if start_interpreted else None)
+        self._start = (
+            background_compile.InterpretedStart(self.kernel, background_compile.kernel_recipe(flags))
+            if start_interpreted
+            else None
+        )
         self.interpreted = False  # whether the last run used the kernel's interpreted copy
 
     @classmethod
-    def for_scene(cls, scene: Scene, *, record: bool = False, parallel: bool | None = None,
-                  threads: int | None = None) -> Simulator:
+    def for_scene(
+        cls, scene: Scene, *, record: bool = False, parallel: bool | None = None, threads: int | None = None
+    ) -> Simulator:
         if parallel is None:
             parallel = scene.n_bodies > 1 and not scene.boxes_collide
-        flags = KernelFlags(solver=scene.solver, use_impulses=scene.use_impulses, use_penalty=scene.has_penalty,
-                            use_friction=scene.has_friction, record=record, parallel=parallel,
-                            boxes_collide=scene.boxes_collide)
+        flags = KernelFlags(
+            solver=scene.solver,
+            use_impulses=scene.use_impulses,
+            use_penalty=scene.has_penalty,
+            use_friction=scene.has_friction,
+            record=record,
+            parallel=parallel,
+            boxes_collide=scene.boxes_collide,
+        )
         return cls(flags, threads)
 
     @property
@@ -133,9 +145,16 @@ class Simulator:
         and leaves the array as it is. The floor-only kernels have no contacts to keep."""
         return self.flags.boxes_collide
 
-    def run(self, state: np.ndarray, params: np.ndarray, settings: np.ndarray, stats: np.ndarray,
-            trajectory: np.ndarray | None = None, events: np.ndarray | None = None,
-            warm_start: np.ndarray | None = None) -> None:
+    def run(
+        self,
+        state: np.ndarray,
+        params: np.ndarray,
+        settings: np.ndarray,
+        stats: np.ndarray,
+        trajectory: np.ndarray | None = None,
+        events: np.ndarray | None = None,
+        warm_start: np.ndarray | None = None,
+    ) -> None:
         """Advance ``state`` in place and fill ``stats`` (n, STATS_SIZE); with ``record`` also
         ``trajectory`` (max_steps + 1, n, 6) and ``events`` (n, MAX_EVENTS, 3).
 
@@ -151,8 +170,10 @@ class Simulator:
         trajectory = self._no_trajectory if trajectory is None else trajectory
         events = self._no_events if events is None else events
         if warm_start is not None and not self.carries_warm_start:
-            raise ValueError("warm_start is for scenes whose boxes collide (Simulator.carries_warm_start); "
-                             f"this kernel is {self.flags}")
+            raise ValueError(
+                "warm_start is for scenes whose boxes collide (Simulator.carries_warm_start); "
+                f"this kernel is {self.flags}"
+            )
         if self.carries_warm_start:
             warm = self._no_warm_start if warm_start is None else check_warm_start(warm_start)
             args: tuple = (state, params, settings, stats, trajectory, events, warm)
@@ -183,12 +204,19 @@ def warm_start_memory(n_bodies: int) -> np.ndarray:
 def check_warm_start(warm_start) -> np.ndarray:
     """``warm_start`` if it is a C-contiguous float64 array (rows, WARM_START_SIZE) with at least one row
     (``warm_start_memory``), else a ValueError naming it."""
-    if (not isinstance(warm_start, np.ndarray) or warm_start.dtype != np.float64 or warm_start.ndim != 2
-            or warm_start.shape[0] < 1 or warm_start.shape[1] != layout.WARM_START_SIZE
-            or not warm_start.flags.c_contiguous):
+    if (
+        not isinstance(warm_start, np.ndarray)
+        or warm_start.dtype != np.float64
+        or warm_start.ndim != 2
+        or warm_start.shape[0] < 1
+        or warm_start.shape[1] != layout.WARM_START_SIZE
+        or not warm_start.flags.c_contiguous
+    ):
         shape = getattr(warm_start, "shape", None)
-        raise ValueError(f"warm_start must be a C-contiguous float64 array of shape (rows >= 1, "
-                         f"{layout.WARM_START_SIZE}) from warm_start_memory, got {type(warm_start).__name__} {shape}")
+        raise ValueError(
+            f"warm_start must be a C-contiguous float64 array of shape (rows >= 1, "
+            f"{layout.WARM_START_SIZE}) from warm_start_memory, got {type(warm_start).__name__} {shape}"
+        )
     return warm_start
 
 
@@ -198,8 +226,10 @@ def run_in_shares(kernel, shares: int, state, params, settings, stats, trajector
     n = state.shape[0]
     edges = [n * k // shares for k in range(shares + 1)]
     pool = thread_pool(shares - 1)
-    futures = [pool.submit(kernel, state[a:b], params[a:b], settings, stats[a:b], trajectory, events)
-               for a, b in zip(edges[:-2], edges[1:-1], strict=True)]
+    futures = [
+        pool.submit(kernel, state[a:b], params[a:b], settings, stats[a:b], trajectory, events)
+        for a, b in zip(edges[:-2], edges[1:-1], strict=True)
+    ]
     a = edges[-2]
     try:
         kernel(state[a:], params[a:], settings, stats[a:], trajectory, events)
@@ -260,8 +290,15 @@ def steps_for(scene: Scene, steps: int | None, duration: float | None) -> int:
     return check_step_count("duration", duration, scene.dt)
 
 
-def simulate(scene: Scene, *, steps: int | None = None, duration: float | None = None,
-             until_rest: bool = False, record: bool = False, threads: int | None = None) -> SimulationResult:
+def simulate(
+    scene: Scene,
+    *,
+    steps: int | None = None,
+    duration: float | None = None,
+    until_rest: bool = False,
+    record: bool = False,
+    threads: int | None = None,
+) -> SimulationResult:
     """Run ``scene`` for ``steps`` time steps (or ``duration`` seconds, rounded up to whole steps).
 
     ``until_rest`` stops each body once it has lain still on a face for ``scene.sleep_time``.
@@ -307,6 +344,5 @@ def collect_result(scene: Scene, state, stats, trajectory, events) -> Simulation
         for body, count in enumerate(recorded):  # a body asleep early keeps its final state
             trajectory[count:rows, body] = state[body]
         result.trajectory = Trajectory(time=np.arange(rows) * scene.dt, state=trajectory[:rows])
-        result.impacts = [events[body, : min(n, layout.MAX_EVENTS)].copy()
-                          for body, n in enumerate(result.n_impacts)]
+        result.impacts = [events[body, : min(n, layout.MAX_EVENTS)].copy() for body, n in enumerate(result.n_impacts)]
     return result

@@ -32,8 +32,9 @@ def check_finite(name: str, value) -> float:
     return number
 
 
-def check_range(name: str, value, low=-math.inf, high=math.inf, *, low_open=False, high_open=False,
-                unit: str = "") -> float:
+def check_range(
+    name: str, value, low=-math.inf, high=math.inf, *, low_open=False, high_open=False, unit: str = ""
+) -> float:
     """Return ``value`` as a float if it lies in the interval, else raise a ValueError that
     names the parameter and the interval, e.g. ``restitution must be in [0, 1], got 1.5``."""
     number = check_finite(name, value)

@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from agents import ceiling
+from agents import benchmark_store, ceiling
 from agents.benchmark import ensure_ceiling
 from agents.oracle import OracleSettings
 
@@ -40,36 +40,32 @@ def test_a_row_per_budget_with_more_throws_for_the_bigger_search(uninterrupted):
 
 
 def test_a_killed_sweep_resumes_at_the_budget_it_was_searching(tmp_path, monkeypatch, uninterrupted):
-    def killed_after_first_budget(env_id, done, on_row):
+    def killed_after_first_budget(env_id, env_kwargs=None, done=None, on_row=None):
         def save_then_die(rows):
             on_row(rows)
             raise KeyboardInterrupt
 
         return small_sweep(env_id, done, save_then_die)
 
+    store = benchmark_store.empty()
     monkeypatch.setattr(ceiling, "sweep", killed_after_first_budget)
     with pytest.raises(KeyboardInterrupt):
-        ensure_ceiling(tmp_path, ENV_ID)
-    partial = tmp_path / ENV_ID / "ceiling.partial.json"
-    assert not (tmp_path / ENV_ID / "ceiling.json").exists()
+        ensure_ceiling(store, tmp_path, ENV_ID)
+    partial = tmp_path / ENV_ID / "ceiling-default.partial.json"
+    assert store["ceilings"] == {}
     assert [measured(row) for row in json.loads(partial.read_text())] == [measured(uninterrupted[0])]
 
     resumed_with = []
 
-    def resumed(env_id, done, on_row):
+    def resumed(env_id, env_kwargs=None, done=None, on_row=None):
         resumed_with.append(len(done))
         return small_sweep(env_id, done, on_row)
 
     monkeypatch.setattr(ceiling, "sweep", resumed)
-    rows = ensure_ceiling(tmp_path, ENV_ID)
+    ensure_ceiling(store, tmp_path, ENV_ID)
+    rows = store["ceilings"][ENV_ID]["default"]
     assert resumed_with == [1]
     assert [measured(row) for row in rows] == [measured(row) for row in uninterrupted]
     assert not partial.exists()
-    assert ensure_ceiling(tmp_path, ENV_ID) == rows  # saved: not searched a third time
-    assert resumed_with == [1]
-
-
-def test_rows_of_budgets_no_longer_swept_are_dropped(uninterrupted):
-    stale = {**uninterrupted[0], "budget": {**uninterrupted[0]["budget"], "initial": 999}}
-    rows = small_sweep(ENV_ID, done=[stale, uninterrupted[0]])
-    assert [measured(row) for row in rows] == [measured(row) for row in uninterrupted]
+    ensure_ceiling(store, tmp_path, ENV_ID)  # stored: not searched a third time
+    assert resumed_with == [1] and store["ceilings"][ENV_ID]["default"] == rows

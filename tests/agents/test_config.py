@@ -146,3 +146,18 @@ def test_a_folder_without_project_settings_uses_its_parents(tmp_path):
     assert config.has_entry("ppo", "BoxToss-v0", tmp_path / "raw")
     assert not config.has_entry("ppo", "BoxToss-OnBox-v0", tmp_path / "raw")
     assert not config.has_entry("sac", "BoxToss-v0", tmp_path / "raw")
+
+
+def test_a_folders_own_project_settings_add_to_its_parents(tmp_path):
+    (tmp_path / "project.yml").write_text("defaults: {eval_freq: 123, torch_threads: 1}\n")
+    (tmp_path / "raw").mkdir()
+    (tmp_path / "raw" / "ppo.yml").write_text("BoxToss-v0: {n_timesteps: 10}\n")
+    (tmp_path / "raw" / "project.yml").write_text("ppo:\n  BoxToss-v0: {eval_freq: 7, initial_mean: ballistic}\n")
+    settings = config.load_hyperparams("ppo", "BoxToss-v0", tmp_path / "raw")
+    assert (settings["eval_freq"], settings["torch_threads"], settings["initial_mean"]) == (7, 1, "ballistic")
+
+
+def test_the_pixel_recipe_is_a_cnn_policy_on_unnormalised_images():
+    hyperparams = config.load_hyperparams("ppo", "BoxToss-Pixels-v0")
+    config.check_config(hyperparams, "ppo")
+    assert hyperparams["policy"] == "CnnPolicy" and hyperparams["normalize"] is False

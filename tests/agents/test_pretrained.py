@@ -12,6 +12,7 @@ import yaml
 from agents import evaluation
 from agents.policies import UnreadableModelError
 from agents.pretrained import CHECKSUMS, MODELS, check_folder, load_agent, read_checksums
+from agents.variant_gifs import pixel_ids
 
 FILES = {"vec_normalize.pkl", "config.yml", "env_kwargs.yml", "results.json", "README.md"}
 FOLDERS = sorted(path for path in MODELS.iterdir() if path.is_dir())
@@ -19,6 +20,7 @@ FOLDERS = sorted(path for path in MODELS.iterdir() if path.is_dir())
 
 def test_every_variant_with_a_ppo_recipe_has_a_trained_agent():
     recipes = set(yaml.safe_load((MODELS.parent / "agents" / "hyperparams" / "ppo.yml").read_text()))
+    recipes -= set(pixel_ids())  # a CnnPolicy's zip is 4.7 MB, past the 1 MB a committed agent may take
     assert {path.name for path in FOLDERS} == {f"ppo-{env_id}" for env_id in recipes}
 
 

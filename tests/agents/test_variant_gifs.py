@@ -47,7 +47,7 @@ def test_docs_show_every_registered_one_throw_variant_with_a_small_gif():
     section = page.split("<!-- variant-gifs:start -->")[1].split("<!-- variant-gifs:end -->")[0]
     linked = re.findall(r"\]\(figures/variant_(.+?)\.gif\)", section)
     assert linked == variant_gifs.variant_ids()
-    assert set(variant_gifs.variant_ids()) | set(variant_gifs.SEQUENTIAL) == {
+    assert set(variant_gifs.variant_ids()) | set(variant_gifs.SEQUENTIAL) | set(variant_gifs.pixel_ids()) == {
         env_id for env_id in gym.registry if env_id.startswith("BoxToss-")
     }
     for env_id in linked:

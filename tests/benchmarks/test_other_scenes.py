@@ -4,7 +4,15 @@ import numpy as np
 import pytest
 
 from benchmarks.other_engines import ENGINES
-from benchmarks.other_scenes import SCENE_ENGINE_MODULES, SCENE_ENGINES, UnsupportedScene, simulate_scene
+from benchmarks.other_scenes import (
+    SCENE_ENGINE_MODULES,
+    SCENE_ENGINES,
+    Box2D3Settings,
+    Layout,
+    UnsupportedScene,
+    make_world,
+    simulate_scene,
+)
 from box_toss_env.physics import Box, Scene
 from reports.cases import toss_of
 
@@ -100,3 +108,41 @@ def test_a_box_sliding_on_a_box_stops_after_v0_squared_over_2_mu_g(engine):
     final = simulate_scene(engine, scene, 240, record=False).final_state
     assert final[1, 0] + 0.5 == pytest.approx(v0**2 / (2 * mu * -scene.gravity), rel=0.03)
     assert abs(final[0, 0]) < 1e-3  # the bottom box holds on the floor
+
+
+def test_a_layout_places_the_bodies_elsewhere_and_reads_them_back_in_our_frame(engine):
+    """Box2D's many_pyramids in the other engines: a box on a second floor 5 m up stays there, read back at y = 0."""
+    scene = colliding(Scene(boxes=(box(0.0, 0.1), box(10.0, 0.1)), dt=1 / 60, restitution=0.0, friction=0.5))
+    layout = Layout(offsets=np.array([[0.0, 0.0], [-10.0, 5.0]]), floors=((0.0, -2.0, 2.0), (5.0, -2.0, 2.0)))
+    world = make_world(engine, scene, layout=layout)
+    world.advance(60)
+    out = np.empty((2, 6))
+    world.read_states(out)
+    np.testing.assert_allclose(out[:, :2], [[0.0, 0.1], [10.0, 0.1]], atol=6e-3)
+
+
+def test_place_teleports_a_body_and_wakes_it(engine):
+    scene = Scene(boxes=(box(0.0, 0.1), box(3.0, 0.1)), dt=1 / 60, restitution=0.0, friction=0.5)
+    world = make_world(engine, scene, sleep=True)
+    world.advance(120)  # Box2D's bodies fall asleep after 0.5 s at rest
+    world.place(1, (0.0, 2.0, 0.0, 3.0, 0.0, 0.0))
+    assert not world.asleep()[1]
+    world.advance(1)
+    out = np.empty((2, 6))
+    world.read_states(out)
+    assert out[1, 0] == pytest.approx(3.0 / 60, abs=1e-3) and out[1, 3] == pytest.approx(3.0, abs=1e-3)
+
+
+def test_box2d3_contact_tuning_is_applied_only_where_asked():
+    """Softer contacts (5 Hz instead of 30) let a resting box sink deeper: the setting reaches the solver."""
+    pytest.importorskip("pyb2d3")
+    scene = Scene(boxes=(Box(length=0.4, width=0.2, mass=200.0, position=(0.0, 0.1)),), dt=1 / 60)
+    depth = {}
+    for hertz in (None, 5.0):
+        world = make_world("box2d3", scene, settings=Box2D3Settings(contact_hertz=hertz))
+        world.advance(60)
+        out = np.empty((1, 6))
+        world.read_states(out)
+        depth[hertz] = 0.1 - out[0, 1]
+    assert depth[5.0] > 2 * depth[None] > 0
+    assert not Box2D3Settings().tuned and Box2D3Settings(push=1.0).contact() == (30.0, 10.0, 1.0)

@@ -353,7 +353,7 @@ def test_a_flat_landing_slides_the_same_whatever_the_phase_of_the_impact_in_the_
     """A box dropped flat with 2 m/s sideways onto a wide base: drop heights 4 mm apart move the impact
     within a time step, which should change where it stops by millimetres (the floor-only kernel: 1.482 to
     1.496 m over 12 such drops). Before restitution was solved with the floor and friction contacts
-    (``colliding_solver`` stage 5), the colliding kernel stopped it anywhere from 1.42 to 1.69 m; now
+    (the colliding solver's restitution stage), the colliding kernel stopped it anywhere from 1.42 to 1.69 m; now
     1.427 to 1.438 m."""
     from box_toss_env.physics import Box, Scene, simulate
 

@@ -11,8 +11,9 @@ import pytest
 from physics_checks import advance_in_runs
 
 from box_toss_env.physics import Box, Scene, Simulator, layout, make_settings, scenes, simulate, warm_start_memory
+from box_toss_env.physics.colliding.alone import bounds_touch, steps_alone
 from box_toss_env.physics.colliding.broadphase import SMALL_SORT, candidate_pairs, sort_keys, sweep_axis
-from box_toss_env.physics.colliding.colliding_solver import bounds_touch, steps_alone
+from box_toss_env.physics.colliding.state import Bodies, Sleep, StepContext
 from box_toss_env.physics.robust.flight import time_to_contact
 
 
@@ -229,7 +230,11 @@ def test_the_search_for_whole_steps_alone_stops_at_its_resolution():
 @numba.njit
 def compiled_steps_alone(pose, vel, half, awake, params):
     radius = np.sqrt(half[:, 0] ** 2 + half[:, 1] ** 2)
-    return steps_alone(pose, vel, half, radius, awake, params, -9.81, 1e-12, 1.0 / 128, 1_000)
+    bodies = Bodies(pose, vel, half, params, 1.0 / params[:, layout.MASS], 1.0 / params[:, layout.INERTIA], radius)
+    n = pose.shape[0]
+    sleep = Sleep(awake, awake, np.zeros(n, np.int64), np.zeros(n), np.zeros(n), np.zeros(n, np.int64), awake)
+    context = StepContext(1.0 / 128, -9.81, 1_000, False, 0.0, 0.0, 0.0, 0.0, 0.0, 1, 1e-12, 0.1, True, True, False)
+    return steps_alone(bodies, sleep, context, 1_000)
 
 
 @pytest.mark.parametrize("gap", [-1e-9, 0.0, 1e-6, 0.3])
@@ -367,7 +372,7 @@ def test_a_run_on_a_pile_asleep_throughout_leaves_what_the_stepping_run_leaves()
 
 
 def test_a_column_of_40_boxes_starting_cold_stays_at_rest():
-    """Over 64 contacts a cold start begins from the resting loads (``colliding_solver.resting_loads``): each
+    """Over 64 contacts a cold start begins from the resting loads (``warm_start.resting_loads``): each
     contact carries the weight above it, so a column of 40 boxes built exactly on one another stays at rest in
     its first step of 1/60 s (from zero, its 16 Gauss-Seidel sweeps cannot carry the load down 40 layers:
     it sank at 0.24 m/s)."""
@@ -422,7 +427,7 @@ def test_the_penalty_acts_island_by_island(per_island):
 
 
 def test_a_leaning_column_starting_cold_stays_at_rest():
-    """The cold start's guess balances moments too (``colliding_solver.lever_shares``): in a column of 40 boxes
+    """The cold start's guess balances moments too (``warm_start.lever_shares``): in a column of 40 boxes
     (over 64 contacts), each 5 mm right of the one below, every pair of contacts carries the load above it split
     by the lever rule (the load's line of action runs right of the middle), so the column stays at rest in its
     first step of 1/60 s; split equally (as before), the boxes turned at up to 6.6 mm/s."""
@@ -435,7 +440,7 @@ def test_a_leaning_column_starting_cold_stays_at_rest():
 
 
 def test_the_sweeps_stop_only_once_every_contact_is_solved():
-    """``colliding_solver.gauss_seidel`` stops once a sweep changes the impulses by less than the tolerance of their
+    """``sweeps.gauss_seidel`` stops once a sweep changes the impulses by less than the tolerance of their
     sum *and* none by more than SINGLE_CHANGE times that share of their mean. Beside 2,000 boxes lying apart (4,000
     contacts whose sum hides one column's), a box dropped from 1 mm onto a column of 10 passes its load down the
     column within the penalty's band (under 4 slops, 0.2 mm); stopped by the sum alone, the column took 0.33 mm."""

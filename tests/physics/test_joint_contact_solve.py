@@ -6,7 +6,6 @@ import numba
 import numpy as np
 import pytest
 
-from box_toss_env.physics.colliding import colliding_solver
 from box_toss_env.physics.colliding.narrowphase import (
     BODY1,
     BODY2,
@@ -24,19 +23,34 @@ from box_toss_env.physics.colliding.narrowphase import (
     TANGENT_MASS,
     TARGET,
 )
+from box_toss_env.physics.colliding.normal_lcp import delassus_matrix, normal_lcp
+from box_toss_env.physics.colliding.prepare import apply_impulse, relative_velocity
+from box_toss_env.physics.colliding.solve import solve_jointly as joint_solve
+from box_toss_env.physics.colliding.state import Bodies, Contacts, ExactWork
+from box_toss_env.physics.colliding.sweeps import friction_sweep
+from box_toss_env.physics.tunables import DIRECT_LIMIT
 
-LIMIT = colliding_solver.DIRECT_LIMIT
+LIMIT = DIRECT_LIMIT
 
 
 @numba.njit(cache=False)
 def solve_jointly(contacts, ids, count, vel, inv_mass, inv_inertia):
-    w, a = np.zeros((LIMIT, LIMIT)), np.zeros((LIMIT, LIMIT))
-    u, x, impulse = np.zeros(LIMIT), np.zeros(LIMIT), np.zeros(LIMIT)
-    index, state = np.zeros(LIMIT, np.int64), np.zeros(LIMIT, np.int64)
-    solved = colliding_solver.solve_jointly(
-        contacts, ids, count, vel, inv_mass, inv_inertia, w, a, u, x, impulse, index, state
+    exact = ExactWork(
+        np.zeros((LIMIT, LIMIT)),
+        np.zeros((LIMIT, LIMIT)),
+        np.zeros(LIMIT),
+        np.zeros(LIMIT),
+        np.zeros(LIMIT, np.bool_),
+        np.zeros(LIMIT, np.int64),
+        np.zeros(LIMIT),
+        np.zeros(LIMIT, np.int64),
+        np.zeros((2, vel.shape[0]), np.bool_),
     )
-    return solved, state[:count].copy()
+    none = np.zeros((vel.shape[0], 3))
+    bodies = Bodies(none, vel, none[:, :2], none, inv_mass, inv_inertia, inv_mass)
+    rows = Contacts(contacts, ids, np.zeros(count, np.bool_), np.zeros(count, np.int64))
+    solved = joint_solve(rows, count, bodies, exact)
+    return solved, exact.state[:count].copy()
 
 
 @numba.njit(cache=False)
@@ -45,24 +59,22 @@ def solve_by_alternation(contacts, ids, count, vel, inv_mass, inv_inertia, round
     w, factor = np.zeros((LIMIT, LIMIT)), np.zeros((LIMIT, LIMIT))
     free, x, y = np.zeros(LIMIT), np.zeros(LIMIT), np.zeros(LIMIT)
     active, index = np.zeros(LIMIT, np.bool_), np.zeros(LIMIT, np.int64)
-    colliding_solver.delassus_matrix(contacts, ids, count, inv_mass, inv_inertia, w)
+    delassus_matrix(contacts, ids, count, inv_mass, inv_inertia, w)
     for _ in range(rounds):
         for c in range(count):
-            ux, uy = colliding_solver.relative_velocity(c, contacts, ids, vel)
+            ux, uy = relative_velocity(c, contacts, ids, vel)
             value = ux * contacts[c, NX] + uy * contacts[c, NY] - contacts[c, TARGET]
             for d in range(count):
                 value -= w[c, d] * contacts[d, IMPULSE]
             free[c] = value
             active[c] = active[c] or free[c] < 0.0
-        if not colliding_solver.normal_lcp(w, free, x, active, count, factor, index, y):
+        if not normal_lcp(w, free, x, active, count, factor, index, y):
             return False
         for c in range(count):
             dp = x[c] - contacts[c, IMPULSE]
             contacts[c, IMPULSE] = x[c]
-            colliding_solver.apply_impulse(
-                c, dp * contacts[c, NX], dp * contacts[c, NY], contacts, ids, vel, inv_mass, inv_inertia
-            )
-        colliding_solver.friction_sweep(contacts, ids, count, vel, inv_mass, inv_inertia)
+            apply_impulse(c, dp * contacts[c, NX], dp * contacts[c, NY], contacts, ids, vel, inv_mass, inv_inertia)
+        friction_sweep(contacts, ids, count, vel, inv_mass, inv_inertia)
     return True
 
 

@@ -24,8 +24,9 @@ from ..robust.memory import (
     start_memory,
 )
 from ..robust.robust_solver import advance_box
+from ..robust.state import FloorSettings, Recording
+from ..tunables import ALONE_LOWEST
 from .broadphase import box_bound, time_apart
-from .limits import ALONE_LOWEST
 from .prepare import body_kinetic_energy
 
 
@@ -38,8 +39,7 @@ def energy_speed(vel, b, params, y, gravity):
     (``robust_solver``: impulses, the energy limit and the penalty's energy all take, never give)."""
     mass = params[b, layout.MASS]
     half = min(params[b, layout.HALF_LENGTH], params[b, layout.HALF_WIDTH])
-    energy = (body_kinetic_energy(vel, b, params)
-              + mass * abs(gravity) * max(y - ALONE_LOWEST * half, 0.0))
+    energy = body_kinetic_energy(vel, b, params) + mass * abs(gravity) * max(y - ALONE_LOWEST * half, 0.0)
     radius2 = params[b, layout.HALF_LENGTH] ** 2 + params[b, layout.HALF_WIDTH] ** 2
     return math.sqrt(2.0 * energy * (1.0 / mass + radius2 / params[b, layout.INERTIA]))
 
@@ -66,7 +66,7 @@ def bounds_touch(pose, half, radius, awake):
 
 
 @jit_stage
-def steps_alone(pose, vel, half, radius, awake, params, gravity, tolerance, dt, steps_left):
+def steps_alone(bodies, sleep, context, steps_left):
     """How many whole time steps every awake body can be advanced alone against the floor
     (``robust_solver.advance_box``: flight in closed form, impacts located in time) before any two boxes could
     meet; the larger of two safe counts:
@@ -78,14 +78,33 @@ def steps_alone(pose, vel, half, radius, awake, params, gravity, tolerance, dt, 
         sum of their speed bounds: a box bouncing or sliding on the floor far from the others.
     Both give none while an awake box's bounding box touches another's (``bounds_touch``), which is asked first:
     a box resting on another costs no search."""
+    pose, vel, half, radius, params, awake = (
+        bodies.pose,
+        bodies.vel,
+        bodies.half,
+        bodies.radius,
+        bodies.params,
+        sleep.awake,
+    )
+    dt, gravity, tolerance = context.dt, context.gravity, context.tolerance
     if bounds_touch(pose, half, radius, awake):
         return 0
     horizon = steps_left * dt
     flight = horizon
     for b in range(pose.shape[0]):
         if awake[b]:
-            tau, _ = time_to_contact(pose[b, 1], pose[b, 2], vel[b, 1], vel[b, 2], half[b, 0], half[b, 1], gravity,
-                                     flight, tolerance, 0.25 * dt)
+            tau, _ = time_to_contact(
+                pose[b, 1],
+                pose[b, 2],
+                vel[b, 1],
+                vel[b, 2],
+                half[b, 0],
+                half[b, 1],
+                gravity,
+                flight,
+                tolerance,
+                0.25 * dt,
+            )
             flight = min(flight, tau)
             if flight < dt:
                 break
@@ -116,63 +135,88 @@ def steps_alone(pose, vel, half, radius, awake, params, gravity, tolerance, dt, 
 
 
 @jit_stage
-def advance_alone(k, n, state_pose, vel, params, awake, supported, alone, memory, stepped, n_impacts, first_contact,
-                  max_penetration, still_for, island, rest_time, work, dt, gravity, until_rest, threshold,
-                  sleep_speed, sleep_time, slop, use_penalty, use_friction, record, corners, delassus, corner_ids,
-                  trajectory, events):
+def advance_alone(k, n, context, bodies, sleep, stats, work):
     """Every awake body advanced alone against the floor for k grid steps from step n
-    (``robust_solver.advance_box``, its memory row carried on while the body stays alone: ``alone``), a body
+    (``robust_solver.advance_box``, its memory row carried on while the body stays alone: ``work.alone``), a body
     that falls asleep on the floor taking an island of its own; the trajectory rows of the others filled.
-    Returns (the step reached, the number of bodies that fell asleep, the failing body or -1)."""
-    nb = state_pose.shape[0]
+    ``work``: ``state.AloneWork``. Returns (the step reached, the number of bodies that fell asleep, the failing body
+    or -1)."""
+    awake, rest_time = sleep.awake, sleep.rest_time
+    settings = FloorSettings(
+        context.dt,
+        context.gravity,
+        context.until_rest,
+        context.threshold,
+        context.sleep_speed,
+        context.sleep_time,
+        context.slop,
+        context.use_penalty,
+        context.use_friction,
+        context.record,
+    )
+    recording = Recording(stats.trajectory, stats.events)
     reached = n
     slept = 0
-    for b in range(nb):
+    for b in range(bodies.pose.shape[0]):
         if not awake[b]:
             continue
-        if not alone[b]:  # a body that the colliding substeps moved starts a new memory row from their state
-            start_memory(memory, b, n * dt)
-            memory[b, IN_FLIGHT] = 0.0 if supported[b] else 1.0
-            memory[b, N_IMPACTS] = n_impacts[b]
-            memory[b, N_STEPS] = stepped[b]
-            memory[b, FIRST_CONTACT] = first_contact[b]
-            memory[b, MAX_PENETRATION] = max_penetration[b]
-            alone[b] = True
-        for c in range(3):
-            work[b, c] = state_pose[b, c]
-            work[b, 3 + c] = vel[b, c]
-        end = advance_box(b, work, params, memory, n, n + k, dt, gravity, until_rest, threshold, sleep_speed,
-                          sleep_time, slop, use_penalty, use_friction, record, corners, delassus, corner_ids,
-                          trajectory, events)
-        for c in range(3):
-            state_pose[b, c] = work[b, c]
-            vel[b, c] = work[b, 3 + c]
-        n_impacts[b] = np.int64(memory[b, N_IMPACTS])
-        stepped[b] = np.int64(memory[b, N_STEPS])
-        first_contact[b] = memory[b, FIRST_CONTACT]
-        max_penetration[b] = memory[b, MAX_PENETRATION]
-        still_for[b] = memory[b, STILL_FOR]
-        if memory[b, STATUS] != layout.STATUS_OK:
+        end = advance_one_alone(b, k, n, bodies, stats, work, settings, recording)
+        sleep.still_for[b] = work.memory[b, STILL_FOR]
+        if work.memory[b, STATUS] != layout.STATUS_OK:
             return end, slept, b
-        if not math.isnan(memory[b, REST_TIME]):
+        if not math.isnan(work.memory[b, REST_TIME]):
             awake[b] = False
-            alone[b] = False  # woken later, it starts a new memory row
-            island[b] = b
-            rest_time[b] = memory[b, REST_TIME]
+            work.alone[b] = False  # woken later, it starts a new memory row
+            sleep.island[b] = b
+            rest_time[b] = work.memory[b, REST_TIME]
             slept += 1
         reached = max(reached, end)
     if slept > 0 and count_awake(awake) == 0:
         k = reached - n  # every body sleeps: the run ends where the last fell asleep
-    if record:
-        for b in range(nb):
-            first = n + 1
-            if not awake[b] and not math.isnan(rest_time[b]) and rest_time[b] > n * dt:
-                first = np.int64(round(rest_time[b] / dt)) + 1  # advance_box recorded it up to its rest
-            elif awake[b]:
-                continue
-            for row in range(first, n + k + 1):
-                store_state(trajectory, row, b, state_pose[b, 0], state_pose[b, 1], state_pose[b, 2], 0.0, 0.0, 0.0)
+    if context.record:
+        fill_resting_rows(bodies.pose, awake, rest_time, n, k, context.dt, stats.trajectory)
     return n + k, slept, -1
+
+
+@jit_stage(inline="always")
+def advance_one_alone(b, k, n, bodies, stats, work, settings, recording):
+    """Body b advanced alone for k grid steps from step n (``advance_box``), its stats carried into and out of its
+    memory row (a body the colliding substeps moved starts a new row from their state). Returns the step reached."""
+    memory, pose, vel = work.memory, bodies.pose, bodies.vel
+    if not work.alone[b]:
+        start_memory(memory, b, n * settings.dt)
+        memory[b, IN_FLIGHT] = 0.0 if stats.supported[b] else 1.0
+        memory[b, N_IMPACTS] = stats.n_impacts[b]
+        memory[b, N_STEPS] = stats.n_stepped[b]
+        memory[b, FIRST_CONTACT] = stats.first_contact[b]
+        memory[b, MAX_PENETRATION] = stats.max_penetration[b]
+        work.alone[b] = True
+    for c in range(3):
+        work.state[b, c] = pose[b, c]
+        work.state[b, 3 + c] = vel[b, c]
+    end = advance_box(b, work.state, bodies.params, memory, n, n + k, settings, work.corners, recording)
+    for c in range(3):
+        pose[b, c] = work.state[b, c]
+        vel[b, c] = work.state[b, 3 + c]
+    stats.n_impacts[b] = np.int64(memory[b, N_IMPACTS])
+    stats.n_stepped[b] = np.int64(memory[b, N_STEPS])
+    stats.first_contact[b] = memory[b, FIRST_CONTACT]
+    stats.max_penetration[b] = memory[b, MAX_PENETRATION]
+    return end
+
+
+@jit_stage(inline="always")
+def fill_resting_rows(pose, awake, rest_time, n, k, dt, trajectory):
+    """The trajectory rows n + 1 to n + k of the bodies asleep: those that fell asleep in these steps from their
+    rest on (``advance_box`` recorded them up to it), the others all."""
+    for b in range(pose.shape[0]):
+        first = n + 1
+        if not awake[b] and not math.isnan(rest_time[b]) and rest_time[b] > n * dt:
+            first = np.int64(round(rest_time[b] / dt)) + 1  # advance_box recorded it up to its rest
+        elif awake[b]:
+            continue
+        for row in range(first, n + k + 1):
+            store_state(trajectory, row, b, pose[b, 0], pose[b, 1], pose[b, 2], 0.0, 0.0, 0.0)
 
 
 @jit_stage

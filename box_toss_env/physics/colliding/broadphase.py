@@ -23,9 +23,7 @@ import math
 
 from ..compile.compilation import jit_stage
 from ..robust.flight import flight_state
-
-SMALL_SORT = 16  # keys: up to this many, ``sort_keys`` sorts by insertion
-ROUNDING = 1e-9  # [m per m of coordinate + 1 m] intervals are padded by this, then pairs tested exactly
+from ..tunables import NEAR_ITERATIONS, ROUNDING, SMALL_SORT
 
 
 @jit_stage
@@ -101,22 +99,35 @@ def overlaps(dx, dy, bound_x, bound_y, margin):
 
 
 @jit_stage
+def sort_intervals(pose, bound, reach, axis, order, low):
+    """Each box's interval start along ``axis`` (padded by ROUNDING) into ``low``, and ``order`` (the sweep order of
+    the last search, any permutation of the boxes) repaired to increasing starts."""
+    for b in range(pose.shape[0]):
+        pad = ROUNDING * (1.0 + abs(pose[b, axis]))
+        low[b] = pose[b, axis] - bound[b, axis] - reach[b] - pad
+    insertion_sort(order, low)
+
+
+@jit_stage(inline="always")
+def interval_end(pose, bound, reach, axis, i):
+    """The end of box i's interval along ``axis`` (padded by ROUNDING)."""
+    return pose[i, axis] + bound[i, axis] + reach[i] + ROUNDING * (1.0 + abs(pose[i, axis]))
+
+
+@jit_stage
 def candidate_pairs(pose, bound, reach, include, moving, axis, order, low, keys):
     """The candidate pairs (module docstring) among the boxes with ``include`` set, of which at least one
     has ``moving`` set, as keys i n + j (i < j) in increasing order in ``keys``. ``order`` is the sweep order
     of the last call (any permutation of the boxes), repaired in place; ``low`` is work space. Returns the
     number of pairs, or -1 if ``keys`` is too short (the caller grows it and asks again)."""
     n = pose.shape[0]
-    for b in range(n):
-        pad = ROUNDING * (1.0 + abs(pose[b, axis]))
-        low[b] = pose[b, axis] - bound[b, axis] - reach[b] - pad
-    insertion_sort(order, low)
+    sort_intervals(pose, bound, reach, axis, order, low)
     count = 0
     for p in range(n):
         i = order[p]
         if not include[i]:
             continue
-        high = pose[i, axis] + bound[i, axis] + reach[i] + ROUNDING * (1.0 + abs(pose[i, axis]))
+        high = interval_end(pose, bound, reach, axis, i)
         for q in range(p + 1, n):
             j = order[q]
             if low[j] > high:
@@ -124,8 +135,13 @@ def candidate_pairs(pose, bound, reach, include, moving, axis, order, low, keys)
             if not include[j] or not (moving[i] or moving[j]):
                 continue
             a, b = min(i, j), max(i, j)
-            if overlaps(pose[b, 0] - pose[a, 0], pose[b, 1] - pose[a, 1], bound[a, 0] + bound[b, 0],
-                        bound[a, 1] + bound[b, 1], reach[a] + reach[b]):
+            if overlaps(
+                pose[b, 0] - pose[a, 0],
+                pose[b, 1] - pose[a, 1],
+                bound[a, 0] + bound[b, 0],
+                bound[a, 1] + bound[b, 1],
+                reach[a] + reach[b],
+            ):
                 if count >= keys.shape[0]:
                     return -1
                 keys[count] = a * n + b
@@ -134,14 +150,39 @@ def candidate_pairs(pose, bound, reach, include, moving, axis, order, low, keys)
     return count
 
 
-NEAR_ITERATIONS = 1_000  # conservative advancement steps of ``time_apart`` at most
+@jit_stage
+def substep_pairs(pose, sweep, n_pairs, include):
+    """A substep's candidate pairs: of the step's (``sweep.pairs[:n_pairs]``, found at every body's reach over the
+    whole step, ``groups.step_pairs``), those whose two boxes have ``include`` set and pass the exact test of the
+    module docstring with the substep's bounds and reaches (``sweep.bound``, ``sweep.reach``), into
+    ``sweep.substep_pairs`` in the same increasing order; returns how many. These are the pairs a search at the
+    substep's reach finds (``candidate_pairs``), since the step's reach holds what a body travels in the step."""
+    bound, reach, keys, kept = sweep.bound, sweep.reach, sweep.pairs, sweep.substep_pairs
+    n = pose.shape[0]
+    count = 0
+    for p in range(n_pairs):
+        a = keys[p] // n
+        b = keys[p] - a * n
+        if (
+            include[a]
+            and include[b]
+            and overlaps(
+                pose[b, 0] - pose[a, 0],
+                pose[b, 1] - pose[a, 1],
+                bound[a, 0] + bound[b, 0],
+                bound[a, 1] + bound[b, 1],
+                reach[a] + reach[b],
+            )
+        ):
+            kept[count] = keys[p]
+            count += 1
+    return count
 
 
 @jit_stage
 def box_bound(cos_a, sin_a, half_length, half_width):
     """Half size (x, y) of the axis-aligned bounding box of a box at the angle of (cos_a, sin_a)."""
-    return (abs(cos_a) * half_length + abs(sin_a) * half_width,
-            abs(sin_a) * half_length + abs(cos_a) * half_width)
+    return (abs(cos_a) * half_length + abs(sin_a) * half_width, abs(sin_a) * half_length + abs(cos_a) * half_width)
 
 
 @jit_stage
@@ -159,8 +200,9 @@ def time_apart(b, pose, vel, half, radius, awake, gravity, horizon, resolution):
     n = pose.shape[0]
     tau = 0.0
     for _ in range(NEAR_ITERATIONS):
-        xb, yb, ab, vxb, vyb, wb = flight_state(pose[b, 0], pose[b, 1], pose[b, 2], vel[b, 0], vel[b, 1], vel[b, 2],
-                                                gravity, tau)
+        xb, yb, ab, vxb, vyb, wb = flight_state(
+            pose[b, 0], pose[b, 1], pose[b, 2], vel[b, 0], vel[b, 1], vel[b, 2], gravity, tau
+        )
         bx, by = box_bound(math.cos(ab), math.sin(ab), half[b, 0], half[b, 1])
         speed_b = math.sqrt(vxb * vxb + vyb * vyb) + abs(wb) * radius[b]
         step = math.inf
@@ -169,8 +211,9 @@ def time_apart(b, pose, vel, half, radius, awake, gravity, horizon, resolution):
                 continue
             xo, yo, ao, speed, accel = pose[o, 0], pose[o, 1], pose[o, 2], speed_b, abs(gravity)
             if awake[o]:
-                xo, yo, ao, vxo, vyo, wo = flight_state(pose[o, 0], pose[o, 1], pose[o, 2], vel[o, 0], vel[o, 1],
-                                                        vel[o, 2], gravity, tau)
+                xo, yo, ao, vxo, vyo, wo = flight_state(
+                    pose[o, 0], pose[o, 1], pose[o, 2], vel[o, 0], vel[o, 1], vel[o, 2], gravity, tau
+                )
                 speed += math.sqrt(vxo * vxo + vyo * vyo) + abs(wo) * radius[o]
                 accel += abs(gravity)
             ox, oy = box_bound(math.cos(ao), math.sin(ao), half[o, 0], half[o, 1])

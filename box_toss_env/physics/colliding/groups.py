@@ -2,17 +2,17 @@
 the step and need fewer substeps than the fastest take them apart, so a box thrown fast far from a pile does not
 make the pile pay its substeps.
 
-Two awake bodies cannot be apart within the step when a chain of candidate pairs joins them (the broadphase's
-test, ``broadphase.candidate_pairs``), each body reaching what it travels in the step dt (``body_reach``) plus
-what the fastest body travels (a struck body moves further than its own speed says, as for the floor's
-contacts); bodies in contact are so joined too (a contact's gap is within the reach of a substep). Each such set
-needs the substep count of its fastest point and turn (``substep_count``); the sets that need the same count
-make one group, named by its smallest body, and the groups are taken in that order (``find_groups``). A split
-must pay (``group_by_substeps``): it saves each body the substeps its group takes fewer than the fastest group,
-and costs each group's substeps a pass over every body (their loops run over the scene's arrays); where it
-saves fewer than SPLIT_SAVING body-substeps, or fewer than 1 / SOLVE_SHARE of the passes it adds, there is one
-group, and the step is what it was without groups, bit for bit (as it is wherever every body needs one count,
-a resting pile's usual case: then no pair is looked for, ``one_count``).
+Two awake bodies cannot be apart within the step when a chain of the step's candidate pairs joins them
+(``step_pairs``: the broadphase's test, each body reaching what it travels in the step dt (``body_reach``) plus what
+the fastest body travels: a struck body moves further than its own speed says, as for the floor's contacts; the same
+pairs bound every substep's search); bodies in contact are so joined too (a contact's gap is within the reach of a
+substep). Each such set needs the substep count of its fastest point and turn (``substep_count``); the sets that
+need the same count make one group, named by its smallest body, and the groups are taken in that order
+(``plan_substeps``). A split must pay (``group_by_substeps``): it saves each body the substeps its group takes fewer
+than the fastest group, and costs each group's substeps a pass over every body (their loops run over the scene's
+arrays); where it saves fewer than SPLIT_SAVING body-substeps, or fewer than 1 / SOLVE_SHARE of the passes it adds,
+there is one group, and the step is what it was without groups, bit for bit (as it is wherever every body needs one
+count, a resting pile's usual case: then no grouping is looked for, ``one_count``).
 
 Each group's first substep is warm-started from the impulses the last step kept (all groups' contacts, by
 key), its later substeps from its own; at its end a group's last impulses are kept with its substep length
@@ -24,49 +24,57 @@ the next step's warm start and, through it, the next run's.
 import math
 
 from ..compile.compilation import jit_stage
+from ..tunables import SOLVE_SHARE, SPLIT_SAVING
 from .broadphase import candidate_pairs
-from .colliding_solver import body_reach, point_speed, substep_count, substeps
 from .islands import find_root
-from .limits import SOLVE_SHARE, SPLIT_SAVING
 from .narrowphase import update_geometry
+from .substeps import body_reach, point_speed, substep_count, substeps
 
 
 @jit_stage
-def step_groups(pose, half, vel, radius, everyone, awake, n_awake, smallest_half, dt, gravity, tolerance, trig, bound,
-                reach, axis, order, low, keys, group_of, work, parent):
-    """How a step takes its substeps, (n_sub, group): all awake bodies one count (``substeps``; group -1), or
-    group by group from the first (``find_groups``; n_sub 0: each group counts its own, and ``parent`` is reset for
-    the groups to join their islands in). (-1, -1) if ``keys`` is too short (the caller grows it and calls again)."""
-    n_sub = substeps(vel, radius, everyone, smallest_half, dt, gravity)
+def step_pairs(context, bodies, sweep, sleep, n_sub):
+    """The step's candidate pairs among the awake bodies, into ``sweep.pairs``. A step of one substep: the substep's own
+    search (its find contacts stage's geometry, reaches over dt and pairs, ``step.contact_reach``), which it then uses
+    as they are. A step of n_sub > 1 substeps: each body reaching what it travels in the step dt (``body_reach``) plus
+    what the fastest body travels (a struck body moves further than its own speed says): every pair a substep of the
+    step can find (``broadphase.substep_pairs``), and the chains that join bodies into sets (``plan_substeps``). Returns
+    how many, or -1 if ``sweep.pairs`` is too short (the caller grows it and calls again)."""
+    pose, reach, awake = bodies.pose, sweep.reach, sleep.awake
+    update_geometry(pose, bodies.half, awake, sweep.trig, sweep.bound)
+    fastest = body_reach(bodies.vel, bodies.radius, awake, context.dt, context.gravity, context.tolerance, reach)
+    for b in range(pose.shape[0]):
+        if n_sub == 1:
+            sweep.floor_reach[b] = reach[b] + fastest
+        else:
+            reach[b] += fastest
+    return candidate_pairs(pose, sweep.bound, reach, awake, awake, sweep.axis, sweep.order, sweep.low, sweep.pairs)
+
+
+@jit_stage
+def step_substeps(context, bodies, sleep):
+    """The substep count every awake body's step needs (``substeps``: the fastest point's and turn's)."""
+    return substeps(bodies.vel, bodies.radius, sleep.everyone, context.smallest_half, context.dt, context.gravity)
+
+
+@jit_stage
+def plan_substeps(context, bodies, sweep, sleep, groups, n_sub, n_awake, n_pairs):
+    """How a step of n_sub substeps (``step_substeps``) takes them, (n_sub, group): all awake bodies one count
+    (group -1), or group by group from the first (n_sub 0: each group counts its own, and ``sleep.parent`` is reset
+    for the groups to join their islands in): the sets of bodies joined by chains of the step's ``n_pairs``
+    candidate pairs (``step_pairs``) that need the same count make a group (``group_by_substeps``), where that
+    pays."""
+    vel, radius, dt, gravity, smallest_half = (
+        bodies.vel,
+        bodies.radius,
+        context.dt,
+        context.gravity,
+        context.smallest_half,
+    )
     if (n_awake - 1) * (n_sub - 1) < SPLIT_SAVING:
         return n_sub, -1  # no split saves SPLIT_SAVING: at most n_sub - 1 for each body but one (two boxes never)
-    groups = find_groups(pose, half, vel, radius, awake, smallest_half, dt, gravity, tolerance, trig, bound, reach,
-                         axis, order, low, keys, group_of, work)
-    if groups < 0:
-        return -1, -1
-    if groups == 1:
-        return n_sub, -1
-    for b in range(parent.shape[0]):
-        parent[b] = b
-    return 0, next_group(group_of, -1)
-
-
-@jit_stage
-def find_groups(pose, half, vel, radius, awake, smallest_half, dt, gravity, tolerance, trig, bound, reach, axis, order,
-                low, keys, group_of, work):
-    """The groups of the awake bodies (module docstring) into ``group_of``: each awake body's group, named by
-    its smallest body (-1 asleep). ``work``: (per body 2 floats, per body an int, per substep count an int).
-    Returns how many groups, or -1 if ``keys`` is too short (the caller grows it and calls again)."""
-    n = pose.shape[0]
-    if one_count(vel, radius, awake, smallest_half, dt, gravity):
-        return 1  # no group can need fewer substeps than another: no pair is looked for
-    update_geometry(pose, half, awake, trig, bound)
-    fastest = body_reach(vel, radius, awake, dt, gravity, tolerance, reach)
-    for b in range(n):
-        reach[b] += fastest
-    n_pairs = candidate_pairs(pose, bound, reach, awake, awake, axis, order, low, keys)
-    if n_pairs < 0:
-        return -1
+    if one_count(vel, radius, sleep.awake, smallest_half, dt, gravity):
+        return n_sub, -1  # no group can need fewer substeps than another
+    group_of, keys, n = groups.group_of, sweep.pairs, vel.shape[0]
     for b in range(n):
         group_of[b] = b
     for p in range(n_pairs):
@@ -75,7 +83,11 @@ def find_groups(pose, half, vel, radius, awake, smallest_half, dt, gravity, tole
         r2 = find_root(group_of, keys[p] - i * n)
         if r1 != r2:
             group_of[max(r1, r2)] = min(r1, r2)
-    return group_by_substeps(vel, radius, awake, smallest_half, dt, gravity, group_of, work)
+    if group_by_substeps(bodies, sleep.awake, context, groups) == 1:
+        return n_sub, -1
+    for b in range(n):
+        sleep.parent[b] = b
+    return 0, next_group(group_of, -1)
 
 
 @jit_stage
@@ -88,19 +100,32 @@ def one_count(vel, radius, awake, smallest_half, dt, gravity):
             speed, turn = point_speed(vel, radius, b, dt, gravity), abs(vel[b, 2])
             low_speed, low_turn = min(low_speed, speed), min(low_turn, turn)
             high_speed, high_turn = max(high_speed, speed), max(high_turn, turn)
-    return substep_count(low_speed, low_turn, smallest_half, dt) == substep_count(high_speed, high_turn,
-                                                                                   smallest_half, dt)
+    return substep_count(low_speed, low_turn, smallest_half, dt) == substep_count(
+        high_speed, high_turn, smallest_half, dt
+    )
 
 
 @jit_stage
-def group_by_substeps(vel, radius, awake, smallest_half, dt, gravity, group_of, work):
-    """Join the sets of ``group_of`` (a union-find forest over the awake bodies) that need the same substep count
-    (``substep_count`` of each set's fastest point and turn) into one group, named by its smallest body, into
+def group_by_substeps(bodies, awake, context, groups):
+    """Join the sets of ``groups.group_of`` (a union-find forest over the awake bodies) that need the same substep
+    count (``substep_count`` of each set's fastest point and turn) into one group, named by its smallest body, into
     ``group_of`` (-1 asleep); returns how many groups, or 1 where they would not pay: if they save fewer than
     SPLIT_SAVING body-substeps in the step (each body's substeps fewer than the fastest group's, summed), or fewer
     than 1 / SOLVE_SHARE of the passes over every body that their substeps add (each group's substeps pass over
     every body, as the one count's do)."""
-    speed_turn, label, label_of_count = work
+    vel, radius, dt, gravity, smallest_half = (
+        bodies.vel,
+        bodies.radius,
+        context.dt,
+        context.gravity,
+        context.smallest_half,
+    )
+    group_of, speed_turn, label, label_of_count = (
+        groups.group_of,
+        groups.speed_turn,
+        groups.label,
+        groups.label_of_count,
+    )
     n = group_of.shape[0]
     for b in range(n):
         speed_turn[b, 0] = 0.0
@@ -112,13 +137,13 @@ def group_by_substeps(vel, radius, awake, smallest_half, dt, gravity, group_of, 
             speed_turn[r, 0] = max(speed_turn[r, 0], point_speed(vel, radius, b, dt, gravity))
             speed_turn[r, 1] = max(speed_turn[r, 1], abs(vel[b, 2]))
     label_of_count[:] = -1
-    groups, most, passes = 0, 0, 0
+    groups_count, most, passes = 0, 0, 0
     for b in range(n):
         if awake[b] and group_of[b] == b:
             count = substep_count(speed_turn[b, 0], speed_turn[b, 1], smallest_half, dt)
             if label_of_count[count] < 0:
                 label_of_count[count] = b
-                groups += 1
+                groups_count += 1
                 passes += count
             label[b, 0], label[b, 1], most = label_of_count[count], count, max(most, count)
     saved = 0
@@ -129,7 +154,7 @@ def group_by_substeps(vel, radius, awake, smallest_half, dt, gravity, group_of, 
         else:
             group_of[b] = -1
     added = (passes - most) * n
-    return groups if saved >= SPLIT_SAVING and SOLVE_SHARE * saved >= added else 1
+    return groups_count if saved >= SPLIT_SAVING and SOLVE_SHARE * saved >= added else 1
 
 
 @jit_stage
@@ -143,12 +168,12 @@ def next_group(group_of, after):
 
 
 @jit_stage
-def keep_group(group_keys, group_impulses, n_group, h, kept_keys, kept_impulses, n_kept):
-    """Append a group's last impulses (key, normal and friction impulse) with its substep length h to the
-    step's ``kept`` rows after the first ``n_kept``; returns how many rows are kept then, or -1 if there is
-    no room (the caller grows them and calls again)."""
-    if n_kept + n_group > kept_keys.shape[0]:
-        return -1
+def keep_group(impulses, n_group, h, n_kept):
+    """Append a group's last impulses (``impulses.group_keys``, ``group_impulses``: key, normal and friction impulse)
+    with its substep length h to the step's kept rows (``impulses.kept_keys``, ``kept_impulses``) after the first
+    ``n_kept``; returns how many rows are kept then (the rows hold every contact a step can find)."""
+    group_keys, group_impulses = impulses.group_keys, impulses.group_impulses
+    kept_keys, kept_impulses = impulses.kept_keys, impulses.kept_impulses
     for c in range(n_group):
         kept_keys[n_kept + c] = group_keys[c]
         kept_impulses[n_kept + c, 0] = group_impulses[c, 0]
@@ -158,10 +183,16 @@ def keep_group(group_keys, group_impulses, n_group, h, kept_keys, kept_impulses,
 
 
 @jit_stage
-def sort_kept(kept_keys, kept_impulses, n_kept, previous_keys, previous_impulses, dt):
-    """The ``n_kept`` kept impulses in increasing key order into ``previous_keys`` / ``previous_impulses`` (the
+def sort_kept(impulses, n_kept, dt):
+    """The ``n_kept`` kept impulses in increasing key order into ``impulses.keys`` / ``impulses.impulses`` (the
     warm start's order), each scaled from its substep length h to h_ref, the first group's (p h_ref / h); returns
     h_ref (dt if none is kept). Heapsort in place on the kept rows (the keys are distinct)."""
+    kept_keys, kept_impulses, previous_keys, previous_impulses = (
+        impulses.kept_keys,
+        impulses.kept_impulses,
+        impulses.keys,
+        impulses.impulses,
+    )
     h_ref = kept_impulses[0, 2] if n_kept > 0 else dt
     for start in range(n_kept // 2 - 1, -1, -1):
         sift_row(kept_keys, kept_impulses, start, n_kept)

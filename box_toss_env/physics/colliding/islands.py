@@ -28,7 +28,7 @@ import numpy as np
 from .. import layout
 from ..compile.compilation import jit_stage
 from ..kernel_support import is_lying_still, write_stats
-from .broadphase import candidate_pairs
+from .broadphase import candidate_pairs, interval_end, overlaps, sort_intervals
 from .narrowphase import BODY1, BODY2, GAP
 
 
@@ -65,10 +65,11 @@ def join_contacts(ids, count, parent):
 
 
 @jit_stage
-def fall_asleep(awake, still_for, sleep_time, parent, ready, island, vel):
-    """Put to sleep every island (``parent``, joined by ``join_islands``) whose awake bodies have all been still
-    for ``sleep_time`` (``still_for``): velocities zero, ``awake`` False, ``island`` the island's root. Returns
+def fall_asleep(sleep, sleep_time, vel):
+    """Put to sleep every island (``sleep.parent``, joined by ``join_islands``) whose awake bodies have all been still
+    for ``sleep_time`` (``sleep.still_for``): velocities zero, ``awake`` False, ``island`` the island's root. Returns
     how many bodies fell asleep."""
+    awake, still_for, parent, ready, island = sleep.awake, sleep.still_for, sleep.parent, sleep.ready, sleep.island
     n = awake.shape[0]
     for b in range(n):
         ready[b] = True
@@ -90,8 +91,9 @@ def fall_asleep(awake, still_for, sleep_time, parent, ready, island, vel):
 
 
 @jit_stage
-def wake_island(label, awake, island, still_for, rest_time):
+def wake_island(label, sleep):
     """Wake every sleeping body of island ``label``; returns how many woke."""
+    awake, island, still_for, rest_time = sleep.awake, sleep.island, sleep.still_for, sleep.rest_time
     woken = 0
     for b in range(awake.shape[0]):
         if not awake[b] and island[b] == label:
@@ -104,43 +106,70 @@ def wake_island(label, awake, island, still_for, rest_time):
 
 
 @jit_stage
-def wake_touched(pose, bound, reach, everyone, awake, island, still_for, rest_time, axis, order, low, keys):
-    """Wake the sleeping islands that an awake body can reach (the broadphase's test with the awake bodies'
-    ``reach``), again for the bodies just woken, until none wakes. ``everyone``: all True. Returns the number
-    of bodies woken, or -1 if ``keys`` is too short (the caller grows it and calls again)."""
+def wake_touched(pose, sweep, sleep):
+    """Wake the sleeping islands that an awake body can reach (the broadphase's test, ``broadphase``, with the
+    bodies' ``sweep.reach``), again for the bodies just woken, until none wakes: the smallest set of islands closed
+    under "an awake body reaches it", whatever the order they are found in. The pairs are tested as the sweep meets
+    them, none stored (so the search never runs out of room). Returns the number of bodies woken."""
+    awake, island, bound, reach, axis, order, low = (
+        sleep.awake,
+        sleep.island,
+        sweep.bound,
+        sweep.reach,
+        sweep.axis,
+        sweep.order,
+        sweep.low,
+    )
     n = pose.shape[0]
+    sort_intervals(pose, bound, reach, axis, order, low)
     total = 0
     while True:
-        n_pairs = candidate_pairs(pose, bound, reach, everyone, awake, axis, order, low, keys)
-        if n_pairs < 0:
-            return -1
         woken = 0
-        for p in range(n_pairs):
-            i = keys[p] // n
-            j = keys[p] - i * n
-            if awake[i] != awake[j]:
-                woken += wake_island(island[j] if awake[i] else island[i], awake, island, still_for, rest_time)
+        for p in range(n):
+            i = order[p]
+            high = interval_end(pose, bound, reach, axis, i)
+            for q in range(p + 1, n):
+                j = order[q]
+                if low[j] > high:
+                    break
+                if awake[i] == awake[j]:
+                    continue
+                a, b = min(i, j), max(i, j)
+                if overlaps(
+                    pose[b, 0] - pose[a, 0],
+                    pose[b, 1] - pose[a, 1],
+                    bound[a, 0] + bound[b, 0],
+                    bound[a, 1] + bound[b, 1],
+                    reach[a] + reach[b],
+                ):
+                    woken += wake_island(island[j] if awake[i] else island[i], sleep)
         if woken == 0:
             return total
         total += woken
 
 
 @jit_stage
-def sleep_placed(pose, vel, half, bound, reach, everyone, awake, island, rest_time, ready, sleep_speed, tolerance,
-                 axis, order, low, keys):
+def sleep_placed(bodies, sweep, sleep, context):
     """Put to sleep, each in an island of its own, the bodies placed at rest: zero velocity, lying on a face
     on the floor (``kernel_support.is_lying_still``) and in no candidate pair with another box within the
-    contact tolerance (the broadphase's test). Returns how many, or -1 if ``keys`` is too short (the caller
+    contact tolerance (the broadphase's test). Returns how many, or -1 if ``sweep.pairs`` is too short (the caller
     grows it and calls again)."""
+    pose, vel, half, reach, keys = bodies.pose, bodies.vel, bodies.half, sweep.reach, sweep.pairs
+    awake, island, rest_time, ready, everyone = sleep.awake, sleep.island, sleep.rest_time, sleep.ready, sleep.everyone
     n = pose.shape[0]
     for b in range(n):
-        reach[b] = tolerance
-    n_pairs = candidate_pairs(pose, bound, reach, everyone, everyone, axis, order, low, keys)
+        reach[b] = context.tolerance
+    n_pairs = candidate_pairs(pose, sweep.bound, reach, everyone, everyone, sweep.axis, sweep.order, sweep.low, keys)
     if n_pairs < 0:
         return -1
     for b in range(n):
-        ready[b] = (awake[b] and vel[b, 0] == 0.0 and vel[b, 1] == 0.0 and vel[b, 2] == 0.0
-                    and is_lying_still(pose[b, 1], pose[b, 2], 0.0, 0.0, 0.0, half[b, 0], half[b, 1], sleep_speed))
+        ready[b] = (
+            awake[b]
+            and vel[b, 0] == 0.0
+            and vel[b, 1] == 0.0
+            and vel[b, 2] == 0.0
+            and is_lying_still(pose[b, 1], pose[b, 2], 0.0, 0.0, 0.0, half[b, 0], half[b, 1], context.sleep_speed)
+        )
     for p in range(n_pairs):
         i = keys[p] // n
         ready[i] = False
@@ -166,12 +195,20 @@ def as_kept(warm, row, pose, params, b):
 
 
 @jit_stage
-def restore_sleeping(warm, pose, vel, params, awake, island, still_for, rest_time, intact):
+def restore_sleeping(warm, bodies, sleep):
     """The sleep ``keep_sleeping`` kept in ``warm`` at the end of the last run: the awake bodies' sleep timers
     (where the pose and parameters are as kept), and the islands asleep then asleep again, each whole island
     only if none of its bodies was moved, set moving or changed since (pose and parameters as kept, velocity
     zero: else the caller changed it, and the island wakes). Bodies past the ones kept are awake. Returns how
     many bodies sleep so."""
+    pose, vel, params = bodies.pose, bodies.vel, bodies.params
+    awake, island, still_for, rest_time, intact = (
+        sleep.awake,
+        sleep.island,
+        sleep.still_for,
+        sleep.rest_time,
+        sleep.ready,
+    )
     n = pose.shape[0]
     kept = min(np.int64(warm[0, 2]), n, (warm.shape[0] - 1) // layout.WARM_BODY_ROWS) if warm.shape[0] > 0 else 0
     for b in range(n):
@@ -225,13 +262,14 @@ def sleeps_through(warm, state, params, dt, capacity, stats):
 
 
 @jit_stage
-def keep_sleeping(warm, pose, params, awake, island, still_for):
+def keep_sleeping(warm, bodies, sleep):
     """Each body's island label (its island's root while it sleeps, -1 awake), sleep timer, pose and parameters into
     ``warm``'s body rows for the next run (``restore_sleeping``), as many bodies as there are rows for (a
     prefix: an island's label is its smallest body, so a kept sleeping body's label is kept too); returns how
     many bodies were kept (0 if ``warm`` is empty)."""
     if warm.shape[0] == 0:
         return 0
+    pose, params, awake, island, still_for = bodies.pose, bodies.params, sleep.awake, sleep.island, sleep.still_for
     kept = min(pose.shape[0], (warm.shape[0] - 1) // layout.WARM_BODY_ROWS)
     warm[0, 2] = kept
     for b in range(kept):

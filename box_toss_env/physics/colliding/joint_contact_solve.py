@@ -26,13 +26,12 @@ caller solves by alternation instead.
 """
 
 from ..compile.compilation import jit_stage
+from ..contact_law import friction_bound, friction_slope, tangent
+from ..tunables import DIRECT_LIMIT, FRICTION_CONE_ROUNDING, JOINT_LIMIT, JOINT_ROUNDS, LCP_TOLERANCE, REGULARISATION
 from .narrowphase import BODY1, FRICTION, FRICTION_IMPULSE, IMPULSE, NX, NY, R1X, R1Y, R2X, R2Y
 
-JOINT_LIMIT = 8  # contacts at most solved jointly (16 unknowns); more go to the alternation
-JOINT_ROUNDS = 24  # state changes at most before giving up
 HISTORY = 2 * JOINT_LIMIT  # where ``joint_impulses`` keeps each round's states in ``index`` (after the unknowns')
-REGULARISATION = 1e-12  # share of W_ii added to the diagonal (redundant contacts)
-LCP_TOLERANCE = 1e-12  # share of the largest |u_0|: the speed by which a condition may be violated
+assert DIRECT_LIMIT >= HISTORY + JOINT_ROUNDS  # the solves' ``index`` (DIRECT_LIMIT long) also holds the rounds
 
 FREE, STICK, SLIDE_PLUS, SLIDE_MINUS, FRICTIONLESS = 0, 1, 2, 3, 4  # contact states (SLIDE_PLUS: q = +mu p)
 
@@ -43,7 +42,7 @@ def direction(contacts, c, row):
     nx, ny = contacts[c, NX], contacts[c, NY]
     if row == 0:
         return nx, ny
-    return -ny, nx
+    return tangent(nx, ny)
 
 
 @jit_stage(inline="always")
@@ -129,9 +128,9 @@ def solve_states(contacts, count, w, u0, state, a, index, x, impulse):
             if j % 2 == 0:  # p_d's column: a sliding contact's friction +-mu p_d folds in
                 d = j // 2
                 if state[d] == SLIDE_PLUS:
-                    value += contacts[d, FRICTION] * w[i, j + 1]
+                    value += friction_slope(contacts[d, FRICTION]) * w[i, j + 1]
                 elif state[d] == SLIDE_MINUS:
-                    value -= contacts[d, FRICTION] * w[i, j + 1]
+                    value -= friction_slope(contacts[d, FRICTION]) * w[i, j + 1]
             a[r, col] = value
         a[r, r] += REGULARISATION * w[i, i]
         a[r, k] = -u0[i]
@@ -143,9 +142,9 @@ def solve_states(contacts, count, w, u0, state, a, index, x, impulse):
         impulse[index[r]] = x[r]
     for c in range(count):
         if state[c] == SLIDE_PLUS:
-            impulse[2 * c + 1] = contacts[c, FRICTION] * impulse[2 * c]
+            impulse[2 * c + 1] = friction_bound(contacts[c, FRICTION], impulse[2 * c])
         elif state[c] == SLIDE_MINUS:
-            impulse[2 * c + 1] = -contacts[c, FRICTION] * impulse[2 * c]
+            impulse[2 * c + 1] = -friction_bound(contacts[c, FRICTION], impulse[2 * c])
     return True
 
 
@@ -163,8 +162,8 @@ def change_state(contacts, count, w, u0, state, impulse, tolerance):
         return True
     for c in range(count):  # a sticking friction beyond mu p slides the way it pushed
         if state[c] == STICK:
-            q, limit = impulse[2 * c + 1], contacts[c, FRICTION] * impulse[2 * c]
-            if abs(q) > limit * (1.0 + 1e-12):
+            q, limit = impulse[2 * c + 1], friction_bound(contacts[c, FRICTION], impulse[2 * c])
+            if abs(q) > limit * (1.0 + FRICTION_CONE_ROUNDING):
                 state[c] = SLIDE_PLUS if q > 0.0 else SLIDE_MINUS
                 return True
     for c in range(count):
@@ -212,7 +211,7 @@ def joint_impulses(contacts, count, w, u, state, a, index, x, impulse):
             state[c] = FREE
         elif mu <= 0.0:
             state[c] = FRICTIONLESS
-        elif p > 0.0 and abs(q) >= mu * p:
+        elif p > 0.0 and abs(q) >= friction_bound(mu, p):
             state[c] = SLIDE_PLUS if q > 0.0 else SLIDE_MINUS
         else:
             state[c] = STICK

@@ -36,17 +36,34 @@ import numpy as np
 
 from ..compile.compilation import jit_stage
 from ..geometry import vertex_offset
+from ..tunables import REFERENCE_TOLERANCE, START_OVERLAP
 
 # columns of the contact array (one row per contact point)
-(NX, NY, R1X, R1Y, R2X, R2Y, GAP, NORMAL_MASS, TANGENT_MASS, IMPULSE, FRICTION_IMPULSE, APPROACH, TARGET,
- RESTITUTION, FRICTION, STIFFNESS, PSEUDO_IMPULSE) = range(17)
+(
+    NX,
+    NY,
+    R1X,
+    R1Y,
+    R2X,
+    R2Y,
+    GAP,
+    NORMAL_MASS,
+    TANGENT_MASS,
+    IMPULSE,
+    FRICTION_IMPULSE,
+    APPROACH,
+    TARGET,
+    RESTITUTION,
+    FRICTION,
+    STIFFNESS,
+    PSEUDO_IMPULSE,
+) = range(17)
 CONTACT_COLUMNS = 17
 # columns of the contact id array: the two bodies (body 2 = FLOOR for the floor) and the warm-start key
 BODY1, BODY2, KEY = 0, 1, 2
 ID_COLUMNS = 3
 FLOOR = -1
 FEATURES = 64  # keys per pair: (reference box, reference face, incident face, clipped end) or a floor corner
-REFERENCE_TOLERANCE = 1e-3  # [share of the smaller box's smaller half extent] B's face wins only if clearly better
 
 
 @jit_stage
@@ -70,8 +87,7 @@ def deepest_face(dx, dy, cos_a, sin_a, hx_a, hy_a, cos_b, sin_b, hx_b, hy_b):
     for f in range(4):
         nx, ny = face_normal(f, cos_a, sin_a)
         half = hy_a if f % 2 == 0 else hx_a
-        s = (nx * dx + ny * dy - abs(nx * cos_b + ny * sin_b) * hx_b - abs(-nx * sin_b + ny * cos_b) * hy_b
-             - half)
+        s = nx * dx + ny * dy - abs(nx * cos_b + ny * sin_b) * hx_b - abs(-nx * sin_b + ny * cos_b) * hy_b - half
         if s > best:
             best = s
             face = f
@@ -79,17 +95,14 @@ def deepest_face(dx, dy, cos_a, sin_a, hx_a, hy_a, cos_b, sin_b, hx_b, hy_b):
 
 
 @jit_stage
-def add_contact(contacts, ids, count, body1, body2, key, nx, ny, px, py, x1, y1, x2, y2, gap):
-    """Append one contact point p (normal n, gap) of body1 against body2; returns the new count, or -1
-    if the arrays are full (the caller grows them and searches again)."""
+def add_contact(contacts, ids, count, body1, body2, key, normal, lever1, lever2, gap):
+    """Append one contact point of body1 against body2 (normal n, lever arms r1, r2 from the bodies' centres to the
+    point, gap); returns the new count, or -1 if the arrays are full (they are sized so that they never are)."""
     if count < 0 or count >= contacts.shape[0]:
         return -1
-    contacts[count, NX] = nx
-    contacts[count, NY] = ny
-    contacts[count, R1X] = px - x1
-    contacts[count, R1Y] = py - y1
-    contacts[count, R2X] = px - x2
-    contacts[count, R2Y] = py - y2
+    contacts[count, NX], contacts[count, NY] = normal
+    contacts[count, R1X], contacts[count, R1Y] = lever1
+    contacts[count, R2X], contacts[count, R2Y] = lever2
     contacts[count, GAP] = gap
     ids[count, BODY1] = body1
     ids[count, BODY2] = body2
@@ -147,8 +160,18 @@ def clipped_contacts(ref, inc, face, reference_b, pose, trig, half, margin, code
         qx, qy = (q1x, q1y) if end == 0 else (q2x, q2y)
         gap = nx * (qx - ax) + ny * (qy - ay)
         if gap <= margin:
-            count = add_contact(contacts, ids, count, inc, ref, base + end, nx, ny, qx, qy, pose[inc, 0],
-                                pose[inc, 1], pose[ref, 0], pose[ref, 1], gap)
+            count = add_contact(
+                contacts,
+                ids,
+                count,
+                inc,
+                ref,
+                base + end,
+                (nx, ny),
+                (qx - pose[inc, 0], qy - pose[inc, 1]),
+                (qx - pose[ref, 0], qy - pose[ref, 1]),
+                gap,
+            )
     return count
 
 
@@ -157,12 +180,14 @@ def box_box_contacts(i, j, pose, trig, half, margin, code, contacts, ids, count)
     """Contact points of boxes i and j (i < j) within ``margin`` (steps 1 to 3 above); returns the count."""
     dx = pose[j, 0] - pose[i, 0]
     dy = pose[j, 1] - pose[i, 1]
-    face_i, sep_i = deepest_face(dx, dy, trig[i, 0], trig[i, 1], half[i, 0], half[i, 1], trig[j, 0], trig[j, 1],
-                                 half[j, 0], half[j, 1])
+    face_i, sep_i = deepest_face(
+        dx, dy, trig[i, 0], trig[i, 1], half[i, 0], half[i, 1], trig[j, 0], trig[j, 1], half[j, 0], half[j, 1]
+    )
     if sep_i > margin:
         return count
-    face_j, sep_j = deepest_face(-dx, -dy, trig[j, 0], trig[j, 1], half[j, 0], half[j, 1], trig[i, 0],
-                                 trig[i, 1], half[i, 0], half[i, 1])
+    face_j, sep_j = deepest_face(
+        -dx, -dy, trig[j, 0], trig[j, 1], half[j, 0], half[j, 1], trig[i, 0], trig[i, 1], half[i, 0], half[i, 1]
+    )
     if sep_j > margin:
         return count
     smallest = min(min(half[i, 0], half[i, 1]), min(half[j, 0], half[j, 1]))
@@ -177,33 +202,33 @@ def floor_contacts(i, pose, trig, half, margin, code, contacts, ids, count):
     for k in range(4):
         rx, ry = vertex_offset(k, trig[i, 0], trig[i, 1], half[i, 0], half[i, 1])
         gap = pose[i, 1] + ry
-        if gap <= margin:
+        if gap <= margin:  # the lever arm of a floor corner is its offset exactly; the floor's is zero
             px, py = pose[i, 0] + rx, pose[i, 1] + ry
-            count = add_contact(contacts, ids, count, i, FLOOR, code * FEATURES + k, 0.0, 1.0, px, py, pose[i, 0],
-                                pose[i, 1], px, py, gap)
-            if count > 0:  # the lever arm of a floor corner is the corner's offset exactly
-                contacts[count - 1, R1X] = rx
-                contacts[count - 1, R1Y] = ry
+            count = add_contact(
+                contacts, ids, count, i, FLOOR, code * FEATURES + k, (0.0, 1.0), (rx, ry), (px - px, py - py), gap
+            )
     return count
 
 
 @jit_stage
-def find_contacts(pose, trig, half, reach, floor_reach, pair_keys, n_pairs, awake, contacts, ids):
-    """Every contact of the scene within reach: awake box i against the floor within floor_reach_i, and the
-    boxes of each candidate pair (``pair_keys``: keys i n + j, i < j, increasing, from
-    ``broadphase.candidate_pairs``) within reach_i + reach_j, in the order (box 0 and the floor, box 0 and
-    box 1, ..., box 1 and the floor, ...), so the keys increase. Returns the number of contacts, or -1 if the
-    arrays are too small."""
+def find_contacts(bodies, sweep, pair_keys, n_pairs, include, contacts):
+    """Every contact of the scene within reach: box i with ``include`` set against the floor within its
+    ``sweep.floor_reach``, and the boxes of each of the first ``n_pairs`` pairs of ``pair_keys`` (keys i n + j,
+    i < j, increasing, ``broadphase``) within reach_i + reach_j, in the order (box 0 and the floor, box 0 and box
+    1, ..., box 1 and the floor, ...), so the keys increase; into ``contacts`` (``state.Contacts``). Returns the
+    number of contacts, or -1 if the arrays are too small (they are sized so that they never are)."""
+    pose, half = bodies.pose, bodies.half
+    trig, reach, floor_reach = sweep.trig, sweep.reach, sweep.floor_reach
+    rows, ids = contacts.rows, contacts.ids
     n = pose.shape[0]
     count = 0
     p = 0
     for i in range(n):
-        if awake[i]:
-            count = floor_contacts(i, pose, trig, half, floor_reach[i], i * (n + 1), contacts, ids, count)
+        if include[i]:
+            count = floor_contacts(i, pose, trig, half, floor_reach[i], i * (n + 1), rows, ids, count)
         while p < n_pairs and pair_keys[p] // n == i:
             j = pair_keys[p] - i * n
-            count = box_box_contacts(i, j, pose, trig, half, reach[i] + reach[j], i * (n + 1) + j + 1, contacts, ids,
-                                     count)
+            count = box_box_contacts(i, j, pose, trig, half, reach[i] + reach[j], i * (n + 1) + j + 1, rows, ids, count)
             p += 1
         if count < 0:
             return -1
@@ -225,9 +250,6 @@ def update_geometry(pose, half, awake, trig, bound):
         bound[i, 1] = abs(s) * half[i, 0] + abs(c) * half[i, 1]
 
 
-START_OVERLAP = 0.01  # [share of the thinner box's smaller half extent] a colliding scene may start with this
-
-
 def overlapping_boxes(boxes, share: float = START_OVERLAP) -> tuple[int, int, float] | None:
     """The first pair of boxes (i, j, depth) that overlap by more than ``share`` of the smaller half extent
     of the two (separating axes, in plain numpy: used to validate a scene before any kernel runs), or None.
@@ -240,10 +262,11 @@ def overlapping_boxes(boxes, share: float = START_OVERLAP) -> tuple[int, int, fl
     angle = np.array([b.angle for b in boxes], dtype=float)
     half = 0.5 * np.array([(b.length, b.width) for b in boxes], dtype=float)
     c, s = np.cos(angle), np.sin(angle)
-    bound = np.stack([np.abs(c) * half[:, 0] + np.abs(s) * half[:, 1],
-                      np.abs(s) * half[:, 0] + np.abs(c) * half[:, 1]], axis=1)
+    bound = np.stack(
+        [np.abs(c) * half[:, 0] + np.abs(s) * half[:, 1], np.abs(s) * half[:, 0] + np.abs(c) * half[:, 1]], axis=1
+    )
     for i in range(n - 1):
-        near = np.flatnonzero(np.all(np.abs(centre[i + 1:] - centre[i]) < bound[i + 1:] + bound[i], axis=1)) + i + 1
+        near = np.flatnonzero(np.all(np.abs(centre[i + 1 :] - centre[i]) < bound[i + 1 :] + bound[i], axis=1)) + i + 1
         for j in near:
             tolerance = share * min(half[i].min(), half[j].min())
             separation = -math.inf

@@ -7,8 +7,8 @@ every box at once, whatever the mass ratio.
 import math
 
 from ..compile.compilation import jit_stage
+from ..tunables import LCP_TOLERANCE, REGULARISATION
 from .joint_contact_solve import delassus_entry
-from .limits import LCP_TOLERANCE, REGULARISATION
 from .narrowphase import NX, NY
 
 
@@ -18,8 +18,18 @@ def delassus_matrix(contacts, ids, count, inv_mass, inv_inertia, w):
     normal impulse at contact d changes u_rel . n at contact c (nonzero where they share a body)."""
     for c in range(count):
         for d in range(c, count):
-            value = delassus_entry(contacts, ids, c, contacts[c, NX], contacts[c, NY], d, contacts[d, NX],
-                                   contacts[d, NY], inv_mass, inv_inertia)
+            value = delassus_entry(
+                contacts,
+                ids,
+                c,
+                contacts[c, NX],
+                contacts[c, NY],
+                d,
+                contacts[d, NX],
+                contacts[d, NY],
+                inv_mass,
+                inv_inertia,
+            )
             w[c, d] = value
             w[d, c] = value
 

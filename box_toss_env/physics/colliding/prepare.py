@@ -11,14 +11,13 @@ and a tangential impulse q t changes u_rel . t by K_t q, K_t the same with t for
 that stops the approach is p = -u_rel . n / K_n, and an impact with restitution e gets
 p = -(1 + e) u_rel . n / K_n in total (the text's p = (1 + e) p' for two bodies).
 
-Material of a box-box contact (Box2D's mixing rules): restitution max(e1, e2), friction sqrt(mu1 mu2),
-penalty stiffness min(k1, k2); box-floor contacts use the box's own.
+Material of a contact: the contact law's (``contact_law``: a box-box contact mixes the two boxes' materials,
+a box-floor contact takes the box's own).
 """
-
-import math
 
 from .. import layout
 from ..compile.compilation import jit_stage
+from ..contact_law import floor_friction, mixed_friction, mixed_restitution, mixed_stiffness
 from .narrowphase import (
     BODY1,
     BODY2,
@@ -64,34 +63,38 @@ def apply_impulse(c, px, py, contacts, ids, vel, inv_mass, inv_inertia):
 
 
 @jit_stage
-def prepare_contacts(contacts, ids, count, params, inv_mass, inv_inertia):
-    """Effective masses 1 / K_n, 1 / K_t and the mixed material of each contact."""
+def prepare_contacts(contacts, count, bodies):
+    """Effective masses 1 / K_n, 1 / K_t and the material (``contact_law``) of each of the first ``count`` contacts
+    (``contacts``: ``state.Contacts``; ``bodies``: ``state.Bodies``)."""
+    rows, ids = contacts.rows, contacts.ids
+    params, inv_mass, inv_inertia = bodies.params, bodies.inv_mass, bodies.inv_inertia
     for c in range(count):
         b1 = ids[c, BODY1]
         b2 = ids[c, BODY2]
-        nx, ny = contacts[c, NX], contacts[c, NY]
-        rn1 = contacts[c, R1X] * ny - contacts[c, R1Y] * nx
-        rt1 = contacts[c, R1X] * nx + contacts[c, R1Y] * ny  # r1 x t with t = (-ny, nx)
+        nx, ny = rows[c, NX], rows[c, NY]
+        rn1 = rows[c, R1X] * ny - rows[c, R1Y] * nx
+        rt1 = rows[c, R1X] * nx + rows[c, R1Y] * ny  # r1 x t with t = (-ny, nx)
         k_n = inv_mass[b1] + rn1 * rn1 * inv_inertia[b1]
         k_t = inv_mass[b1] + rt1 * rt1 * inv_inertia[b1]
         if b2 >= 0:
-            rn2 = contacts[c, R2X] * ny - contacts[c, R2Y] * nx
-            rt2 = contacts[c, R2X] * nx + contacts[c, R2Y] * ny
+            rn2 = rows[c, R2X] * ny - rows[c, R2Y] * nx
+            rt2 = rows[c, R2X] * nx + rows[c, R2Y] * ny
             k_n += inv_mass[b2] + rn2 * rn2 * inv_inertia[b2]
             k_t += inv_mass[b2] + rt2 * rt2 * inv_inertia[b2]
-            contacts[c, RESTITUTION] = max(params[b1, layout.RESTITUTION], params[b2, layout.RESTITUTION])
-            contacts[c, FRICTION] = math.sqrt(params[b1, layout.FRICTION] * params[b2, layout.FRICTION])
-            contacts[c, STIFFNESS] = min(params[b1, layout.STIFFNESS], params[b2, layout.STIFFNESS])
+            rows[c, RESTITUTION] = mixed_restitution(params[b1, layout.RESTITUTION], params[b2, layout.RESTITUTION])
+            rows[c, FRICTION] = mixed_friction(params[b1, layout.FRICTION], params[b2, layout.FRICTION])
+            rows[c, STIFFNESS] = mixed_stiffness(params[b1, layout.STIFFNESS], params[b2, layout.STIFFNESS])
         else:
-            contacts[c, RESTITUTION] = params[b1, layout.RESTITUTION]
-            contacts[c, FRICTION] = params[b1, layout.FRICTION]
-            contacts[c, STIFFNESS] = params[b1, layout.STIFFNESS]
-        contacts[c, NORMAL_MASS] = 1.0 / k_n
-        contacts[c, TANGENT_MASS] = 1.0 / k_t
+            rows[c, RESTITUTION] = params[b1, layout.RESTITUTION]
+            rows[c, FRICTION] = floor_friction(params[b1, layout.FRICTION])
+            rows[c, STIFFNESS] = params[b1, layout.STIFFNESS]
+        rows[c, NORMAL_MASS] = 1.0 / k_n
+        rows[c, TANGENT_MASS] = 1.0 / k_t
 
 
 @jit_stage
 def body_kinetic_energy(vel, b, params):
     """m |v|^2 / 2 + I omega^2 / 2 of body b [J]."""
-    return 0.5 * (params[b, layout.MASS] * (vel[b, 0] ** 2 + vel[b, 1] ** 2)
-                  + params[b, layout.INERTIA] * vel[b, 2] ** 2)
+    return 0.5 * (
+        params[b, layout.MASS] * (vel[b, 0] ** 2 + vel[b, 1] ** 2) + params[b, layout.INERTIA] * vel[b, 2] ** 2
+    )

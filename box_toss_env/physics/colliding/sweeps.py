@@ -5,7 +5,8 @@ after the first sweep only the contacts of bodies that moved (``gauss_seidel``, 
 """
 
 from ..compile.compilation import jit_stage
-from .limits import SINGLE_CHANGE
+from ..contact_law import clamp_friction, friction_bound, tangent
+from ..tunables import SINGLE_CHANGE
 from .narrowphase import BODY1, BODY2, FRICTION, FRICTION_IMPULSE, IMPULSE, NORMAL_MASS, NX, NY, TANGENT_MASS, TARGET
 from .prepare import apply_impulse, relative_velocity
 
@@ -26,16 +27,16 @@ def friction_sweep(contacts, ids, count, vel, inv_mass, inv_inertia):
 def friction_step(c, contacts, ids, vel, inv_mass, inv_inertia):
     """Contact c's friction: the tangential impulse that stops the slip, added to the accumulated one and clamped
     to mu times the normal impulse, applied to ``vel``; returns the change dq."""
-    nx, ny = contacts[c, NX], contacts[c, NY]
+    tx, ty = tangent(contacts[c, NX], contacts[c, NY])
     ux, uy = relative_velocity(c, contacts, ids, vel)
-    slip = -ux * ny + uy * nx  # u_rel . t, t = (-ny, nx)
+    slip = ux * tx + uy * ty  # u_rel . t
     before = contacts[c, FRICTION_IMPULSE]
-    limit = contacts[c, FRICTION] * contacts[c, IMPULSE]
-    after = min(max(before - slip * contacts[c, TANGENT_MASS], -limit), limit)
+    bound = friction_bound(contacts[c, FRICTION], contacts[c, IMPULSE])
+    after = clamp_friction(before - slip * contacts[c, TANGENT_MASS], bound)
     contacts[c, FRICTION_IMPULSE] = after
     dq = after - before
     if dq != 0.0:
-        apply_impulse(c, -dq * ny, dq * nx, contacts, ids, vel, inv_mass, inv_inertia)
+        apply_impulse(c, dq * tx, dq * ty, contacts, ids, vel, inv_mass, inv_inertia)
     return dq
 
 
@@ -81,8 +82,9 @@ def gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction,
         for c in range(count):
             b1 = ids[c, BODY1]
             b2 = ids[c, BODY2]
-            if sweep > 0 and not (before_sweep[b1] or this_sweep[b1]
-                                  or (b2 >= 0 and (before_sweep[b2] or this_sweep[b2]))):
+            if sweep > 0 and not (
+                before_sweep[b1] or this_sweep[b1] or (b2 >= 0 and (before_sweep[b2] or this_sweep[b2]))
+            ):
                 total += contacts[c, IMPULSE]
                 continue
             if use_friction and contacts[c, FRICTION] > 0.0:

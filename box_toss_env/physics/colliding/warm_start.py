@@ -6,13 +6,14 @@
 import numpy as np
 
 from ..compile.compilation import jit_stage
-from .limits import DIRECT_LIMIT, SUPPORT_SLOPE
+from ..contact_law import clamp_friction, friction_bound, tangent
+from ..tunables import DIRECT_LIMIT, LEVER_SPREAD, SUPPORT_SLOPE
 from .narrowphase import BODY1, BODY2, FRICTION, FRICTION_IMPULSE, GAP, IMPULSE, KEY, NX, NY, R1X, R2X
 from .prepare import apply_impulse
 
 
 @jit_stage(nrt=True)  # it allocates its work arrays (once a cold start)
-def resting_loads(contacts, ids, count, pose, vel, inv_mass, inv_inertia, h, gravity):
+def resting_loads(contacts, count, bodies, h, gravity):
     """A first guess at the impulses of a resting scene, for a cold start (no warm start kept). From the
     highest body down, each body's vertical load F (its weight m |g| h and what rests on it) acts along the
     line x_F = sum(F_i x_i) / F; the contacts that hold the body up (|n_y| > SUPPORT_SLOPE, the body above
@@ -25,6 +26,8 @@ def resting_loads(contacts, ids, count, pose, vel, inv_mass, inv_inertia, h, gra
     below. The solve then corrects the guess: from zero, Gauss-Seidel needs a sweep per layer to carry a
     load down a pile (a column of 40 boxes, cold, sank 0.24 m/s in its first step of 1/60 s; with the
     guess it stays at rest). Returns how many contacts got an impulse."""
+    rows, ids = contacts.rows, contacts.ids
+    pose, vel, inv_mass, inv_inertia = bodies.pose, bodies.vel, bodies.inv_mass, bodies.inv_inertia
     n = pose.shape[0]
     load = np.empty(n)
     moment = np.empty(n)  # sum of F_i x_i over the loads on a body
@@ -34,10 +37,10 @@ def resting_loads(contacts, ids, count, pose, vel, inv_mass, inv_inertia, h, gra
         load[b] = -gravity * h / inv_mass[b]
         moment[b] = load[b] * pose[b, 0]
     for c in range(count):
-        contacts[c, IMPULSE] = 0.0
-        contacts[c, FRICTION_IMPULSE] = 0.0
-        ny = contacts[c, NY]
-        if contacts[c, GAP] <= near and abs(ny) > SUPPORT_SLOPE:
+        rows[c, IMPULSE] = 0.0
+        rows[c, FRICTION_IMPULSE] = 0.0
+        ny = rows[c, NY]
+        if rows[c, GAP] <= near and abs(ny) > SUPPORT_SLOPE:
             first[1 + (ids[c, BODY1] if ny > 0.0 else ids[c, BODY2])] += 1
     for b in range(n):
         first[b + 1] += first[b]
@@ -45,11 +48,11 @@ def resting_loads(contacts, ids, count, pose, vel, inv_mass, inv_inertia, h, gra
     at_x = np.empty(first[n])  # [m] where each holds it
     filled = first[:n].copy()
     for c in range(count):
-        ny = contacts[c, NY]
-        if contacts[c, GAP] <= near and abs(ny) > SUPPORT_SLOPE:
+        ny = rows[c, NY]
+        if rows[c, GAP] <= near and abs(ny) > SUPPORT_SLOPE:
             upper = ids[c, BODY1] if ny > 0.0 else ids[c, BODY2]
             held[filled[upper]] = c
-            at_x[filled[upper]] = pose[upper, 0] + (contacts[c, R1X] if ny > 0.0 else contacts[c, R2X])
+            at_x[filled[upper]] = pose[upper, 0] + (rows[c, R1X] if ny > 0.0 else rows[c, R2X])
             filled[upper] += 1
     share = np.empty(first[n])
     for b in np.argsort(-pose[:, 1]):
@@ -57,15 +60,13 @@ def resting_loads(contacts, ids, count, pose, vel, inv_mass, inv_inertia, h, gra
         for i in range(first[b], first[b + 1]):
             c = held[i]
             force = load[b] * share[i]
-            ny = contacts[c, NY]
+            ny = rows[c, NY]
             p = force * abs(ny)
-            q = force * contacts[c, NX] * (1.0 if ny > 0.0 else -1.0)
-            bound = contacts[c, FRICTION] * p
-            q = min(max(q, -bound), bound)
-            contacts[c, IMPULSE] = p
-            contacts[c, FRICTION_IMPULSE] = q
-            apply_impulse(c, p * contacts[c, NX] - q * ny, p * ny + q * contacts[c, NX], contacts, ids, vel,
-                          inv_mass, inv_inertia)
+            q = clamp_friction(force * rows[c, NX] * (1.0 if ny > 0.0 else -1.0), friction_bound(rows[c, FRICTION], p))
+            rows[c, IMPULSE] = p
+            rows[c, FRICTION_IMPULSE] = q
+            tx, ty = tangent(rows[c, NX], ny)
+            apply_impulse(c, p * rows[c, NX] + q * tx, p * ny + q * ty, rows, ids, vel, inv_mass, inv_inertia)
             lower = ids[c, BODY2] if ny > 0.0 else ids[c, BODY1]
             if lower >= 0:
                 load[lower] += force
@@ -92,7 +93,7 @@ def lever_shares(x, begin, end, centre, share):
     spread = 0.0
     for i in range(begin, end):
         spread += (x[i] - mean) ** 2
-    if x[high] - x[low] <= 1e-9:
+    if x[high] - x[low] <= LEVER_SPREAD:
         for i in range(begin, end):
             share[i] = 1.0 / k
         return
@@ -110,26 +111,30 @@ def lever_shares(x, begin, end, centre, share):
 
 
 @jit_stage
-def warm_start(contacts, ids, count, previous_keys, previous_impulses, n_previous, ratio, vel, inv_mass,
-               inv_inertia, pose, h, gravity):
-    """Start each contact from the impulses its key had in the last substep (times ``ratio``, the ratio
-    of the substep lengths), applied to the velocities; new contacts start from zero. Both lists of keys
-    increase (``find_contacts``' order), so one pass over them together pairs them. A cold start (none kept)
-    of more contacts than the exact solves take, under a gravity that pulls down, starts from ``resting_loads``'
-    guess instead."""
+def warm_start(contacts, count, warm_from, bodies, h, gravity):
+    """Start each contact from the impulses its key had in the last substep (``warm_from``: keys, impulses, their
+    count and substep length h', scaled by h / h'), applied to the velocities; new contacts start from zero. Both
+    lists of keys increase (``find_contacts``' order), so one pass over them together pairs them. A cold start
+    (none kept) of more contacts than the exact solves take, under a gravity that pulls down, starts from
+    ``resting_loads``' guess instead."""
+    previous_keys, previous_impulses, n_previous, h_previous = warm_from
     if n_previous == 0 and count > DIRECT_LIMIT and gravity < 0.0:
-        resting_loads(contacts, ids, count, pose, vel, inv_mass, inv_inertia, h, gravity)
+        resting_loads(contacts, count, bodies, h, gravity)
         return
+    rows, ids = contacts.rows, contacts.ids
+    vel, inv_mass, inv_inertia = bodies.vel, bodies.inv_mass, bodies.inv_inertia
+    ratio = h / h_previous
     at = 0
     for c in range(count):
-        contacts[c, IMPULSE] = 0.0
-        contacts[c, FRICTION_IMPULSE] = 0.0
+        rows[c, IMPULSE] = 0.0
+        rows[c, FRICTION_IMPULSE] = 0.0
         while at < n_previous and previous_keys[at] < ids[c, KEY]:
             at += 1
         if at < n_previous and previous_keys[at] == ids[c, KEY]:
             p = ratio * previous_impulses[at, 0]
             q = ratio * previous_impulses[at, 1]
-            contacts[c, IMPULSE] = p
-            contacts[c, FRICTION_IMPULSE] = q
-            nx, ny = contacts[c, NX], contacts[c, NY]
-            apply_impulse(c, p * nx - q * ny, p * ny + q * nx, contacts, ids, vel, inv_mass, inv_inertia)
+            rows[c, IMPULSE] = p
+            rows[c, FRICTION_IMPULSE] = q
+            nx, ny = rows[c, NX], rows[c, NY]
+            tx, ty = tangent(nx, ny)
+            apply_impulse(c, p * nx + q * tx, p * ny + q * ty, rows, ids, vel, inv_mass, inv_inertia)

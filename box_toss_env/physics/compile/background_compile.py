@@ -121,14 +121,18 @@ class Worker:
             errors = None
         try:
             self.process = subprocess.Popen(
-                [sys.executable, "-c", WORKER], stdin=subprocess.PIPE,
-                stdout=subprocess.DEVNULL, stderr=errors or subprocess.DEVNULL, env=env, start_new_session=True)
+                [sys.executable, "-c", WORKER],
+                stdin=subprocess.PIPE,
+                stdout=subprocess.DEVNULL,
+                stderr=errors or subprocess.DEVNULL,
+                env=env,
+                start_new_session=True,
+            )
         finally:
             if errors is not None:
                 errors.close()
         try:
-            self.process.stdin.write(pickle.dumps({"package": str(PACKAGE), "recipe": recipe,
-                                                   "signature": signature}))
+            self.process.stdin.write(pickle.dumps({"package": str(PACKAGE), "recipe": recipe, "signature": signature}))
             self.process.stdin.close()
         except OSError:  # the worker died at once: ``done`` says so and this process compiles
             pass
@@ -166,10 +170,14 @@ class BackgroundCompile:
         if not compiling_elsewhere(kernel, self.signature):
             self._start_worker()
         where = f"worker pid {self.worker.pid}" if self.worker else "another process holds its compile lock"
-        LOG.warning("box_toss_env: the engine kernel %s is not in numba's cache yet: it compiles in the background "
-                    "(%s; progress in %s), seconds to a minute of CPU once, and meanwhile runs of up to a few dozen "
-                    "bodies use its interpreted copy (the same results, about 100x slower)", describe(recipe), where,
-                    self.log_path())
+        LOG.warning(
+            "box_toss_env: the engine kernel %s is not in numba's cache yet: it compiles in the background "
+            "(%s; progress in %s), seconds to a minute of CPU once, and meanwhile runs of up to a few dozen "
+            "bodies use its interpreted copy (the same results, about 100x slower)",
+            describe(recipe),
+            where,
+            self.log_path(),
+        )
 
     def log_path(self) -> str:
         return os.path.join(cache_location(self.kernel) or "", LOG_NAME)
@@ -258,9 +266,13 @@ class InterpretedStart:
             self.compilation = start(self.kernel, self.recipe, args)
         if self.compilation is None or self.compilation.ready():
             if self.compilation is not None:
-                LOG.info("box_toss_env: %s runs compiled from now on, %.1f s and %d interpreted runs after it was "
-                         "first needed", describe(self.recipe), time.monotonic() - self.compilation.started,
-                         self.interpreted_runs)
+                LOG.info(
+                    "box_toss_env: %s runs compiled from now on, %.1f s and %d interpreted runs after it was "
+                    "first needed",
+                    describe(self.recipe),
+                    time.monotonic() - self.compilation.started,
+                    self.interpreted_runs,
+                )
             self.compiled = True
             return False
         saved = [array.copy() for array in outputs]

@@ -98,8 +98,9 @@ class EngineDispatcher(CPUDispatcher):
     def get_call_template(self, args, kws):
         # a call from compiled code with a constant argument would compile a copy for that constant
         # (Literal[int](0), Literal[bool](True), ...): compile once for the plain types instead
-        return super().get_call_template([types.unliteral(a) for a in args],
-                                         {name: types.unliteral(a) for name, a in kws.items()})
+        return super().get_call_template(
+            [types.unliteral(a) for a in args], {name: types.unliteral(a) for name, a in kws.items()}
+        )
 
     def enable_caching(self):
         try:
@@ -115,9 +116,13 @@ def warn_uncached(reason: str) -> None:
     global _warned_uncached
     if not _warned_uncached:
         _warned_uncached = True
-        warnings.warn(f"box_toss_env: no writable directory for numba's cache ({reason}). The engine is compiled "
-                      "again in every process (seconds each time). Set NUMBA_CACHE_DIR to a writable directory to "
-                      "keep the compiled code.", CacheWarning, stacklevel=2)
+        warnings.warn(
+            f"box_toss_env: no writable directory for numba's cache ({reason}). The engine is compiled "
+            "again in every process (seconds each time). Set NUMBA_CACHE_DIR to a writable directory to "
+            "keep the compiled code.",
+            CacheWarning,
+            stacklevel=2,
+        )
 
 
 def name_variant(function: Callable) -> Callable:
@@ -158,9 +163,10 @@ def jit_stage(function: Callable | None = None, *, inline: str = "never", nrt: b
     faster, bit for bit the same (docs/changelog.md). A stage that allocated would
     fail to compile, not run unsafely; one that must allocate (numba's sort keeps a stack array)
     says ``nrt=True``."""
+
     def decorate(function):
-        return _make_dispatcher(function, no_cpython_wrapper=True, no_cfunc_wrapper=True, inline=inline,
-                                _nrt=nrt)
+        return _make_dispatcher(function, no_cpython_wrapper=True, no_cfunc_wrapper=True, inline=inline, _nrt=nrt)
+
     return decorate if function is None else decorate(function)
 
 
@@ -255,11 +261,15 @@ def compile_locked(kernel, signature: tuple) -> bool:
     lock = None if cached_for(kernel, signature) else compile_lock(kernel, signature)
     if lock is not None:
         if compiling_elsewhere(kernel, signature):
-            LOG.info("waiting for another process compiling %s into %s", kernel.py_func.__qualname__,
-                     cache_location(kernel))
+            LOG.info(
+                "waiting for another process compiling %s into %s", kernel.py_func.__qualname__, cache_location(kernel)
+            )
         else:
-            LOG.info("compiling %s in this process (not in numba's cache %s yet)", kernel.py_func.__qualname__,
-                     cache_location(kernel))
+            LOG.info(
+                "compiling %s in this process (not in numba's cache %s yet)",
+                kernel.py_func.__qualname__,
+                cache_location(kernel),
+            )
         try:
             with lock:
                 kernel.compile(signature)  # numba looks in the cache first: another process may have compiled it

@@ -1,7 +1,7 @@
-"""Stage 2 of the robust solver's contact step, solve contacts (and the solves stages 0 and 6 reuse): impulses
-on the corners that can touch the floor (at most three: the lowest corner and its two neighbours), solved
-together, with clamped Coulomb friction (``solve_contact_velocities``), and the implicit penalty correction
-of stage 6 (``correct_penetration``).
+"""The solve contacts stage of the floor-only solver's contact step (and the solves its restitution and relax
+stages reuse): impulses on the corners that can touch the floor (at most three: the lowest corner and its two
+neighbours), solved together, with clamped Coulomb friction (``solve_contact_velocities``), and the implicit
+penalty correction of the relax stage (``correct_penetration``).
 
 Notation for one box with inverse mass 1/m, inverse inertia 1/I, and a corner at lever arm
 r = (rx, ry) from the centre of mass; the floor normal is n = (0, 1), the tangent (1, 0):
@@ -22,22 +22,16 @@ Corners travel in a small work array ``corners[row, i]`` (rows below), the first
 import math
 
 from ..compile.compilation import jit_stage
+from ..contact_law import clamp_friction, friction_bound, friction_slope
 from ..geometry import vertex_offset
+from ..tunables import CORNER_CONVERGED, CORNER_SWEEPS, LCP_TOLERANCE, PAIR_CONDITION, PENALTY_DAMPING_RATIO
 
 # rows of the corner work array: lever arm, target normal velocity b_i, accumulated normal and friction
 # impulses, normal velocity before the step, depth below the floor, compression impulse (Poisson), and
 # the LCP's scratch rows (w at zero impulse, new impulses, impulse changes)
-(RX, RY, TARGET, IMPULSE, FRICTION_IMPULSE, APPROACH, DEPTH, COMPRESSION, FREE_W, NEW_IMPULSE,
- SCRATCH) = range(11)
+(RX, RY, TARGET, IMPULSE, FRICTION_IMPULSE, APPROACH, DEPTH, COMPRESSION, FREE_W, NEW_IMPULSE, SCRATCH) = range(11)
 CORNER_ROWS = 11
 MAX_CORNERS = 3
-
-PAIR_CONDITION = 1e-9  # det(K) of two corners below this fraction of K_ii K_jj: their rows are parallel
-LCP_TOLERANCE = 1e-12  # a corner left free may approach its target by this share of the largest |w| (rounding)
-LCP_SWEEPS = 64  # Gauss-Seidel sweeps of the fallback, for rows parallel to rounding
-CONVERGED = 1e-12  # Gauss-Seidel stops when the impulses change by less than this share
-PENALTY_DAMPING_RATIO = 1.0  # zeta of the penalty spring: critically damped
-FRICTION_ITERATIONS = 8  # at most this many Gauss-Seidel sweeps over friction and the normal block
 
 
 @jit_stage
@@ -115,7 +109,7 @@ def normal_impulses(u_row, corners, n, k):
     if free_corners_hold(corners, n, k, -1, -1, tolerance):
         return
     # rows parallel to rounding (a face almost vertical, or the two corners of a thin box's short side)
-    for _ in range(LCP_SWEEPS):
+    for _ in range(CORNER_SWEEPS):
         for p in range(n):
             w = a[p]
             for j in range(n):
@@ -151,8 +145,7 @@ def friction_impulse(vx, spin, ry, normal_impulse, accumulated, friction, inv_ma
     """
     slip = vx - spin * ry
     total = accumulated - slip / (inv_mass + ry * ry * inv_inertia)
-    limit = friction * normal_impulse
-    total = min(max(total, -limit), limit)
+    total = clamp_friction(total, friction_bound(friction, normal_impulse))
     change = total - accumulated
     return vx + change * inv_mass, spin - ry * change * inv_inertia, total
 
@@ -198,15 +191,15 @@ def solve_one_corner(vx, vy, spin, corners, friction, inv_mass, inv_inertia):
     if det > 0.0:  # sticking
         lam = ((b - u_n) * k_tt + u_t * k_nt) / det
         q = (-u_t * k_nn - (b - u_n) * k_nt) / det
-        if not (lam >= 0.0 and abs(q) <= friction * lam):
+        if not (lam >= 0.0 and abs(q) <= friction_bound(friction, lam)):
             lam = -1.0
     if lam < 0.0:
         sign = 1.0 if u_t > 0.0 else -1.0
         for _ in range(2):  # sliding on, then (a slip that reverses under the normal impulse) the other way
-            denominator = k_nn - sign * friction * k_nt
+            denominator = k_nn - sign * friction_slope(friction) * k_nt
             if denominator > 0.0:
                 lam = (b - u_n) / denominator
-                q = -sign * friction * lam
+                q = -sign * friction_bound(friction, lam)
                 if lam >= 0.0 and sign * (u_t + k_nt * lam + k_tt * q) >= 0.0:
                     break
             lam = -1.0
@@ -221,7 +214,7 @@ def solve_one_corner(vx, vy, spin, corners, friction, inv_mass, inv_inertia):
 def solve_contact_velocities(vx, vy, spin, corners, n, friction, inv_mass, inv_inertia, iterations, k):
     """Velocities after the normal impulses (targets u_n,i >= b_i, row TARGET) and, with ``friction`` > 0,
     the friction impulses of the first n corners: the exact normal block, then projected Gauss-Seidel
-    sweeps over friction and the normal block, until the impulses change by less than CONVERGED of the
+    sweeps over friction and the normal block, until the impulses change by less than CORNER_CONVERGED of the
     normal impulse (at most ``iterations`` sweeps); a single corner is solved exactly (``solve_one_corner``).
     The normal impulses are left in row IMPULSE.
     Returns (vx, vy, spin)."""
@@ -241,14 +234,15 @@ def solve_contact_velocities(vx, vy, spin, corners, n, friction, inv_mass, inv_i
         total = 0.0
         for i in range(n):
             before = corners[FRICTION_IMPULSE, i]
-            vx, spin, corners[FRICTION_IMPULSE, i] = friction_impulse(vx, spin, corners[RY, i], corners[IMPULSE, i],
-                                                                      before, friction, inv_mass, inv_inertia)
+            vx, spin, corners[FRICTION_IMPULSE, i] = friction_impulse(
+                vx, spin, corners[RY, i], corners[IMPULSE, i], before, friction, inv_mass, inv_inertia
+            )
             change += abs(corners[FRICTION_IMPULSE, i] - before)
         vy, spin = solve_normal_block(vy, spin, corners, n, inv_mass, inv_inertia, k)
         for i in range(n):
             change += abs(corners[SCRATCH, i])
             total += corners[IMPULSE, i]
-        if change <= CONVERGED * total:
+        if change <= CORNER_CONVERGED * total:
             break
     return vx, vy, spin
 

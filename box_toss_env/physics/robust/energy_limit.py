@@ -46,6 +46,7 @@ def limit_energy(vx, vy, spin, kinetic_before, h, gravity, inv_mass, inv_inertia
     """Stage 4: the velocities after the contact stages of a piece h, scaled by ``energy_limit_scale`` so that the
     piece (with its position update, B = -m g h v_y) gains no energy over ``kinetic_before``. Returns (vx, vy,
     spin)."""
-    scale = energy_limit_scale(kinetic_before, kinetic_energy(vx, vy, spin, inv_mass, inv_inertia),
-                               -gravity * h * vy / inv_mass)
+    scale = energy_limit_scale(
+        kinetic_before, kinetic_energy(vx, vy, spin, inv_mass, inv_inertia), -gravity * h * vy / inv_mass
+    )
     return scale * vx, scale * vy, scale * spin

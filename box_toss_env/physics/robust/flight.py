@@ -17,16 +17,16 @@ from .. import layout
 from ..compile.compilation import jit_stage
 from ..geometry import vertex_offset
 from ..kernel_support import is_finite_state, record_event, store_state
+from ..tunables import MAX_ADVANCE_ITERATIONS
+from .memory import Tally
 from .restitution import resolve_impact
-
-MAX_ADVANCE_ITERATIONS = 100_000  # a grazing approach past this many steps is handed to stepping
+from .state import Motion
 
 
 @jit_stage
 def flight_state(x, y, angle, vx, vy, spin, gravity, tau):
     """The state a time ``tau`` after (x, y, angle, vx, vy, spin), in free flight."""
-    return (x + vx * tau, y + vy * tau + 0.5 * gravity * tau * tau, angle + spin * tau,
-            vx, vy + gravity * tau, spin)
+    return (x + vx * tau, y + vy * tau + 0.5 * gravity * tau * tau, angle + spin * tau, vx, vy + gravity * tau, spin)
 
 
 @jit_stage
@@ -85,61 +85,63 @@ def time_to_contact(y, angle, vy, spin, half_length, half_width, gravity, horizo
 
 
 @jit_stage(inline="always")
-def fly(i, x, y, angle, vx, vy, spin, hx, hy, gravity, t, n, n_end, dt, tolerance, record, trajectory):
+def fly(i, motion, box, settings, t, n, n_end, trajectory):
     """Flight in closed form from time t (grid step n) to the first contact with the floor or to grid step
-    ``n_end``, whichever comes first, the grid rows passed recorded. Returns the state there, the time flown,
+    ``n_end``, whichever comes first, the grid rows passed recorded. Returns the motion there, the time flown,
     whether a corner touched, and the last grid row the flight passed."""
+    dt, gravity = settings.dt, settings.gravity
+    x, y, angle, vx, vy, spin = motion.x, motion.y, motion.angle, motion.vx, motion.vy, motion.spin
     end_time = n_end * dt
-    tau, touched = time_to_contact(y, angle, vy, spin, hx, hy, gravity, end_time - t, tolerance, 0.0)
+    tau, touched = time_to_contact(y, angle, vy, spin, box.hx, box.hy, gravity, end_time - t, box.tolerance, 0.0)
     # grid rows passed in this flight: up to the end, or to the last one before the contact
     last = n_end if not touched else min(np.int64(math.floor((t + tau) / dt)), n_end)
-    if record:
+    if settings.record:
         for row in range(n + 1, last + 1):
             xr, yr, ar, vxr, vyr, wr = flight_state(x, y, angle, vx, vy, spin, gravity, row * dt - t)
             store_state(trajectory, row, i, xr, yr, ar, vxr, vyr, wr)
     x, y, angle, vx, vy, spin = flight_state(x, y, angle, vx, vy, spin, gravity, tau)
-    return x, y, angle, vx, vy, spin, tau, touched, last
+    return Motion(x, y, angle, vx, vy, spin, math.cos(angle), math.sin(angle)), tau, touched, last
 
 
 @jit_stage(inline="always")
-def fly_to_impact(i, x, y, angle, vx, vy, spin, box, gravity, t, n, n_end, dt, tolerance, simultaneous, threshold,
-                  first_contact, n_impacts, record, trajectory, events, corners, k):
+def fly_to_impact(i, motion, box, settings, t, n, n_end, tally, recording, work):
     """Flight in closed form from time t (grid step n) to the first contact (``fly``) and the impact there
-    (``resolve_impact``), or to grid step ``n_end``. Returns (x, y, angle, vx, vy, spin, cos, sin, t, n, first
-    contact, impacts, in flight, whether to go on, status, failed step): a box that leaves the floor flies on; one
-    that stays is brought back onto the grid, its contact step of (n + 1) dt - t next (unless ``n_end`` is
-    reached); ``box``: (hx, hy, 1/m, 1/I, e, mu, k, radius)."""
-    hx, hy, inv_mass, inv_inertia, restitution, friction, _, _ = box
-    x, y, angle, vx, vy, spin, tau, touched, last = fly(i, x, y, angle, vx, vy, spin, hx, hy, gravity, t, n, n_end,
-                                                        dt, tolerance, record, trajectory)
-    cos_a = math.cos(angle)
-    sin_a = math.sin(angle)
+    (``resolve_impact``), or to grid step ``n_end``. Returns (motion, t, n, tally, in flight, whether to go on,
+    status, failed step): a box that leaves the floor flies on; one that stays is brought back onto the grid, its
+    contact step of (n + 1) dt - t next (unless ``n_end`` is reached)."""
+    dt = settings.dt
+    first_contact, n_impacts, max_penetration, n_steps = tally
+    motion, tau, touched, last = fly(i, motion, box, settings, t, n, n_end, recording.trajectory)
     if not touched:
-        n = n_end
-        failed = not is_finite_state(x, y, angle, vx, vy, spin)
-        return (x, y, angle, vx, vy, spin, cos_a, sin_a, n_end * dt, n, first_contact, n_impacts, True, False,
-                layout.STATUS_NONFINITE if failed else layout.STATUS_OK, n if failed else -1)
+        failed = not is_finite_state(motion.x, motion.y, motion.angle, motion.vx, motion.vy, motion.spin)
+        return (
+            motion,
+            n_end * dt,
+            n_end,
+            tally,
+            True,
+            False,
+            layout.STATUS_NONFINITE if failed else layout.STATUS_OK,
+            n_end if failed else -1,
+        )
     t = t + tau
     if math.isnan(first_contact):
         first_contact = t
-    vx, vy, spin, touching, approach, leaves = resolve_impact(
-        y, cos_a, sin_a, vx, vy, spin, hx, hy, inv_mass, inv_inertia, restitution,
-        friction, threshold, simultaneous, corners, k)
-    if touching > 0 and approach > threshold:
-        if record:
-            record_event(events, i, n_impacts, t, approach, touching)
+    vx, vy, spin, touching, approach, leaves = resolve_impact(motion, box, settings.threshold, work)
+    motion = Motion(motion.x, motion.y, motion.angle, vx, vy, spin, motion.cos_a, motion.sin_a)
+    if touching > 0 and approach > settings.threshold:
+        if settings.record:
+            record_event(recording.events, i, n_impacts, t, approach, touching)
         n_impacts += 1
-    if not is_finite_state(x, y, angle, vx, vy, spin):
-        return (x, y, angle, vx, vy, spin, cos_a, sin_a, t, n, first_contact, n_impacts, True, False,
-                layout.STATUS_NONFINITE, np.int64(math.floor(t / dt)))
+    tally = Tally(first_contact, n_impacts, max_penetration, n_steps)
+    if not is_finite_state(motion.x, motion.y, motion.angle, vx, vy, spin):
+        return motion, t, n, tally, True, False, layout.STATUS_NONFINITE, np.int64(math.floor(t / dt))
     n = max(n, last)  # rows up to n hold the flight
     if not leaves:
         if (n + 1) * dt <= t and n < n_end:  # the contact fell on grid point n + 1
             n += 1
-            if record:
-                store_state(trajectory, n, i, x, y, angle, vx, vy, spin)
+            if settings.record:
+                store_state(recording.trajectory, n, i, motion.x, motion.y, motion.angle, vx, vy, spin)
         if n >= n_end:
             t = n_end * dt
-    return (x, y, angle, vx, vy, spin, cos_a, sin_a, t, n, first_contact, n_impacts, leaves, leaves or n < n_end,
-            layout.STATUS_OK, -1)
-
+    return motion, t, n, tally, leaves, leaves or n < n_end, layout.STATUS_OK, -1

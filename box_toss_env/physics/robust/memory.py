@@ -9,47 +9,108 @@ can reach) across its substeps.
 """
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from .. import layout
 from ..compile.compilation import jit_stage
 
-IN_FLIGHT, LOCATED, LOADED, LIFT, STILL_FOR, FIRST_CONTACT, REST_TIME, MAX_PENETRATION, N_IMPACTS, N_STEPS, TIME, \
-    STATUS, FAIL_STEP = range(13)
+(
+    IN_FLIGHT,
+    LOCATED,
+    LOADED,
+    LIFT,
+    STILL_FOR,
+    FIRST_CONTACT,
+    REST_TIME,
+    MAX_PENETRATION,
+    N_IMPACTS,
+    N_STEPS,
+    TIME,
+    STATUS,
+    FAIL_STEP,
+) = range(13)
 MEMORY_SIZE = 13
+
+
+class Corners(NamedTuple):
+    """What one contact step leaves the next: the corner located to arrive (-1 none), the corners that carried
+    load (bit c for corner c) and how far a rotating step lifts a held corner [m]."""
+
+    located: int
+    loaded: int
+    lift: float
+
+
+class Tally(NamedTuple):
+    """A box's counts for its stats: first contact [s] (nan: none yet), impacts, deepest penetration [m], steps."""
+
+    first_contact: float
+    n_impacts: int
+    max_penetration: float
+    n_steps: int
+
+
+class Progress(NamedTuple):
+    """Where a box is: in flight or in contact, its time [s], its sleep timer [s] and rest time [s] (nan: awake),
+    and whether it is still finite (``layout.STATUS_*``, the failed grid step or -1)."""
+
+    in_flight: bool
+    t: float
+    still_for: float
+    rest_time: float
+    status: int
+    fail_step: int
 
 
 @jit_stage
 def start_memory(memory, i, time):
     """Box i's row of ``advance_box``'s memory for a box starting (in flight) at ``time``: no corner located or
     loaded, no lift, not still, no contact, rest or penetration yet, no impacts or steps, status OK."""
-    write_memory(memory, i, True, -1, 0, 0.0, 0.0, math.nan, math.nan, 0.0, 0, 0, time, layout.STATUS_OK, -1)
+    write_memory(
+        memory,
+        i,
+        Progress(True, time, 0.0, math.nan, layout.STATUS_OK, -1),
+        Corners(-1, 0, 0.0),
+        Tally(math.nan, 0, 0.0, 0),
+    )
 
 
 @jit_stage(inline="always")
 def read_memory(memory, i):
-    """Box i's row of ``memory`` as (in flight, located corner, loaded corners, lift, still for, first contact,
-    rest time, max penetration, impacts, steps, time)."""
-    return (memory[i, IN_FLIGHT] != 0.0, np.int64(memory[i, LOCATED]), np.int64(memory[i, LOADED]), memory[i, LIFT],
-            memory[i, STILL_FOR], memory[i, FIRST_CONTACT], memory[i, REST_TIME], memory[i, MAX_PENETRATION],
-            np.int64(memory[i, N_IMPACTS]), np.int64(memory[i, N_STEPS]), memory[i, TIME])
+    """Box i's row of ``memory`` as (``Progress``, ``Corners``, ``Tally``)."""
+    progress = Progress(
+        memory[i, IN_FLIGHT] != 0.0,
+        memory[i, TIME],
+        memory[i, STILL_FOR],
+        memory[i, REST_TIME],
+        np.int64(memory[i, STATUS]),
+        np.int64(memory[i, FAIL_STEP]),
+    )
+    corners = Corners(np.int64(memory[i, LOCATED]), np.int64(memory[i, LOADED]), memory[i, LIFT])
+    tally = Tally(
+        memory[i, FIRST_CONTACT],
+        np.int64(memory[i, N_IMPACTS]),
+        memory[i, MAX_PENETRATION],
+        np.int64(memory[i, N_STEPS]),
+    )
+    return progress, corners, tally
 
 
 @jit_stage(inline="always")
-def write_memory(memory, i, in_flight, located, loaded, lift, still_for, first_contact, rest_time, max_penetration,
-                 n_impacts, n_steps, t, status, fail_step):
-    """``read_memory``'s inverse, with the status and the failed step: every column of box i's row."""
-    memory[i, IN_FLIGHT] = 1.0 if in_flight else 0.0
-    memory[i, LOCATED] = located
-    memory[i, LOADED] = loaded
-    memory[i, LIFT] = lift
-    memory[i, STILL_FOR] = still_for
-    memory[i, FIRST_CONTACT] = first_contact
-    memory[i, REST_TIME] = rest_time
-    memory[i, MAX_PENETRATION] = max_penetration
-    memory[i, N_IMPACTS] = n_impacts
-    memory[i, N_STEPS] = n_steps
-    memory[i, TIME] = t
-    memory[i, STATUS] = status
-    memory[i, FAIL_STEP] = fail_step
+def write_memory(memory, i, progress, corners, tally):
+    """``read_memory``'s inverse: every column of box i's row."""
+    memory[i, IN_FLIGHT] = 1.0 if progress.in_flight else 0.0
+    memory[i, TIME] = progress.t
+    memory[i, STILL_FOR] = progress.still_for
+    memory[i, REST_TIME] = progress.rest_time
+    memory[i, STATUS] = progress.status
+    memory[i, FAIL_STEP] = progress.fail_step
+    memory[i, LOCATED] = corners.located
+    memory[i, LOADED] = corners.loaded
+    memory[i, LIFT] = corners.lift
+    memory[i, FIRST_CONTACT] = tally.first_contact
+    memory[i, N_IMPACTS] = tally.n_impacts
+    memory[i, MAX_PENETRATION] = tally.max_penetration
+    memory[i, N_STEPS] = tally.n_steps

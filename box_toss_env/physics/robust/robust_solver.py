@@ -12,31 +12,13 @@ frictionless corner and never creates energy with friction) for corners approach
 restitution threshold, friction clamped to mu times the normal impulse. A box that leaves the floor
 flies on; one that stays goes to
 
-Contact (``contact_step``): time-stepping on the grid t_n = n dt, the stages of one step (or of a
-piece of it) being
-  0. impacts (``restitution.contact_impact``): where a corner touching the floor approaches faster than
-     the restitution threshold, the touching corners take an impact at this instant (Poisson as above);
-  1. integrate velocities: v += dt g;
-  2. solve contacts (``contact_solver``): the corners that can reach the floor in the step (the lowest,
-     and both its neighbours: a thin box's far end too, ``contact_step.contact_corners``) together (an
-     LCP of up to three corners; one corner with friction exactly), each may close its gap but not pass
-     it (speculative: u_n >= -max(y_i, 0)/dt), with clamped friction that never reverses sliding;
-  3. locate impacts (``contact_step.locate_impact``): a corner off the floor that this solve had to stop
-     while it approached faster than the threshold would hit inside the step, after gap / approach: the
-     piece is redone up to that instant and the impact resolved there (0.), so impacts in contact are
-     not tied to the grid;
-  4. energy limit (``energy_limit``): where the step would end with more kinetic + potential energy
-     than it began with (the contacts pushing the centre up within a step), the velocities are scaled
-     down to exactly what gains nothing (``energy_limit.energy_limit_scale``);
-  5. integrate positions: x += dt v, alpha += dt omega (symplectic Euler);
-  6. relax (``penalty``): penetration is removed by the critically damped penalty spring integrated with
-     backward Euler, as a pseudo-velocity, stable for every stiffness and step
-     (``contact_solver.penalty_correction_share``); the potential energy this returns is taken from the
-     kinetic.
-A step is split into substeps when the box would turn more than MAX_ROTATION_PER_STEP.
-The box flies again when no corner is loaded or below the floor, and
-  7. sleep: it is put to sleep (velocities set to zero, stepping stops) once it has lain still on a
-     face for ``sleep_time`` (``kernel_support.lies_still_at``, ``kernel_support.rest_timer``).
+Contact (``contact_step``): time-stepping on the grid t_n = n dt, each step (or piece of one) running the stages of
+``stages.FLOOR_PIECE`` (restitution at this instant, find contacts, integrate velocities, solve contacts, locate
+impacts, store impulses, energy limit, integrate positions, relax; ``contact_step``'s docstring says what each does
+here), split into substeps where the box would turn more than MAX_ROTATION_PER_STEP. The box flies again when no
+corner is loaded or below the floor, and sleeps (velocities set to zero, stepping stops) once it has lain still on a
+face for ``sleep_time`` (``kernel_support.lies_still_at``, ``kernel_support.rest_timer``): the grid step is
+``stages.FLOOR_STEP``.
 What a box carries from one call to the next is its row of ``memory``.
 
 What this fixes in the seed scheme (measured on it): corners resolved one after another make
@@ -52,83 +34,79 @@ import numpy as np
 
 from .. import layout
 from ..compile.compilation import jit_kernel, jit_stage
-from ..kernel_support import (
-    is_finite_state,
-    lies_still_at,
-    read_settings,
-    rest_timer,
-    store_state,
-    write_stats,
-)
+from ..contact_law import floor_friction
+from ..kernel_support import is_finite_state, lies_still_at, read_settings, rest_timer, store_state, write_stats
+from ..tunables import CONTACT_TOLERANCE, SIMULTANEOUS_TOLERANCE
 from .contact_solver import CORNER_ROWS, MAX_CORNERS
-from .contact_step import MAX_ROTATION_PER_STEP, contact_step
-from .energy_limit import energy_limit_scale
+from .contact_step import contact_step
 from .flight import fly_to_impact
-from .memory import (
-    FAIL_STEP,
-    FIRST_CONTACT,
-    IN_FLIGHT,
-    MAX_PENETRATION,
-    MEMORY_SIZE,
-    N_IMPACTS,
-    N_STEPS,
-    REST_TIME,
-    STATUS,
-    STILL_FOR,
-    TIME,
-    read_memory,
-    start_memory,
-    write_memory,
-)
-from .penalty import PENALTY_TRIGGER
-
-# names the colliding solver imports from here (its floor-only bodies are advanced by ``advance_box``)
-__all__ = ["FIRST_CONTACT", "IN_FLIGHT", "MAX_PENETRATION", "MAX_ROTATION_PER_STEP", "MEMORY_SIZE", "N_IMPACTS",
-           "N_STEPS", "PENALTY_TRIGGER", "REST_TIME", "STATUS", "STILL_FOR", "advance_box", "energy_limit_scale",
-           "make_robust_kernel", "start_memory"]
-
-CONTACT_TOLERANCE = 1e-12  # [m per m of corner radius + 1 m] a corner this close touches
-SIMULTANEOUS_TOLERANCE = 1e-9  # [same units] corners this close hit at the same instant
+from .memory import MEMORY_SIZE, Corners, Progress, Tally, read_memory, start_memory, write_memory
+from .state import BoxConstants, CornerWork, FloorSettings, Motion, Recording
 
 
 @jit_stage(inline="always")
 def box_constants(params, i, use_friction):
-    """Box i's constants as the stages take them: (hx, hy, 1/m, 1/I, e, mu (0 without friction), k, the corner
-    radius R = sqrt(hx^2 + hy^2))."""
+    """Box i's constants as the stages take them (``state.BoxConstants``; friction 0 without friction)."""
     hx = params[i, layout.HALF_LENGTH]
     hy = params[i, layout.HALF_WIDTH]
-    return (hx, hy, 1.0 / params[i, layout.MASS], 1.0 / params[i, layout.INERTIA], params[i, layout.RESTITUTION],
-            params[i, layout.FRICTION] if use_friction else 0.0, params[i, layout.STIFFNESS],
-            math.sqrt(hx * hx + hy * hy))
+    radius = math.sqrt(hx * hx + hy * hy)
+    return BoxConstants(
+        hx,
+        hy,
+        1.0 / params[i, layout.MASS],
+        1.0 / params[i, layout.INERTIA],
+        params[i, layout.RESTITUTION],
+        floor_friction(params[i, layout.FRICTION]) if use_friction else 0.0,
+        params[i, layout.STIFFNESS],
+        radius,
+        CONTACT_TOLERANCE * (1.0 + radius),
+        SIMULTANEOUS_TOLERANCE * (1.0 + radius),
+    )
+
+
+@jit_stage(inline="always")
+def floor_settings(settings, use_penalty, use_friction, record):
+    """The settings array (``layout``) and the kernel's switches as the floor-only stages read them."""
+    dt, gravity, _, until_rest, threshold, sleep_speed, sleep_time, slop = read_settings(settings)
+    return FloorSettings(
+        dt, gravity, until_rest, threshold, sleep_speed, sleep_time, slop, use_penalty, use_friction, record
+    )
+
+
+@jit_stage(inline="always")
+def falls_asleep(motion, box, settings, still_for, h):
+    """Sleep: the sleep timer after a contact step of length h (``kernel_support.rest_timer``: still on a face,
+    ``lies_still_at``) and whether the box rests now."""
+    still = lies_still_at(
+        motion.y, motion.cos_a, motion.sin_a, motion.vx, motion.vy, motion.spin, box.hx, box.hy, settings.sleep_speed
+    )
+    return rest_timer(still, still_for, h, settings.sleep_time)
 
 
 @jit_stage
-def advance_box(i, state, params, memory, n, n_end, dt, gravity, until_rest, threshold, sleep_speed, sleep_time,
-                slop, use_penalty, use_friction, record, corners, k, ids, trajectory, events):
-    """Box i against the floor alone, from grid step n (its time ``memory[i, TIME]``) to grid step ``n_end``,
+def advance_box(i, state, params, memory, n, n_end, settings, work, recording):
+    """Box i against the floor alone, from grid step n (its time in its ``memory`` row) to grid step ``n_end``,
     or until it falls asleep or its state stops being finite: the stage script of this module's docstring.
     What a box carries from one call to the next (its mode, the located corner, its time, its counts) is its
     row of ``memory`` (``memory.start_memory``), so a box advanced in pieces goes on as one advanced in one call
     (the floor-only kernel calls it once per box; the colliding kernel for a box that no other can reach).
-    ``corners``, ``k``, ``ids``: work arrays (``contact_solver``). Returns the grid step reached."""
-    x, y, angle, vx, vy, spin = (state[i, 0], state[i, 1], state[i, 2],
-                                 state[i, 3], state[i, 4], state[i, 5])
-    box = box_constants(params, i, use_friction)
-    hx, hy, radius = box[0], box[1], box[7]
-    tolerance = CONTACT_TOLERANCE * (1.0 + radius)
-    (in_flight, located, loaded, lift, still_for, first_contact, rest_time, max_penetration, n_impacts, n_steps,
-     t) = read_memory(memory, i)
-    status = layout.STATUS_OK
-    fail_step = -1
-    cos_a = math.cos(angle)
-    sin_a = math.sin(angle)
+    ``settings``: ``state.FloorSettings``; ``work``: ``state.CornerWork``; ``recording``: ``state.Recording``.
+    Returns the grid step reached."""
+    dt = settings.dt
+    angle = state[i, 2]
+    motion = Motion(
+        state[i, 0], state[i, 1], angle, state[i, 3], state[i, 4], state[i, 5], math.cos(angle), math.sin(angle)
+    )
+    box = box_constants(params, i, settings.use_friction)
+    progress, corners, tally = read_memory(memory, i)
+    in_flight, t, still_for, rest_time = progress.in_flight, progress.t, progress.still_for, progress.rest_time
+    status, fail_step = layout.STATUS_OK, -1
     while n < n_end:
         if in_flight:
             # ---- flight: closed form up to the first contact, the impact there ----
-            (x, y, angle, vx, vy, spin, cos_a, sin_a, t, n, first_contact, n_impacts, in_flight, going_on, status,
-             fail_step) = fly_to_impact(i, x, y, angle, vx, vy, spin, box, gravity, t, n, n_end, dt, tolerance,
-                                        SIMULTANEOUS_TOLERANCE * (1.0 + radius), threshold, first_contact,
-                                        n_impacts, record, trajectory, events, corners, k)
+            motion, t, n, tally, in_flight, going_on, status, fail_step = fly_to_impact(
+                i, motion, box, settings, t, n, n_end, tally, recording, work
+            )
             if not going_on:
                 break
             if in_flight:
@@ -136,38 +114,34 @@ def advance_box(i, state, params, memory, n, n_end, dt, gravity, until_rest, thr
             h = (n + 1) * dt - t  # a partial step brings the box back onto the grid
         else:
             h = dt
-        # ---- contact: one step on the grid, stages 0.-6., split where the box turns fast and at impacts ----
-        (x, y, angle, vx, vy, spin, cos_a, sin_a, located, loaded, lift, held, n_impacts,
-         max_penetration) = contact_step(i, x, y, angle, vx, vy, spin, cos_a, sin_a, h, box, gravity, tolerance,
-                                         threshold, slop, lift, located, loaded, use_penalty, t, n_impacts,
-                                         max_penetration, record, events, corners, k, ids)
-        n_steps += 1
+        # ---- substeps: one contact step on the grid (stages.FLOOR_PIECE), split where the box turns fast ----
+        motion, corners, held, tally = contact_step(
+            i, motion, h, box, settings, corners, t, tally, recording.events, work
+        )
+        tally = Tally(tally.first_contact, tally.n_impacts, tally.max_penetration, tally.n_steps + 1)
         n += 1
         t = n * dt
-        if record:
-            store_state(trajectory, n, i, x, y, angle, vx, vy, spin)
-        if not is_finite_state(x, y, angle, vx, vy, spin):
+        if settings.record:
+            store_state(recording.trajectory, n, i, motion.x, motion.y, motion.angle, motion.vx, motion.vy, motion.spin)
+        if not is_finite_state(motion.x, motion.y, motion.angle, motion.vx, motion.vy, motion.spin):
             status = layout.STATUS_NONFINITE
             fail_step = n
             break
-        # ---- 7. sleep: still on a face for sleep_time ----
-        if until_rest:
-            still_for, rests = rest_timer(lies_still_at(y, cos_a, sin_a, vx, vy, spin, hx, hy, sleep_speed),
-                                          still_for, h, sleep_time)
+        # ---- sleep: still on a face for sleep_time ----
+        if settings.until_rest:
+            still_for, rests = falls_asleep(motion, box, settings, still_for, h)
             if rests:
-                vx, vy, spin = 0.0, 0.0, 0.0
+                motion = Motion(motion.x, motion.y, motion.angle, 0.0, 0.0, 0.0, motion.cos_a, motion.sin_a)
                 rest_time = t
-                if record:
-                    store_state(trajectory, n, i, x, y, angle, vx, vy, spin)
+                if settings.record:
+                    store_state(recording.trajectory, n, i, motion.x, motion.y, motion.angle, 0.0, 0.0, 0.0)
                 break
         if not held:
             in_flight = True
-            located = -1
-            loaded = 0
-    state[i, 0], state[i, 1], state[i, 2] = x, y, angle
-    state[i, 3], state[i, 4], state[i, 5] = vx, vy, spin
-    write_memory(memory, i, in_flight, located, loaded, lift, still_for, first_contact, rest_time, max_penetration,
-                 n_impacts, n_steps, t, status, fail_step)
+            corners = Corners(-1, 0, corners.lift)
+    state[i, 0], state[i, 1], state[i, 2] = motion.x, motion.y, motion.angle
+    state[i, 3], state[i, 4], state[i, 5] = motion.vx, motion.vy, motion.spin
+    write_memory(memory, i, Progress(in_flight, t, still_for, rest_time, status, fail_step), corners, tally)
     return n
 
 
@@ -184,20 +158,33 @@ def make_robust_kernel(use_penalty: bool, use_friction: bool, record: bool, sour
         # numba keys its on-disk cache on this file and the closure values: the digest of every engine
         # source must be a closure value, or a kernel compiled with an older stage would be loaded
         _ = DIGEST
-        dt, gravity, max_steps, until_rest, threshold, sleep_speed, sleep_time, slop = read_settings(settings)
-        corners = np.zeros((CORNER_ROWS, MAX_CORNERS))  # the corner work array (contact_solver)
-        k = np.zeros((MAX_CORNERS, MAX_CORNERS))  # their Delassus matrix
-        ids = np.zeros(MAX_CORNERS, np.int64)  # which corner of the box each column is
+        context = floor_settings(settings, PENALTY, FRICTION, RECORD)
+        max_steps = np.int64(settings[layout.MAX_STEPS])
+        work = CornerWork(
+            np.zeros((CORNER_ROWS, MAX_CORNERS)), np.zeros((MAX_CORNERS, MAX_CORNERS)), np.zeros(MAX_CORNERS, np.int64)
+        )
+        recording = Recording(trajectory, events)
         memory = np.zeros((state.shape[0], MEMORY_SIZE))
         for i in range(state.shape[0]):
             if RECORD:
-                store_state(trajectory, 0, i, state[i, 0], state[i, 1], state[i, 2], state[i, 3], state[i, 4],
-                            state[i, 5])
+                store_state(
+                    trajectory, 0, i, state[i, 0], state[i, 1], state[i, 2], state[i, 3], state[i, 4], state[i, 5]
+                )
             start_memory(memory, i, 0.0)
-            n = advance_box(i, state, params, memory, 0, max_steps, dt, gravity, until_rest, threshold, sleep_speed,
-                            sleep_time, slop, PENALTY, FRICTION, RECORD, corners, k, ids, trajectory, events)
-            write_stats(stats, i, memory[i, FIRST_CONTACT], np.int64(memory[i, N_IMPACTS]),
-                        np.int64(memory[i, N_STEPS]), memory[i, MAX_PENETRATION], memory[i, REST_TIME],
-                        memory[i, TIME], np.int64(memory[i, STATUS]), np.int64(memory[i, FAIL_STEP]), n + 1)
+            n = advance_box(i, state, params, memory, 0, max_steps, context, work, recording)
+            progress, _, tally = read_memory(memory, i)
+            write_stats(
+                stats,
+                i,
+                tally.first_contact,
+                tally.n_impacts,
+                tally.n_steps,
+                tally.max_penetration,
+                progress.rest_time,
+                progress.t,
+                progress.status,
+                progress.fail_step,
+                n + 1,
+            )
 
     return run
