@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import functools
 import types
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -33,9 +34,11 @@ MAX_GROUP_SIZE = 64
 """The most bodies one group (one env's scene) may hold."""
 
 MAX_INTERPRETED_GROUPED_BODIES = 16
-"""The largest batch (bodies) run interpreted while the grouped kernel compiles: a colliding throw costs
-~30 times a floor-only one, so 8 throws onto a box already take 0.6-1.1 s in Python (measured beside the
-compiling worker on 2 cores)."""
+"""The bodies of one interpreted call while the grouped kernel compiles (at least one group): a batch runs
+interpreted in calls of this many bodies, and between two calls looks whether the compiled kernel is ready
+(then its remaining groups run compiled). A colliding throw costs ~30 times a floor-only one, so 8 throws onto
+a box already take 0.6-1.1 s in Python (measured beside the compiling worker on 2 cores); a step is never held
+up for longer than such a call past the moment the compiled kernel is ready, and never waits on the compile."""
 
 
 def _grouped_kernel_source(SOLVER, IMPULSES, PENALTY, FRICTION, DIGEST):
@@ -101,8 +104,12 @@ class GroupedSimulator:
     ``threads`` contiguous shares of whole groups run at once (``threads`` in [1,
     numba.config.NUMBA_NUM_THREADS], default all of them; with ``flags.parallel`` False, one). No
     recording: a recorded scene (rendering) is one group, which the plain ``Simulator`` runs. With
-    ``start_interpreted`` (the batched env), a kernel not in the cache yet is compiled by a worker process
-    while runs of up to ``MAX_INTERPRETED_GROUPED_BODIES`` bodies use its interpreted copy (``background_compile``).
+    ``start_interpreted`` (the batched env), a kernel not in the cache yet is compiled by a worker process while
+    runs use its interpreted copy (``background_compile``), in calls of whole groups of up to
+    ``MAX_INTERPRETED_GROUPED_BODIES`` bodies; once the compiled kernel is ready (between two such calls) the
+    remaining groups, and every later run, use it. A run of any size therefore never waits for the compile (a
+    scene of four boxes in each of 8 envs is 32 bodies: waiting made a cold ``BoxToss-Stack-v0`` batch's third
+    step take the whole compile, 175 s at load 5), and each group's result is the same either way.
     """
 
     def __init__(
@@ -131,12 +138,11 @@ class GroupedSimulator:
         self._no_warm_start = np.zeros((0, 0, layout.WARM_START_SIZE))
         self._ready = False
         recipe_call = (__name__, "make_grouped_kernel", recipe)
+        # a call of the copy is one chunk of whole groups (``_run_interpreted``): any one group may run interpreted
         self._start = (
-            background_compile.InterpretedStart(self.kernel, recipe_call, MAX_INTERPRETED_GROUPED_BODIES)
-            if start_interpreted
-            else None
+            background_compile.InterpretedStart(self.kernel, recipe_call, MAX_GROUP_SIZE) if start_interpreted else None
         )
-        self.interpreted = False  # whether the last run used the kernel's interpreted copy
+        self.interpreted = False  # whether the last run used the kernel's interpreted copy (for some groups)
 
     @property
     def shares(self) -> int:
@@ -165,30 +171,62 @@ class GroupedSimulator:
             raise ValueError(f"state must hold whole groups of group_size={size} bodies, got {state.shape[0]} rows")
         groups = state.shape[0] // size
         warm = self._no_warm_start if warm_start is None else check_group_warm_starts(warm_start, groups)
+        arrays = GroupArrays(state, params, settings, stats, size, warm)
+        first = 0  # the first group the compiled kernel runs
+        self.interpreted = False
         if not self._ready:
-            args = (state, params, settings, stats, size, warm)
-            self.interpreted = self._start is not None and self._start.run(args, (state, stats, warm))
-            if self.interpreted:
+            first = self._run_interpreted(arrays, groups)
+            self.interpreted = first > 0
+            if first == groups:
                 return
-            ensure_compiled(self.kernel, args)
+            ensure_compiled(self.kernel, arrays.share(first, groups))
             self._ready = True
-        shares = min(self.shares, groups)
+        shares = min(self.shares, groups - first)
         if shares <= 1:
-            self.kernel(state, params, settings, stats, size, warm)
+            self.kernel(*arrays.share(first, groups))
             return
-        edges = [groups * k // shares for k in range(shares + 1)]
-
-        def share(a: int, b: int) -> tuple:
-            rows = slice(size * a, size * b)
-            return state[rows], params[rows], settings, stats[rows], size, warm[a:b] if warm.shape[0] else warm
-
+        edges = [first + (groups - first) * k // shares for k in range(shares + 1)]
         pool = thread_pool(shares - 1)
-        futures = [pool.submit(self.kernel, *share(a, b)) for a, b in zip(edges[:-2], edges[1:-1], strict=True)]
+        futures = [pool.submit(self.kernel, *arrays.share(a, b)) for a, b in zip(edges[:-2], edges[1:-1], strict=True)]
         try:
-            self.kernel(*share(edges[-2], groups))
+            self.kernel(*arrays.share(edges[-2], groups))
         finally:
             for future in futures:
                 future.result()
+
+    def _run_interpreted(self, arrays: GroupArrays, groups: int) -> int:
+        """Run groups 0, 1, ... with the kernel's interpreted copy, in calls of whole groups of up to
+        ``MAX_INTERPRETED_GROUPED_BODIES`` bodies (at least one group), until every group has run or the
+        compiled kernel is ready (or the copy refused a call: ``InterpretedStart.run``); returns how many
+        groups ran. Nothing here waits for the compile."""
+        if self._start is None:
+            return 0
+        chunk = max(1, MAX_INTERPRETED_GROUPED_BODIES // arrays.size)
+        done = 0
+        while done < groups:
+            end = min(groups, done + chunk)
+            args = arrays.share(done, end)
+            if not self._start.run(args, (args[0], args[3], args[5])):  # it writes the state, stats, warm starts
+                break
+            done = end
+        return done
+
+
+class GroupArrays(NamedTuple):
+    """One run's arrays (``GroupedSimulator.run``): the bodies of ``state.shape[0] // size`` groups."""
+
+    state: np.ndarray
+    params: np.ndarray
+    settings: np.ndarray
+    stats: np.ndarray
+    size: int
+    warm: np.ndarray
+
+    def share(self, a: int, b: int) -> tuple:
+        """The grouped kernel's arguments for groups ``a`` to ``b - 1`` (views: the kernel writes in place)."""
+        rows = slice(self.size * a, self.size * b)
+        warm = self.warm[a:b] if self.warm.shape[0] else self.warm
+        return self.state[rows], self.params[rows], self.settings, self.stats[rows], self.size, warm
 
 
 def check_group_warm_starts(warm_start, groups: int) -> np.ndarray:

@@ -17,10 +17,11 @@ import pytest
 
 import box_toss_env
 from box_toss_env.envs.random_streams import RandomStreams, fill_uniform
-from box_toss_env.physics import grouped
+from box_toss_env.physics import grouped, layout
 from box_toss_env.physics.compile import background_compile, compilation
 from box_toss_env.physics.compile.background_compile import MAX_INTERPRETED_BODIES, InterpretedStart, interpreted_copy
 from box_toss_env.physics.compile.compilation import jit_kernel
+from box_toss_env.physics.kernels import KernelFlags
 
 PACKAGE = Path(box_toss_env.__file__).parent
 
@@ -115,7 +116,7 @@ def test_interpreted_only_while_a_worker_compiles_and_for_small_batches(monkeypa
     assert not InterpretedStart(floor_of_third, ("unused", "unused", {})).run((values,), (values,))
 
 
-def test_a_batch_onto_boxes_runs_interpreted_only_up_to_its_own_smaller_size(monkeypatch):
+def test_a_batch_onto_boxes_starts_the_grouped_kernels_background_compile(monkeypatch):
     monkeypatch.setenv(background_compile.SWITCH, "1")
     started = []
     monkeypatch.setattr(
@@ -134,9 +135,82 @@ def test_a_batch_onto_boxes_runs_interpreted_only_up_to_its_own_smaller_size(mon
     ) in started
     module, factory, kwargs = started[-1]
     assert getattr(importlib.import_module(module), factory)(**kwargs) is small.unwrapped.simulator.kernel
-    simulator = grouped.GroupedSimulator(small.unwrapped.simulator.flags, 2, start_interpreted=True)
-    state = np.zeros((grouped.MAX_INTERPRETED_GROUPED_BODIES + 2, 6))
-    assert not simulator._start.run((state, None, None, None, 2), ())  # one group too many: compiled
+
+
+COLLIDING = KernelFlags(boxes_collide=True, parallel=True)
+
+
+def group_arrays(groups: int, size: int) -> tuple:
+    """``GroupedSimulator.run``'s arrays for ``groups`` scenes of ``size`` bodies (zeros: a stand-in copy runs them)."""
+    rows = groups * size
+    return (
+        np.zeros((rows, layout.STATE_SIZE)),
+        np.zeros((rows, layout.PARAM_SIZE)),
+        np.zeros(layout.SETTINGS_SIZE),
+        np.zeros((rows, layout.STATS_SIZE)),
+    )
+
+
+@pytest.mark.parametrize("size, calls", [(3, [15, 15, 3]), (20, [20, 20])], ids=["small-scenes", "large-scenes"])
+def test_a_large_batch_onto_boxes_runs_interpreted_in_calls_of_whole_scenes_and_never_waits(monkeypatch, size, calls):
+    """A batch of more bodies than one interpreted call takes (a cold ``BoxToss-Stack-v0`` batch of 8 at its third
+    throw: 24 bodies) runs interpreted in calls of whole scenes while the worker compiles: it neither compiles
+    the kernel here nor waits on the compile lock the worker holds (that wait was the whole compile, 175 s)."""
+    monkeypatch.setenv(background_compile.SWITCH, "1")
+    monkeypatch.setattr(background_compile, "start", lambda kernel, recipe, args: RunningWorker())
+    rows = []
+    monkeypatch.setattr(background_compile, "interpreted_copy", lambda kernel: lambda *a: rows.append(a[0].shape[0]))
+
+    def waits(kernel, args):
+        raise AssertionError("the step waited for the compiled kernel")
+
+    monkeypatch.setattr(grouped, "ensure_compiled", waits)
+    simulator = grouped.GroupedSimulator(COLLIDING, size, start_interpreted=True)
+    groups = sum(calls) // size
+    simulator.run(*group_arrays(groups, size), warm_start=np.zeros((groups, 1, layout.WARM_START_SIZE)))
+    assert rows == calls and simulator.interpreted and not simulator._ready
+
+
+class ReadyAfter:
+    """A stand-in for a background compile whose kernel is ready after ``checks`` looks."""
+
+    def __init__(self, checks: int):
+        self.checks = checks
+        self.started = 0.0
+
+    def ready(self) -> bool:
+        self.checks -= 1
+        return self.checks < 0
+
+
+def test_a_batch_finishes_compiled_once_the_kernel_is_ready_with_the_same_results(monkeypatch):
+    """The compiled kernel ready after the first interpreted call of a step: that call's scenes ran interpreted,
+    the step's other scenes run compiled, and every scene ends as in a step that ran compiled throughout."""
+    actions = np.random.default_rng(2).uniform(-1, 1, (2, 3, 3)).astype(np.float32)
+    results = []
+    for switch in ("0", "1"):  # compiled throughout; interpreted until the kernel is ready
+        monkeypatch.setenv(background_compile.SWITCH, switch)
+        monkeypatch.setattr(background_compile, "start", lambda kernel, recipe, args: ReadyAfter(1))
+        monkeypatch.setattr(grouped, "MAX_INTERPRETED_GROUPED_BODIES", 2)  # a call of one scene of two boxes
+        batch = gym.make_vec("BoxToss-OnBox-v0", num_envs=3)
+        batch.reset(seed=5)
+        steps = [batch.step(action) for action in actions]
+        results.append([np.concatenate([step[0].ravel(), step[1]]) for step in steps])
+        simulator = batch.unwrapped.simulator
+        assert simulator._ready and simulator.interpreted is False  # the second step ran compiled
+        assert simulator._start.interpreted_runs == (1 if switch == "1" else 0)
+    assert np.array_equal(results[0], results[1])
+
+
+def test_a_kernel_seen_in_the_cache_is_ready_for_every_caller_at_once(monkeypatch):
+    """The single and the batched env (or a batch's scene sizes) share a background compile: once one of them has
+    seen the compiled kernel in the cache, the next asks and gets it at once, not after another look."""
+    monkeypatch.setattr(background_compile, "compiling_elsewhere", lambda kernel, signature: True)  # no worker
+    looks = iter([True])
+    monkeypatch.setattr(background_compile, "cached_for", lambda kernel, signature: next(looks, False))
+    compilation = background_compile.BackgroundCompile(floor_of_third, ("unused", "unused", {}), (np.zeros(3),))
+    compilation._next_check = 0.0
+    assert compilation.ready() and compilation.ready() and compilation.worker is None
 
 
 def test_a_copy_that_raises_leaves_the_arrays_as_they_were(monkeypatch):
@@ -211,6 +285,7 @@ KERNEL_FIELDS = (
 # -- one compile between processes: the kernel's compile lock ---------------------------------------------
 TINY_KERNELS = """
 from box_toss_env.physics.compile.compilation import jit_kernel
+from box_toss_env.physics.kernels import KernelFlags
 
 
 @jit_kernel

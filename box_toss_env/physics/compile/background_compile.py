@@ -23,8 +23,10 @@ The interpreted copy is the kernel's own Python source with every compiled stage
 by that stage's Python source: the same IEEE double operations in the same order, so the results
 are identical, which ``tests/physics/test_background_compile.py`` checks throw by throw. Nothing is
 interpreted where it would cost more than waiting: batches larger than ``MAX_INTERPRETED_BODIES``
-bodies, scenes run through ``simulate`` (the default ``start_interpreted=False``), and a machine
-without a writable cache directory (the worker's result could not reach this process) compile here.
+bodies (a batch of scenes of colliding boxes runs interpreted in calls of a few scenes instead, looking for
+the compiled kernel between two calls: ``grouped.GroupedSimulator``), scenes run through ``simulate`` (the
+default ``start_interpreted=False``), and a machine without a writable cache directory (the worker's result
+could not reach this process) compile here.
 Setting ``BOX_TOSS_ENV_START_INTERPRETED=0`` turns the interpreted start off everywhere.
 """
 
@@ -162,6 +164,7 @@ class BackgroundCompile:
         self.recipe = recipe
         self.signature = argument_types(kernel, args)
         self.worker: Worker | None = None
+        self.found = False  # the compiled kernel seen in the cache (it stays there)
         self.started = time.monotonic()
         self._next_check = self.started + CHECK_INTERVAL
         if not compiling_elsewhere(kernel, self.signature):
@@ -189,14 +192,16 @@ class BackgroundCompile:
 
     def ready(self) -> bool:
         """Whether the interpreted runs may stop: this process's worker is done (if it failed, the caller
-        compiles here), or the compiled kernel is in the cache (looked for at most every ``CHECK_INTERVAL``)."""
-        if self.worker is not None and self.worker.done():
+        compiles here), or the compiled kernel is in the cache (looked for at most every ``CHECK_INTERVAL``; once
+        seen there, ready for every caller: the single and the batched env, or a batch's scene sizes, share one)."""
+        if self.found or (self.worker is not None and self.worker.done()):
             return True
         now = time.monotonic()
         if now < self._next_check:
             return False
         self._next_check = now + CHECK_INTERVAL
         if cached_for(self.kernel, self.signature):
+            self.found = True
             return True
         if self.worker is None and not compiling_elsewhere(self.kernel, self.signature):
             self._start_worker()  # the process that held the lock stopped without the kernel
