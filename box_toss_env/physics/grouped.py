@@ -148,7 +148,7 @@ class GroupedSimulator:
     def shares(self) -> int:
         if not self.flags.parallel:
             return 1
-        return self.threads if self.threads is not None else numba.config.NUMBA_NUM_THREADS
+        return self.threads if self.threads is not None else numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]  # numba sets its config at import
 
     def run(
         self,

@@ -7,6 +7,7 @@ Each is a function returning a ``Scene``; keyword arguments change the parts tha
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -85,7 +86,7 @@ def stiff(**scene) -> Scene:
 
 
 # -- scenes whose boxes collide with one another (boxes_collide=True) ------------------------------
-STACK_BOX = dict(length=0.4, width=0.2)  # the BoxToss box's size, 2 kg unless ``masses`` says otherwise
+STACK_BOX: dict[str, Any] = dict(length=0.4, width=0.2)  # the BoxToss box's size, 2 kg unless ``masses`` says otherwise
 STACK_MATERIAL = dict(restitution=0.3, friction=0.5, penalty_stiffness=1e5, dt=1 / 256)
 
 

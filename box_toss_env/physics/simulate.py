@@ -136,7 +136,7 @@ class Simulator:
         """How many threads a parallel run uses at most (1 without ``flags.parallel``)."""
         if not self.flags.parallel or self.flags.boxes_collide:  # colliding boxes are stepped together
             return 1
-        return self.threads if self.threads is not None else numba.config.NUMBA_NUM_THREADS
+        return self.threads if self.threads is not None else numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]  # numba sets its config at import
 
     @property
     def carries_warm_start(self) -> bool:
@@ -261,7 +261,7 @@ if hasattr(os, "register_at_fork"):
 def check_threads(threads) -> int:
     """``threads`` as an int in [1, numba's thread count] (``numba.config.NUMBA_NUM_THREADS``, the
     most numba can run), else a TypeError or ValueError naming it."""
-    return check_integer("threads", threads, 1, numba.config.NUMBA_NUM_THREADS)
+    return check_integer("threads", threads, 1, numba.config.NUMBA_NUM_THREADS)  # type: ignore[attr-defined]  # numba sets its config at import
 
 
 def make_settings(scene: Scene, max_steps: int, until_rest: bool) -> np.ndarray:

@@ -140,7 +140,7 @@ class ExactWork(NamedTuple):
     free: np.ndarray  # (DIRECT_LIMIT,)
     x: np.ndarray  # (DIRECT_LIMIT,)
     active: np.ndarray  # (DIRECT_LIMIT,) bool
-    index: np.ndarray  # (DIRECT_LIMIT,) int64
+    index: np.ndarray  # type: ignore[assignment]  # (DIRECT_LIMIT,) int64; a field, over tuple.index
     y: np.ndarray  # (DIRECT_LIMIT,)
     state: np.ndarray  # (DIRECT_LIMIT,) int64
     moved: np.ndarray  # (2, n) bool

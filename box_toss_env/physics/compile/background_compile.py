@@ -70,7 +70,7 @@ WORKER = "import sys; from box_toss_env.physics.compile.background_compile impor
 def interpreted_start_enabled() -> bool:
     """Whether envs may start interpreted: not with ``BOX_TOSS_ENV_START_INTERPRETED=0``, nor when
     numba's JIT is disabled (everything is interpreted anyway)."""
-    return os.environ.get(SWITCH, "1") != "0" and not config.DISABLE_JIT
+    return os.environ.get(SWITCH, "1") != "0" and not config.DISABLE_JIT  # type: ignore[attr-defined]  # numba sets its config at import
 
 
 _copies: dict[int, Callable] = {}
@@ -131,6 +131,7 @@ class Worker:
         finally:
             if errors is not None:
                 errors.close()
+        assert self.process.stdin is not None  # opened with stdin=subprocess.PIPE
         try:
             self.process.stdin.write(pickle.dumps({"package": str(PACKAGE), "recipe": recipe, "signature": signature}))
             self.process.stdin.close()

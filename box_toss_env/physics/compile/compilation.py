@@ -142,7 +142,7 @@ def name_variant(function: Callable) -> Callable:
 
 
 def _make_dispatcher(function: Callable, **options) -> Callable:
-    if config.DISABLE_JIT:  # NUMBA_DISABLE_JIT=1: plain Python, as numba.njit would give
+    if config.DISABLE_JIT:  # type: ignore[attr-defined]  # NUMBA_DISABLE_JIT=1: plain Python, as numba.njit gives
         return function
     name_variant(function)
     dispatcher = EngineDispatcher(py_func=function, locals={}, targetoptions={"nopython": True, **options})
