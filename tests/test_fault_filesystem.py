@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 from fault_injection import refuse, size_limited, tree_state
-from test_fault_files import RESUME, TINY, refused
+from test_fault_files import RESUME, TINY, refused, trained  # noqa: F401  (trained: the run these tests copy)
 
 from agents import evaluate, train
 from agents.run_folder import read_csv
@@ -22,15 +22,8 @@ from agents.run_folder import read_csv
 REPO = Path(__file__).resolve().parents[1]
 
 
-@pytest.fixture(scope="module")
-def trained(tmp_path_factory) -> Path:
-    runs = tmp_path_factory.mktemp("runs")
-    argv = ["--runs-dir", str(runs), "--name", "run", "--no-progress", "--no-eval", "--set", "n_timesteps=128", *TINY]
-    return train.main(argv)
-
-
 @pytest.fixture
-def run(trained, tmp_path) -> Path:
+def run(trained, tmp_path) -> Path:  # noqa: F811  (the fixture imported above)
     copy = tmp_path / "runs" / "run"
     shutil.copytree(trained, copy, ignore=shutil.ignore_patterns(".lock"))
     return copy

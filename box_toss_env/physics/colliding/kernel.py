@@ -5,13 +5,11 @@ candidate pairs are found at every body's reach over the whole step (``groups.st
 they fit) and the contact rows are grown to hold every contact those pairs and the floor can give (two a pair, four a
 body); the substeps search only among those pairs."""
 
-import math
-
 import numpy as np
 
 from .. import layout
 from ..compile.compilation import jit_kernel, jit_stage
-from ..kernel_support import write_stats
+from ..kernel_support import is_finite_state, write_stats
 from ..tunables import ALONE_LIMIT
 from .alone import advance_alone, count_awake, steps_alone
 from .broadphase import sweep_axis
@@ -174,12 +172,7 @@ def write_back(state, stats, bodies, tally, rest_time, outcome):
         state[b, 3], state[b, 4], state[b, 5] = vel[b, 0], vel[b, 1], vel[b, 2]
         body_status = layout.STATUS_OK
         if status != layout.STATUS_OK and not (
-            math.isfinite(pose[b, 0])
-            and math.isfinite(pose[b, 1])
-            and math.isfinite(pose[b, 2])
-            and math.isfinite(vel[b, 0])
-            and math.isfinite(vel[b, 1])
-            and math.isfinite(vel[b, 2])
+            is_finite_state(pose[b, 0], pose[b, 1], pose[b, 2], vel[b, 0], vel[b, 1], vel[b, 2])
         ):
             body_status = status
         write_stats(

@@ -35,7 +35,7 @@ import math
 from .. import layout
 from ..compile.compilation import jit_stage
 from ..contact_law import is_impact, newton_target
-from ..kernel_support import record_event, store_state
+from ..kernel_support import is_finite_state, record_event, store_state
 from ..robust.energy_limit import energy_limit_scale
 from .broadphase import substep_pairs
 from .groups import keep_group, next_group, plan_substeps, sort_kept
@@ -371,14 +371,7 @@ def end_step(bodies, awake, stats, n, record):
     finite = True
     for b in range(pose.shape[0]):
         stats.n_stepped[b] += awake[b]
-        if not (
-            math.isfinite(pose[b, 0])
-            and math.isfinite(pose[b, 1])
-            and math.isfinite(pose[b, 2])
-            and math.isfinite(vel[b, 0])
-            and math.isfinite(vel[b, 1])
-            and math.isfinite(vel[b, 2])
-        ):
+        if not is_finite_state(pose[b, 0], pose[b, 1], pose[b, 2], vel[b, 0], vel[b, 1], vel[b, 2]):
             finite = False
     return finite
 
