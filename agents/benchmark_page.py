@@ -47,6 +47,8 @@ INTRO = (
 def tier_section(store: dict[str, Any], tier: Tier, level: str = "###") -> list[str]:
     """A tier's table, its probability of improvement and its held-out table."""
     lines = [f"{level} {tier.title}", "", f"Acting in {tier.meaning}.", "", *tables.tier_table(store, tier), ""]
+    if repeated := tables.repeated_line(tier):
+        lines += [repeated, ""]
     if line := tables.improvement_line(store, tier):
         lines += [line, ""]
     if tier.headline and (goals := tables.goals_line(store, tier)):
@@ -83,7 +85,9 @@ def summary(store: dict[str, Any], hidden_rows: dict[str, Any]) -> str:
     if line := tables.improvement_line(store, headline):
         lines += [f"- {line}"]
     for tier in others:
-        lines += [f"- **{tier.title}**, over every variant: {tables.aggregate_text(store, tier)}"]
+        repeated = tables.repeated_cells(tier)
+        also = f" ({repeated}: the {headline.name} tier's trainings, the recipe has no wrapper)" if repeated else ""
+        lines += [f"- **{tier.title}**, over every variant{also}: {tables.aggregate_text(store, tier)}"]
     if line := hidden.summary_line(hidden_rows):
         lines += [f"- {line}"]
     heldout = [f"{tier.title.lower()}: {text}" for tier in TIERS if (text := heldout_text(store, tier))]

@@ -16,7 +16,7 @@ import numpy as np
 from agents import benchmark_stats as stats
 from agents import benchmark_store as store_module
 from agents import ceiling
-from agents.benchmark_tiers import PLANNED_CEILINGS, RANDOM_SEEDS, SAME_TASK, STACK, TIERS, Tier
+from agents.benchmark_tiers import PLANNED_CEILINGS, RANDOM_SEEDS, SAME_TASK, STACK, TIERS, Tier, same_as_headline
 from agents.report import format_seconds
 
 RANDOM, PRIOR = "random", "prior"
@@ -109,8 +109,37 @@ def aggregate_row(store: dict[str, Any], tier: Tier) -> str:
     return "| **all variants** (success / ceiling) | " + " | ".join(cells) + " | 100% |"
 
 
+def repeats_headline(tier: Tier, env_id: str, agent: str) -> bool:
+    """Whether a cell of ``tier`` is the headline tier's trainings again (``same_as_headline``; the prior: its
+    algorithm's recipe)."""
+    if agent == RANDOM:
+        return False
+    return same_as_headline(tier, tier.prior_algo if agent == PRIOR else agent, env_id)
+
+
+def repeated_cells(tier: Tier) -> str:
+    """The agents and variants whose cells of ``tier`` repeat the headline tier's trainings, "" where none do."""
+    found = {
+        label(agent): [env_id for env_id in tier.variants if repeats_headline(tier, env_id, agent)]
+        for agent in agents_of(tier)
+    }
+    return "; ".join(f"{name} on {', '.join(f'`{env_id}`' for env_id in envs)}" for name, envs in found.items() if envs)
+
+
+def repeated_line(tier: Tier) -> str:
+    """What the table's ``= raw`` cells mean, naming them; "" where the tier has none."""
+    name = TIERS[0].name
+    if not (cells := repeated_cells(tier)):
+        return ""
+    return (
+        f"`= {name}`: {cells}: the recipe (`agents/hyperparams/<algo>.yml`) has no `env_wrapper` there, so the cell "
+        f"is the {name} tier's trainings again, seed for seed (the same scores), not a run in this tier's commands."
+    )
+
+
 def tier_table(store: dict[str, Any], tier: Tier) -> list[str]:
-    """One tier's table: a row per variant, a column per agent and the ceiling, then the aggregate."""
+    """One tier's table: a row per variant, a column per agent and the ceiling, then the aggregate; a cell that
+    repeats the headline tier's trainings (``repeats_headline``) is marked ``= raw``."""
     agents = agents_of(tier)
     lines = [
         "| variant | " + " | ".join(label(agent) for agent in agents) + " | ceiling |",
@@ -120,6 +149,10 @@ def tier_table(store: dict[str, Any], tier: Tier) -> list[str]:
         cells = [
             cell_text(estimate(scores(store, env_id, tier, agent)), planned_seeds(tier, env_id, agent))
             for agent in agents
+        ]
+        cells = [
+            f"{cell} = {TIERS[0].name}" if cell != "-" and repeats_headline(tier, env_id, agent) else cell
+            for cell, agent in zip(cells, agents, strict=True)
         ]
         if all(cell == "-" for cell in cells[2:]):
             continue
@@ -195,7 +228,8 @@ def improvement_line(store: dict[str, Any], tier: Tier) -> str:
 
 def heldout_table(store: dict[str, Any], tier: Tier) -> list[str]:
     """Per variant and algorithm with runs trained on the train split: success on the train split's and on the
-    test split's test targets, the gap (train minus test, per seed), and the ceiling on each split."""
+    test split's test targets, the gap (train minus test, per seed), and the ceiling on each split; an agent that
+    repeats the headline tier's trainings (``repeats_headline``) is marked ``= raw``."""
     lines = [
         "| variant | agent | train split | test split | gap (train - test) | ceiling: train | ceiling: test |",
         "|---|---|---:|---:|---:|---:|---:|",
@@ -214,8 +248,9 @@ def heldout_table(store: dict[str, Any], tier: Tier) -> list[str]:
             train, test = [p[0] for p in pairs], [p[1] for p in pairs]
             gap = [a - b for a, b in pairs]
             tops = [ceiling_rate(store, env_id, tag) for tag in ("split=train", TEST_TAG)]
+            same = f" = {TIERS[0].name}" if repeats_headline(tier, env_id, agent) else ""
             lines.append(
-                f"| {env_id} | {label(agent)} | {cell_text(estimate(train))} | {cell_text(estimate(test))} | "
+                f"| {env_id} | {label(agent)}{same} | {cell_text(estimate(train))} | {cell_text(estimate(test))} | "
                 f"{cell_text(estimate(gap))} | "
                 + " | ".join("-" if top is None else f"{top:.1%}" for top in tops)
                 + " |"

@@ -104,6 +104,29 @@ TIERS: tuple[Tier, ...] = (RAW, ASSISTED)
 TIER_NAMES = tuple(tier.name for tier in TIERS)
 
 
+def recipe_of(tier: Tier, algo: str, env_id: str) -> dict:
+    """``algo``'s recipe on ``env_id`` in ``tier`` with the tier's overrides (no ``--set``), an ``env_wrapper`` of
+    None dropped (the raw tier's ``env_wrapper=null`` is a recipe without one)."""
+    config = configuration.apply_overrides(
+        configuration.load_hyperparams(algo, env_id, tier.hyperparams(algo, env_id)), list(tier.overrides), algo
+    )
+    if config.get("env_wrapper") is None:
+        config.pop("env_wrapper", None)
+    return config
+
+
+def same_as_headline(tier: Tier, algo: str, env_id: str) -> bool:
+    """Whether ``algo`` trains on ``env_id`` in ``tier`` exactly as in the headline tier: a recipe of another tier
+    with no ``env_wrapper`` (``ppo.yml``'s BoxToss-v0 and BoxToss-LongSide-v0 entries act in the env's own actions),
+    so its cell repeats the headline tier's trainings seed for seed."""
+    headline = TIERS[0]
+    if tier.headline or env_id not in headline.variants or not headline.has_recipe(algo, env_id):
+        return False
+    if not tier.has_recipe(algo, env_id):
+        return False
+    return recipe_of(tier, algo, env_id) == recipe_of(headline, algo, env_id)
+
+
 def tier_named(name: str) -> Tier:
     """The tier called ``name`` (a ValueError naming the tiers otherwise)."""
     for tier in TIERS:

@@ -194,3 +194,29 @@ def test_what_the_store_holds_is_not_trained_again(tmp_path, monkeypatch):
     benchmark.train_variant(args, store, "BoxToss-v0")
     assert trained == [("td3", seed) for seed in range(3)]  # TD3 had no run; PPO's 5 and SAC's 3 seeds are kept
     assert evaluated == [3, 4]  # the prior's seeds 0-2 are there; the plan asks PPO's 5
+
+
+def test_an_assisted_cell_whose_recipe_has_no_wrapper_says_it_repeats_the_raw_runs():
+    from agents.benchmark_tiers import same_as_headline
+
+    # ppo.yml's BoxToss-v0 and LongSide entries act in env actions: the assisted tier trains them as the raw tier does
+    assert same_as_headline(ASSISTED, "ppo", "BoxToss-v0") and same_as_headline(ASSISTED, "ppo", "BoxToss-LongSide-v0")
+    assert not same_as_headline(ASSISTED, "ppo", "BoxToss-ShortEnd-v0")  # ballistic commands
+    assert not same_as_headline(ASSISTED, "sac", "BoxToss-v0") and not same_as_headline(RAW, "ppo", "BoxToss-v0")
+    store = make_store({**STORE, ("BoxToss-v0", "assisted", "ppo", None): [1.0] * 3})
+    table = tables.tier_table(store, ASSISTED)
+    row = next(line for line in table if line.startswith("| BoxToss-v0 |"))
+    assert "| 100.0% [100.0, 100.0] (3) = raw |" in row and row.count("= raw") == 1  # no prior stored: "-"
+    short_end = next(line for line in table if line.startswith("| BoxToss-ShortEnd-v0 |"))
+    assert "= raw" not in short_end
+    line = tables.repeated_line(ASSISTED)
+    assert line.startswith(
+        "`= raw`: prior on `BoxToss-v0`, `BoxToss-LongSide-v0`; PPO on `BoxToss-v0`, `BoxToss-LongSide"
+    )
+    assert tables.repeated_line(RAW) == "" and "= raw" not in "".join(tables.tier_table(store, RAW))
+    assert "(prior on `BoxToss-v0`" in benchmark_page.summary(store, {"agents": {}, "ceiling": None})
+    store = make_store(
+        {("BoxToss-v0", "assisted", "ppo", "train"): [1.0], ("BoxToss-v0", "raw", "ppo", "train"): [1.0]}
+    )
+    assert tables.heldout_table(store, ASSISTED)[2].startswith("| BoxToss-v0 | PPO = raw | 100.0% [")
+    assert tables.heldout_table(store, RAW)[2].startswith("| BoxToss-v0 | PPO | 100.0% [")
