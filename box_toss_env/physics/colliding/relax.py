@@ -13,6 +13,7 @@ from ..tunables import DIRECT_LIMIT, EXACT_CONVERGED, PENALTY_ITERATIONS, PENALT
 from .islands import islands_deeper_than
 from .narrowphase import GAP, NORMAL_MASS, NX, NY, PSEUDO_IMPULSE, STIFFNESS, TARGET
 from .normal_lcp import delassus_matrix, normal_lcp
+from .parallel import PARALLEL_CONTACTS, partitioned_penalty_sweeps
 from .prepare import apply_impulse, body_kinetic_energy, relative_velocity
 from .sweeps import normal_step
 
@@ -65,7 +66,8 @@ def pseudo_impulses(contacts, count, bodies, pseudo, exact, deep_island, context
     DIRECT_LIMIT contacts solved exactly (``normal_lcp``, as the velocities: Gauss-Seidel leaves a light box between
     heavy ones turning), beyond that, or at a looser tolerance as the velocities, by Gauss-Seidel over the deep
     islands' contacts (the scene's ``solver_tolerance``, at most PENALTY_ITERATIONS or ``solver_iterations``
-    sweeps, ``penalty_sweeps``)."""
+    sweeps, ``penalty_sweeps``; from PARALLEL_CONTACTS contacts up block by block, on threads:
+    ``parallel.partitioned_penalty_sweeps``)."""
     rows, ids = contacts.rows, contacts.ids
     inv_mass, inv_inertia = bodies.inv_mass, bodies.inv_inertia
     if count <= DIRECT_LIMIT and context.sweep_tolerance <= EXACT_CONVERGED:
@@ -80,6 +82,10 @@ def pseudo_impulses(contacts, count, bodies, pseudo, exact, deep_island, context
                 if x[c] != 0.0:
                     apply_impulse(c, x[c] * rows[c, NX], x[c] * rows[c, NY], rows, ids, pseudo, inv_mass, inv_inertia)
             return
+    if count >= PARALLEL_CONTACTS:
+        iterations = min(context.sweeps, PENALTY_ITERATIONS)
+        partitioned_penalty_sweeps(contacts, pseudo, bodies, iterations, context.sweep_tolerance)
+        return
     listed = contacts.listed  # the deep islands' contacts: the sweeps leave the others out
     n_listed = 0
     for c in range(count):

@@ -10,6 +10,7 @@ from ..tunables import DIRECT_LIMIT, EXACT_CONVERGED, JOINT_LIMIT, VELOCITY_ITER
 from .joint_contact_solve import full_delassus, joint_impulses
 from .narrowphase import FRICTION_IMPULSE, IMPULSE, NX, NY, TARGET
 from .normal_lcp import delassus_matrix, normal_lcp
+from .parallel import PARALLEL_CONTACTS, partitioned_gauss_seidel
 from .prepare import apply_impulse, relative_velocity
 from .sweeps import friction_sweep, gauss_seidel
 
@@ -22,8 +23,14 @@ def solve_velocities(contacts, count, bodies, exact, context):
     the exact solve fails, or if the scene's ``solver_tolerance`` is looser than EXACT_CONVERGED (it chose the
     sweeps' speed: the exact solve's pivots on tens of contacts, the last islands of a settling pile awake, cost
     more than its sweeps), projected Gauss-Seidel (``gauss_seidel``, with the scene's ``solver_tolerance`` and
-    ``solver_iterations``). ``exact``: ``state.ExactWork``; ``context``: ``state.StepContext``."""
+    ``solver_iterations``; from PARALLEL_CONTACTS contacts up block by block, on threads:
+    ``parallel.partitioned_gauss_seidel``). ``exact``: ``state.ExactWork``; ``context``: ``state.StepContext``."""
     if count == 0:
+        return
+    if count >= PARALLEL_CONTACTS:
+        partitioned_gauss_seidel(
+            contacts, count, bodies, context.use_friction, context.sweeps, context.sweep_tolerance, exact.moved
+        )
         return
     use_friction = context.use_friction
     if use_friction and count <= JOINT_LIMIT and solve_jointly(contacts, count, bodies, exact):

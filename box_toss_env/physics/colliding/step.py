@@ -55,6 +55,7 @@ from .narrowphase import (
     find_contacts,
     update_geometry,
 )
+from .parallel import PARALLEL_BODIES, PARALLEL_CONTACTS, parallel_find_contacts, partition_contacts
 from .prepare import body_kinetic_energy, prepare_contacts, relative_velocity
 from .relax import correct_penetrations
 from .restitution import apply_restitution
@@ -80,13 +81,22 @@ def find_substep_contacts(context, bodies, sweep, contacts, include, h, pairs):
     """Find contacts: broadphase and narrowphase, the contacts within what the included bodies can travel in the substep
     (``contact_reach``), among the step's candidate pairs (``pairs``: how many, and whether they are this
     substep's own search already, ``groups.step_pairs``; else ``broadphase.substep_pairs``,
-    ``narrowphase.find_contacts``); returns how many."""
+    ``narrowphase.find_contacts``; from PARALLEL_BODIES bodies up on threads, ``parallel.parallel_find_contacts``: the
+    same contacts); from PARALLEL_CONTACTS contacts up, their blocks for the sweeps (``parallel.partition_contacts``).
+    Returns how many."""
     n_pairs, searched = pairs
-    if searched:
-        return find_contacts(bodies, sweep, sweep.pairs, n_pairs, include, contacts)
-    contact_reach(bodies, sweep, include, h, context)
-    n_substep_pairs = substep_pairs(bodies.pose, sweep, n_pairs, include)
-    return find_contacts(bodies, sweep, sweep.substep_pairs, n_substep_pairs, include, contacts)
+    keys = sweep.pairs
+    if not searched:
+        contact_reach(bodies, sweep, include, h, context)
+        n_pairs = substep_pairs(bodies.pose, sweep, n_pairs, include)
+        keys = sweep.substep_pairs
+    if bodies.pose.shape[0] >= PARALLEL_BODIES:
+        count = parallel_find_contacts(bodies, sweep, keys, n_pairs, include, contacts)
+    else:
+        count = find_contacts(bodies, sweep, keys, n_pairs, include, contacts)
+    if count >= PARALLEL_CONTACTS:
+        partition_contacts(contacts.ids, count, sweep.order, sweep.spread.block, contacts.partition)
+    return count
 
 
 @jit_stage(inline="always")
