@@ -32,26 +32,33 @@ from numba import prange
 
 from ..compile.compilation import jit_stage
 from ..contact_law import is_impact, newton_target
+from ..robust.contact_solver import penalty_correction_share
 from ..tunables import EXACT_CONVERGED, RESTITUTION_ITERATIONS, SINGLE_CHANGE
 from .broadphase import candidate_pairs, interval_end, overlaps, sort_intervals
 from .narrowphase import (
     APPROACH,
     BODY1,
     BODY2,
-    CONTACT_COLUMNS,
     FRICTION,
+    FRICTION_IMPULSE,
+    GAP,
     ID_COLUMNS,
     IMPULSE,
+    KEY,
     NORMAL_MASS,
     NX,
     NY,
     PSEUDO_IMPULSE,
     RESTITUTION,
+    STIFFNESS,
     TARGET,
     box_box_contacts,
+    box_geometry,
     floor_contacts,
+    update_geometry,
 )
-from .prepare import apply_impulse, relative_velocity
+from .prepare import apply_impulse, body_kinetic_energy, prepare_contact, relative_velocity
+from .substeps import body_reach, travel
 from .sweeps import friction_step, normal_step
 
 PARALLEL_BODIES = 256
@@ -61,7 +68,7 @@ PARALLEL_CONTACTS = 1024
 """[contacts] from this many up, a substep's sweeps go block by block (``partition_contacts``): on threads, and in
 that order on one thread too. Fewer keep the contact order of the sweeps (the exact solves take up to 64)."""
 
-BLOCKS = 8
+BLOCKS = 4
 """[-] blocks of bodies along the sweep axis, whatever the number of threads (it sets the sweeps' order): more
 blocks spread over more threads, and put more contacts on the boundary, swept one after another."""
 
@@ -81,9 +88,10 @@ class Partition(NamedTuple):
 
 
 class Spare(NamedTuple):
-    """Contact rows as ``state.Contacts``' (``narrowphase`` columns), each box's at its own place, before packing."""
+    """Contact rows as ``state.Contacts``' (the ``narrowphase`` columns it writes, NX to GAP), each box's at its own
+    place, before packing."""
 
-    rows: np.ndarray  # (capacity, CONTACT_COLUMNS)
+    rows: np.ndarray  # (capacity, GAP + 1)
     ids: np.ndarray  # (capacity, ID_COLUMNS) int64
 
 
@@ -109,7 +117,7 @@ def make_partition(capacity):
             np.zeros(BLOCKS + 1, np.int64),
             np.zeros((BLOCKS + 1, 3)),
         ),
-        Spare(np.empty((capacity, CONTACT_COLUMNS)), np.empty((capacity, ID_COLUMNS), np.int64)),
+        Spare(np.empty((capacity, GAP + 1)), np.empty((capacity, ID_COLUMNS), np.int64)),
     )
 
 
@@ -449,7 +457,7 @@ def pack_contacts(spare_rows, spare_ids, rows, ids, first, found, filled):
     for i in prange(found.shape[0]):
         slot = 4 * i + 2 * first[i]
         for r in range(found[i]):
-            for column in range(CONTACT_COLUMNS):
+            for column in range(GAP + 1):  # the columns the narrowphase writes
                 rows[filled[i] + r, column] = spare_rows[slot + r, column]
             for column in range(ID_COLUMNS):
                 ids[filled[i] + r, column] = spare_ids[slot + r, column]
@@ -472,3 +480,119 @@ def parallel_find_contacts(bodies, sweep, pair_keys, n_pairs, include, contacts)
         count += found[i]
     pack_contacts(spare.rows, spare.ids, contacts.rows, contacts.ids, first, found, filled)
     return count
+
+
+# -- each body, each contact at once -----------------------------------------------------------------
+@jit_stage(parallel=True)
+def geometry_on_threads(pose, half, include, trig, bound, vel, radius, h, gravity, tolerance, reach):
+    """``narrowphase.update_geometry`` and ``substeps.body_reach`` (without its largest), each body at once."""
+    for b in prange(pose.shape[0]):
+        if include[b]:
+            box_geometry(b, pose, half, trig, bound)
+        reach[b] = tolerance
+        if include[b]:
+            reach[b] += travel(vel, radius, b, h, gravity)
+
+
+@jit_stage
+def geometry_and_reach(bodies, include, h, context, sweep):
+    """Each included body's geometry (``narrowphase.update_geometry``) and reach over h (``substeps.body_reach``,
+    returned: the largest): on threads from PARALLEL_BODIES bodies up (the same values)."""
+    pose, vel, radius, trig, bound, reach = bodies.pose, bodies.vel, bodies.radius, sweep.trig, sweep.bound, sweep.reach
+    if pose.shape[0] < PARALLEL_BODIES:
+        update_geometry(pose, bodies.half, include, trig, bound)
+        return body_reach(vel, radius, include, h, context.gravity, context.tolerance, reach)
+    gravity, tolerance = context.gravity, context.tolerance
+    geometry_on_threads(pose, bodies.half, include, trig, bound, vel, radius, h, gravity, tolerance, reach)
+    fastest = 0.0
+    for b in range(pose.shape[0]):
+        if include[b]:
+            fastest = max(fastest, reach[b])
+    return fastest
+
+
+@jit_stage(parallel=True)
+def prepare_on_threads(rows, ids, count, params, inv_mass, inv_inertia):
+    """``prepare.prepare_contacts``, each contact at once."""
+    for c in prange(count):
+        prepare_contact(c, rows, ids, params, inv_mass, inv_inertia)
+
+
+@jit_stage(parallel=True)
+def approach_on_threads(rows, ids, count, vel, params, kinetic_before):
+    """``step.approach_speeds``, each body and each contact at once."""
+    for b in prange(vel.shape[0]):
+        kinetic_before[b] = body_kinetic_energy(vel, b, params)
+    for c in prange(count):
+        ux, uy = relative_velocity(c, rows, ids, vel)
+        rows[c, APPROACH] = ux * rows[c, NX] + uy * rows[c, NY]
+
+
+@jit_stage(parallel=True)
+def gravity_on_threads(vel, include, h, gravity):
+    """``step.integrate_velocities``, each body at once."""
+    for b in prange(vel.shape[0]):
+        if include[b]:
+            vel[b, 1] += h * gravity
+
+
+@jit_stage(parallel=True)
+def targets_on_threads(rows, count, h):
+    """``step.speculative_targets``, each contact at once."""
+    for c in prange(count):
+        rows[c, TARGET] = -max(rows[c, GAP], 0.0) / h
+
+
+@jit_stage(parallel=True)
+def store_on_threads(rows, ids, count, keys, impulses):
+    """``step.store_impulses``, each contact at once."""
+    for c in prange(count):
+        keys[c] = ids[c, KEY]
+        impulses[c, 0] = rows[c, IMPULSE]
+        impulses[c, 1] = rows[c, FRICTION_IMPULSE]
+
+
+@jit_stage(parallel=True)
+def positions_on_threads(pose, vel, include, touched, h, gravity):
+    """``step.integrate_positions``, each body at once."""
+    for b in prange(pose.shape[0]):
+        if include[b]:
+            pose[b, 0] += h * vel[b, 0]
+            pose[b, 1] += h * vel[b, 1]
+            if not touched[b]:
+                pose[b, 1] -= 0.5 * h * h * gravity
+            pose[b, 2] += h * vel[b, 2]
+
+
+@jit_stage(inline="always")
+def penalty_target(c, rows, deep, slop, tolerance, h):
+    """Contact c's target for the penalty's pseudo-velocities (``relax.correct_penetrations``): the penalty's share
+    of its depth beyond the slop over h in a deep island, else its gap may close but not pass; its pseudo-impulse 0."""
+    depth = -rows[c, GAP] - slop
+    rows[c, PSEUDO_IMPULSE] = 0.0
+    if depth > tolerance and deep[c]:
+        share = penalty_correction_share(rows[c, STIFFNESS], 1.0 / rows[c, NORMAL_MASS], h)
+        rows[c, TARGET] = share * depth / h
+    else:
+        rows[c, TARGET] = -max(rows[c, GAP], 0.0) / h
+
+
+@jit_stage(parallel=True)
+def penalty_targets_on_threads(rows, count, deep, slop, tolerance, h):
+    """``penalty_target``, each contact at once."""
+    for c in prange(count):
+        penalty_target(c, rows, deep, slop, tolerance, h)
+
+
+@jit_stage(inline="always")
+def pseudo_gap(c, rows, ids, pseudo, h):
+    """Contact c's gap after the positions move by h times the pseudo-velocities (to first order)."""
+    ux, uy = relative_velocity(c, rows, ids, pseudo)
+    rows[c, GAP] += h * (ux * rows[c, NX] + uy * rows[c, NY])
+
+
+@jit_stage(parallel=True)
+def pseudo_gaps_on_threads(rows, ids, count, pseudo, h):
+    """``pseudo_gap``, each contact at once."""
+    for c in prange(count):
+        pseudo_gap(c, rows, ids, pseudo, h)

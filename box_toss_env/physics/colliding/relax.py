@@ -8,13 +8,19 @@ import math
 
 from .. import layout
 from ..compile.compilation import jit_stage
-from ..robust.contact_solver import penalty_correction_share
 from ..tunables import DIRECT_LIMIT, EXACT_CONVERGED, PENALTY_ITERATIONS, PENALTY_TRIGGER
 from .islands import islands_deeper_than
-from .narrowphase import GAP, NORMAL_MASS, NX, NY, PSEUDO_IMPULSE, STIFFNESS, TARGET
+from .narrowphase import GAP, NX, NY, PSEUDO_IMPULSE, TARGET
 from .normal_lcp import delassus_matrix, normal_lcp
-from .parallel import PARALLEL_CONTACTS, partitioned_penalty_sweeps
-from .prepare import apply_impulse, body_kinetic_energy, relative_velocity
+from .parallel import (
+    PARALLEL_CONTACTS,
+    partitioned_penalty_sweeps,
+    penalty_target,
+    penalty_targets_on_threads,
+    pseudo_gap,
+    pseudo_gaps_on_threads,
+)
+from .prepare import apply_impulse, body_kinetic_energy
 from .sweeps import normal_step
 
 
@@ -44,18 +50,17 @@ def correct_penetrations(contacts, count, bodies, work, exact, h, context):
         pseudo[b, 2] = 0.0
     deep_island = contacts.deep
     islands_deeper_than(rows, ids, count, trigger, work.root, work.marked, deep_island)
-    for c in range(count):
-        depth = -rows[c, GAP] - slop
-        rows[c, PSEUDO_IMPULSE] = 0.0
-        if depth > context.tolerance and deep_island[c]:
-            share = penalty_correction_share(rows[c, STIFFNESS], 1.0 / rows[c, NORMAL_MASS], h)
-            rows[c, TARGET] = share * depth / h
-        else:
-            rows[c, TARGET] = -max(rows[c, GAP], 0.0) / h
+    if count >= PARALLEL_CONTACTS:  # each contact at once, the same values
+        penalty_targets_on_threads(rows, count, deep_island, slop, context.tolerance, h)
+    else:
+        for c in range(count):
+            penalty_target(c, rows, deep_island, slop, context.tolerance, h)
     pseudo_impulses(contacts, count, bodies, pseudo, exact, deep_island, context)
-    for c in range(count):
-        ux, uy = relative_velocity(c, rows, ids, pseudo)
-        rows[c, GAP] += h * (ux * rows[c, NX] + uy * rows[c, NY])
+    if count >= PARALLEL_CONTACTS:
+        pseudo_gaps_on_threads(rows, ids, count, pseudo, h)
+    else:
+        for c in range(count):
+            pseudo_gap(c, rows, ids, pseudo, h)
     move_by_pseudo_velocities(bodies, pseudo, h, context.gravity)
     return deepest
 
