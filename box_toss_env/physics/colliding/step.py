@@ -254,7 +254,7 @@ def substep(context, bodies, sweep, contacts, stats, scratch, include, h, t, pai
     integrate_velocities(vel, include, h, gravity)
     # warm start: the speculative targets, each contact's impulses of the last substep
     speculative_targets(contacts.rows, count, h)
-    warm_start(contacts, count, warm_from, bodies, h, gravity)
+    warm_start(contacts, count, warm_from, bodies, h, context)
     # solve contacts
     solve_velocities(contacts, count, bodies, exact, context)
     # store impulses: for the next substep's warm start
