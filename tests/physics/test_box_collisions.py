@@ -41,7 +41,7 @@ def drift(scene, states):
 # -- resting ---------------------------------------------------------------------------------------
 def test_a_stack_of_ten_rests_60_s_within_a_millimetre():
     scene = scenes.stack(n=10)
-    result = simulate(scene, duration=60.0, record=True)
+    result = simulate(scene, duration=60.0, record=True, sleep=False)  # kept awake: the solver holds it
     assert drift(scene, result.trajectory.state) < 1e-3  # measured: 1.1e-11 m
     assert np.all(result.n_impacts == 0)  # resting contacts take no restitution
 
@@ -49,7 +49,7 @@ def test_a_stack_of_ten_rests_60_s_within_a_millimetre():
 def test_a_pyramid_of_fifteen_holds():
     scene = scenes.pyramid(rows=5)
     assert scene.n_bodies == 15
-    result = simulate(scene, duration=20.0, record=True)
+    result = simulate(scene, duration=20.0, record=True, sleep=False)
     assert drift(scene, result.trajectory.state) < 1e-6  # measured: 2.7e-12 m in 60 s
 
 
@@ -57,15 +57,15 @@ def test_a_pyramid_of_fifteen_holds():
 def test_a_stack_with_mass_ratio_1_to_1000_stays_stable(ratio):
     # boxes alternating 2 kg and 2000 kg (or 2 g), bottom first
     scene = scenes.stack(n=10, masses=[2.0 * ratio ** (k % 2) for k in range(10)])
-    result = simulate(scene, duration=10.0, record=True)
+    result = simulate(scene, duration=10.0, record=True, sleep=False)
     assert drift(scene, result.trajectory.state) < 1e-6  # measured: 2.0e-11 m (both), 60 s: 2.0e-11 m
 
 
 def test_a_pile_of_100_settles():
     # 200 contacts: beyond the exact solve's 64, the Gauss-Seidel path
     scene = scenes.pile(n=100)
-    settled = simulate(scene, duration=10.0).final_state
-    later = simulate(scene, duration=20.0).final_state
+    settled = simulate(scene, duration=10.0, sleep=False).final_state  # kept awake: the sweeps hold it
+    later = simulate(scene, duration=20.0, sleep=False).final_state
     assert np.abs(settled[:, 3:]).max() < 1e-3
     assert np.abs(later[:, :2] - settled[:, :2]).max() < 1e-4  # measured: 1.0e-7 m from 10 s to 20 s
     assert settled[:, 1].min() > 0.099  # lying on the floor, not in it
@@ -89,7 +89,9 @@ def test_the_exact_solve_of_up_to_64_contacts_runs_where_unlike_masses_meet_what
     # contacts made a dropped pile of 16 cost 900 times Box2D v3), and the pile still settles and sleeps
     def heavy(tolerance, iterations):
         scene = scenes.stack(5, masses=(1.0, 1.0, 1.0, 1.0, 1000.0))
-        return scene, simulate(scene.replace(solver_tolerance=tolerance, solver_iterations=iterations), duration=2.0)
+        return scene, simulate(
+            scene.replace(solver_tolerance=tolerance, solver_iterations=iterations), duration=2.0, sleep=False
+        )
 
     def pile(iterations):
         scene = scenes.pile(n=10, solver_iterations=iterations)

@@ -349,7 +349,7 @@ def advance_step(context, bodies, sweep, contacts, impulses, sleep, stats, scrat
     count, n_previous, h_previous = advance_substeps(step_state, n, (n_sub, group), (n_pairs, searched), previous)
     if not end_step(bodies, sleep.awake, stats, n + 1, context.record):
         return False, n_awake, (n_previous, h_previous)
-    if context.until_rest:  # sleep
+    if context.sleeping:  # sleep
         if group < 0:
             join_islands(contacts.ids, count, sleep.parent)
         n_awake -= sleep_islands(bodies, sleep, stats, context, n + 1)
