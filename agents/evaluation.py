@@ -30,7 +30,7 @@ from agents import oracle
 from agents.config import parse_override
 from agents.policies import ConstantPolicy, GoalPolicy, Policy, RandomPolicy, TrainedPolicy, load_model
 from agents.run_files import read_run_config
-from agents.run_folder import RunFolderError, check_component, lock_run, unlock_run, write_atomic
+from agents.run_folder import LOCK, RunFolderError, check_component, lock_run, unlock_run, write_atomic
 from agents.targets import STACK_TEST_EPISODES, TEST_FIRST_SEED, TEST_TARGETS, VALIDATION_FIRST_SEED  # noqa: F401
 from box_toss_env.envs import task
 from box_toss_env.envs.functional import EnergyGainError
@@ -432,6 +432,7 @@ def evaluate_run(
     out = run_dir / "eval" / tag
     settings = {"model": model, "env_id": env_id, "env_kwargs": kwargs, "seeds": [int(seeds[0]), int(seeds[-1])]}
     check_results_folder(out, settings)
+    made = [folder for folder in (out.parent, out) if not folder.exists()]  # what a failed evaluation removes
     claim_results_folder(out)
     try:
         start = time.perf_counter()
@@ -440,6 +441,20 @@ def evaluate_run(
         return evaluate_throws_run(run_dir, config, policy, model, env_id, kwargs, seeds, tag, out, start, quiet)
     finally:
         unlock_run(out)
+        remove_if_unused(out, made)
+
+
+def remove_if_unused(out: Path, made: list[Path]) -> None:
+    """After an evaluation that wrote no results (stopped by a full disk, an error, Ctrl-C), remove the folders
+    it made (``made``, outermost first) if they hold nothing but its lock: no empty ``eval/TAG`` is left behind."""
+    if (out / "results.json").exists():
+        return
+    for folder in reversed(made):
+        try:
+            (folder / LOCK).unlink(missing_ok=True)
+            folder.rmdir()  # only an empty folder: anything else in it stays
+        except OSError:
+            return
 
 
 def evaluate_throws_run(run_dir, config, policy, model, env_id, kwargs, seeds, tag, out, start, quiet):

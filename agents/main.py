@@ -76,12 +76,12 @@ def machine_note() -> str:
     return f"a {os.cpu_count()}-core machine shared with other jobs ({load}{time.strftime('%Y-%m-%d')})"
 
 
-def baseline(algo: str, runs_dir: Path, *, replan: bool = True) -> Path:
-    """Evaluate a baseline into ``runs_dir/algo`` (kept if already evaluated and not ``replan``)."""
+def baseline(algo: str, runs_dir: Path, *, reevaluate: bool = True) -> Path:
+    """Evaluate a baseline into ``runs_dir/algo`` (kept if already evaluated and not ``reevaluate``)."""
     from agents import evaluation, report
 
     run_dir = runs_dir / algo
-    if replan or report.read_results(run_dir) is None:
+    if reevaluate or report.read_results(run_dir) is None:
         print(f"evaluating the {algo} baseline on {TEST_TARGETS:,} test targets ...")
         evaluation.make_baseline_run(algo, run_dir, ENV_ID, command=f"python -m agents.baselines {algo} --env {ENV_ID}")
         evaluation.evaluate_run(run_dir, quiet=True)
@@ -141,7 +141,7 @@ def main(argv: list[str] | None = None) -> None:
     # the main command's own time, wall and CPU: what runs without --full (random, the short run, the oracle)
     command = Stopwatch()
     with one_line_errors(PROG):
-        rows = {"random": baseline("random", runs_dir)}
+        rows = {"random": baseline("random", runs_dir, reevaluate=args.readme)}
     short = free_name(runs_dir, "short") if not args.readme else "short"
     training = Stopwatch()
     rows["short"] = train.main([*common, "--name", short, "--set", f"n_timesteps={args.timesteps}"])
@@ -152,7 +152,7 @@ def main(argv: list[str] | None = None) -> None:
     with one_line_errors(PROG):
         if not args.no_oracle:
             command.start()
-            rows["oracle"] = baseline("oracle", runs_dir, replan=args.readme)
+            rows["oracle"] = baseline("oracle", runs_dir, reevaluate=args.readme)
             command.stop()
         times = {"command": command.seconds(), "training": training.seconds()}
         report_results(args, rows, argv, start, times)

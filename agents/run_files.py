@@ -91,6 +91,8 @@ def read_run_config(run_dir: Path) -> dict[str, Any]:
     """A run folder's ``config.yml``, checked: a mapping naming the algorithm (one of the algorithms, with a seed
     and hyperparameters that pass ``check_config``, or a baseline) and a registered env id."""
     path = Path(run_dir) / "config.yml"
+    if Path(run_dir).is_file():
+        raise RunFolderError(f"{run_dir} is a file, not a run folder: give the folder that holds it")
     if not path.is_file():
         raise RunFolderError(f"{run_dir} is not a run folder (no config.yml)")
     config = read_yaml(path)

@@ -141,6 +141,8 @@ def test_a_later_command_removes_the_temporary_files_an_interrupted_write_left(r
 
 def test_a_missing_run_is_one_line(tmp_path, capsys):
     refused(capsys, evaluate.main, [str(tmp_path / "nowhere")], "is not a run folder")
+    (tmp_path / "config.yml").write_text("algo: ppo\n")
+    refused(capsys, evaluate.main, [str(tmp_path / "config.yml")], "is a file, not a run folder")
     refused(capsys, train.main, ["--resume", str(tmp_path / "nowhere")], "--resume", "is not a run folder")
     assert not (tmp_path / "nowhere").exists()
 

@@ -64,6 +64,15 @@ def test_a_disk_that_fills_during_training_stops_it_in_one_line_and_the_run_resu
     assert steps == sorted(set(steps)) and steps[-1] == 192
 
 
+def test_a_disk_that_fills_during_evaluation_leaves_no_empty_results_folder(run, capsys):
+    before = tree_state(run)
+    with refuse(run, errno.ENOSPC, pattern="*throws*"):  # the disk fills as the throws are written
+        refused(capsys, evaluate.main, [str(run), "--targets", "4", "--no-plots"], "the disk is full")
+    assert tree_state(run) == before and not (run / "eval" / "targets=4").exists()  # no folder holding a lock
+    evaluate.main([str(run), "--targets", "4", "--no-plots"])  # room again: the evaluation goes through
+    assert (run / "eval" / "targets=4" / "results.json").is_file()
+
+
 def test_a_file_without_read_permission_is_named(run, capsys):
     before = tree_state(run)
     with refuse(run, errno.EACCES, reads=True, pattern="*/config.yml"):

@@ -16,7 +16,7 @@ from .compile.compilation import ensure_compiled
 from .kernels import KernelFlags, make_kernel
 from .ranges import MAX_STEPS, check_step_count
 from .scene import Scene
-from .validation import check_integer, check_range
+from .validation import check_bool, check_integer, check_range
 
 
 class NonFiniteStateError(FloatingPointError):
@@ -280,8 +280,9 @@ def check_threads(threads) -> int:
     return check_integer("threads", threads, 1, numba.config.NUMBA_NUM_THREADS)  # type: ignore[attr-defined]  # numba sets its config at import
 
 
-def make_settings(scene: Scene, max_steps: int, until_rest: bool) -> np.ndarray:
-    """The scene-wide settings array the kernels read (see ``layout``)."""
+def make_settings(scene: Scene, max_steps: int, until_rest: bool, sleep: bool = True) -> np.ndarray:
+    """The scene-wide settings array the kernels read (see ``layout``): ``until_rest`` ends the run once every body
+    sleeps; ``sleep`` (colliding scenes; implied by ``until_rest``) lets islands at rest sleep, the run going on."""
     settings = np.empty(layout.SETTINGS_SIZE)
     settings[layout.DT] = scene.dt
     settings[layout.GRAVITY] = scene.gravity
@@ -293,6 +294,7 @@ def make_settings(scene: Scene, max_steps: int, until_rest: bool) -> np.ndarray:
     settings[layout.PENETRATION_SLOP] = scene.penetration_slop
     settings[layout.SOLVER_TOLERANCE] = scene.solver_tolerance
     settings[layout.SOLVER_ITERATIONS] = scene.solver_iterations
+    settings[layout.SLEEP] = 1.0 if sleep or until_rest else 0.0
     return settings
 
 
@@ -314,18 +316,24 @@ def simulate(
     until_rest: bool = False,
     record: bool = False,
     threads: int | None = None,
+    sleep: bool = True,
 ) -> SimulationResult:
     """Run ``scene`` for ``steps`` time steps (or ``duration`` seconds, rounded up to whole steps).
 
-    ``until_rest`` stops each body once it has lain still on a face for ``scene.sleep_time``.
+    ``sleep`` (colliding scenes): an island of touching boxes that has lain still for ``scene.sleep_time`` (every
+    point slower than ``scene.sleep_speed``) sleeps, at no cost, at rest, until an awake body reaches it; the run
+    goes on to its end. Off, every body is stepped at every step (a resting pile costs as a moving one).
+    ``until_rest`` also ends the run once every body sleeps (each body's ``end_time``; the floor-only solver ends
+    each body once it has lain still on a face for ``scene.sleep_time``, and lets none sleep without it).
     ``record`` keeps the states on the time grid and the impacts; without it nothing per step
     is stored. Raises ``NonFiniteStateError`` naming the body and step if a state diverges.
     """
     max_steps = steps_for(scene, steps, duration)
+    sleep = check_bool("sleep", sleep)
     simulator = Simulator.for_scene(scene, record=record, threads=threads)
     state = scene.initial_state()
     params = scene.body_params()
-    settings = make_settings(scene, max_steps, until_rest)
+    settings = make_settings(scene, max_steps, until_rest, sleep)
     stats = np.zeros((scene.n_bodies, layout.STATS_SIZE))
     trajectory = events = None
     if record:

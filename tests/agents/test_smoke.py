@@ -131,3 +131,14 @@ def test_a_truncated_model_is_one_line(tmp_path):
     done = run("agents.evaluate", str(tmp_path / "tiny"), "--targets", "8", ok=False)
     assert done.returncode != 0 and "model.zip is damaged: not a whole zip archive" in done.stderr
     assert "Traceback" not in done.stderr
+
+
+def test_main_keeps_an_evaluated_random_baseline_unless_it_rewrites_the_docs(tmp_path):
+    from agents.main import baseline
+
+    results = baseline("random", tmp_path) / "eval" / "default" / "results.json"
+    first = results.read_bytes()
+    baseline("random", tmp_path, reevaluate=False)  # what `box-toss main` does on a second call
+    assert results.read_bytes() == first
+    baseline("random", tmp_path)  # what --readme does: evaluated afresh (its timing differs)
+    assert results.read_bytes() != first

@@ -8,7 +8,7 @@ import math
 
 from .. import layout
 from ..compile.compilation import jit_stage
-from ..tunables import DIRECT_LIMIT, EXACT_CONVERGED, PENALTY_ITERATIONS, PENALTY_TRIGGER
+from ..tunables import PENALTY_ITERATIONS, PENALTY_TRIGGER
 from .islands import islands_deeper_than
 from .narrowphase import GAP, NX, NY, PSEUDO_IMPULSE, TARGET
 from .normal_lcp import delassus_matrix, normal_lcp
@@ -21,6 +21,7 @@ from .parallel import (
     pseudo_gaps_on_threads,
 )
 from .prepare import apply_impulse, body_kinetic_energy
+from .solve import exact_pays
 from .sweeps import normal_step
 
 
@@ -67,15 +68,15 @@ def correct_penetrations(contacts, count, bodies, work, exact, h, context):
 
 @jit_stage(inline="always")
 def pseudo_impulses(contacts, count, bodies, pseudo, exact, deep_island, context):
-    """The penalty's pseudo-impulses (column PSEUDO_IMPULSE, targets in column TARGET) into ``pseudo``: up to
-    DIRECT_LIMIT contacts solved exactly (``normal_lcp``, as the velocities: Gauss-Seidel leaves a light box between
-    heavy ones turning), beyond that, or at a looser tolerance as the velocities, by Gauss-Seidel over the deep
+    """The penalty's pseudo-impulses (column PSEUDO_IMPULSE, targets in column TARGET) into ``pseudo``: solved exactly
+    where the velocities' exact solve pays (``solve.exact_pays``, ``normal_lcp``: Gauss-Seidel leaves a light box
+    between heavy ones turning), otherwise by Gauss-Seidel over the deep
     islands' contacts (the scene's ``solver_tolerance``, at most PENALTY_ITERATIONS or ``solver_iterations``
     sweeps, ``penalty_sweeps``; from PARALLEL_CONTACTS contacts up block by block, on threads:
     ``parallel.partitioned_penalty_sweeps``)."""
     rows, ids = contacts.rows, contacts.ids
     inv_mass, inv_inertia = bodies.inv_mass, bodies.inv_inertia
-    if count <= DIRECT_LIMIT and context.sweep_tolerance <= EXACT_CONVERGED:
+    if exact_pays(ids, count, inv_mass, context.use_friction):
         delassus_matrix(rows, ids, count, inv_mass, inv_inertia, exact.w)
         for c in range(count):
             exact.free[c] = -rows[c, TARGET]

@@ -38,7 +38,8 @@ class StepContext(NamedTuple):
     dt: float  # [s] grid step
     gravity: float  # [m/s^2] along y
     max_steps: int
-    until_rest: bool
+    until_rest: bool  # the run ends once every body sleeps
+    sleeping: bool  # islands at rest sleep (``Scene`` sleep settings; always with until_rest)
     threshold: float  # [m/s] restitution threshold
     sleep_speed: float  # [m/s]
     sleep_time: float  # [s]
@@ -203,6 +204,7 @@ def step_context(settings, half, radius, use_penalty, use_friction, record):
         gravity,
         max_steps,
         until_rest,
+        until_rest or settings[layout.SLEEP] != 0.0,
         threshold,
         sleep_speed,
         sleep_time,

@@ -295,7 +295,7 @@ def substep(context, bodies, sweep, contacts, stats, scratch, include, h, t, pai
     integrate_velocities(vel, include, h, gravity)
     # warm start: the speculative targets, each contact's impulses of the last substep
     speculative_targets(contacts.rows, count, h)
-    warm_start(contacts, count, warm_from, bodies, h, gravity)
+    warm_start(contacts, count, warm_from, bodies, h, context)
     # solve contacts
     solve_velocities(contacts, count, bodies, exact, context)
     # store impulses: for the next substep's warm start
@@ -390,7 +390,7 @@ def advance_step(context, bodies, sweep, contacts, impulses, sleep, stats, scrat
     count, n_previous, h_previous = advance_substeps(step_state, n, (n_sub, group), (n_pairs, searched), previous)
     if not end_step(bodies, sleep.awake, stats, n + 1, context.record):
         return False, n_awake, (n_previous, h_previous)
-    if context.until_rest:  # sleep
+    if context.sleeping:  # sleep
         if group < 0:
             join_islands(contacts.ids, count, sleep.parent)
         n_awake -= sleep_islands(bodies, sleep, stats, context, n + 1)
