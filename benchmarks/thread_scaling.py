@@ -9,7 +9,7 @@ Cases (``CASES``), each at the scene's defaults as ``benchmarks.scene_suite`` bu
 - ``large_pyramid``: Box2D's benchmark scene (5,050 boxes, sleeping off), one step of 1/60 s untimed, then the
   published 499 steps' time (8.3 s) timed, or ``--seconds``;
 - ``pile 1000 drop``: the wide pile of 1,000 dropped from its built state, the suite's 2 s window (``simulate``'s
-  default sleeping);
+  default: islands at rest sleep);
 - ``pile 1000 awake``: the same pile settled for the suite's 3 s (untimed, once), then 2 s kept awake.
 
 Method. Each timed run starts from the same state and warm start (``warm_start_memory``) and is timed in wall time
@@ -40,7 +40,7 @@ from benchmarks.scene_suite import (
     large_pyramid,
     wide_pile,
 )
-from benchmarks.suite_runs import NEVER_SLEEP, until_rest_default
+from benchmarks.suite_runs import NEVER_SLEEP, sleep_default
 from box_toss_env.physics import Scene, Simulator, layout, make_settings, warm_start_memory
 
 REPEATS = 3
@@ -48,29 +48,29 @@ REPEATS = 3
 
 @dataclass(frozen=True)
 class Start:
-    """A run to time: the scene, its state and warm start at the start, its steps and whether it sleeps."""
+    """A run to time: the scene, its state and warm start at the start, its steps and whether islands sleep."""
 
     scene: Scene
     state: np.ndarray
     warm: np.ndarray
     steps: int
-    until_rest: bool
+    sleep: bool
 
 
-def advance(scene: Scene, state: np.ndarray, warm: np.ndarray, steps: int, until_rest: bool, threads: int) -> None:
+def advance(scene: Scene, state: np.ndarray, warm: np.ndarray, steps: int, sleep: bool, threads: int) -> None:
     """``steps`` steps of ``scene`` from ``state`` and ``warm`` (both advanced in place) on ``threads`` threads."""
     stats = np.zeros((scene.n_bodies, layout.STATS_SIZE))
-    settings = make_settings(scene, steps, until_rest)
+    settings = make_settings(scene, steps, until_rest=False, sleep=sleep)
     Simulator.for_scene(scene, threads=threads).run(state, scene.body_params(), settings, stats, warm_start=warm)
 
 
-def prepared(scene: Scene, lead_in: float, timed: float, until_rest: bool) -> Start:
+def prepared(scene: Scene, lead_in: float, timed: float, sleep: bool) -> Start:
     """The start of a timed run of ``timed`` s after ``lead_in`` s run untimed (on every thread)."""
     state, warm = scene.initial_state(), warm_start_memory(scene.n_bodies)
     lead_steps = round(lead_in / scene.dt)
     if lead_steps:
-        advance(scene, state, warm, lead_steps, until_rest, numba.config.NUMBA_NUM_THREADS)  # type: ignore[attr-defined]  # numba sets its config at import
-    return Start(scene, state, warm, max(round(timed / scene.dt), 1), until_rest)
+        advance(scene, state, warm, lead_steps, sleep, numba.config.NUMBA_NUM_THREADS)  # type: ignore[attr-defined]  # numba sets its config at import
+    return Start(scene, state, warm, max(round(timed / scene.dt), 1), sleep)
 
 
 def pyramid_start(seconds: float | None) -> Start:
@@ -80,7 +80,7 @@ def pyramid_start(seconds: float | None) -> Start:
 
 
 def drop_start(seconds: float | None) -> Start:
-    return prepared(wide_pile(1000), 0.0, WINDOW if seconds is None else seconds, until_rest_default())
+    return prepared(wide_pile(1000), 0.0, WINDOW if seconds is None else seconds, sleep_default())
 
 
 def awake_start(seconds: float | None) -> Start:
@@ -101,7 +101,7 @@ def timed_run(start: Start, threads: int) -> tuple[float, float, np.ndarray]:
     state, warm = start.state.copy(), start.warm.copy()
     load = os.getloadavg()[0]
     began = time.perf_counter()
-    advance(start.scene, state, warm, start.steps, start.until_rest, threads)
+    advance(start.scene, state, warm, start.steps, start.sleep, threads)
     return time.perf_counter() - began, load, state
 
 

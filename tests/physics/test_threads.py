@@ -12,11 +12,11 @@ from box_toss_env.physics.colliding.parallel import PARALLEL_BODIES, PARALLEL_CO
 TWO = pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="numba has one thread here")
 
 
-def run(scene, steps, threads, until_rest=False):
-    """(final state, stats, warm start) of ``steps`` steps of ``scene`` on ``threads`` threads."""
+def run(scene, steps, threads):
+    """(final state, stats, warm start) of ``steps`` steps of ``scene`` on ``threads`` threads, kept awake."""
     state, warm = scene.initial_state(), warm_start_memory(scene.n_bodies)
     stats = np.zeros((scene.n_bodies, layout.STATS_SIZE))
-    settings = make_settings(scene, steps, until_rest)
+    settings = make_settings(scene, steps, until_rest=False, sleep=False)
     Simulator.for_scene(scene, threads=threads).run(state, scene.body_params(), settings, stats, warm_start=warm)
     return state, stats, warm
 
