@@ -20,6 +20,7 @@ import functools
 from dataclasses import dataclass
 
 from .colliding.kernel import make_colliding_robust_kernel
+from .colliding.parallel import launch_threads
 from .compile.compilation import engine_source_digest
 from .reference.colliding_reference import make_colliding_reference_kernel
 from .reference.reference_solver import make_reference_kernel
@@ -74,6 +75,7 @@ def _make_kernel(solver: str, use_impulses: bool, use_penalty: bool, use_frictio
 
 @functools.cache
 def _make_colliding_kernel(solver: str, use_impulses: bool, use_penalty: bool, use_friction: bool, record: bool):
+    launch_threads()  # the kernel's parallel stages call into numba's threading layer
     if solver == "seed":
         return make_colliding_reference_kernel(use_impulses, use_penalty, use_friction, record, source_digest())
     if solver == "robust":

@@ -27,6 +27,7 @@ Two kinds of stage, by what they change:
 
 from typing import NamedTuple
 
+import numba
 import numpy as np
 from numba import prange
 
@@ -131,6 +132,13 @@ def make_spread(n):
         np.zeros(n, np.int64),
         np.zeros(n, np.int64),
     )
+
+
+def launch_threads() -> None:
+    """Start numba's threading layer (``numba.get_num_threads`` starts it), before a kernel holding these stages
+    runs: a kernel loaded from numba's cache does not start it, and its parallel stages then called a null pointer
+    (a segmentation fault, even where no stage ran on threads)."""
+    numba.get_num_threads()
 
 
 # -- blocks ------------------------------------------------------------------------------------------
