@@ -156,6 +156,11 @@ PENALTY_TRIGGER = 2.0
 beyond one slop (a band, as Box2D 2.x's position solver stops within 3 slops: a pile whose looser solve lets
 corners creep to the slop would otherwise run the penalty at every step)."""
 
+PENALTY_FLOOR = 1e-9
+"""[m per m of size + 1 m] the penalty never starts on a penetration shallower than this, whatever the slop: rounding
+(a pyramid built at rest, kept awake, sinks by 1e-12 m and ran the relax stage at every substep, half its cost at
+a slop of 0). Smaller: the penalty chases rounding; larger: boxes may rest that deep in one another."""
+
 PENALTY_DAMPING_RATIO = 1.0
 """[-] zeta of the penalty spring: critically damped. Smaller: corrections overshoot and ring; larger: slower."""
 

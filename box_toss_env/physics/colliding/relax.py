@@ -8,7 +8,7 @@ import math
 
 from .. import layout
 from ..compile.compilation import jit_stage
-from ..tunables import PENALTY_ITERATIONS, PENALTY_TRIGGER
+from ..tunables import CONTACT_TOLERANCE, PENALTY_FLOOR, PENALTY_ITERATIONS, PENALTY_TRIGGER
 from .islands import islands_deeper_than
 from .narrowphase import GAP, NX, NY, PSEUDO_IMPULSE, TARGET
 from .normal_lcp import delassus_matrix, normal_lcp
@@ -28,16 +28,17 @@ from .sweeps import normal_step
 @jit_stage
 def correct_penetrations(contacts, count, bodies, work, exact, h, context):
     """Stage 2, island by island (bodies joined by box-box contacts): in the islands holding a contact deeper
-    than PENALTY_TRIGGER slops (``islands.islands_deeper_than``), pseudo-velocities that remove the penalty's
-    share of each penetration deeper than the slop (normal impulses >= 0 with targets ERP depth / h; the other
-    contacts, and every contact of the other islands, may close their gap but not pass it: their impulses stay
-    zero unless pressed, so the sweeps leave out the other islands' contacts, the same result), moved into the
-    positions (``pseudo_impulses``, ``move_by_pseudo_velocities``); the gaps of every contact follow to first
-    order, and the potential energy gained is taken from the kinetic energy of the moved bodies. Returns the
-    deepest penetration (0 if none)."""
+    than PENALTY_TRIGGER slops and than PENALTY_FLOOR (rounding, ``islands.islands_deeper_than``),
+    pseudo-velocities that remove the penalty's share of each penetration deeper than the slop (normal impulses
+    >= 0 with targets ERP depth / h; the other contacts, and every contact of the other islands, may close their
+    gap but not pass it: their impulses stay zero unless pressed, so the sweeps leave out the other islands'
+    contacts, the same result), moved into the positions (``pseudo_impulses``, ``move_by_pseudo_velocities``);
+    the gaps of every contact follow to first order, and the potential energy gained is taken from the kinetic
+    energy of the moved bodies. Returns the deepest penetration (0 if none)."""
     rows, ids = contacts.rows, contacts.ids
     slop = context.slop
-    trigger = PENALTY_TRIGGER * slop + context.tolerance
+    floor = PENALTY_FLOOR / CONTACT_TOLERANCE * context.tolerance  # PENALTY_FLOOR at the scene's size
+    trigger = max(PENALTY_TRIGGER * slop + context.tolerance, floor)
     deepest = 0.0
     for c in range(count):
         deepest = max(deepest, -rows[c, GAP])
