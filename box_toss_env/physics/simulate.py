@@ -89,10 +89,12 @@ class Simulator:
     """A kernel compiled for one combination of stages, run on arrays many times.
 
     ``run`` takes the state (n, 6) and the body parameters (n, 7) (see ``layout``) and advances
-    the state in place; it allocates nothing per step. With ``flags.parallel`` the bodies are split
-    into ``threads`` contiguous shares run at once (``threads`` in [1, numba.config.NUMBA_NUM_THREADS],
-    default: all of them, the cores available): the kernel releases the GIL, so the shares run on a
-    thread pool, and each body's result does not depend on the split. One body and a batch run the
+    the state in place; it allocates nothing per step. With ``flags.parallel`` the run uses ``threads`` threads
+    (in [1, numba.config.NUMBA_NUM_THREADS], default: all of them, the cores available), and its results do not
+    depend on how many: without box-box contact the bodies are split into that many contiguous shares run at once
+    (the kernel releases the GIL, so the shares run on a thread pool, and each body's result does not depend on the
+    split); a scene whose boxes collide is one call whose large stages run on that many of numba's threads
+    (``colliding.parallel``: from hundreds of boxes up), bit for bit as on one. One body and a batch run the
     same compiled kernel (``kernels``); its first run compiles it or loads it from numba's cache
     (``compilation.ensure_compiled``). With ``start_interpreted`` (the envs), a kernel that is not in the
     cache yet is compiled by a worker process while runs of up to ``MAX_INTERPRETED_BODIES`` bodies use its
@@ -119,7 +121,7 @@ class Simulator:
         cls, scene: Scene, *, record: bool = False, parallel: bool | None = None, threads: int | None = None
     ) -> Simulator:
         if parallel is None:
-            parallel = scene.n_bodies > 1 and not scene.boxes_collide
+            parallel = scene.n_bodies > 1
         flags = KernelFlags(
             solver=scene.solver,
             use_impulses=scene.use_impulses,
@@ -134,7 +136,7 @@ class Simulator:
     @property
     def shares(self) -> int:
         """How many threads a parallel run uses at most (1 without ``flags.parallel``)."""
-        if not self.flags.parallel or self.flags.boxes_collide:  # colliding boxes are stepped together
+        if not self.flags.parallel:
             return 1
         return self.threads if self.threads is not None else numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]  # numba sets its config at import
 
@@ -186,6 +188,9 @@ class Simulator:
                 return
             ensure_compiled(self.kernel, args)
             self._ready = True
+        if self.flags.boxes_collide:  # one scene, stepped together: its large stages on numba's threads
+            run_on_threads(self.kernel, args, self.shares)
+            return
         shares = min(self.shares, state.shape[0])
         if shares <= 1 or self.flags.record:  # a recording's (T, n, 6) trajectory does not split into contiguous shares
             self.kernel(*args)
@@ -218,6 +223,17 @@ def check_warm_start(warm_start) -> np.ndarray:
             f"{layout.WARM_START_SIZE}) from warm_start_memory, got {type(warm_start).__name__} {shape}"
         )
     return warm_start
+
+
+def run_on_threads(kernel, args: tuple, threads: int) -> None:
+    """``kernel(*args)`` with numba's thread count (``numba.set_num_threads``, this thread's own) at ``threads``,
+    and back to what it was after."""
+    before = numba.get_num_threads()
+    numba.set_num_threads(threads)
+    try:
+        kernel(*args)
+    finally:
+        numba.set_num_threads(before)
 
 
 def run_in_shares(kernel, shares: int, state, params, settings, stats, trajectory, events) -> None:

@@ -8,12 +8,19 @@ import math
 
 from .. import layout
 from ..compile.compilation import jit_stage
-from ..robust.contact_solver import penalty_correction_share
 from ..tunables import CONTACT_TOLERANCE, PENALTY_FLOOR, PENALTY_ITERATIONS, PENALTY_TRIGGER
 from .islands import islands_deeper_than
-from .narrowphase import GAP, NORMAL_MASS, NX, NY, PSEUDO_IMPULSE, STIFFNESS, TARGET
+from .narrowphase import GAP, NX, NY, PSEUDO_IMPULSE, TARGET
 from .normal_lcp import delassus_matrix, normal_lcp
-from .prepare import apply_impulse, body_kinetic_energy, relative_velocity
+from .parallel import (
+    PARALLEL_CONTACTS,
+    partitioned_penalty_sweeps,
+    penalty_target,
+    penalty_targets_on_threads,
+    pseudo_gap,
+    pseudo_gaps_on_threads,
+)
+from .prepare import apply_impulse, body_kinetic_energy
 from .solve import exact_pays
 from .sweeps import normal_step
 
@@ -45,18 +52,17 @@ def correct_penetrations(contacts, count, bodies, work, exact, h, context):
         pseudo[b, 2] = 0.0
     deep_island = contacts.deep
     islands_deeper_than(rows, ids, count, trigger, work.root, work.marked, deep_island)
-    for c in range(count):
-        depth = -rows[c, GAP] - slop
-        rows[c, PSEUDO_IMPULSE] = 0.0
-        if depth > context.tolerance and deep_island[c]:
-            share = penalty_correction_share(rows[c, STIFFNESS], 1.0 / rows[c, NORMAL_MASS], h)
-            rows[c, TARGET] = share * depth / h
-        else:
-            rows[c, TARGET] = -max(rows[c, GAP], 0.0) / h
+    if count >= PARALLEL_CONTACTS:  # each contact at once, the same values
+        penalty_targets_on_threads(rows, count, deep_island, slop, context.tolerance, h)
+    else:
+        for c in range(count):
+            penalty_target(c, rows, deep_island, slop, context.tolerance, h)
     pseudo_impulses(contacts, count, bodies, pseudo, exact, deep_island, context)
-    for c in range(count):
-        ux, uy = relative_velocity(c, rows, ids, pseudo)
-        rows[c, GAP] += h * (ux * rows[c, NX] + uy * rows[c, NY])
+    if count >= PARALLEL_CONTACTS:
+        pseudo_gaps_on_threads(rows, ids, count, pseudo, h)
+    else:
+        for c in range(count):
+            pseudo_gap(c, rows, ids, pseudo, h)
     move_by_pseudo_velocities(bodies, pseudo, h, context.gravity)
     return deepest
 
@@ -67,7 +73,8 @@ def pseudo_impulses(contacts, count, bodies, pseudo, exact, deep_island, context
     where the velocities' exact solve pays (``solve.exact_pays``, ``normal_lcp``: Gauss-Seidel leaves a light box
     between heavy ones turning), otherwise by Gauss-Seidel over the deep
     islands' contacts (the scene's ``solver_tolerance``, at most PENALTY_ITERATIONS or ``solver_iterations``
-    sweeps, ``penalty_sweeps``)."""
+    sweeps, ``penalty_sweeps``; from PARALLEL_CONTACTS contacts up block by block, on threads:
+    ``parallel.partitioned_penalty_sweeps``)."""
     rows, ids = contacts.rows, contacts.ids
     inv_mass, inv_inertia = bodies.inv_mass, bodies.inv_inertia
     if exact_pays(ids, count, inv_mass, context.use_friction):
@@ -82,6 +89,10 @@ def pseudo_impulses(contacts, count, bodies, pseudo, exact, deep_island, context
                 if x[c] != 0.0:
                     apply_impulse(c, x[c] * rows[c, NX], x[c] * rows[c, NY], rows, ids, pseudo, inv_mass, inv_inertia)
             return
+    if count >= PARALLEL_CONTACTS:
+        iterations = min(context.sweeps, PENALTY_ITERATIONS)
+        partitioned_penalty_sweeps(contacts, pseudo, bodies, iterations, context.sweep_tolerance)
+        return
     listed = contacts.listed  # the deep islands' contacts: the sweeps leave the others out
     n_listed = 0
     for c in range(count):

@@ -11,6 +11,7 @@ from ..tunables import DIRECT_LIMIT, EXACT_CONVERGED, EXACT_MASS_RATIO, JOINT_LI
 from .joint_contact_solve import full_delassus, joint_impulses
 from .narrowphase import BODY1, BODY2, FRICTION_IMPULSE, IMPULSE, NX, NY, TARGET
 from .normal_lcp import delassus_matrix, normal_lcp
+from .parallel import PARALLEL_CONTACTS, partitioned_gauss_seidel
 from .prepare import apply_impulse, relative_velocity
 from .sweeps import friction_sweep, gauss_seidel
 
@@ -21,9 +22,15 @@ def solve_velocities(contacts, count, bodies, exact, context):
     normal and friction impulses are solved together, exactly (``joint_contact_solve``); up to DIRECT_LIMIT contacts
     where boxes of unlike masses meet (``exact_pays``; or if the joint solve does not settle), the normal impulses
     are solved exactly together (``alternate``); otherwise, or if the exact solve fails, projected Gauss-Seidel
-    (``gauss_seidel``, with the scene's ``solver_tolerance`` and ``solver_iterations``).
+    (``gauss_seidel``, with the scene's ``solver_tolerance`` and ``solver_iterations``; from PARALLEL_CONTACTS
+    contacts up block by block, on threads: ``parallel.partitioned_gauss_seidel``).
     ``exact``: ``state.ExactWork``; ``context``: ``state.StepContext``."""
     if count == 0:
+        return
+    if count >= PARALLEL_CONTACTS:
+        partitioned_gauss_seidel(
+            contacts, count, bodies, context.use_friction, context.sweeps, context.sweep_tolerance, exact.moved
+        )
         return
     use_friction = context.use_friction
     if use_friction and count <= JOINT_LIMIT and solve_jointly(contacts, count, bodies, exact):

@@ -29,6 +29,7 @@ from ..robust.memory import MEMORY_SIZE
 from ..robust.state import CornerWork
 from ..tunables import CONTACT_TOLERANCE, DIRECT_LIMIT, MAX_SUBSTEPS, MIN_CAPACITY
 from .narrowphase import CONTACT_COLUMNS, ID_COLUMNS
+from .parallel import Partition, Spare, Spread, make_partition, make_spread
 
 
 class StepContext(NamedTuple):
@@ -79,6 +80,7 @@ class Sweep(NamedTuple):
     order: np.ndarray  # (n,) int64
     pairs: np.ndarray  # (capacity,) int64
     substep_pairs: np.ndarray  # (capacity,) int64
+    spread: Spread  # the threads' work (``parallel``)
 
 
 class Contacts(NamedTuple):
@@ -89,6 +91,8 @@ class Contacts(NamedTuple):
     ids: np.ndarray  # (capacity, ID_COLUMNS) int64
     deep: np.ndarray  # (capacity,) bool
     listed: np.ndarray  # (capacity,) int64
+    partition: Partition  # the contacts' blocks, for sweeps on threads (``parallel``)
+    spare: Spare  # rows the narrowphase on threads fills before packing them (``parallel``)
 
 
 class Impulses(NamedTuple):
@@ -251,6 +255,7 @@ def make_sweep(n):
         np.empty(n, np.int64),
         np.zeros(pairs, np.int64),
         np.zeros(pairs, np.int64),
+        make_spread(n),
     )
 
 
@@ -267,6 +272,7 @@ def with_axis(sweep, axis):
         sweep.order,
         sweep.pairs,
         sweep.substep_pairs,
+        sweep.spread,
     )
 
 
@@ -284,6 +290,7 @@ def grown_sweep(sweep):
         sweep.order,
         np.zeros(pairs, np.int64),
         np.zeros(pairs, np.int64),
+        sweep.spread,
     )
 
 
@@ -291,12 +298,15 @@ def grown_sweep(sweep):
 def make_contacts(capacity):
     """``Contacts`` and ``Impulses`` with room for ``capacity`` rows (each written before it is read: left
     unzeroed)."""
+    partition, spare = make_partition(capacity)
     return (
         Contacts(
             np.empty((capacity, CONTACT_COLUMNS)),
             np.empty((capacity, ID_COLUMNS), np.int64),
             np.empty(capacity, np.bool_),
             np.empty(capacity, np.int64),
+            partition,
+            spare,
         ),
         Impulses(
             np.empty(capacity, np.int64),
