@@ -126,7 +126,7 @@ def pile_cost(n: int, solver: str = "robust", settle: float = 2.0, steps: int = 
     settled = simulate(scene, duration=settle).final_state
     simulator = Simulator.for_scene(scene)
     params = scene.body_params()
-    settings = make_settings(scene, steps, until_rest=False)
+    settings = make_settings(scene, steps, until_rest=False, sleep=False)  # awake: the steps are what is timed
     stats = np.zeros((n, layout.STATS_SIZE))
     state = settled.copy()
 

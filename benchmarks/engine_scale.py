@@ -50,6 +50,7 @@ from benchmarks.suite_runs import (
     Window,
     loop_overhead,
     run_case,
+    sleep_default,
     until_rest_default,
 )
 from box_toss_env.files import write_atomic
@@ -206,8 +207,9 @@ def method(cases: list[Case], window: float, settle: float, repeats: int, budget
         "",
         f"- **Engines**, each at its own defaults, one thread. Ours (box_toss_env {version('box_toss_env')}, numba "
         f"{version('numba')}): each scene exactly as `scenes.*` builds it (for the pile of 16: "
-        f"{our_settings_text(cases[0])}), run by `Simulator.for_scene` with `until_rest` at `simulate`'s default "
-        f"({until_rest_default()}), its warm start (`warm_start_memory`) carried from run to run. Box2D v3 (pyb2d3 "
+        f"{our_settings_text(cases[0])}), run by `Simulator.for_scene` with `sleep` and `until_rest` at "
+        f"`simulate`'s defaults ({sleep_default()}, {until_rest_default()}), its warm start (`warm_start_memory`) "
+        f"carried from run to run. Box2D v3 (pyb2d3 "
         f"{version('pyb2d3')}): {1 / DEFAULT_DT['box2d3']:g} Hz, {BOX2D3_SUBSTEPS} substeps, contact hertz "
         f"{b2_hz:g}, damping ratio {b2_damping:g}, push {b2_push:g} m/s, sleeping and continuous collision on. "
         f"Box2D 2.3 (box2d {version('box2d')}): {1 / DEFAULT_DT['box2d']:g} Hz, {BOX2D_ITERATIONS[0]} velocity and "

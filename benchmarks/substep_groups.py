@@ -55,9 +55,9 @@ def timed_run(scene, start, steps: int) -> float:
     simulator = Simulator.for_scene(scene, parallel=False)
     params, state, warm = scene.body_params(), start.copy(), warm_start_memory(scene.n_bodies)
     stats = np.zeros((scene.n_bodies, layout.STATS_SIZE))
-    simulator.run(state, params, make_settings(scene, LEAD_IN, until_rest=False), stats, warm_start=warm)
+    simulator.run(state, params, make_settings(scene, LEAD_IN, until_rest=False, sleep=False), stats, warm_start=warm)
     began = time.thread_time()
-    simulator.run(state, params, make_settings(scene, steps, until_rest=False), stats, warm_start=warm)
+    simulator.run(state, params, make_settings(scene, steps, until_rest=False, sleep=False), stats, warm_start=warm)
     return time.thread_time() - began
 
 

@@ -3,10 +3,10 @@ measures what the scene did, step by step, and decides how many steps fit the bu
 window, interleaved across engines (ABAB, not AAA BBB), in thread CPU time, the stepping loop alone.
 
 Ours runs as a user gets it: ``Simulator.for_scene(scene)`` on the scene as ``scenes`` builds it, one thread, the
-settings of ``make_settings`` and ``until_rest`` at ``simulate``'s default (read from its signature, so a new
-default is measured as soon as it lands), the warm start (``warm_start_memory``) carried from run to run, as one
-long run. "Sleeping off" is ``sleep_time`` 1e6 s and ``until_rest=False``. ``ours, tuned`` (``OUR_TUNED``) is
-ours at settings a user can pick, shown beside the defaults, never instead of them.
+settings of ``make_settings`` and ``sleep`` and ``until_rest`` at ``simulate``'s defaults (read from its signature,
+so a new default is measured as soon as it lands), the warm start (``warm_start_memory``) carried from run to run,
+as one long run. "Sleeping off" is ``sleep_time`` 1e6 s, ``sleep=False`` and ``until_rest=False``. ``ours, tuned``
+(``OUR_TUNED``) is ours at settings a user can pick, shown beside the defaults, never instead of them.
 """
 
 from __future__ import annotations
@@ -39,8 +39,13 @@ work in the process: its row says so."""
 
 
 def until_rest_default() -> bool:
-    """``simulate``'s default for ``until_rest`` (whether a plain ``simulate(scene, ...)`` lets bodies sleep)."""
+    """``simulate``'s default for ``until_rest`` (whether a plain ``simulate(scene, ...)`` ends once all sleep)."""
     return bool(inspect.signature(simulate).parameters["until_rest"].default)
+
+
+def sleep_default() -> bool:
+    """``simulate``'s default for ``sleep`` (whether a plain ``simulate(scene, ...)`` lets islands at rest sleep)."""
+    return bool(inspect.signature(simulate).parameters["sleep"].default)
 
 
 class OurWorld:
@@ -50,6 +55,7 @@ class OurWorld:
         changes = {**settings, **({} if sleep else {"sleep_time": NEVER_SLEEP})}
         self.scene = scene.replace(**changes) if changes else scene
         self.until_rest = (until_rest_default() if until_rest is None else until_rest) and sleep
+        self.sleep = sleep and (sleep_default() or self.until_rest)
         self.dt = self.scene.dt
         self.simulator = Simulator.for_scene(self.scene, parallel=False, threads=1)
         self.params = self.scene.body_params()
@@ -63,7 +69,7 @@ class OurWorld:
 
     def run_settings(self, steps: int) -> np.ndarray:
         if steps not in self.settings:
-            self.settings[steps] = make_settings(self.scene, steps, self.until_rest)
+            self.settings[steps] = make_settings(self.scene, steps, self.until_rest, self.sleep)
         return self.settings[steps]
 
     def advance(self, steps: int) -> float:

@@ -1,10 +1,10 @@
 """Kernel factory: one compiled kernel per combination of the stages a scene uses.
 
 The flags (solver, impulses, penalty, friction, recording, boxes colliding) are compile-time: a branch on a flag
-that is off is compiled away, so a scene pays nothing for what it lacks. ``parallel`` is not: it
-says whether ``Simulator`` splits the bodies over threads, and one body or a batch of them runs
-the same compiled kernel. Floats never enter the flags (each new value would recompile); they
-travel in arrays. Kernels are cached in memory per compile-time flags and on disk by numba
+that is off is compiled away, so a scene pays nothing for what it lacks. ``parallel`` is not: it says whether
+``Simulator`` runs on threads (the bodies split over them, or a colliding scene's large stages on numba's), and one
+body or a batch of them runs the same compiled kernel. Floats never enter the flags (each new value would
+recompile); they travel in arrays. Kernels are cached in memory per compile-time flags and on disk by numba
 (``compilation``); the on-disk key includes a digest of the engine's sources, so editing any
 stage recompiles its callers.
 
@@ -20,6 +20,7 @@ import functools
 from dataclasses import dataclass
 
 from .colliding.kernel import make_colliding_robust_kernel
+from .colliding.parallel import launch_threads
 from .compile.compilation import engine_source_digest
 from .reference.colliding_reference import make_colliding_reference_kernel
 from .reference.reference_solver import make_reference_kernel
@@ -28,9 +29,9 @@ from .robust.robust_solver import make_robust_kernel
 
 @dataclass(frozen=True)
 class KernelFlags:
-    """What a kernel is built for (every field but ``parallel``), and whether ``Simulator`` runs the
-    bodies on threads (``parallel``, a run option: it does not change the compiled kernel; a kernel
-    whose boxes collide runs its bodies together on one thread whatever ``parallel`` says)."""
+    """What a kernel is built for (every field but ``parallel``), and whether ``Simulator`` runs it on
+    threads (``parallel``, a run option: it does not change the compiled kernel nor its results; a kernel whose
+    boxes collide runs its bodies together, its large stages on numba's threads, ``colliding.parallel``)."""
 
     solver: str = "robust"  # "robust" or "seed"
     use_impulses: bool = True
@@ -74,6 +75,7 @@ def _make_kernel(solver: str, use_impulses: bool, use_penalty: bool, use_frictio
 
 @functools.cache
 def _make_colliding_kernel(solver: str, use_impulses: bool, use_penalty: bool, use_friction: bool, record: bool):
+    launch_threads()  # the kernel's parallel stages call into numba's threading layer
     if solver == "seed":
         return make_colliding_reference_kernel(use_impulses, use_penalty, use_friction, record, source_digest())
     if solver == "robust":

@@ -25,8 +25,11 @@ PARAM_SIZE = 7  # [m], [m], [kg], [kg m^2], [-], [-], [N/m]
     PENETRATION_SLOP,
     SOLVER_TOLERANCE,
     SOLVER_ITERATIONS,
-) = range(10)
-SETTINGS_SIZE = 10  # [s], [m/s^2], [-], [0/1], [m/s], [m/s], [s], [m], [-], [-]
+    SLEEP,
+) = range(11)
+SETTINGS_SIZE = 11  # [s], [m/s^2], [-], [0/1], [m/s], [m/s], [s], [m], [-], [-], [0/1]
+# UNTIL_REST: the run ends once every body sleeps; SLEEP: islands at rest sleep (colliding scenes; with UNTIL_REST,
+# always), the run going on to MAX_STEPS
 
 # per-body statistics (n_bodies, STATS_SIZE) written by every kernel
 (FIRST_CONTACT_TIME, N_IMPACTS, N_STEPS, MAX_PENETRATION, REST_TIME, END_TIME, STATUS, FAIL_STEP, N_RECORDED) = range(9)

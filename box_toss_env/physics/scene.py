@@ -64,16 +64,16 @@ class Scene:
     ``restitution_threshold`` are inelastic, a box lying on a face slower than ``sleep_speed``
     for ``sleep_time`` is put to sleep, and ``penetration_slop`` is left uncorrected (the penalty starts once a
     corner is twice that deep, island by island, then removes what lies beyond it). The last two
-    belong to its colliding scenes with more contacts than it solves exactly (``colliding.solve``:
-    over 64 in a substep, a pile): their projected Gauss-Seidel sweeps stop once a sweep changes the
+    belong to its colliding scenes' contacts that it does not solve exactly (``colliding.solve``: a pile of
+    like boxes): their projected Gauss-Seidel sweeps stop once a sweep changes the
     impulses by less than ``solver_tolerance`` of their sum (and none by more than 100 times that share of
     their mean), after ``solver_iterations`` sweeps at most
-    (the penalty's after at most 16); a tolerance looser than the default also hands them the contacts
-    solved exactly otherwise (up to 64; the velocities of up to 8 with friction stay solved jointly). The
+    (the penalty's after at most 16); the exact solves take 8 contacts or fewer, and up to 64 where a contact joins
+    boxes of unlike masses or there is no friction (``colliding.solve.exact_pays``), at any tolerance. The
     defaults, 1e-9 and 16, run the 16 sweeps nearly always: a settled pile of 100 moves 0.1 um in 10 s. A
     looser tolerance costs less and creeps more: at 1e-4 with 32 sweeps, awake piles cost about 0.6x and the
-    pyramid's top box drifts less in 2 s, but a settled pile of 100 creeps 4.7 mm in 10 s awake (it sleeps
-    with ``until_rest``); docs/engine_scale.md measures both.
+    pyramid's top box drifts less in 2 s, but a settled pile of 100 creeps 4.7 mm in 10 s awake (asleep, as
+    ``simulate`` lets it by default, it does not move); docs/engine_scale.md measures both.
 
     ``boxes_collide``: False (default), every box meets only the floor and the boxes are independent
     (a batch of them runs on threads); True, the boxes of the scene also collide with one another and

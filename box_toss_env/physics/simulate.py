@@ -16,7 +16,7 @@ from .compile.compilation import ensure_compiled
 from .kernels import KernelFlags, make_kernel
 from .ranges import MAX_STEPS, check_step_count
 from .scene import Scene
-from .validation import check_integer, check_range
+from .validation import check_bool, check_integer, check_range
 
 
 class NonFiniteStateError(FloatingPointError):
@@ -89,10 +89,12 @@ class Simulator:
     """A kernel compiled for one combination of stages, run on arrays many times.
 
     ``run`` takes the state (n, 6) and the body parameters (n, 7) (see ``layout``) and advances
-    the state in place; it allocates nothing per step. With ``flags.parallel`` the bodies are split
-    into ``threads`` contiguous shares run at once (``threads`` in [1, numba.config.NUMBA_NUM_THREADS],
-    default: all of them, the cores available): the kernel releases the GIL, so the shares run on a
-    thread pool, and each body's result does not depend on the split. One body and a batch run the
+    the state in place; it allocates nothing per step. With ``flags.parallel`` the run uses ``threads`` threads
+    (in [1, numba.config.NUMBA_NUM_THREADS], default: all of them, the cores available), and its results do not
+    depend on how many: without box-box contact the bodies are split into that many contiguous shares run at once
+    (the kernel releases the GIL, so the shares run on a thread pool, and each body's result does not depend on the
+    split); a scene whose boxes collide is one call whose large stages run on that many of numba's threads
+    (``colliding.parallel``: from hundreds of boxes up), bit for bit as on one. One body and a batch run the
     same compiled kernel (``kernels``); its first run compiles it or loads it from numba's cache
     (``compilation.ensure_compiled``). With ``start_interpreted`` (the envs), a kernel that is not in the
     cache yet is compiled by a worker process while runs of up to ``MAX_INTERPRETED_BODIES`` bodies use its
@@ -119,7 +121,7 @@ class Simulator:
         cls, scene: Scene, *, record: bool = False, parallel: bool | None = None, threads: int | None = None
     ) -> Simulator:
         if parallel is None:
-            parallel = scene.n_bodies > 1 and not scene.boxes_collide
+            parallel = scene.n_bodies > 1
         flags = KernelFlags(
             solver=scene.solver,
             use_impulses=scene.use_impulses,
@@ -134,7 +136,7 @@ class Simulator:
     @property
     def shares(self) -> int:
         """How many threads a parallel run uses at most (1 without ``flags.parallel``)."""
-        if not self.flags.parallel or self.flags.boxes_collide:  # colliding boxes are stepped together
+        if not self.flags.parallel:
             return 1
         return self.threads if self.threads is not None else numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]  # numba sets its config at import
 
@@ -186,6 +188,9 @@ class Simulator:
                 return
             ensure_compiled(self.kernel, args)
             self._ready = True
+        if self.flags.boxes_collide:  # one scene, stepped together: its large stages on numba's threads
+            run_on_threads(self.kernel, args, self.shares)
+            return
         shares = min(self.shares, state.shape[0])
         if shares <= 1 or self.flags.record:  # a recording's (T, n, 6) trajectory does not split into contiguous shares
             self.kernel(*args)
@@ -218,6 +223,17 @@ def check_warm_start(warm_start) -> np.ndarray:
             f"{layout.WARM_START_SIZE}) from warm_start_memory, got {type(warm_start).__name__} {shape}"
         )
     return warm_start
+
+
+def run_on_threads(kernel, args: tuple, threads: int) -> None:
+    """``kernel(*args)`` with numba's thread count (``numba.set_num_threads``, this thread's own) at ``threads``,
+    and back to what it was after."""
+    before = numba.get_num_threads()
+    numba.set_num_threads(threads)
+    try:
+        kernel(*args)
+    finally:
+        numba.set_num_threads(before)
 
 
 def run_in_shares(kernel, shares: int, state, params, settings, stats, trajectory, events) -> None:
@@ -264,8 +280,9 @@ def check_threads(threads) -> int:
     return check_integer("threads", threads, 1, numba.config.NUMBA_NUM_THREADS)  # type: ignore[attr-defined]  # numba sets its config at import
 
 
-def make_settings(scene: Scene, max_steps: int, until_rest: bool) -> np.ndarray:
-    """The scene-wide settings array the kernels read (see ``layout``)."""
+def make_settings(scene: Scene, max_steps: int, until_rest: bool, sleep: bool = True) -> np.ndarray:
+    """The scene-wide settings array the kernels read (see ``layout``): ``until_rest`` ends the run once every body
+    sleeps; ``sleep`` (colliding scenes; implied by ``until_rest``) lets islands at rest sleep, the run going on."""
     settings = np.empty(layout.SETTINGS_SIZE)
     settings[layout.DT] = scene.dt
     settings[layout.GRAVITY] = scene.gravity
@@ -277,6 +294,7 @@ def make_settings(scene: Scene, max_steps: int, until_rest: bool) -> np.ndarray:
     settings[layout.PENETRATION_SLOP] = scene.penetration_slop
     settings[layout.SOLVER_TOLERANCE] = scene.solver_tolerance
     settings[layout.SOLVER_ITERATIONS] = scene.solver_iterations
+    settings[layout.SLEEP] = 1.0 if sleep or until_rest else 0.0
     return settings
 
 
@@ -298,18 +316,24 @@ def simulate(
     until_rest: bool = False,
     record: bool = False,
     threads: int | None = None,
+    sleep: bool = True,
 ) -> SimulationResult:
     """Run ``scene`` for ``steps`` time steps (or ``duration`` seconds, rounded up to whole steps).
 
-    ``until_rest`` stops each body once it has lain still on a face for ``scene.sleep_time``.
+    ``sleep`` (colliding scenes): an island of touching boxes that has lain still for ``scene.sleep_time`` (every
+    point slower than ``scene.sleep_speed``) sleeps, at no cost, at rest, until an awake body reaches it; the run
+    goes on to its end. Off, every body is stepped at every step (a resting pile costs as a moving one).
+    ``until_rest`` also ends the run once every body sleeps (each body's ``end_time``; the floor-only solver ends
+    each body once it has lain still on a face for ``scene.sleep_time``, and lets none sleep without it).
     ``record`` keeps the states on the time grid and the impacts; without it nothing per step
     is stored. Raises ``NonFiniteStateError`` naming the body and step if a state diverges.
     """
     max_steps = steps_for(scene, steps, duration)
+    sleep = check_bool("sleep", sleep)
     simulator = Simulator.for_scene(scene, record=record, threads=threads)
     state = scene.initial_state()
     params = scene.body_params()
-    settings = make_settings(scene, max_steps, until_rest)
+    settings = make_settings(scene, max_steps, until_rest, sleep)
     stats = np.zeros((scene.n_bodies, layout.STATS_SIZE))
     trajectory = events = None
     if record:

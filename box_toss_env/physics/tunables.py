@@ -92,6 +92,14 @@ DIRECT_LIMIT = 64
 alternating with friction sweeps; more go to projected Gauss-Seidel. Larger: stacks of more boxes carry any mass
 ratio, at a cost growing as the cube of the contacts."""
 
+EXACT_MASS_RATIO = 4.0
+"""[-] the exact normal solve (up to DIRECT_LIMIT contacts) runs only where a box-box contact of the substep joins
+two boxes whose masses differ by more than this factor (``solve.exact_pays``): there Gauss-Seidel carries a heavy
+box's load through a light one slowly (a 1 kg box under 100 kg sank); among boxes of like masses its sweeps,
+warm-started or from the resting loads' guess, hold a column as the exact solve does, at a fraction of its cost (the
+exact solve's pivots on 64 contacts made a dropped pile of 16 cost 900 times Box2D v3). Larger: more scenes on the
+sweeps; 1: every small contact set on the exact solve."""
+
 VELOCITY_ITERATIONS = 64
 """[-] rounds of exact normal solve and friction sweep at most per substep (``solve.solve_velocities``)."""
 
@@ -147,6 +155,11 @@ PENALTY_TRIGGER = 2.0
 """[slops] the penalty starts once a contact is this many ``Scene.penetration_slop`` deep, then removes what lies
 beyond one slop (a band, as Box2D 2.x's position solver stops within 3 slops: a pile whose looser solve lets
 corners creep to the slop would otherwise run the penalty at every step)."""
+
+PENALTY_FLOOR = 1e-9
+"""[m per m of size + 1 m] the penalty never starts on a penetration shallower than this, whatever the slop: rounding
+(a pyramid built at rest, kept awake, sinks by 1e-12 m and ran the relax stage at every substep, half its cost at
+a slop of 0). Smaller: the penalty chases rounding; larger: boxes may rest that deep in one another."""
 
 PENALTY_DAMPING_RATIO = 1.0
 """[-] zeta of the penalty spring: critically damped. Smaller: corrections overshoot and ring; larger: slower."""

@@ -41,11 +41,19 @@ def test_ours_runs_at_simulates_default_and_its_runs_carry_on_as_one():
 
 
 def test_a_new_default_of_simulate_is_measured(monkeypatch):
-    def later(scene, *, steps=None, duration=None, until_rest=True, record=False, threads=None): ...
+    def later(scene, *, steps=None, duration=None, until_rest=True, record=False, threads=None, sleep=False): ...
+
+    def awake(scene, *, steps=None, duration=None, until_rest=False, record=False, threads=None, sleep=False): ...
 
     monkeypatch.setattr(simulate, "__signature__", inspect.signature(later), raising=False)
-    assert suite_runs.until_rest_default() is True
-    assert suite_runs.OurWorld(scenes.pile(2), True).until_rest is True
+    assert suite_runs.until_rest_default() is True and suite_runs.sleep_default() is False
+    world = suite_runs.OurWorld(scenes.pile(2), True)
+    assert world.until_rest is True and world.sleep is True  # until_rest sleeps
+    monkeypatch.setattr(simulate, "__signature__", inspect.signature(awake), raising=False)
+    assert suite_runs.OurWorld(scenes.pile(2), True).sleep is False
+    monkeypatch.undo()
+    assert suite_runs.OurWorld(scenes.pile(2), True).sleep is True  # simulate's default today
+    assert suite_runs.OurWorld(scenes.pile(2), False).sleep is False  # sleeping off
 
 
 def test_snapshot_restore_and_reset():

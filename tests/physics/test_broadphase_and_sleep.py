@@ -180,8 +180,11 @@ def test_bodies_placed_at_rest_sleep_from_the_start_and_others_do_not():
     assert np.array_equal(
         simulate(scene.replace(boxes=(lone,)), duration=1.0, until_rest=True).final_state[0], lone_state
     )
-    # without until_rest nothing sleeps: the same box is stepped
-    assert simulate(scene, duration=0.2).n_steps[2] > 0
+    # sleeping is simulate's default (the run going on to its end); with it off nothing sleeps: the box is stepped
+    sleeping = simulate(scene, duration=2.0)
+    assert np.all(sleeping.at_rest) and np.all(sleeping.end_time == 2.0) and sleeping.n_steps[2] == 0
+    assert np.array_equal(sleeping.final_state, result.final_state)
+    assert simulate(scene, duration=0.2, sleep=False).n_steps[2] > 0
 
 
 @pytest.mark.parametrize("speed", [1.0, 4.0, 12.0])
@@ -233,7 +236,9 @@ def compiled_steps_alone(pose, vel, half, awake, params):
     bodies = Bodies(pose, vel, half, params, 1.0 / params[:, layout.MASS], 1.0 / params[:, layout.INERTIA], radius)
     n = pose.shape[0]
     sleep = Sleep(awake, awake, np.zeros(n, np.int64), np.zeros(n), np.zeros(n), np.zeros(n, np.int64), awake)
-    context = StepContext(1.0 / 128, -9.81, 1_000, False, 0.0, 0.0, 0.0, 0.0, 0.0, 1, 1e-12, 0.1, True, True, False)
+    context = StepContext(
+        1.0 / 128, -9.81, 1_000, False, False, 0.0, 0.0, 0.0, 0.0, 0.0, 1, 1e-12, 0.1, True, True, False
+    )
     return steps_alone(bodies, sleep, context, 1_000)
 
 

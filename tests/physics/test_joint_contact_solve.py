@@ -24,6 +24,7 @@ from box_toss_env.physics.colliding.narrowphase import (
     TARGET,
 )
 from box_toss_env.physics.colliding.normal_lcp import delassus_matrix, normal_lcp
+from box_toss_env.physics.colliding.parallel import make_partition
 from box_toss_env.physics.colliding.prepare import apply_impulse, relative_velocity
 from box_toss_env.physics.colliding.solve import solve_jointly as joint_solve
 from box_toss_env.physics.colliding.state import Bodies, Contacts, ExactWork
@@ -48,7 +49,8 @@ def solve_jointly(contacts, ids, count, vel, inv_mass, inv_inertia):
     )
     none = np.zeros((vel.shape[0], 3))
     bodies = Bodies(none, vel, none[:, :2], none, inv_mass, inv_inertia, inv_mass)
-    rows = Contacts(contacts, ids, np.zeros(count, np.bool_), np.zeros(count, np.int64))
+    partition, spare = make_partition(count)
+    rows = Contacts(contacts, ids, np.zeros(count, np.bool_), np.zeros(count, np.int64), partition, spare)
     solved = joint_solve(rows, count, bodies, exact)
     return solved, exact.state[:count].copy()
 

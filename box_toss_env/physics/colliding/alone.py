@@ -145,7 +145,7 @@ def advance_alone(k, n, context, bodies, sleep, stats, work):
     settings = FloorSettings(
         context.dt,
         context.gravity,
-        context.until_rest,
+        context.sleeping,
         context.threshold,
         context.sleep_speed,
         context.sleep_time,

@@ -27,8 +27,8 @@ from ..compile.compilation import jit_stage
 from ..tunables import SOLVE_SHARE, SPLIT_SAVING
 from .broadphase import candidate_pairs
 from .islands import find_root
-from .narrowphase import update_geometry
-from .substeps import body_reach, point_speed, substep_count, substeps
+from .parallel import PARALLEL_BODIES, geometry_and_reach, parallel_candidate_pairs
+from .substeps import point_speed, substep_count, substeps
 
 
 @jit_stage
@@ -38,15 +38,19 @@ def step_pairs(context, bodies, sweep, sleep, n_sub):
     as they are. A step of n_sub > 1 substeps: each body reaching what it travels in the step dt (``body_reach``) plus
     what the fastest body travels (a struck body moves further than its own speed says): every pair a substep of the
     step can find (``broadphase.substep_pairs``), and the chains that join bodies into sets (``plan_substeps``). Returns
-    how many, or -1 if ``sweep.pairs`` is too short (the caller grows it and calls again)."""
+    how many, or -1 if ``sweep.pairs`` is too short (the caller grows it and calls again). From PARALLEL_BODIES
+    bodies up the search runs on threads (``parallel.parallel_candidate_pairs``: the same pairs)."""
     pose, reach, awake = bodies.pose, sweep.reach, sleep.awake
-    update_geometry(pose, bodies.half, awake, sweep.trig, sweep.bound)
-    fastest = body_reach(bodies.vel, bodies.radius, awake, context.dt, context.gravity, context.tolerance, reach)
+    fastest = geometry_and_reach(bodies, awake, context.dt, context, sweep)  # on threads for many bodies
     for b in range(pose.shape[0]):
         if n_sub == 1:
             sweep.floor_reach[b] = reach[b] + fastest
         else:
             reach[b] += fastest
+    if pose.shape[0] >= PARALLEL_BODIES:
+        return parallel_candidate_pairs(
+            pose, sweep.bound, reach, awake, awake, sweep.axis, sweep.order, sweep.low, sweep.pairs, sweep.spread
+        )
     return candidate_pairs(pose, sweep.bound, reach, awake, awake, sweep.axis, sweep.order, sweep.low, sweep.pairs)
 
 

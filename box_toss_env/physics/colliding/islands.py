@@ -1,7 +1,8 @@
 """Islands and sleeping for scenes whose boxes collide: a box that rests costs nothing until touched.
 
 Bodies joined by box-box contacts form an island (union-find over the contacts of the last substep; the
-floor joins nothing, as in Box2D). With ``until_rest`` each awake body keeps a sleep timer: the time it
+floor joins nothing, as in Box2D). With sleeping on (``simulate``'s ``sleep``, the default; always with
+``until_rest``) each awake body keeps a sleep timer: the time it
 has been supported (it took a contact impulse) with every point slower than ``sleep_speed``
 (|v| + |omega| R <= sleep_speed); an island falls asleep when every one of its bodies has been so for
 ``sleep_time``. A sleeping body's velocity is set to zero and it is left out of everything: no contact is
@@ -9,9 +10,10 @@ looked for, no velocity or position integrated, no impulse solved. It keeps the 
 (the island's root body, ``island``), so that a touch wakes the whole island at once: at the start of
 every grid step, every sleeping body that an awake body can reach within the step (the broadphase's
 test, ``broadphase.candidate_pairs``) wakes with its island, and the test is repeated for the bodies just
-woken. Without ``until_rest`` nothing sleeps. A body placed at rest (zero velocity, lying on a face on the
-floor, touching no other box, ``sleep_placed``) sleeps from the start, as the resting base of
-``BoxToss-OnBox-v0``: stepping it would only find it at rest ``sleep_time`` later.
+woken. With sleeping off nothing sleeps; with ``until_rest`` the run ends once every body sleeps. A body
+placed at rest (zero velocity, lying on a face on the floor, touching no other box, ``sleep_placed``) sleeps
+from the start, as the resting base of ``BoxToss-OnBox-v0``: stepping it would only find it at rest
+``sleep_time`` later.
 
 Sleep carries from run to run in the caller's warm start (``simulate.warm_start_memory``, rows in
 ``layout``): at the end of a run each body's island label (-1 awake), sleep timer, pose and parameters are kept

@@ -47,15 +47,15 @@ def start_sweep(bodies, sweep, everyone):
 @jit_stage(inline="always")  # into the kernel (it grows the pair array: numba's runtime)
 def start_steps(context, bodies, sweep, sleep, warm):
     """Before the first step: the islands asleep at the end of the last call asleep again (``restore_sleeping``,
-    with ``until_rest``), the sweep's axis and order, the bodies placed at rest asleep (``sleep_placed``), and the
+    with sleeping on), the sweep's axis and order, the bodies placed at rest asleep (``sleep_placed``), and the
     islands the others can reach in the first step awake (``wake``). Returns (the sweep, how many bodies are
     awake)."""
     n_awake = bodies.pose.shape[0]
-    if context.until_rest:
+    if context.sleeping:
         n_awake -= restore_sleeping(warm, bodies, sleep)
     if n_awake > 0:  # all asleep: no sweep
         sweep = with_axis(sweep, start_sweep(bodies, sweep, sleep.everyone))
-    if context.until_rest and n_awake > 0:
+    if context.sleeping and n_awake > 0:
         slept = sleep_placed(bodies, sweep, sleep, context)
         while slept < 0:
             sweep = grown_sweep(sweep)
@@ -139,6 +139,11 @@ def advance_steps(context, bodies, sweep, contacts, impulses, sleep, stats, scra
                 return (n, n_awake, n_previous, h_previous), layout.STATUS_NONFINITE, n, 0
         if 0 < n_awake < nb and n < context.max_steps:  # wake, for the next step
             n_awake = wake(context, bodies, sweep, sleep)
+    if not context.until_rest and n < context.max_steps:  # every body asleep: at rest to the end of the run
+        if context.record:
+            for row in range(n + 1, context.max_steps + 1):
+                record_states(stats.trajectory, row, bodies.pose, bodies.vel)
+        n = context.max_steps
     return (n, n_awake, n_previous, h_previous), layout.STATUS_OK, -1, 0
 
 

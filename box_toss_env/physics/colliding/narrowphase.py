@@ -240,14 +240,19 @@ def update_geometry(pose, half, awake, trig, bound):
     """cos and sin of every awake box's angle, and the half size of its bounding box (a sleeping box keeps
     those of when it fell asleep: it has not moved since)."""
     for i in range(pose.shape[0]):
-        if not awake[i]:
-            continue
-        c = math.cos(pose[i, 2])
-        s = math.sin(pose[i, 2])
-        trig[i, 0] = c
-        trig[i, 1] = s
-        bound[i, 0] = abs(c) * half[i, 0] + abs(s) * half[i, 1]
-        bound[i, 1] = abs(s) * half[i, 0] + abs(c) * half[i, 1]
+        if awake[i]:
+            box_geometry(i, pose, half, trig, bound)
+
+
+@jit_stage(inline="always")
+def box_geometry(i, pose, half, trig, bound):
+    """cos and sin of box i's angle, and the half size of its bounding box (``update_geometry``)."""
+    c = math.cos(pose[i, 2])
+    s = math.sin(pose[i, 2])
+    trig[i, 0] = c
+    trig[i, 1] = s
+    bound[i, 0] = abs(c) * half[i, 0] + abs(s) * half[i, 1]
+    bound[i, 1] = abs(s) * half[i, 0] + abs(c) * half[i, 1]
 
 
 def overlapping_boxes(boxes, share: float = START_OVERLAP) -> tuple[int, int, float] | None:

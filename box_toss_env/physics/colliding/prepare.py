@@ -67,29 +67,34 @@ def prepare_contacts(contacts, count, bodies):
     """Effective masses 1 / K_n, 1 / K_t and the material (``contact_law``) of each of the first ``count`` contacts
     (``contacts``: ``state.Contacts``; ``bodies``: ``state.Bodies``)."""
     rows, ids = contacts.rows, contacts.ids
-    params, inv_mass, inv_inertia = bodies.params, bodies.inv_mass, bodies.inv_inertia
     for c in range(count):
-        b1 = ids[c, BODY1]
-        b2 = ids[c, BODY2]
-        nx, ny = rows[c, NX], rows[c, NY]
-        rn1 = rows[c, R1X] * ny - rows[c, R1Y] * nx
-        rt1 = rows[c, R1X] * nx + rows[c, R1Y] * ny  # r1 x t with t = (-ny, nx)
-        k_n = inv_mass[b1] + rn1 * rn1 * inv_inertia[b1]
-        k_t = inv_mass[b1] + rt1 * rt1 * inv_inertia[b1]
-        if b2 >= 0:
-            rn2 = rows[c, R2X] * ny - rows[c, R2Y] * nx
-            rt2 = rows[c, R2X] * nx + rows[c, R2Y] * ny
-            k_n += inv_mass[b2] + rn2 * rn2 * inv_inertia[b2]
-            k_t += inv_mass[b2] + rt2 * rt2 * inv_inertia[b2]
-            rows[c, RESTITUTION] = mixed_restitution(params[b1, layout.RESTITUTION], params[b2, layout.RESTITUTION])
-            rows[c, FRICTION] = mixed_friction(params[b1, layout.FRICTION], params[b2, layout.FRICTION])
-            rows[c, STIFFNESS] = mixed_stiffness(params[b1, layout.STIFFNESS], params[b2, layout.STIFFNESS])
-        else:
-            rows[c, RESTITUTION] = params[b1, layout.RESTITUTION]
-            rows[c, FRICTION] = floor_friction(params[b1, layout.FRICTION])
-            rows[c, STIFFNESS] = params[b1, layout.STIFFNESS]
-        rows[c, NORMAL_MASS] = 1.0 / k_n
-        rows[c, TANGENT_MASS] = 1.0 / k_t
+        prepare_contact(c, rows, ids, bodies.params, bodies.inv_mass, bodies.inv_inertia)
+
+
+@jit_stage(inline="always")
+def prepare_contact(c, rows, ids, params, inv_mass, inv_inertia):
+    """Contact c's effective masses 1 / K_n, 1 / K_t and material (``prepare_contacts``)."""
+    b1 = ids[c, BODY1]
+    b2 = ids[c, BODY2]
+    nx, ny = rows[c, NX], rows[c, NY]
+    rn1 = rows[c, R1X] * ny - rows[c, R1Y] * nx
+    rt1 = rows[c, R1X] * nx + rows[c, R1Y] * ny  # r1 x t with t = (-ny, nx)
+    k_n = inv_mass[b1] + rn1 * rn1 * inv_inertia[b1]
+    k_t = inv_mass[b1] + rt1 * rt1 * inv_inertia[b1]
+    if b2 >= 0:
+        rn2 = rows[c, R2X] * ny - rows[c, R2Y] * nx
+        rt2 = rows[c, R2X] * nx + rows[c, R2Y] * ny
+        k_n += inv_mass[b2] + rn2 * rn2 * inv_inertia[b2]
+        k_t += inv_mass[b2] + rt2 * rt2 * inv_inertia[b2]
+        rows[c, RESTITUTION] = mixed_restitution(params[b1, layout.RESTITUTION], params[b2, layout.RESTITUTION])
+        rows[c, FRICTION] = mixed_friction(params[b1, layout.FRICTION], params[b2, layout.FRICTION])
+        rows[c, STIFFNESS] = mixed_stiffness(params[b1, layout.STIFFNESS], params[b2, layout.STIFFNESS])
+    else:
+        rows[c, RESTITUTION] = params[b1, layout.RESTITUTION]
+        rows[c, FRICTION] = floor_friction(params[b1, layout.FRICTION])
+        rows[c, STIFFNESS] = params[b1, layout.STIFFNESS]
+    rows[c, NORMAL_MASS] = 1.0 / k_n
+    rows[c, TANGENT_MASS] = 1.0 / k_t
 
 
 @jit_stage

@@ -8,28 +8,37 @@ import math
 
 from .. import layout
 from ..compile.compilation import jit_stage
-from ..robust.contact_solver import penalty_correction_share
-from ..tunables import DIRECT_LIMIT, EXACT_CONVERGED, PENALTY_ITERATIONS, PENALTY_TRIGGER
+from ..tunables import CONTACT_TOLERANCE, PENALTY_FLOOR, PENALTY_ITERATIONS, PENALTY_TRIGGER
 from .islands import islands_deeper_than
-from .narrowphase import GAP, NORMAL_MASS, NX, NY, PSEUDO_IMPULSE, STIFFNESS, TARGET
+from .narrowphase import GAP, NX, NY, PSEUDO_IMPULSE, TARGET
 from .normal_lcp import delassus_matrix, normal_lcp
-from .prepare import apply_impulse, body_kinetic_energy, relative_velocity
+from .parallel import (
+    PARALLEL_CONTACTS,
+    partitioned_penalty_sweeps,
+    penalty_target,
+    penalty_targets_on_threads,
+    pseudo_gap,
+    pseudo_gaps_on_threads,
+)
+from .prepare import apply_impulse, body_kinetic_energy
+from .solve import exact_pays
 from .sweeps import normal_step
 
 
 @jit_stage
 def correct_penetrations(contacts, count, bodies, work, exact, h, context):
     """Stage 2, island by island (bodies joined by box-box contacts): in the islands holding a contact deeper
-    than PENALTY_TRIGGER slops (``islands.islands_deeper_than``), pseudo-velocities that remove the penalty's
-    share of each penetration deeper than the slop (normal impulses >= 0 with targets ERP depth / h; the other
-    contacts, and every contact of the other islands, may close their gap but not pass it: their impulses stay
-    zero unless pressed, so the sweeps leave out the other islands' contacts, the same result), moved into the
-    positions (``pseudo_impulses``, ``move_by_pseudo_velocities``); the gaps of every contact follow to first
-    order, and the potential energy gained is taken from the kinetic energy of the moved bodies. Returns the
-    deepest penetration (0 if none)."""
+    than PENALTY_TRIGGER slops and than PENALTY_FLOOR (rounding, ``islands.islands_deeper_than``),
+    pseudo-velocities that remove the penalty's share of each penetration deeper than the slop (normal impulses
+    >= 0 with targets ERP depth / h; the other contacts, and every contact of the other islands, may close their
+    gap but not pass it: their impulses stay zero unless pressed, so the sweeps leave out the other islands'
+    contacts, the same result), moved into the positions (``pseudo_impulses``, ``move_by_pseudo_velocities``);
+    the gaps of every contact follow to first order, and the potential energy gained is taken from the kinetic
+    energy of the moved bodies. Returns the deepest penetration (0 if none)."""
     rows, ids = contacts.rows, contacts.ids
     slop = context.slop
-    trigger = PENALTY_TRIGGER * slop + context.tolerance
+    floor = PENALTY_FLOOR / CONTACT_TOLERANCE * context.tolerance  # PENALTY_FLOOR at the scene's size
+    trigger = max(PENALTY_TRIGGER * slop + context.tolerance, floor)
     deepest = 0.0
     for c in range(count):
         deepest = max(deepest, -rows[c, GAP])
@@ -43,32 +52,32 @@ def correct_penetrations(contacts, count, bodies, work, exact, h, context):
         pseudo[b, 2] = 0.0
     deep_island = contacts.deep
     islands_deeper_than(rows, ids, count, trigger, work.root, work.marked, deep_island)
-    for c in range(count):
-        depth = -rows[c, GAP] - slop
-        rows[c, PSEUDO_IMPULSE] = 0.0
-        if depth > context.tolerance and deep_island[c]:
-            share = penalty_correction_share(rows[c, STIFFNESS], 1.0 / rows[c, NORMAL_MASS], h)
-            rows[c, TARGET] = share * depth / h
-        else:
-            rows[c, TARGET] = -max(rows[c, GAP], 0.0) / h
+    if count >= PARALLEL_CONTACTS:  # each contact at once, the same values
+        penalty_targets_on_threads(rows, count, deep_island, slop, context.tolerance, h)
+    else:
+        for c in range(count):
+            penalty_target(c, rows, deep_island, slop, context.tolerance, h)
     pseudo_impulses(contacts, count, bodies, pseudo, exact, deep_island, context)
-    for c in range(count):
-        ux, uy = relative_velocity(c, rows, ids, pseudo)
-        rows[c, GAP] += h * (ux * rows[c, NX] + uy * rows[c, NY])
+    if count >= PARALLEL_CONTACTS:
+        pseudo_gaps_on_threads(rows, ids, count, pseudo, h)
+    else:
+        for c in range(count):
+            pseudo_gap(c, rows, ids, pseudo, h)
     move_by_pseudo_velocities(bodies, pseudo, h, context.gravity)
     return deepest
 
 
 @jit_stage(inline="always")
 def pseudo_impulses(contacts, count, bodies, pseudo, exact, deep_island, context):
-    """The penalty's pseudo-impulses (column PSEUDO_IMPULSE, targets in column TARGET) into ``pseudo``: up to
-    DIRECT_LIMIT contacts solved exactly (``normal_lcp``, as the velocities: Gauss-Seidel leaves a light box between
-    heavy ones turning), beyond that, or at a looser tolerance as the velocities, by Gauss-Seidel over the deep
+    """The penalty's pseudo-impulses (column PSEUDO_IMPULSE, targets in column TARGET) into ``pseudo``: solved exactly
+    where the velocities' exact solve pays (``solve.exact_pays``, ``normal_lcp``: Gauss-Seidel leaves a light box
+    between heavy ones turning), otherwise by Gauss-Seidel over the deep
     islands' contacts (the scene's ``solver_tolerance``, at most PENALTY_ITERATIONS or ``solver_iterations``
-    sweeps, ``penalty_sweeps``)."""
+    sweeps, ``penalty_sweeps``; from PARALLEL_CONTACTS contacts up block by block, on threads:
+    ``parallel.partitioned_penalty_sweeps``)."""
     rows, ids = contacts.rows, contacts.ids
     inv_mass, inv_inertia = bodies.inv_mass, bodies.inv_inertia
-    if count <= DIRECT_LIMIT and context.sweep_tolerance <= EXACT_CONVERGED:
+    if exact_pays(ids, count, inv_mass, context.use_friction):
         delassus_matrix(rows, ids, count, inv_mass, inv_inertia, exact.w)
         for c in range(count):
             exact.free[c] = -rows[c, TARGET]
@@ -80,6 +89,10 @@ def pseudo_impulses(contacts, count, bodies, pseudo, exact, deep_island, context
                 if x[c] != 0.0:
                     apply_impulse(c, x[c] * rows[c, NX], x[c] * rows[c, NY], rows, ids, pseudo, inv_mass, inv_inertia)
             return
+    if count >= PARALLEL_CONTACTS:
+        iterations = min(context.sweeps, PENALTY_ITERATIONS)
+        partitioned_penalty_sweeps(contacts, pseudo, bodies, iterations, context.sweep_tolerance)
+        return
     listed = contacts.listed  # the deep islands' contacts: the sweeps leave the others out
     n_listed = 0
     for c in range(count):

@@ -6,6 +6,7 @@ from ..compile.compilation import jit_stage
 from ..contact_law import is_impact, newton_target
 from ..tunables import EXACT_CONVERGED, RESTITUTION_ITERATIONS
 from .narrowphase import APPROACH, BODY2, IMPULSE, NORMAL_MASS, NX, NY, RESTITUTION, TARGET
+from .parallel import PARALLEL_CONTACTS, partitioned_restitution
 from .prepare import apply_impulse, relative_velocity
 
 
@@ -15,7 +16,10 @@ def apply_restitution(contacts, count, bodies, threshold):
     u_rel . n >= -e u0 for the contacts that approached faster than the threshold and took an impulse (the
     normal impulse stays >= 0; a single contact gets the closed form to rounding); the floor's other contacts
     join with their speculative target less the threshold, their impulse only growing. Returns how many
-    contacts are impacts."""
+    contacts are impacts. From PARALLEL_CONTACTS contacts up block by block, on threads
+    (``parallel.partitioned_restitution``)."""
+    if count >= PARALLEL_CONTACTS:
+        return partitioned_restitution(contacts, count, bodies, threshold)
     rows, ids = contacts.rows, contacts.ids
     vel, inv_mass, inv_inertia = bodies.vel, bodies.inv_mass, bodies.inv_inertia
     impacts = 0

@@ -1,15 +1,17 @@
 """The solve contacts stage of the colliding solver (``stages.COLLIDING_SUBSTEP``): the contact impulses, by the
 cheapest method that is exact for the contact set (``solve_velocities``): normal and friction together up to
 JOINT_LIMIT contacts (``solve_jointly``, ``joint_contact_solve``), the normals exactly with friction sweeps up
-to DIRECT_LIMIT (``normal_lcp``, ``sweeps``), projected Gauss-Seidel beyond (``sweeps.gauss_seidel``).
+to DIRECT_LIMIT where boxes of unlike masses meet (``exact_pays``, ``normal_lcp``, ``sweeps``), projected
+Gauss-Seidel otherwise (``sweeps.gauss_seidel``).
 """
 
 from ..compile.compilation import jit_stage
 from ..contact_law import tangent
-from ..tunables import DIRECT_LIMIT, EXACT_CONVERGED, JOINT_LIMIT, VELOCITY_ITERATIONS
+from ..tunables import DIRECT_LIMIT, EXACT_CONVERGED, EXACT_MASS_RATIO, JOINT_LIMIT, VELOCITY_ITERATIONS
 from .joint_contact_solve import full_delassus, joint_impulses
-from .narrowphase import FRICTION_IMPULSE, IMPULSE, NX, NY, TARGET
+from .narrowphase import BODY1, BODY2, FRICTION_IMPULSE, IMPULSE, NX, NY, TARGET
 from .normal_lcp import delassus_matrix, normal_lcp
+from .parallel import PARALLEL_CONTACTS, partitioned_gauss_seidel
 from .prepare import apply_impulse, relative_velocity
 from .sweeps import friction_sweep, gauss_seidel
 
@@ -18,17 +20,22 @@ from .sweeps import friction_sweep, gauss_seidel
 def solve_velocities(contacts, count, bodies, exact, context):
     """Solve contacts: the contact impulses of the first ``count`` contacts. Up to JOINT_LIMIT contacts with friction,
     normal and friction impulses are solved together, exactly (``joint_contact_solve``); up to DIRECT_LIMIT contacts
-    (or if that does not settle), the normal impulses are solved exactly together (``alternate``); beyond that, if
-    the exact solve fails, or if the scene's ``solver_tolerance`` is looser than EXACT_CONVERGED (it chose the
-    sweeps' speed: the exact solve's pivots on tens of contacts, the last islands of a settling pile awake, cost
-    more than its sweeps), projected Gauss-Seidel (``gauss_seidel``, with the scene's ``solver_tolerance`` and
-    ``solver_iterations``). ``exact``: ``state.ExactWork``; ``context``: ``state.StepContext``."""
+    where boxes of unlike masses meet (``exact_pays``; or if the joint solve does not settle), the normal impulses
+    are solved exactly together (``alternate``); otherwise, or if the exact solve fails, projected Gauss-Seidel
+    (``gauss_seidel``, with the scene's ``solver_tolerance`` and ``solver_iterations``; from PARALLEL_CONTACTS
+    contacts up block by block, on threads: ``parallel.partitioned_gauss_seidel``).
+    ``exact``: ``state.ExactWork``; ``context``: ``state.StepContext``."""
     if count == 0:
+        return
+    if count >= PARALLEL_CONTACTS:
+        partitioned_gauss_seidel(
+            contacts, count, bodies, context.use_friction, context.sweeps, context.sweep_tolerance, exact.moved
+        )
         return
     use_friction = context.use_friction
     if use_friction and count <= JOINT_LIMIT and solve_jointly(contacts, count, bodies, exact):
         return
-    if count <= DIRECT_LIMIT and context.sweep_tolerance <= EXACT_CONVERGED:
+    if exact_pays(contacts.ids, count, bodies.inv_mass, use_friction):
         if alternate(contacts, count, bodies, exact, use_friction):
             return
     gauss_seidel(
@@ -43,6 +50,25 @@ def solve_velocities(contacts, count, bodies, exact, context):
         context.sweep_tolerance,
         exact.moved,
     )
+
+
+@jit_stage(inline="always")
+def exact_pays(ids, count, inv_mass, use_friction):
+    """Whether the exact normal solve pays for these ``count`` contacts: at most JOINT_LIMIT of them (a small system);
+    or at most DIRECT_LIMIT and either no friction (one solve, no rounds of friction sweeps to alternate with) or one
+    contact joining two boxes whose masses differ by more than EXACT_MASS_RATIO (Gauss-Seidel passes a heavy box's
+    load through a light one a little at a sweep; among like masses its sweeps hold as well, for far less)."""
+    if count <= JOINT_LIMIT or (count <= DIRECT_LIMIT and not use_friction):
+        return True
+    if count > DIRECT_LIMIT:
+        return False
+    for c in range(count):
+        b2 = ids[c, BODY2]
+        if b2 >= 0:
+            a, b = inv_mass[ids[c, BODY1]], inv_mass[b2]
+            if a > EXACT_MASS_RATIO * b or b > EXACT_MASS_RATIO * a:
+                return True
+    return False
 
 
 @jit_stage(inline="always")

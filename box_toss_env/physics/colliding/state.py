@@ -29,6 +29,7 @@ from ..robust.memory import MEMORY_SIZE
 from ..robust.state import CornerWork
 from ..tunables import CONTACT_TOLERANCE, DIRECT_LIMIT, MAX_SUBSTEPS, MIN_CAPACITY
 from .narrowphase import CONTACT_COLUMNS, ID_COLUMNS
+from .parallel import Partition, Spare, Spread, make_partition, make_spread
 
 
 class StepContext(NamedTuple):
@@ -37,7 +38,8 @@ class StepContext(NamedTuple):
     dt: float  # [s] grid step
     gravity: float  # [m/s^2] along y
     max_steps: int
-    until_rest: bool
+    until_rest: bool  # the run ends once every body sleeps
+    sleeping: bool  # islands at rest sleep (``Scene`` sleep settings; always with until_rest)
     threshold: float  # [m/s] restitution threshold
     sleep_speed: float  # [m/s]
     sleep_time: float  # [s]
@@ -78,6 +80,7 @@ class Sweep(NamedTuple):
     order: np.ndarray  # (n,) int64
     pairs: np.ndarray  # (capacity,) int64
     substep_pairs: np.ndarray  # (capacity,) int64
+    spread: Spread  # the threads' work (``parallel``)
 
 
 class Contacts(NamedTuple):
@@ -88,6 +91,8 @@ class Contacts(NamedTuple):
     ids: np.ndarray  # (capacity, ID_COLUMNS) int64
     deep: np.ndarray  # (capacity,) bool
     listed: np.ndarray  # (capacity,) int64
+    partition: Partition  # the contacts' blocks, for sweeps on threads (``parallel``)
+    spare: Spare  # rows the narrowphase on threads fills before packing them (``parallel``)
 
 
 class Impulses(NamedTuple):
@@ -199,6 +204,7 @@ def step_context(settings, half, radius, use_penalty, use_friction, record):
         gravity,
         max_steps,
         until_rest,
+        until_rest or settings[layout.SLEEP] != 0.0,
         threshold,
         sleep_speed,
         sleep_time,
@@ -249,6 +255,7 @@ def make_sweep(n):
         np.empty(n, np.int64),
         np.zeros(pairs, np.int64),
         np.zeros(pairs, np.int64),
+        make_spread(n),
     )
 
 
@@ -265,6 +272,7 @@ def with_axis(sweep, axis):
         sweep.order,
         sweep.pairs,
         sweep.substep_pairs,
+        sweep.spread,
     )
 
 
@@ -282,6 +290,7 @@ def grown_sweep(sweep):
         sweep.order,
         np.zeros(pairs, np.int64),
         np.zeros(pairs, np.int64),
+        sweep.spread,
     )
 
 
@@ -289,12 +298,15 @@ def grown_sweep(sweep):
 def make_contacts(capacity):
     """``Contacts`` and ``Impulses`` with room for ``capacity`` rows (each written before it is read: left
     unzeroed)."""
+    partition, spare = make_partition(capacity)
     return (
         Contacts(
             np.empty((capacity, CONTACT_COLUMNS)),
             np.empty((capacity, ID_COLUMNS), np.int64),
             np.empty(capacity, np.bool_),
             np.empty(capacity, np.int64),
+            partition,
+            spare,
         ),
         Impulses(
             np.empty(capacity, np.int64),

@@ -53,13 +53,25 @@ from .narrowphase import (
     RESTITUTION,
     TARGET,
     find_contacts,
-    update_geometry,
+)
+from .parallel import (
+    PARALLEL_BODIES,
+    PARALLEL_CONTACTS,
+    approach_on_threads,
+    geometry_and_reach,
+    gravity_on_threads,
+    parallel_find_contacts,
+    partition_contacts,
+    positions_on_threads,
+    prepare_on_threads,
+    store_on_threads,
+    targets_on_threads,
 )
 from .prepare import body_kinetic_energy, prepare_contacts, relative_velocity
 from .relax import correct_penetrations
 from .restitution import apply_restitution
 from .solve import solve_velocities
-from .substeps import body_reach, substeps
+from .substeps import substeps
 from .warm_start import warm_start
 
 
@@ -69,8 +81,7 @@ def contact_reach(bodies, sweep, include, h, context):
     """Each included body's bounding box and how far it can travel in the substep (``body_reach``); against
     the floor a body reaches its own distance plus the fastest body's (a struck box moves further than its
     own speed says)."""
-    update_geometry(bodies.pose, bodies.half, include, sweep.trig, sweep.bound)
-    fastest = body_reach(bodies.vel, bodies.radius, include, h, context.gravity, context.tolerance, sweep.reach)
+    fastest = geometry_and_reach(bodies, include, h, context, sweep)  # on threads for many bodies
     for b in range(bodies.pose.shape[0]):
         sweep.floor_reach[b] = sweep.reach[b] + fastest
 
@@ -80,13 +91,22 @@ def find_substep_contacts(context, bodies, sweep, contacts, include, h, pairs):
     """Find contacts: broadphase and narrowphase, the contacts within what the included bodies can travel in the substep
     (``contact_reach``), among the step's candidate pairs (``pairs``: how many, and whether they are this
     substep's own search already, ``groups.step_pairs``; else ``broadphase.substep_pairs``,
-    ``narrowphase.find_contacts``); returns how many."""
+    ``narrowphase.find_contacts``; from PARALLEL_BODIES bodies up on threads, ``parallel.parallel_find_contacts``: the
+    same contacts); from PARALLEL_CONTACTS contacts up, their blocks for the sweeps (``parallel.partition_contacts``).
+    Returns how many."""
     n_pairs, searched = pairs
-    if searched:
-        return find_contacts(bodies, sweep, sweep.pairs, n_pairs, include, contacts)
-    contact_reach(bodies, sweep, include, h, context)
-    n_substep_pairs = substep_pairs(bodies.pose, sweep, n_pairs, include)
-    return find_contacts(bodies, sweep, sweep.substep_pairs, n_substep_pairs, include, contacts)
+    keys = sweep.pairs
+    if not searched:
+        contact_reach(bodies, sweep, include, h, context)
+        n_pairs = substep_pairs(bodies.pose, sweep, n_pairs, include)
+        keys = sweep.substep_pairs
+    if bodies.pose.shape[0] >= PARALLEL_BODIES:
+        count = parallel_find_contacts(bodies, sweep, keys, n_pairs, include, contacts)
+    else:
+        count = find_contacts(bodies, sweep, keys, n_pairs, include, contacts)
+    if count >= PARALLEL_CONTACTS:
+        partition_contacts(contacts.ids, count, sweep.order, sweep.spread.block, contacts.partition)
+    return count
 
 
 @jit_stage(inline="always")
@@ -105,8 +125,12 @@ def note_penetration(contacts, count, max_penetration):
 # -- before the solve: energies, approach speeds; integrate velocities --------------------------
 @jit_stage(inline="always")
 def approach_speeds(contacts, count, bodies, kinetic_before):
-    """Each body's kinetic energy and each contact's approach speed u_rel . n before the substep's impulses."""
+    """Each body's kinetic energy and each contact's approach speed u_rel . n before the substep's impulses (on
+    threads from PARALLEL_CONTACTS contacts up)."""
     rows, ids, vel = contacts.rows, contacts.ids, bodies.vel
+    if count >= PARALLEL_CONTACTS:
+        approach_on_threads(rows, ids, count, vel, bodies.params, kinetic_before)
+        return
     for b in range(vel.shape[0]):
         kinetic_before[b] = body_kinetic_energy(vel, b, bodies.params)
     for c in range(count):
@@ -116,7 +140,10 @@ def approach_speeds(contacts, count, bodies, kinetic_before):
 
 @jit_stage(inline="always")
 def integrate_velocities(vel, include, h, gravity):
-    """v += h g for the included bodies (a sleeping body does not fall)."""
+    """v += h g for the included bodies (a sleeping body does not fall); on threads from PARALLEL_BODIES up."""
+    if vel.shape[0] >= PARALLEL_BODIES:
+        gravity_on_threads(vel, include, h, gravity)
+        return
     for b in range(vel.shape[0]):
         if include[b]:
             vel[b, 1] += h * gravity
@@ -125,15 +152,23 @@ def integrate_velocities(vel, include, h, gravity):
 # -- warm start, solve contacts, store impulses ----------------------------------------------------
 @jit_stage(inline="always")
 def speculative_targets(rows, count, h):
-    """u_rel . n >= -max(gap, 0) / h: each gap may close within the substep but not pass."""
+    """u_rel . n >= -max(gap, 0) / h: each gap may close within the substep but not pass (on threads from
+    PARALLEL_CONTACTS contacts up)."""
+    if count >= PARALLEL_CONTACTS:
+        targets_on_threads(rows, count, h)
+        return
     for c in range(count):
         rows[c, TARGET] = -max(rows[c, GAP], 0.0) / h
 
 
 @jit_stage(inline="always")
 def store_impulses(contacts, count, keys, impulses):
-    """Keep the solved impulses by contact key for the next substep's warm start; returns how many."""
+    """Keep the solved impulses by contact key for the next substep's warm start; returns how many (on threads from
+    PARALLEL_CONTACTS contacts up)."""
     rows, ids = contacts.rows, contacts.ids
+    if count >= PARALLEL_CONTACTS:
+        store_on_threads(rows, ids, count, keys, impulses)
+        return count
     for c in range(count):
         keys[c] = ids[c, KEY]
         impulses[c, 0] = rows[c, IMPULSE]
@@ -223,7 +258,10 @@ def limit_energy(contacts, count, bodies, stats, work, h, t, context):
 @jit_stage(inline="always")
 def integrate_positions(pose, vel, include, touched, h, gravity):
     """The exact parabola out of contact (x += h v - h^2 g / 2, v at the end of the substep), symplectic
-    Euler in contact (x += h v)."""
+    Euler in contact (x += h v). On threads from PARALLEL_BODIES bodies up."""
+    if pose.shape[0] >= PARALLEL_BODIES:
+        positions_on_threads(pose, vel, include, touched, h, gravity)
+        return
     for b in range(pose.shape[0]):
         if include[b]:
             pose[b, 0] += h * vel[b, 0]
@@ -244,7 +282,10 @@ def substep(context, bodies, sweep, contacts, stats, scratch, include, h, t, pai
     gravity, threshold, vel, work, exact = context.gravity, context.threshold, bodies.vel, scratch.work, scratch.exact
     # find contacts
     count = find_substep_contacts(context, bodies, sweep, contacts, include, h, pairs)
-    prepare_contacts(contacts, count, bodies)
+    if count >= PARALLEL_CONTACTS:
+        prepare_on_threads(contacts.rows, contacts.ids, count, bodies.params, bodies.inv_mass, bodies.inv_inertia)
+    else:
+        prepare_contacts(contacts, count, bodies)
     note_penetration(contacts, count, stats.max_penetration)
     # relax: split-impulse correction of penetrations deeper than the slop
     if context.use_penalty and count > 0:
@@ -254,7 +295,7 @@ def substep(context, bodies, sweep, contacts, stats, scratch, include, h, t, pai
     integrate_velocities(vel, include, h, gravity)
     # warm start: the speculative targets, each contact's impulses of the last substep
     speculative_targets(contacts.rows, count, h)
-    warm_start(contacts, count, warm_from, bodies, h, gravity)
+    warm_start(contacts, count, warm_from, bodies, h, context)
     # solve contacts
     solve_velocities(contacts, count, bodies, exact, context)
     # store impulses: for the next substep's warm start
@@ -349,7 +390,7 @@ def advance_step(context, bodies, sweep, contacts, impulses, sleep, stats, scrat
     count, n_previous, h_previous = advance_substeps(step_state, n, (n_sub, group), (n_pairs, searched), previous)
     if not end_step(bodies, sleep.awake, stats, n + 1, context.record):
         return False, n_awake, (n_previous, h_previous)
-    if context.until_rest:  # sleep
+    if context.sleeping:  # sleep
         if group < 0:
             join_islands(contacts.ids, count, sleep.parent)
         n_awake -= sleep_islands(bodies, sleep, stats, context, n + 1)

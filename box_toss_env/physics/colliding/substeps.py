@@ -52,6 +52,12 @@ def body_reach(vel, radius, awake, h, gravity, tolerance, reach):
     for b in range(vel.shape[0]):
         reach[b] = tolerance
         if awake[b]:
-            reach[b] += h * (math.sqrt(vel[b, 0] ** 2 + vel[b, 1] ** 2) + abs(gravity) * h + abs(vel[b, 2]) * radius[b])
+            reach[b] += travel(vel, radius, b, h, gravity)
             fastest = max(fastest, reach[b])
     return fastest
+
+
+@jit_stage(inline="always")
+def travel(vel, radius, b, h, gravity):
+    """|v| h + |g| h^2 + |omega| R h: how far body b's points can travel in a time h (``body_reach``)."""
+    return h * (math.sqrt(vel[b, 0] ** 2 + vel[b, 1] ** 2) + abs(gravity) * h + abs(vel[b, 2]) * radius[b])

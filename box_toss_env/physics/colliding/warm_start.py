@@ -7,9 +7,10 @@ import numpy as np
 
 from ..compile.compilation import jit_stage
 from ..contact_law import clamp_friction, friction_bound, tangent
-from ..tunables import DIRECT_LIMIT, LEVER_SPREAD, SUPPORT_SLOPE
+from ..tunables import LEVER_SPREAD, SUPPORT_SLOPE
 from .narrowphase import BODY1, BODY2, FRICTION, FRICTION_IMPULSE, GAP, IMPULSE, KEY, NX, NY, R1X, R2X
 from .prepare import apply_impulse
+from .solve import exact_pays
 
 
 @jit_stage(nrt=True)  # it allocates its work arrays (once a cold start)
@@ -111,15 +112,19 @@ def lever_shares(x, begin, end, centre, share):
 
 
 @jit_stage
-def warm_start(contacts, count, warm_from, bodies, h, gravity):
+def warm_start(contacts, count, warm_from, bodies, h, context):
     """Start each contact from the impulses its key had in the last substep (``warm_from``: keys, impulses, their
     count and substep length h', scaled by h / h'), applied to the velocities; new contacts start from zero. Both
     lists of keys increase (``find_contacts``' order), so one pass over them together pairs them. A cold start
-    (none kept) of more contacts than the exact solves take, under a gravity that pulls down, starts from
-    ``resting_loads``' guess instead."""
+    (none kept) of contacts the sweeps solve (``solve.exact_pays`` false), under a gravity that pulls down, starts
+    from ``resting_loads``' guess instead."""
     previous_keys, previous_impulses, n_previous, h_previous = warm_from
-    if n_previous == 0 and count > DIRECT_LIMIT and gravity < 0.0:
-        resting_loads(contacts, count, bodies, h, gravity)
+    if (
+        n_previous == 0
+        and context.gravity < 0.0
+        and not exact_pays(contacts.ids, count, bodies.inv_mass, context.use_friction)
+    ):
+        resting_loads(contacts, count, bodies, h, context.gravity)
         return
     rows, ids = contacts.rows, contacts.ids
     vel, inv_mass, inv_inertia = bodies.vel, bodies.inv_mass, bodies.inv_inertia

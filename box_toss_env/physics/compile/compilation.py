@@ -150,7 +150,7 @@ def _make_dispatcher(function: Callable, **options) -> Callable:
     return dispatcher
 
 
-def jit_stage(function: Callable | None = None, *, inline: str = "never", nrt: bool = False):
+def jit_stage(function: Callable | None = None, *, inline: str = "never", nrt: bool = False, parallel: bool = False):
     """Decorator for a function called only from compiled code: one compilation per set of plain
     argument types, no Python wrappers, cached on disk. ``inline="always"`` inlines it into its
     callers at numba's level (its callers then type it again at each call site).
@@ -162,10 +162,13 @@ def jit_stage(function: Callable | None = None, *, inline: str = "never", nrt: b
     sweeps: without it an awake pile of 100 boxes and the 210-box pyramid stepped 2.6-2.8 times
     faster, bit for bit the same (docs/changelog.md). A stage that allocated would
     fail to compile, not run unsafely; one that must allocate (numba's sort keeps a stack array)
-    says ``nrt=True``."""
+    says ``nrt=True``. With ``parallel=True`` its ``prange`` loops run on numba's threads (``colliding.parallel``)."""
 
     def decorate(function):
-        return _make_dispatcher(function, no_cpython_wrapper=True, no_cfunc_wrapper=True, inline=inline, _nrt=nrt)
+        options = {"parallel": True} if parallel else {}
+        return _make_dispatcher(
+            function, no_cpython_wrapper=True, no_cfunc_wrapper=True, inline=inline, _nrt=nrt, **options
+        )
 
     return decorate if function is None else decorate(function)
 

@@ -1,0 +1,606 @@
+"""Threads for large scenes whose boxes collide: the stages of a substep that dominate a scene of hundreds or
+thousands of boxes, run over numba's thread pool (``numba.set_num_threads``, set by ``Simulator`` from its
+``threads``), with results that do not depend on the number of threads, bit for bit.
+
+Two kinds of stage, by what they change:
+
+- **The same results as before, on any number of threads.** The broadphase's sweep (``parallel_candidate_pairs``:
+  each sweep position's pairs into slots of its own, then put in key order by a counting sort over the smaller body)
+  and the narrowphase (``parallel_find_contacts``: each body's contacts into rows of its own, then packed in body
+  order) give the very pairs and contacts in the very order of ``broadphase.candidate_pairs`` and
+  ``narrowphase.find_contacts``. They run from PARALLEL_BODIES bodies up.
+- **Gauss-Seidel by blocks.** A sweep visits the contacts one after another, each against the velocities the ones
+  before it left: two that share a body cannot run at once. The bodies are cut into BLOCKS blocks of consecutive
+  positions along the broadphase's sweep axis (``partition_contacts``: a pile or a pyramid cut into vertical
+  slabs); a contact whose bodies lie in one block (the floor is no body: it moves for none) is that block's, any
+  other goes to the boundary. A sweep then visits the blocks' contacts, each block in contact order, the blocks at
+  once (no two share a body, so any split of the blocks over threads gives the same velocities), then the boundary's
+  contacts in contact order. That order is the same on any number of threads, one included: the velocity sweeps
+  (``partitioned_gauss_seidel``), the penalty's (``partitioned_penalty_sweeps``) and the restitution polish
+  (``partitioned_restitution``) run so from PARALLEL_CONTACTS contacts up, in place of the contact-order sweeps
+  (``sweeps.gauss_seidel``, ``relax.penalty_sweeps``, ``restitution.apply_restitution``), which smaller scenes keep.
+  Each block adds up its own changes and impulses (a sweep's stop rule), and the sums are added block by block, so
+  they too are the same on any number of threads. A sweep is one parallel region (graph colouring, Box2D v3's way,
+  needs one per colour: a dozen per sweep, each waiting for the slowest thread, which costs on a loaded machine),
+  and only the contacts that cross a cut change their place in the order.
+"""
+
+from typing import NamedTuple
+
+import numba
+import numpy as np
+from numba import prange
+
+from ..compile.compilation import jit_stage
+from ..contact_law import is_impact, newton_target
+from ..robust.contact_solver import penalty_correction_share
+from ..tunables import EXACT_CONVERGED, RESTITUTION_ITERATIONS, SINGLE_CHANGE
+from .broadphase import candidate_pairs, interval_end, overlaps, sort_intervals
+from .narrowphase import (
+    APPROACH,
+    BODY1,
+    BODY2,
+    FRICTION,
+    FRICTION_IMPULSE,
+    GAP,
+    ID_COLUMNS,
+    IMPULSE,
+    KEY,
+    NORMAL_MASS,
+    NX,
+    NY,
+    PSEUDO_IMPULSE,
+    RESTITUTION,
+    STIFFNESS,
+    TARGET,
+    box_box_contacts,
+    box_geometry,
+    floor_contacts,
+    update_geometry,
+)
+from .prepare import apply_impulse, body_kinetic_energy, prepare_contact, relative_velocity
+from .substeps import body_reach, travel
+from .sweeps import friction_step, normal_step
+
+PARALLEL_BODIES = 256
+"""[bodies] from this many up, the broadphase's sweep and the narrowphase run on threads (same results)."""
+
+PARALLEL_CONTACTS = 1024
+"""[contacts] from this many up, a substep's sweeps go block by block (``partition_contacts``): on threads, and in
+that order on one thread too. Fewer keep the contact order of the sweeps (the exact solves take up to 64)."""
+
+BLOCKS = 4
+"""[-] blocks of bodies along the sweep axis, whatever the number of threads (it sets the sweeps' order): more
+blocks spread over more threads, and put more contacts on the boundary, swept one after another."""
+
+PAIR_SLOTS = 16
+"""[pairs] slots per sweep position in the parallel broadphase; a position with more (a box overlapping more than
+this many boxes after it along the sweep axis) sends the search to ``broadphase.candidate_pairs``."""
+
+
+class Partition(NamedTuple):
+    """The blocks of a substep's contacts (``partition_contacts``) and the sweeps' work."""
+
+    block: np.ndarray  # (capacity,) int64: each contact's block (BLOCKS: the boundary)
+    order: np.ndarray  # (capacity,) int64: the contacts block by block, the boundary's last
+    start: np.ndarray  # (BLOCKS + 2,) int64: where each block starts in ``order``
+    filled: np.ndarray  # (BLOCKS + 1,) int64: work
+    partial: np.ndarray  # (BLOCKS + 1, 3): each block's sums in a sweep (change, impulses, largest change)
+
+
+class Spare(NamedTuple):
+    """Contact rows as ``state.Contacts``' (the ``narrowphase`` columns it writes, NX to GAP), each box's at its own
+    place, before packing."""
+
+    rows: np.ndarray  # (capacity, GAP + 1)
+    ids: np.ndarray  # (capacity, ID_COLUMNS) int64
+
+
+class Spread(NamedTuple):
+    """Per sweep position or box: the parallel broadphase's pair slots and counts, where each box's pairs or
+    contacts start, and each body's block (``partition_contacts``)."""
+
+    slots: np.ndarray  # (n * PAIR_SLOTS,) int64
+    found: np.ndarray  # (n,) int64
+    first: np.ndarray  # (n + 1,) int64
+    filled: np.ndarray  # (n,) int64
+    block: np.ndarray  # (n,) int64
+
+
+@jit_stage(inline="always")  # into its callers, which run with numba's runtime
+def make_partition(capacity):
+    """``Partition`` and ``Spare`` for ``capacity`` contact rows (each entry written before it is read)."""
+    return (
+        Partition(
+            np.empty(capacity, np.int64),
+            np.empty(capacity, np.int64),
+            np.zeros(BLOCKS + 2, np.int64),
+            np.zeros(BLOCKS + 1, np.int64),
+            np.zeros((BLOCKS + 1, 3)),
+        ),
+        Spare(np.empty((capacity, GAP + 1)), np.empty((capacity, ID_COLUMNS), np.int64)),
+    )
+
+
+@jit_stage(inline="always")  # into its callers, which run with numba's runtime
+def make_spread(n):
+    """``Spread`` for n bodies."""
+    return Spread(
+        np.zeros(n * PAIR_SLOTS, np.int64),
+        np.zeros(n, np.int64),
+        np.zeros(n + 1, np.int64),
+        np.zeros(n, np.int64),
+        np.zeros(n, np.int64),
+    )
+
+
+def launch_threads() -> None:
+    """Start numba's threading layer (``numba.get_num_threads`` starts it), before a kernel holding these stages
+    runs: a kernel loaded from numba's cache does not start it, and its parallel stages then called a null pointer
+    (a segmentation fault, even where no stage ran on threads)."""
+    numba.get_num_threads()
+
+
+# -- blocks ------------------------------------------------------------------------------------------
+@jit_stage
+def partition_contacts(ids, count, sweep_order, body_block, partition):
+    """The blocks of the first ``count`` contacts (module docstring) into ``partition``: body at position p of the
+    sweep order ``sweep_order`` (of n) in block p BLOCKS // n (into ``body_block``), each contact in its bodies'
+    block or the boundary (BLOCKS), the contacts block by block in contact order, and where each block starts."""
+    block, order, start, filled = partition.block, partition.order, partition.start, partition.filled
+    n = body_block.shape[0]
+    for p in range(n):
+        body_block[sweep_order[p]] = p * BLOCKS // n
+    start[:] = 0
+    for c in range(count):
+        b2 = ids[c, BODY2]
+        k = body_block[ids[c, BODY1]]
+        if b2 >= 0 and body_block[b2] != k:
+            k = BLOCKS
+        block[c] = k
+        start[k + 1] += 1
+    for k in range(BLOCKS + 1):
+        start[k + 1] += start[k]
+        filled[k] = start[k]
+    for c in range(count):
+        order[filled[block[c]]] = c
+        filled[block[c]] += 1
+
+
+@jit_stage
+def add_blocks(partial):
+    """The sums of every block and the boundary (``Partition.partial``), added in block order: (change, impulses,
+    largest change)."""
+    change, total, largest = 0.0, 0.0, 0.0
+    for k in range(BLOCKS + 1):
+        change += partial[k, 0]
+        total += partial[k, 1]
+        largest = max(largest, partial[k, 2])
+    return change, total, largest
+
+
+# -- Gauss-Seidel of the velocities ------------------------------------------------------------------
+@jit_stage(inline="always")
+def velocity_step(c, rows, ids, vel, inv_mass, inv_inertia, use_friction, sweep, moved, quiet):
+    """``sweeps.gauss_seidel``'s step on contact c in sweep ``sweep`` (its friction, then its normal impulse; after
+    the first sweep only if a body of it moved: ``moved[sweep % 2]`` in the sweep before, ``moved[(sweep + 1) % 2]``
+    in this one so far). Returns (its change, its largest change)."""
+    b1 = ids[c, BODY1]
+    b2 = ids[c, BODY2]
+    before, now = sweep % 2, (sweep + 1) % 2
+    change, largest = 0.0, 0.0
+    if sweep == 0 or moved[before, b1] or moved[now, b1] or (b2 >= 0 and (moved[before, b2] or moved[now, b2])):
+        if use_friction and rows[c, FRICTION] > 0.0:
+            dq = abs(friction_step(c, rows, ids, vel, inv_mass, inv_inertia))
+            change, largest = dq, dq
+            if dq > quiet:
+                moved[now, b1] = True
+                if b2 >= 0:
+                    moved[now, b2] = True
+        dp = abs(normal_step(c, IMPULSE, rows, ids, vel, inv_mass, inv_inertia))
+        change, largest = change + dp, max(largest, dp)
+        if dp > quiet:
+            moved[now, b1] = True
+            if b2 >= 0:
+                moved[now, b2] = True
+    return change, largest
+
+
+@jit_stage(inline="always")
+def velocity_block(k, rows, ids, order, start, vel, inv_mass, inv_inertia, use_friction, sweep, moved, quiet):
+    """``velocity_step`` over block k's contacts in order; returns its sums (change, impulses, largest change)."""
+    change, total, largest = 0.0, 0.0, 0.0
+    for position in range(start[k], start[k + 1]):
+        c = order[position]
+        dc, dl = velocity_step(c, rows, ids, vel, inv_mass, inv_inertia, use_friction, sweep, moved, quiet)
+        change, total, largest = change + dc, total + rows[c, IMPULSE], max(largest, dl)
+    return change, total, largest
+
+
+@jit_stage(parallel=True)
+def velocity_blocks(rows, ids, order, start, vel, inv_mass, inv_inertia, use_friction, sweep, moved, quiet, partial):
+    """One sweep: ``velocity_block`` over the blocks at once (no two share a body), then over the boundary; each
+    one's sums into ``partial``."""
+    for k in prange(BLOCKS):
+        partial[k, 0], partial[k, 1], partial[k, 2] = velocity_block(
+            k, rows, ids, order, start, vel, inv_mass, inv_inertia, use_friction, sweep, moved, quiet
+        )
+    partial[BLOCKS, 0], partial[BLOCKS, 1], partial[BLOCKS, 2] = velocity_block(
+        BLOCKS, rows, ids, order, start, vel, inv_mass, inv_inertia, use_friction, sweep, moved, quiet
+    )
+
+
+@jit_stage
+def partitioned_gauss_seidel(contacts, count, bodies, use_friction, iterations, tolerance, moved):
+    """``sweeps.gauss_seidel`` (its stop rule, its sweeps after the first over the contacts of bodies that moved)
+    block by block (module docstring): at most ``iterations`` sweeps; ``moved``: (2, bodies) work."""
+    rows, ids, partition = contacts.rows, contacts.ids, contacts.partition
+    order, start, partial = partition.order, partition.start, partition.partial
+    vel, inv_mass, inv_inertia = bodies.vel, bodies.inv_mass, bodies.inv_inertia
+    total = 0.0
+    for c in range(count):
+        total += rows[c, IMPULSE]
+    for sweep in range(iterations):
+        quiet = tolerance * total / count
+        moved[(sweep + 1) % 2, :] = False
+        velocity_blocks(rows, ids, order, start, vel, inv_mass, inv_inertia, use_friction, sweep, moved, quiet, partial)
+        change, total, largest = add_blocks(partial)
+        if change <= tolerance * total and largest * count <= SINGLE_CHANGE * tolerance * total:
+            break
+
+
+# -- the penalty's sweeps ----------------------------------------------------------------------------
+@jit_stage(inline="always")
+def penalty_block(k, rows, ids, order, start, pseudo, inv_mass, inv_inertia, deep):
+    """``relax.penalty_sweeps``' step over block k's contacts of deep islands, in order; returns its sums (change,
+    impulses)."""
+    change, total = 0.0, 0.0
+    for position in range(start[k], start[k + 1]):
+        c = order[position]
+        if deep[c]:
+            change += abs(normal_step(c, PSEUDO_IMPULSE, rows, ids, pseudo, inv_mass, inv_inertia))
+            total += rows[c, PSEUDO_IMPULSE]
+    return change, total
+
+
+@jit_stage(parallel=True)
+def penalty_blocks(rows, ids, order, start, pseudo, inv_mass, inv_inertia, deep, partial):
+    """One penalty sweep: ``penalty_block`` over the blocks at once, then over the boundary; sums into ``partial``."""
+    for k in prange(BLOCKS):
+        partial[k, 0], partial[k, 1] = penalty_block(k, rows, ids, order, start, pseudo, inv_mass, inv_inertia, deep)
+    partial[BLOCKS, 0], partial[BLOCKS, 1] = penalty_block(
+        BLOCKS, rows, ids, order, start, pseudo, inv_mass, inv_inertia, deep
+    )
+
+
+@jit_stage
+def partitioned_penalty_sweeps(contacts, pseudo, bodies, iterations, tolerance):
+    """``relax.penalty_sweeps`` over the contacts of the deep islands (``contacts.deep``) block by block."""
+    rows, ids, partition, deep = contacts.rows, contacts.ids, contacts.partition, contacts.deep
+    order, start, partial = partition.order, partition.start, partition.partial
+    partial[:, 2] = 0.0
+    for _ in range(iterations):
+        penalty_blocks(rows, ids, order, start, pseudo, bodies.inv_mass, bodies.inv_inertia, deep, partial)
+        change, total, _ = add_blocks(partial)
+        if change <= tolerance * total:
+            break
+
+
+# -- the restitution polish --------------------------------------------------------------------------
+@jit_stage(inline="always")
+def restitution_block(k, rows, ids, order, start, vel, inv_mass, inv_inertia, threshold):
+    """``restitution.apply_restitution``'s step over block k's contacts in order (an impact, or a floor contact
+    whose impulse may only grow); returns its sums (change, impulses)."""
+    change, total = 0.0, 0.0
+    for position in range(start[k], start[k + 1]):
+        c = order[position]
+        if is_impact(rows[c, APPROACH], threshold) and rows[c, IMPULSE] > 0.0:
+            target = newton_target(rows[c, RESTITUTION], rows[c, APPROACH])
+            least = 0.0
+        elif ids[c, BODY2] < 0:
+            target = rows[c, TARGET] - threshold
+            least = rows[c, IMPULSE]
+        else:
+            continue
+        nx, ny = rows[c, NX], rows[c, NY]
+        ux, uy = relative_velocity(c, rows, ids, vel)
+        before = rows[c, IMPULSE]
+        after = max(before - (ux * nx + uy * ny - target) * rows[c, NORMAL_MASS], least)
+        rows[c, IMPULSE] = after
+        dp = after - before
+        if dp != 0.0:
+            apply_impulse(c, dp * nx, dp * ny, rows, ids, vel, inv_mass, inv_inertia)
+        change += abs(dp)
+        total += after
+    return change, total
+
+
+@jit_stage(parallel=True)
+def restitution_blocks(rows, ids, order, start, vel, inv_mass, inv_inertia, threshold, partial):
+    """One polish sweep: ``restitution_block`` over the blocks at once, then the boundary; sums into ``partial``."""
+    for k in prange(BLOCKS):
+        partial[k, 0], partial[k, 1] = restitution_block(
+            k, rows, ids, order, start, vel, inv_mass, inv_inertia, threshold
+        )
+    partial[BLOCKS, 0], partial[BLOCKS, 1] = restitution_block(
+        BLOCKS, rows, ids, order, start, vel, inv_mass, inv_inertia, threshold
+    )
+
+
+@jit_stage
+def partitioned_restitution(contacts, count, bodies, threshold):
+    """``restitution.apply_restitution`` block by block (its impacts counted first: none, nothing done); returns
+    how many contacts are impacts."""
+    rows, ids, partition = contacts.rows, contacts.ids, contacts.partition
+    order, start, partial = partition.order, partition.start, partition.partial
+    impacts = 0
+    for c in range(count):
+        if is_impact(rows[c, APPROACH], threshold) and rows[c, IMPULSE] > 0.0:
+            impacts += 1
+    if impacts == 0:
+        return 0
+    partial[:, 2] = 0.0
+    for _ in range(RESTITUTION_ITERATIONS):
+        restitution_blocks(rows, ids, order, start, bodies.vel, bodies.inv_mass, bodies.inv_inertia, threshold, partial)
+        change, total, _ = add_blocks(partial)
+        if change <= EXACT_CONVERGED * total:
+            break
+    return impacts
+
+
+# -- broadphase --------------------------------------------------------------------------------------
+@jit_stage(parallel=True)
+def sweep_slots(pose, bound, reach, include, moving, axis, order, low, slots, found):
+    """``broadphase.candidate_pairs``' sweep, each position p of the sweep order at once: its pairs (keys) into
+    ``slots[p * PAIR_SLOTS:]``, how many into ``found[p]`` (more than PAIR_SLOTS: not all kept)."""
+    n = pose.shape[0]
+    for p in prange(n):
+        i = order[p]
+        k = 0
+        if include[i]:
+            high = interval_end(pose, bound, reach, axis, i)
+            for q in range(p + 1, n):
+                j = order[q]
+                if low[j] > high:
+                    break
+                if include[j] and (moving[i] or moving[j]):
+                    a, b = min(i, j), max(i, j)
+                    if overlaps(
+                        pose[b, 0] - pose[a, 0],
+                        pose[b, 1] - pose[a, 1],
+                        bound[a, 0] + bound[b, 0],
+                        bound[a, 1] + bound[b, 1],
+                        reach[a] + reach[b],
+                    ):
+                        if k < PAIR_SLOTS:
+                            slots[p * PAIR_SLOTS + k] = a * n + b
+                        k += 1
+        found[p] = k
+
+
+@jit_stage(parallel=True)
+def sort_buckets(keys, first):
+    """Each body's keys ``keys[first[a]:first[a + 1]]`` (its pairs with larger bodies) sorted, by insertion."""
+    for a in prange(first.shape[0] - 1):
+        for p in range(first[a] + 1, first[a + 1]):
+            item = keys[p]
+            q = p - 1
+            while q >= first[a] and keys[q] > item:
+                keys[q + 1] = keys[q]
+                q -= 1
+            keys[q + 1] = item
+
+
+@jit_stage
+def parallel_candidate_pairs(pose, bound, reach, include, moving, axis, order, low, keys, spread):
+    """``broadphase.candidate_pairs`` (same arguments, same pairs in the same order; ``spread``: ``state.Spread``)
+    with its sweep on threads (``sweep_slots``) and its sort a counting sort by the smaller body, each body's keys
+    then sorted (``sort_buckets``). A position with more than PAIR_SLOTS pairs: ``candidate_pairs`` itself."""
+    n = pose.shape[0]
+    sort_intervals(pose, bound, reach, axis, order, low)
+    found, first, filled, slots = spread.found, spread.first, spread.filled, spread.slots
+    sweep_slots(pose, bound, reach, include, moving, axis, order, low, slots, found)
+    count = 0
+    for p in range(n):
+        if found[p] > PAIR_SLOTS:
+            return candidate_pairs(pose, bound, reach, include, moving, axis, order, low, keys)
+        count += found[p]
+    if count > keys.shape[0]:
+        return -1
+    first[:] = 0
+    for p in range(n):
+        for k in range(found[p]):
+            first[slots[p * PAIR_SLOTS + k] // n + 1] += 1
+    for a in range(n):
+        first[a + 1] += first[a]
+        filled[a] = first[a]
+    for p in range(n):
+        for k in range(found[p]):
+            key = slots[p * PAIR_SLOTS + k]
+            keys[filled[key // n]] = key
+            filled[key // n] += 1
+    sort_buckets(keys, first)
+    return count
+
+
+# -- narrowphase -------------------------------------------------------------------------------------
+@jit_stage(parallel=True)
+def contacts_by_body(pose, half, trig, reach, floor_reach, pair_keys, include, spare, first, found):
+    """``narrowphase.find_contacts``' contacts of each box i at once (against the floor, then its pairs with larger
+    boxes, ``first[i]:first[i + 1]`` of ``pair_keys``) into rows of its own of ``spare`` (rows, ids; from 4 i + 2
+    first[i]: four a box, two a pair), how many into ``found[i]`` (negative: no room)."""
+    rows, ids = spare
+    n = pose.shape[0]
+    for i in prange(n):
+        slot = 4 * i + 2 * first[i]
+        count = slot
+        if include[i]:
+            count = floor_contacts(i, pose, trig, half, floor_reach[i], i * (n + 1), rows, ids, count)
+        for p in range(first[i], first[i + 1]):
+            j = pair_keys[p] - i * n
+            count = box_box_contacts(i, j, pose, trig, half, reach[i] + reach[j], i * (n + 1) + j + 1, rows, ids, count)
+        found[i] = count - slot if count >= 0 else -1
+
+
+@jit_stage(parallel=True)
+def first_pairs(pair_keys, n_pairs, first):
+    """``first[i]``: where box i's pairs (keys i n + j) start in the increasing ``pair_keys[:n_pairs]`` (binary
+    search, each box at once); ``first[n]`` = n_pairs."""
+    n = first.shape[0] - 1
+    for i in prange(n + 1):
+        low, high = 0, n_pairs
+        while low < high:
+            middle = (low + high) // 2
+            if pair_keys[middle] < i * n:
+                low = middle + 1
+            else:
+                high = middle
+        first[i] = low
+
+
+@jit_stage(parallel=True)
+def pack_contacts(spare_rows, spare_ids, rows, ids, first, found, filled):
+    """Each box's rows of the spare rows (``contacts_by_body``) into ``rows``, ``ids`` from ``filled[i]`` on, at
+    once."""
+    for i in prange(found.shape[0]):
+        slot = 4 * i + 2 * first[i]
+        for r in range(found[i]):
+            for column in range(GAP + 1):  # the columns the narrowphase writes
+                rows[filled[i] + r, column] = spare_rows[slot + r, column]
+            for column in range(ID_COLUMNS):
+                ids[filled[i] + r, column] = spare_ids[slot + r, column]
+
+
+@jit_stage
+def parallel_find_contacts(bodies, sweep, pair_keys, n_pairs, include, contacts):
+    """``narrowphase.find_contacts`` (same arguments, the same contacts in the same order) with each box's contacts
+    found at once (``contacts_by_body``) and packed in box order (``pack_contacts``); returns how many."""
+    spare, first, found, filled = contacts.spare, sweep.spread.first, sweep.spread.found, sweep.spread.filled
+    first_pairs(pair_keys, n_pairs, first)
+    trig, reach, floor_reach = sweep.trig, sweep.reach, sweep.floor_reach
+    spare_arrays = (spare.rows, spare.ids)
+    contacts_by_body(bodies.pose, bodies.half, trig, reach, floor_reach, pair_keys, include, spare_arrays, first, found)
+    count = 0
+    for i in range(found.shape[0]):
+        if found[i] < 0:
+            return -1
+        filled[i] = count
+        count += found[i]
+    pack_contacts(spare.rows, spare.ids, contacts.rows, contacts.ids, first, found, filled)
+    return count
+
+
+# -- each body, each contact at once -----------------------------------------------------------------
+@jit_stage(parallel=True)
+def geometry_on_threads(pose, half, include, trig, bound, vel, radius, h, gravity, tolerance, reach):
+    """``narrowphase.update_geometry`` and ``substeps.body_reach`` (without its largest), each body at once."""
+    for b in prange(pose.shape[0]):
+        if include[b]:
+            box_geometry(b, pose, half, trig, bound)
+        reach[b] = tolerance
+        if include[b]:
+            reach[b] += travel(vel, radius, b, h, gravity)
+
+
+@jit_stage
+def geometry_and_reach(bodies, include, h, context, sweep):
+    """Each included body's geometry (``narrowphase.update_geometry``) and reach over h (``substeps.body_reach``,
+    returned: the largest): on threads from PARALLEL_BODIES bodies up (the same values)."""
+    pose, vel, radius, trig, bound, reach = bodies.pose, bodies.vel, bodies.radius, sweep.trig, sweep.bound, sweep.reach
+    if pose.shape[0] < PARALLEL_BODIES:
+        update_geometry(pose, bodies.half, include, trig, bound)
+        return body_reach(vel, radius, include, h, context.gravity, context.tolerance, reach)
+    gravity, tolerance = context.gravity, context.tolerance
+    geometry_on_threads(pose, bodies.half, include, trig, bound, vel, radius, h, gravity, tolerance, reach)
+    fastest = 0.0
+    for b in range(pose.shape[0]):
+        if include[b]:
+            fastest = max(fastest, reach[b])
+    return fastest
+
+
+@jit_stage(parallel=True)
+def prepare_on_threads(rows, ids, count, params, inv_mass, inv_inertia):
+    """``prepare.prepare_contacts``, each contact at once."""
+    for c in prange(count):
+        prepare_contact(c, rows, ids, params, inv_mass, inv_inertia)
+
+
+@jit_stage(parallel=True)
+def approach_on_threads(rows, ids, count, vel, params, kinetic_before):
+    """``step.approach_speeds``, each body and each contact at once."""
+    for b in prange(vel.shape[0]):
+        kinetic_before[b] = body_kinetic_energy(vel, b, params)
+    for c in prange(count):
+        ux, uy = relative_velocity(c, rows, ids, vel)
+        rows[c, APPROACH] = ux * rows[c, NX] + uy * rows[c, NY]
+
+
+@jit_stage(parallel=True)
+def gravity_on_threads(vel, include, h, gravity):
+    """``step.integrate_velocities``, each body at once."""
+    for b in prange(vel.shape[0]):
+        if include[b]:
+            vel[b, 1] += h * gravity
+
+
+@jit_stage(parallel=True)
+def targets_on_threads(rows, count, h):
+    """``step.speculative_targets``, each contact at once."""
+    for c in prange(count):
+        rows[c, TARGET] = -max(rows[c, GAP], 0.0) / h
+
+
+@jit_stage(parallel=True)
+def store_on_threads(rows, ids, count, keys, impulses):
+    """``step.store_impulses``, each contact at once."""
+    for c in prange(count):
+        keys[c] = ids[c, KEY]
+        impulses[c, 0] = rows[c, IMPULSE]
+        impulses[c, 1] = rows[c, FRICTION_IMPULSE]
+
+
+@jit_stage(parallel=True)
+def positions_on_threads(pose, vel, include, touched, h, gravity):
+    """``step.integrate_positions``, each body at once."""
+    for b in prange(pose.shape[0]):
+        if include[b]:
+            pose[b, 0] += h * vel[b, 0]
+            pose[b, 1] += h * vel[b, 1]
+            if not touched[b]:
+                pose[b, 1] -= 0.5 * h * h * gravity
+            pose[b, 2] += h * vel[b, 2]
+
+
+@jit_stage(inline="always")
+def penalty_target(c, rows, deep, slop, tolerance, h):
+    """Contact c's target for the penalty's pseudo-velocities (``relax.correct_penetrations``): the penalty's share
+    of its depth beyond the slop over h in a deep island, else its gap may close but not pass; its pseudo-impulse 0."""
+    depth = -rows[c, GAP] - slop
+    rows[c, PSEUDO_IMPULSE] = 0.0
+    if depth > tolerance and deep[c]:
+        share = penalty_correction_share(rows[c, STIFFNESS], 1.0 / rows[c, NORMAL_MASS], h)
+        rows[c, TARGET] = share * depth / h
+    else:
+        rows[c, TARGET] = -max(rows[c, GAP], 0.0) / h
+
+
+@jit_stage(parallel=True)
+def penalty_targets_on_threads(rows, count, deep, slop, tolerance, h):
+    """``penalty_target``, each contact at once."""
+    for c in prange(count):
+        penalty_target(c, rows, deep, slop, tolerance, h)
+
+
+@jit_stage(inline="always")
+def pseudo_gap(c, rows, ids, pseudo, h):
+    """Contact c's gap after the positions move by h times the pseudo-velocities (to first order)."""
+    ux, uy = relative_velocity(c, rows, ids, pseudo)
+    rows[c, GAP] += h * (ux * rows[c, NX] + uy * rows[c, NY])
+
+
+@jit_stage(parallel=True)
+def pseudo_gaps_on_threads(rows, ids, count, pseudo, h):
+    """``pseudo_gap``, each contact at once."""
+    for c in prange(count):
+        pseudo_gap(c, rows, ids, pseudo, h)

@@ -1,0 +1,58 @@
+"""A large scene whose boxes collide runs its large stages on threads (``colliding.parallel``): the same results
+bit for bit on one thread and on two, in every stage that runs on threads (the broadphase's sweep, the
+narrowphase, and the sweeps of the velocities, the penalty and the restitution block by block)."""
+
+import numba
+import numpy as np
+import pytest
+
+from box_toss_env.physics import Simulator, layout, make_settings, scenes, simulate, warm_start_memory
+from box_toss_env.physics.colliding.parallel import PARALLEL_BODIES, PARALLEL_CONTACTS
+
+TWO = pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="numba has one thread here")
+
+
+def run(scene, steps, threads):
+    """(final state, stats, warm start) of ``steps`` steps of ``scene`` on ``threads`` threads, kept awake."""
+    state, warm = scene.initial_state(), warm_start_memory(scene.n_bodies)
+    stats = np.zeros((scene.n_bodies, layout.STATS_SIZE))
+    settings = make_settings(scene, steps, until_rest=False, sleep=False)
+    Simulator.for_scene(scene, threads=threads).run(state, scene.body_params(), settings, stats, warm_start=warm)
+    return state, stats, warm
+
+
+@TWO
+@pytest.mark.parametrize(
+    ("name", "scene", "steps"),
+    [
+        ("pile", scenes.pile(700, restitution=0.3), 450),  # dropped: impacts (restitution), substeps, the penalty
+        ("pyramid", scenes.pyramid(rows=30), 40),  # one island of 465 boxes at rest
+    ],
+)
+def test_one_and_two_threads_give_the_same_results_bit_for_bit(name, scene, steps):
+    assert scene.n_bodies >= PARALLEL_BODIES
+    one_state, one_stats, one_warm = run(scene, steps, threads=1)
+    two_state, two_stats, two_warm = run(scene, steps, threads=2)
+    assert one_warm[0, 0] >= PARALLEL_CONTACTS  # the last substep's contacts: the sweeps ran block by block
+    assert np.array_equal(one_state, two_state)
+    assert np.array_equal(one_stats, two_stats, equal_nan=True)
+    assert np.array_equal(one_warm, two_warm)
+    assert np.isfinite(one_state).all()
+
+
+@TWO
+def test_simulate_takes_its_threads_and_sleeps_the_same_on_any():
+    scene = scenes.pile(300)
+    one = simulate(scene, duration=1.0, until_rest=True, threads=1)
+    two = simulate(scene, duration=1.0, until_rest=True, threads=2)
+    assert np.array_equal(one.final_state, two.final_state)
+    assert np.array_equal(one.rest_time, two.rest_time, equal_nan=True)
+    assert np.array_equal(one.max_penetration, two.max_penetration)
+
+
+def test_a_large_pyramid_stands_when_its_sweeps_go_block_by_block():
+    scene = scenes.pyramid(rows=30)
+    state, stats, warm = run(scene, 128, threads=1)
+    assert warm[0, 0] >= PARALLEL_CONTACTS
+    assert np.abs(state[:, :3] - scene.initial_state()[:, :3]).max() < 1e-6
+    assert stats[:, layout.MAX_PENETRATION].max() < 1e-4
