@@ -327,6 +327,8 @@ def test_a_colliding_scene_runs_its_boxes_together_whatever_parallel_says():
     scene = scenes.pile(n=10)
     assert Simulator.for_scene(scene, parallel=False).shares == 1
     assert Simulator.for_scene(scene, parallel=True, threads=1).shares == 1  # its large stages' threads (one here)
+    assert Simulator.for_scene(scene).shares == 1  # one thread unless told: a second does not pay on piles
+    assert Simulator.for_scene(scene, threads=2).shares == 2
     assert np.array_equal(
         simulate(scene, duration=0.5).final_state, simulate(scene, duration=0.5, threads=2).final_state
     )
