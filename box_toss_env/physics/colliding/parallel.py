@@ -32,7 +32,7 @@ import numpy as np
 from numba import prange
 
 from ..compile.compilation import jit_stage
-from ..contact_law import is_impact, newton_target
+from ..contact_law import is_impact
 from ..robust.contact_solver import penalty_correction_share
 from ..tunables import EXACT_CONVERGED, RESTITUTION_ITERATIONS, SINGLE_CHANGE
 from .broadphase import candidate_pairs, interval_end, overlaps, sort_intervals
@@ -50,7 +50,6 @@ from .narrowphase import (
     NX,
     NY,
     PSEUDO_IMPULSE,
-    RESTITUTION,
     STIFFNESS,
     TARGET,
     box_box_contacts,
@@ -58,7 +57,7 @@ from .narrowphase import (
     floor_contacts,
     update_geometry,
 )
-from .prepare import apply_impulse, body_kinetic_energy, prepare_contact, relative_velocity
+from .prepare import body_kinetic_energy, prepare_contact, relative_velocity, restitution_step
 from .substeps import body_reach, travel
 from .sweeps import friction_step, normal_step
 
@@ -293,24 +292,8 @@ def restitution_block(k, rows, ids, order, start, vel, inv_mass, inv_inertia, th
     whose impulse may only grow); returns its sums (change, impulses)."""
     change, total = 0.0, 0.0
     for position in range(start[k], start[k + 1]):
-        c = order[position]
-        if is_impact(rows[c, APPROACH], threshold) and rows[c, IMPULSE] > 0.0:
-            target = newton_target(rows[c, RESTITUTION], rows[c, APPROACH])
-            least = 0.0
-        elif ids[c, BODY2] < 0:
-            target = rows[c, TARGET] - threshold
-            least = rows[c, IMPULSE]
-        else:
-            continue
-        nx, ny = rows[c, NX], rows[c, NY]
-        ux, uy = relative_velocity(c, rows, ids, vel)
-        before = rows[c, IMPULSE]
-        after = max(before - (ux * nx + uy * ny - target) * rows[c, NORMAL_MASS], least)
-        rows[c, IMPULSE] = after
-        dp = after - before
-        if dp != 0.0:
-            apply_impulse(c, dp * nx, dp * ny, rows, ids, vel, inv_mass, inv_inertia)
-        change += abs(dp)
+        moved, after = restitution_step(order[position], rows, ids, vel, inv_mass, inv_inertia, threshold)
+        change += moved
         total += after
     return change, total
 

@@ -17,11 +17,13 @@ a box-floor contact takes the box's own).
 
 from .. import layout
 from ..compile.compilation import jit_stage
-from ..contact_law import floor_friction, mixed_friction, mixed_restitution, mixed_stiffness
+from ..contact_law import floor_friction, is_impact, mixed_friction, mixed_restitution, mixed_stiffness, newton_target
 from .narrowphase import (
+    APPROACH,
     BODY1,
     BODY2,
     FRICTION,
+    IMPULSE,
     NORMAL_MASS,
     NX,
     NY,
@@ -32,6 +34,7 @@ from .narrowphase import (
     RESTITUTION,
     STIFFNESS,
     TANGENT_MASS,
+    TARGET,
 )
 
 
@@ -60,6 +63,30 @@ def apply_impulse(c, px, py, contacts, ids, vel, inv_mass, inv_inertia):
         vel[b2, 0] -= px * inv_mass[b2]
         vel[b2, 1] -= py * inv_mass[b2]
         vel[b2, 2] -= (contacts[c, R2X] * py - contacts[c, R2Y] * px) * inv_inertia[b2]
+
+
+@jit_stage(inline="always")
+def restitution_step(c, rows, ids, vel, inv_mass, inv_inertia, threshold):
+    """One contact of the restitution polish: an impact (approaching faster than ``threshold``, with an impulse)
+    to u_rel . n >= -e u0, its normal impulse >= 0; a floor contact to its speculative target less the threshold,
+    its impulse only growing; any other contact untouched. Returns (|change|, impulse after), (0, 0) if untouched."""
+    if is_impact(rows[c, APPROACH], threshold) and rows[c, IMPULSE] > 0.0:
+        target = newton_target(rows[c, RESTITUTION], rows[c, APPROACH])
+        least = 0.0
+    elif ids[c, BODY2] < 0:  # the floor's other contacts: an impact may not drive a corner into the
+        target = rows[c, TARGET] - threshold  # floor faster than the threshold, nor release it
+        least = rows[c, IMPULSE]
+    else:
+        return 0.0, 0.0
+    nx, ny = rows[c, NX], rows[c, NY]
+    ux, uy = relative_velocity(c, rows, ids, vel)
+    before = rows[c, IMPULSE]
+    after = max(before - (ux * nx + uy * ny - target) * rows[c, NORMAL_MASS], least)
+    rows[c, IMPULSE] = after
+    dp = after - before
+    if dp != 0.0:
+        apply_impulse(c, dp * nx, dp * ny, rows, ids, vel, inv_mass, inv_inertia)
+    return abs(dp), after
 
 
 @jit_stage

@@ -3,11 +3,11 @@ u_rel . n >= -e u0 polished contact by contact after the joint solve (``apply_re
 """
 
 from ..compile.compilation import jit_stage
-from ..contact_law import is_impact, newton_target
+from ..contact_law import is_impact
 from ..tunables import EXACT_CONVERGED, RESTITUTION_ITERATIONS
-from .narrowphase import APPROACH, BODY2, IMPULSE, NORMAL_MASS, NX, NY, RESTITUTION, TARGET
+from .narrowphase import APPROACH, IMPULSE
 from .parallel import PARALLEL_CONTACTS, partitioned_restitution
-from .prepare import apply_impulse, relative_velocity
+from .prepare import restitution_step
 
 
 @jit_stage
@@ -32,23 +32,8 @@ def apply_restitution(contacts, count, bodies, threshold):
         change = 0.0
         total = 0.0
         for c in range(count):
-            if is_impact(rows[c, APPROACH], threshold) and rows[c, IMPULSE] > 0.0:
-                target = newton_target(rows[c, RESTITUTION], rows[c, APPROACH])
-                least = 0.0
-            elif ids[c, BODY2] < 0:  # the floor's other contacts: an impact may not drive a corner into the
-                target = rows[c, TARGET] - threshold  # floor faster than the threshold, nor release it
-                least = rows[c, IMPULSE]
-            else:
-                continue
-            nx, ny = rows[c, NX], rows[c, NY]
-            ux, uy = relative_velocity(c, rows, ids, vel)
-            before = rows[c, IMPULSE]
-            after = max(before - (ux * nx + uy * ny - target) * rows[c, NORMAL_MASS], least)
-            rows[c, IMPULSE] = after
-            dp = after - before
-            if dp != 0.0:
-                apply_impulse(c, dp * nx, dp * ny, rows, ids, vel, inv_mass, inv_inertia)
-            change += abs(dp)
+            moved, after = restitution_step(c, rows, ids, vel, inv_mass, inv_inertia, threshold)
+            change += moved
             total += after
         if change <= EXACT_CONVERGED * total:
             break
