@@ -20,6 +20,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from numba.core import event
+from numba.core.caching import IndexDataCacheFile
 
 import box_toss_env
 from box_toss_env.physics import KernelFlags, geometry, kernel_support, make_kernel
@@ -411,3 +412,40 @@ def test_a_second_process_compiles_nothing_for_any_id(tmp_path):
     assert second["compiled"] == []
     kinds = {name.split(".<locals>.")[0] for name in second["loaded"]}
     assert {"make_robust_kernel", "make_colliding_robust_kernel", "_grouped_kernel_source", "fill_uniform"} <= kinds
+
+
+POISONED_MODULE = textwrap.dedent("""
+    from box_toss_env.physics.compile.compilation import jit_kernel
+
+    @jit_kernel
+    def twice(x):
+        return 2.0 * x
+""")
+
+
+def test_a_cache_index_naming_a_class_that_is_gone_compiles_anew(tmp_path, monkeypatch):
+    """numba unpickles a function's whole cache index to look one entry up; an index written when a signature
+    named a class that a later version deleted (or a truncated index) made every call of the function raise
+    (ModuleNotFoundError, AttributeError, EOFError). The engine's cache reads it as empty: compile, and write a
+    readable index in its place."""
+    monkeypatch.syspath_prepend(str(tmp_path))
+    (tmp_path / "poisoned_kernel.py").write_text(POISONED_MODULE)
+    module = importlib.import_module("poisoned_kernel")
+    cache_file = module.twice._cache._cache_file
+    gone = type("Gone", (), {"__module__": "box_toss_env.a_module_that_was_deleted"})
+    sys.modules["box_toss_env.a_module_that_was_deleted"] = type(sys)("box_toss_env.a_module_that_was_deleted")
+    sys.modules["box_toss_env.a_module_that_was_deleted"].Gone = gone
+    try:
+        cache_file._save_index({(gone, "float64"): "twice-1.py311.1.nbc"})
+    finally:
+        del sys.modules["box_toss_env.a_module_that_was_deleted"]
+    with pytest.raises(ModuleNotFoundError):
+        IndexDataCacheFile._load_index(cache_file)  # numba's own reading of the index fails
+
+    assert module.twice(1.5) == 3.0
+    assert sum(module.twice.stats.cache_misses.values()) == 1
+    assert len(IndexDataCacheFile._load_index(cache_file)) == 1  # rewritten, readable by numba again
+
+    Path(cache_file._index_path).write_bytes(Path(cache_file._index_path).read_bytes()[:-7])  # truncated
+    again = importlib.reload(module)
+    assert again.twice(2.0) == 4.0

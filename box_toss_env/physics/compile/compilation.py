@@ -40,7 +40,7 @@ from pathlib import Path
 
 import filelock
 from numba.core import config, types
-from numba.core.caching import FunctionCache
+from numba.core.caching import FunctionCache, IndexDataCacheFile
 from numba.core.dispatcher import Dispatcher
 from numba.core.registry import CPUDispatcher
 from numba.core.runtime import rtsys
@@ -65,12 +65,43 @@ def engine_source_digest() -> int:
     return int.from_bytes(sha.digest()[:7], "little")
 
 
+class EngineCacheFile(IndexDataCacheFile):
+    """numba's index and data files of one cached function, read as a miss where they cannot be unpickled. numba
+    unpickles a function's whole index to look up one entry, so an index written while a signature named a class
+    that a later version of the engine deleted (or one cut short by a full disk) made every call of that function
+    raise (``ModuleNotFoundError``, ``AttributeError``, ``EOFError``) instead of compiling it again; here such a
+    file reads as empty, the function compiles, and the index is written anew."""
+
+    def _load_index(self):
+        try:
+            return super()._load_index()
+        except Exception as error:  # noqa: BLE001  (whatever unpickling an outdated or damaged file raises)
+            LOG.warning("numba's cache index %s is unreadable (%r): compiling anew", self._index_path, error)
+            return {}
+
+    def _load_data(self, name):
+        try:
+            return super()._load_data(name)
+        except OSError:
+            raise
+        except Exception as error:  # noqa: BLE001  (numba's ``load`` takes an OSError for a missing entry)
+            raise OSError(f"numba's cache file {name} is unreadable: {error!r}") from error
+
+
 class EngineCache(FunctionCache):
     """numba's on-disk cache of one engine function, its entries keyed also by ``engine_source_digest``. numba
     keys an entry by the function's own bytecode and checks its own file's time stamp, so a stage in a file
     left as it was, calling or inlining a stage of an edited file, was loaded with the old callee compiled in
     (an edit of ``alone`` ran the old ``steps_alone`` inside ``step.advance_steps``); with the digest any edit
     of the engine compiles every stage again, as a fresh install does."""
+
+    def __init__(self, py_func):
+        super().__init__(py_func)
+        self._cache_file = EngineCacheFile(
+            cache_path=self._cache_path,
+            filename_base=self._impl.filename_base,
+            source_stamp=self._impl.locator.get_source_stamp(),
+        )
 
     def _index_key(self, sig, codegen):
         return super()._index_key(sig, codegen), engine_source_digest()
