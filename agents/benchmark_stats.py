@@ -12,6 +12,7 @@ runs give the same intervals.
 from __future__ import annotations
 
 import contextlib
+import textwrap
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -28,6 +29,8 @@ IMPROVEMENT_REPS = 1_000
 SEED = 0
 TAUS = np.linspace(0.0, 1.0, 101)
 """Thresholds of the performance profiles: the share of runs whose normalised score exceeds tau."""
+PANEL_TITLE_WIDTH = 40
+"""Characters in a line of a panel's title (a panel is 5.2 inches wide; a longer title ran past the figure)."""
 
 
 @dataclass(frozen=True)
@@ -124,6 +127,11 @@ def profiles(matrices: dict[str, np.ndarray]) -> tuple[dict[str, np.ndarray], di
         )
 
 
+def panel_title(title: str) -> str:
+    """A panel's title in lines that fit its width (a long one ran past the figure's edge)."""
+    return "\n".join(textwrap.wrap(title, PANEL_TITLE_WIDTH))
+
+
 def plot_profiles(panels: dict[str, dict[str, np.ndarray]], path: Path, colors: dict[str, str]) -> Path | None:
     """One panel per tier (``panels``: title -> agent -> runs x tasks of normalised scores): the performance
     profile of each agent with its band (rliable's ``plot_performance_profiles``), written to ``path``."""
@@ -151,7 +159,7 @@ def plot_profiles(panels: dict[str, dict[str, np.ndarray]], path: Path, colors: 
             legend=True,
             legendsize="small",
         )
-        ax.set_title(title, fontsize="medium")
+        ax.set_title(panel_title(title), fontsize="medium")
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     save_figure(fig, path, dpi=100)
@@ -176,7 +184,7 @@ def plot_aggregates(panels: dict[str, dict[str, Estimate]], path: Path, colors: 
             ax.barh(k, e.high - e.low, left=e.low, height=0.6, color=colors[name], alpha=0.75)
             ax.vlines(e.value, k - 0.3, k + 0.3, color="k", linewidth=2)
         ax.set_yticks(range(len(names)), names)
-        ax.set(xlim=(0, 1.02), xlabel="IQM of success / ceiling, over variants (95% CI)", title=title)
+        ax.set(xlim=(0, 1.02), xlabel="IQM of success / ceiling, over variants (95% CI)", title=panel_title(title))
         ax.grid(axis="x", alpha=0.3)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)

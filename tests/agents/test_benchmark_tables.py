@@ -220,3 +220,15 @@ def test_an_assisted_cell_whose_recipe_has_no_wrapper_says_it_repeats_the_raw_ru
     )
     assert tables.heldout_table(store, ASSISTED)[2].startswith("| BoxToss-v0 | PPO = raw | 100.0% [")
     assert tables.heldout_table(store, RAW)[2].startswith("| BoxToss-v0 | PPO | 100.0% [")
+
+
+def test_every_tier_title_fits_its_panel():
+    """A panel is 5.2 inches wide: a title over about 45 characters at medium size ran past the figure's edge
+    (the hidden-physics panel's did)."""
+    from agents import benchmark_hidden
+
+    for title in [*(tier.title for tier in TIERS), benchmark_hidden.TITLE]:
+        lines = benchmark_stats.panel_title(title).split("\n")
+        assert " ".join(lines) == title
+        assert max(len(line) for line in lines) <= benchmark_stats.PANEL_TITLE_WIDTH
+    assert "\n" in benchmark_stats.panel_title(benchmark_hidden.TITLE)
