@@ -98,6 +98,18 @@ def overlaps(dx, dy, bound_x, bound_y, margin):
     return abs(dx) <= bound_x + margin and abs(dy) <= bound_y + margin
 
 
+@jit_stage(inline="always")
+def pair_overlaps(pose, bound, reach, a, b):
+    """Whether boxes a and b pass the test of the module docstring (``overlaps``) at their reaches ``reach``."""
+    return overlaps(
+        pose[b, 0] - pose[a, 0],
+        pose[b, 1] - pose[a, 1],
+        bound[a, 0] + bound[b, 0],
+        bound[a, 1] + bound[b, 1],
+        reach[a] + reach[b],
+    )
+
+
 @jit_stage
 def sort_intervals(pose, bound, reach, axis, order, low):
     """Each box's interval start along ``axis`` (padded by ROUNDING) into ``low``, and ``order`` (the sweep order of
@@ -135,13 +147,7 @@ def candidate_pairs(pose, bound, reach, include, moving, axis, order, low, keys)
             if not include[j] or not (moving[i] or moving[j]):
                 continue
             a, b = min(i, j), max(i, j)
-            if overlaps(
-                pose[b, 0] - pose[a, 0],
-                pose[b, 1] - pose[a, 1],
-                bound[a, 0] + bound[b, 0],
-                bound[a, 1] + bound[b, 1],
-                reach[a] + reach[b],
-            ):
+            if pair_overlaps(pose, bound, reach, a, b):
                 if count >= keys.shape[0]:
                     return -1
                 keys[count] = a * n + b
@@ -163,17 +169,7 @@ def substep_pairs(pose, sweep, n_pairs, include):
     for p in range(n_pairs):
         a = keys[p] // n
         b = keys[p] - a * n
-        if (
-            include[a]
-            and include[b]
-            and overlaps(
-                pose[b, 0] - pose[a, 0],
-                pose[b, 1] - pose[a, 1],
-                bound[a, 0] + bound[b, 0],
-                bound[a, 1] + bound[b, 1],
-                reach[a] + reach[b],
-            )
-        ):
+        if include[a] and include[b] and pair_overlaps(pose, bound, reach, a, b):
             kept[count] = keys[p]
             count += 1
     return count

@@ -30,7 +30,7 @@ import numpy as np
 from .. import layout
 from ..compile.compilation import jit_stage
 from ..kernel_support import is_lying_still, write_stats
-from .broadphase import candidate_pairs, interval_end, overlaps, sort_intervals
+from .broadphase import candidate_pairs, interval_end, pair_overlaps, sort_intervals
 from .narrowphase import BODY1, BODY2, GAP
 
 
@@ -137,13 +137,7 @@ def wake_touched(pose, sweep, sleep):
                 if awake[i] == awake[j]:
                     continue
                 a, b = min(i, j), max(i, j)
-                if overlaps(
-                    pose[b, 0] - pose[a, 0],
-                    pose[b, 1] - pose[a, 1],
-                    bound[a, 0] + bound[b, 0],
-                    bound[a, 1] + bound[b, 1],
-                    reach[a] + reach[b],
-                ):
+                if pair_overlaps(pose, bound, reach, a, b):
                     woken += wake_island(island[j] if awake[i] else island[i], sleep)
         if woken == 0:
             return total

@@ -35,7 +35,7 @@ from ..compile.compilation import jit_stage
 from ..contact_law import is_impact
 from ..robust.contact_solver import penalty_correction_share
 from ..tunables import EXACT_CONVERGED, RESTITUTION_ITERATIONS, SINGLE_CHANGE
-from .broadphase import candidate_pairs, interval_end, overlaps, sort_intervals
+from .broadphase import candidate_pairs, interval_end, pair_overlaps, sort_intervals
 from .narrowphase import (
     APPROACH,
     BODY1,
@@ -348,13 +348,7 @@ def sweep_slots(pose, bound, reach, include, moving, axis, order, low, slots, fo
                     break
                 if include[j] and (moving[i] or moving[j]):
                     a, b = min(i, j), max(i, j)
-                    if overlaps(
-                        pose[b, 0] - pose[a, 0],
-                        pose[b, 1] - pose[a, 1],
-                        bound[a, 0] + bound[b, 0],
-                        bound[a, 1] + bound[b, 1],
-                        reach[a] + reach[b],
-                    ):
+                    if pair_overlaps(pose, bound, reach, a, b):
                         if k < PAIR_SLOTS:
                             slots[p * PAIR_SLOTS + k] = a * n + b
                         k += 1
