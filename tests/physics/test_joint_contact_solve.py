@@ -27,7 +27,7 @@ from box_toss_env.physics.colliding.normal_lcp import delassus_matrix, normal_lc
 from box_toss_env.physics.colliding.parallel import make_partition
 from box_toss_env.physics.colliding.prepare import apply_impulse, relative_velocity
 from box_toss_env.physics.colliding.solve import solve_jointly as joint_solve
-from box_toss_env.physics.colliding.state import Bodies, Contacts, ExactWork
+from box_toss_env.physics.colliding.state import Bodies, Contacts, make_exact_work
 from box_toss_env.physics.colliding.sweeps import friction_sweep
 from box_toss_env.physics.tunables import DIRECT_LIMIT
 
@@ -36,17 +36,7 @@ LIMIT = DIRECT_LIMIT
 
 @numba.njit(cache=False)
 def solve_jointly(contacts, ids, count, vel, inv_mass, inv_inertia):
-    exact = ExactWork(
-        np.zeros((LIMIT, LIMIT)),
-        np.zeros((LIMIT, LIMIT)),
-        np.zeros(LIMIT),
-        np.zeros(LIMIT),
-        np.zeros(LIMIT, np.bool_),
-        np.zeros(LIMIT, np.int64),
-        np.zeros(LIMIT),
-        np.zeros(LIMIT, np.int64),
-        np.zeros((2, vel.shape[0]), np.bool_),
-    )
+    exact = make_exact_work(vel.shape[0])
     none = np.zeros((vel.shape[0], 3))
     bodies = Bodies(none, vel, none[:, :2], none, inv_mass, inv_inertia, inv_mass)
     partition, spare = make_partition(count)

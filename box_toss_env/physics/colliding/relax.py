@@ -21,7 +21,7 @@ from .parallel import (
     pseudo_gaps_on_threads,
 )
 from .prepare import apply_impulse, body_kinetic_energy
-from .solve import exact_pays
+from .solve import exact_pays, gather_island, mark_unlike_islands
 from .sweeps import normal_step
 
 
@@ -71,10 +71,10 @@ def correct_penetrations(contacts, count, bodies, work, exact, h, context):
 def pseudo_impulses(contacts, count, bodies, pseudo, exact, deep_island, context):
     """The penalty's pseudo-impulses (column PSEUDO_IMPULSE, targets in column TARGET) into ``pseudo``: solved exactly
     where the velocities' exact solve pays (``solve.exact_pays``, ``normal_lcp``: Gauss-Seidel leaves a light box
-    between heavy ones turning), otherwise by Gauss-Seidel over the deep
-    islands' contacts (the scene's ``solver_tolerance``, at most PENALTY_ITERATIONS or ``solver_iterations``
-    sweeps, ``penalty_sweeps``; from PARALLEL_CONTACTS contacts up block by block, on threads:
-    ``parallel.partitioned_penalty_sweeps``)."""
+    between heavy ones turning), otherwise exactly in each deep island of unlike masses small enough
+    (``exact_islands``) and by Gauss-Seidel over the other deep islands' contacts (the scene's ``solver_tolerance``,
+    at most PENALTY_ITERATIONS or ``solver_iterations`` sweeps, ``penalty_sweeps``; from PARALLEL_CONTACTS contacts
+    up block by block, on threads: ``parallel.partitioned_penalty_sweeps``)."""
     rows, ids = contacts.rows, contacts.ids
     inv_mass, inv_inertia = bodies.inv_mass, bodies.inv_inertia
     if exact_pays(ids, count, inv_mass, context.use_friction):
@@ -89,6 +89,7 @@ def pseudo_impulses(contacts, count, bodies, pseudo, exact, deep_island, context
                 if x[c] != 0.0:
                     apply_impulse(c, x[c] * rows[c, NX], x[c] * rows[c, NY], rows, ids, pseudo, inv_mass, inv_inertia)
             return
+    exact_islands(contacts, count, bodies, pseudo, exact, deep_island)
     if count >= PARALLEL_CONTACTS:
         iterations = min(context.sweeps, PENALTY_ITERATIONS)
         partitioned_penalty_sweeps(contacts, pseudo, bodies, iterations, context.sweep_tolerance)
@@ -110,6 +111,48 @@ def pseudo_impulses(contacts, count, bodies, pseudo, exact, deep_island, context
         min(context.sweeps, PENALTY_ITERATIONS),
         context.sweep_tolerance,
     )
+
+
+@jit_stage
+def exact_islands(contacts, count, bodies, pseudo, exact, deep_island):
+    """The pseudo-impulses of each deep island that ``solve.mark_unlike_islands`` marks (unlike masses, at most
+    DIRECT_LIMIT contacts), solved exactly on its own as ``pseudo_impulses`` solves a small contact set, and its
+    contacts taken out of the deep ones the sweeps then visit (no other island's contact touches its bodies).
+    Returns the number of islands so solved."""
+    rows, ids = contacts.rows, contacts.ids
+    inv_mass, inv_inertia = bodies.inv_mass, bodies.inv_inertia
+    if not mark_unlike_islands(ids, count, inv_mass, exact):
+        return 0
+    solved = 0
+    for c in range(count):  # an island's first contact gathers it
+        if not deep_island[c]:
+            continue
+        k = gather_island(rows, ids, count, c, exact)
+        if k == 0:
+            continue
+        island_rows, island_ids = exact.rows, exact.ids
+        delassus_matrix(island_rows, island_ids, k, inv_mass, inv_inertia, exact.w)
+        for j in range(k):
+            exact.free[j] = -island_rows[j, TARGET]
+            exact.active[j] = exact.free[j] < 0.0
+        if normal_lcp(exact.w, exact.free, exact.x, exact.active, k, exact.factor, exact.index, exact.y):
+            for j in range(k):
+                x = exact.x[j]
+                rows[exact.listed[j], PSEUDO_IMPULSE] = x
+                deep_island[exact.listed[j]] = False
+                if x != 0.0:
+                    apply_impulse(
+                        j,
+                        x * island_rows[j, NX],
+                        x * island_rows[j, NY],
+                        island_rows,
+                        island_ids,
+                        pseudo,
+                        inv_mass,
+                        inv_inertia,
+                    )
+            solved += 1
+    return solved
 
 
 @jit_stage(inline="always")

@@ -137,8 +137,8 @@ class Stats(NamedTuple):
 
 class ExactWork(NamedTuple):
     """The exact solves' work arrays (``normal_lcp``, ``joint_contact_solve``): W, its factor, the free velocities,
-    the solution, the active set, an index, the forward solve's y, the contacts' states; and the sweeps'
-    ``moved`` (``sweeps.gauss_seidel``)."""
+    the solution, the active set, an index, the forward solve's y, the contacts' states; the sweeps'
+    ``moved`` (``sweeps.gauss_seidel``); and the islands solved exactly among many contacts (``solve``)."""
 
     w: np.ndarray  # (DIRECT_LIMIT, DIRECT_LIMIT)
     factor: np.ndarray  # (DIRECT_LIMIT, DIRECT_LIMIT)
@@ -149,6 +149,11 @@ class ExactWork(NamedTuple):
     y: np.ndarray  # (DIRECT_LIMIT,)
     state: np.ndarray  # (DIRECT_LIMIT,) int64
     moved: np.ndarray  # (2, n) bool
+    root: np.ndarray  # (n,) int64: the islands' union-find forest (``solve.solve_unlike_islands``)
+    tally: np.ndarray  # (n,) int64: per island root, its contacts (-1: none of unlike masses, or done)
+    rows: np.ndarray  # (DIRECT_LIMIT, CONTACT_COLUMNS): one island's contacts, gathered
+    ids: np.ndarray  # (DIRECT_LIMIT, ID_COLUMNS) int64
+    listed: np.ndarray  # (DIRECT_LIMIT,) int64: where each gathered contact came from
 
 
 class GroupWork(NamedTuple):
@@ -361,9 +366,9 @@ def make_stats(n, trajectory, events):
 
 
 @jit_stage(inline="always")  # into its callers, which run with numba's runtime
-def make_scratch(n):
-    """``Scratch`` for n bodies."""
-    exact = ExactWork(
+def make_exact_work(n):
+    """``ExactWork`` for n bodies."""
+    return ExactWork(
         np.zeros((DIRECT_LIMIT, DIRECT_LIMIT)),
         np.zeros((DIRECT_LIMIT, DIRECT_LIMIT)),
         np.zeros(DIRECT_LIMIT),
@@ -373,7 +378,18 @@ def make_scratch(n):
         np.zeros(DIRECT_LIMIT),
         np.zeros(DIRECT_LIMIT, np.int64),
         np.zeros((2, n), np.bool_),
+        np.zeros(n, np.int64),
+        np.zeros(n, np.int64),
+        np.zeros((DIRECT_LIMIT, CONTACT_COLUMNS)),
+        np.zeros((DIRECT_LIMIT, ID_COLUMNS), np.int64),
+        np.zeros(DIRECT_LIMIT, np.int64),
     )
+
+
+@jit_stage(inline="always")  # into its callers, which run with numba's runtime
+def make_scratch(n):
+    """``Scratch`` for n bodies."""
+    exact = make_exact_work(n)
     groups = GroupWork(
         np.full(n, -1, np.int64),
         np.zeros(n, np.bool_),
