@@ -150,7 +150,7 @@ class ExactWork(NamedTuple):
     state: np.ndarray  # (DIRECT_LIMIT,) int64
     moved: np.ndarray  # (2, n) bool
     root: np.ndarray  # (n,) int64: the islands' union-find forest (``solve.solve_unlike_islands``)
-    tally: np.ndarray  # (n,) int64: per island root, its contacts (-1: none of unlike masses, or done)
+    tally: np.ndarray  # (n,) int64: per island root, minus its contact count if it is to be solved exactly
     rows: np.ndarray  # (DIRECT_LIMIT, CONTACT_COLUMNS): one island's contacts, gathered
     ids: np.ndarray  # (DIRECT_LIMIT, ID_COLUMNS) int64
     listed: np.ndarray  # (DIRECT_LIMIT,) int64: where each gathered contact came from
