@@ -32,7 +32,7 @@ INTRO = (
     "within the tolerance on a target face. A cell is the interquartile mean (IQM) of its seeds' success with its 95%"
     " stratified-bootstrap confidence interval and, in brackets, the number of seeds, all by "
     "[rliable](https://github.com/google-research/rliable) (with 3 seeds the IQM is their mean). The planned seeds "
-    "are 5 for PPO on every variant of the headline tier (3 on `BoxToss-Pixels-v0`) and for every algorithm on "
+    "are 5 for PPO on every variant of the headline tier and for every algorithm on "
     "ThisSideUp, ShortEnd and the stack, 3 elsewhere; a cell with fewer says so (`3 of 5`: the seeds this 2-core "
     "machine had time for), and `-` is a cell not trained. "
     "*random*: uniform env actions; *prior*: the tier's PPO recipe untrained, its mean action (what training starts "

@@ -69,15 +69,14 @@ class Tier:
         return self.recipes if own and self.recipes is not None else configuration.HYPERPARAMS
 
     def has_recipe(self, algo: str, env_id: str) -> bool:
-        """Whether ``algo`` has a recipe for ``env_id`` in this tier (``BoxToss-Pixels-v0`` has PPO's alone): the
-        others are not in the tier's plan for the variant."""
+        """Whether ``algo`` has a recipe for ``env_id`` in this tier (``BoxToss-Pixels-v0``: the raw tier's alone):
+        the others are not in the tier's plan for the variant."""
         return configuration.has_entry(algo, env_id, self.hyperparams(algo, env_id))
 
     def default_seeds(self, env_id: str, algo: str) -> tuple[int, ...]:
         """The seeds ``python -m agents.benchmark`` trains without ``--seeds``: five for the headline algorithm on
-        every variant of the headline tier (but a variant observed otherwise, ``SAME_TASK``) and for every algorithm on
-        ``FIVE_SEED_VARIANTS``, three elsewhere."""
-        headline = self.headline and algo == self.prior_algo and env_id not in SAME_TASK
+        every variant of the headline tier and for every algorithm on ``FIVE_SEED_VARIANTS``, three elsewhere."""
+        headline = self.headline and algo == self.prior_algo
         five = headline or env_id in FIVE_SEED_VARIANTS
         return tuple(range(5 if five else 3))
 
@@ -86,7 +85,7 @@ RAW = Tier(
     name="raw",
     title="Raw actions (headline)",
     meaning="the env's own actions: launch speed, direction and spin (`BoxToss-Pixels-v0`: `BoxToss-v0` observed as "
-    "an image, PPO with SB3's CnnPolicy)",
+    "an image, SB3's CnnPolicy)",
     variants=(*ONE_THROW, PIXELS, STACK),
     folder="raw",
     overrides=("env_wrapper=null",),

@@ -147,7 +147,8 @@ def test_report_only_writes_the_page_figures_and_readme_from_the_store(tmp_path,
 def test_default_seeds_follow_the_plan_and_tiers_pick_their_recipes():
     assert RAW.default_seeds("BoxToss-v0", "ppo") == (0, 1, 2, 3, 4)  # the headline algorithm everywhere
     assert RAW.default_seeds("BoxToss-v0", "sac") == (0, 1, 2)
-    assert RAW.default_seeds("BoxToss-Pixels-v0", "ppo") == (0, 1, 2)  # BoxToss-v0 seen as an image
+    assert RAW.default_seeds("BoxToss-Pixels-v0", "ppo") == tuple(range(5))  # BoxToss-v0 seen as an image
+    assert RAW.has_recipe("sac", "BoxToss-Pixels-v0") and not ASSISTED.has_recipe("sac", "BoxToss-Pixels-v0")
     assert RAW.default_seeds("BoxToss-ShortEnd-v0", "td3") == tuple(range(5))
     assert ASSISTED.default_seeds("BoxToss-Stack-v0", "sac") == tuple(range(5))
     assert ASSISTED.default_seeds("BoxToss-Mixed-v0", "ppo") == (0, 1, 2)

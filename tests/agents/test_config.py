@@ -130,12 +130,15 @@ def test_raw_recipes_are_valid_zoo_entries_without_a_wrapper(algo):
     if not path.exists():
         pytest.skip(f"no raw recipes for {algo}")
     for env_id in config.read_mapping(path):
-        assert env_id in VARIANTS
+        assert env_id in (*VARIANTS, "BoxToss-Pixels-v0")
         hyperparams = config.load_hyperparams(algo, env_id, config.RAW_HYPERPARAMS)
         config.check_config(hyperparams, algo)
         assert set(config.algorithm_kwargs(hyperparams, algo)) <= algorithms.constructor_keys(algo) | {"action_noise"}
         assert hyperparams.get("env_wrapper") is None
-        assert hyperparams["torch_threads"] == config.load_hyperparams(algo, env_id)["torch_threads"]
+        project = config.load_hyperparams(algo, "BoxToss-v0")  # project.yml's settings are every entry's
+        assert hyperparams["torch_threads"] == project["torch_threads"]
+        images = env_id.endswith("-Pixels-v0")
+        assert (hyperparams["policy"] == "CnnPolicy") == images and (not images or hyperparams["normalize"] is False)
 
 
 def test_a_folder_without_project_settings_uses_its_parents(tmp_path):
