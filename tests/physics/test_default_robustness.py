@@ -49,6 +49,24 @@ def test_a_heavy_box_dropped_on_light_ones_beside_a_pyramid_lands_and_stands(rat
     assert np.abs(state[:, 5:, :3] - rest[None]).max() < 1e-3  # the pyramid stands
 
 
+def test_eight_heavy_boxes_dropped_on_light_ones_side_by_side_land_and_stand():
+    """Eight 1000:1 stacks 2 m apart: 80 contacts, more than the exact solve takes together, so each stack is an
+    island solved exactly on its own, its contacts gathered from the scene's list (``solve.order_marked``: one
+    counting sort for every island, wherever the narrowphase put their contacts)."""
+    stack = scenes.stack(5, masses=(1.0, 1.0, 1.0, 1.0, 1000.0))
+    top = stack.boxes[4]
+    column = (*stack.boxes[:4], dataclasses.replace(top, position=(top.position[0], top.position[1] + 0.05)))
+    boxes = tuple(
+        dataclasses.replace(b, position=(b.position[0] + 2.0 * i, b.position[1])) for i in range(8) for b in column
+    )
+    scene = stack.replace(boxes=boxes)
+    state = simulate(scene, duration=2.0, record=True, sleep=False).trajectory.state
+    x0 = scene.initial_state()[:, 0]
+    assert np.abs(state[:, :, 0] - x0[None]).max() < 1e-3  # measured 2e-4 m
+    assert np.abs(state[-1, :, 2]).max() < 1e-3
+    np.testing.assert_allclose(state[-1, :, 1], np.tile([0.1, 0.3, 0.5, 0.7, 0.9], 8), atol=1e-3)
+
+
 @pytest.mark.parametrize("n", [16, 100])
 def test_a_dropped_pile_shoots_no_box_up_and_sleeps_within_two_seconds_of_landing(n):
     scene = scenes.pile(n)

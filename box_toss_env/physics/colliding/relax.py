@@ -121,13 +121,13 @@ def exact_islands(contacts, count, bodies, pseudo, exact, deep_island):
     Returns the number of islands so solved."""
     rows, ids = contacts.rows, contacts.ids
     inv_mass, inv_inertia = bodies.inv_mass, bodies.inv_inertia
-    if not mark_unlike_islands(ids, count, inv_mass, exact):
+    if not mark_unlike_islands(ids, count, inv_mass, exact, contacts.listed):  # listed: free until the sweeps
         return 0
     solved = 0
     for c in range(count):  # an island's first contact gathers it
         if not deep_island[c]:
             continue
-        k = gather_island(rows, ids, count, c, exact)
+        k = gather_island(rows, ids, c, exact, contacts.listed)
         if k == 0:
             continue
         island_rows, island_ids = exact.rows, exact.ids

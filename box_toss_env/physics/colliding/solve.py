@@ -94,11 +94,11 @@ def solve_unlike_islands(contacts, count, bodies, exact, use_friction):
     which pass its load through the light boxes a little at a sweep, and a 1000:1 stack dropped 5 cm beside a
     pyramid collapsed and threw its boxes 3 m. Returns the number of islands so solved."""
     rows = contacts.rows
-    if not mark_unlike_islands(contacts.ids, count, bodies.inv_mass, exact):
+    if not mark_unlike_islands(contacts.ids, count, bodies.inv_mass, exact, contacts.listed):
         return 0
     solved = 0
     for c in range(count):  # an island's first contact gathers it
-        k = gather_island(rows, contacts.ids, count, c, exact)
+        k = gather_island(rows, contacts.ids, c, exact, contacts.listed)
         if k == 0:
             continue
         alternate(exact.rows, exact.ids, k, bodies, exact, use_friction)
@@ -110,11 +110,12 @@ def solve_unlike_islands(contacts, count, bodies, exact, use_friction):
 
 
 @jit_stage
-def mark_unlike_islands(ids, count, inv_mass, exact):
+def mark_unlike_islands(ids, count, inv_mass, exact, order):
     """The islands of the contacts (``exact.root``, a union-find joined by the box-box contacts) to solve exactly
     among many: per root, ``exact.tally`` minus its number of contacts where the island holds a contact between
-    unlike masses (``unlike_masses``) and at most DIRECT_LIMIT contacts, >= 0 otherwise. Returns whether any contact
-    joins unlike masses (if none, nothing is marked, at the cost of one pass over the contacts)."""
+    unlike masses (``unlike_masses``) and at most DIRECT_LIMIT contacts, >= 0 otherwise; the marked islands'
+    contacts listed island by island in ``order`` (``order_marked``). Returns whether any contact joins unlike masses
+    (if none, nothing is marked, at the cost of one pass over the contacts)."""
     first = -1
     for c in range(count):
         if unlike_masses(ids, c, inv_mass):
@@ -132,27 +133,48 @@ def mark_unlike_islands(ids, count, inv_mass, exact):
         r = find_root(root, ids[c, BODY1])
         if 0 < tally[r] <= DIRECT_LIMIT and unlike_masses(ids, c, inv_mass):
             tally[r] = -tally[r]
+    order_marked(ids, count, exact, order)
     return True
 
 
+@jit_stage(inline="always")
+def order_marked(ids, count, exact, order):
+    """The contacts of the islands ``mark_unlike_islands`` marked, listed in ``order`` island by island (a counting
+    sort: islands in the order of their first contact, each island's contacts in their own order), one pass over
+    the contacts: island root r's contacts are ``order[exact.start[r] + tally[r] : exact.start[r]]`` (tally[r] < 0
+    its count), so gathering k islands costs their contacts, not k passes over the scene's."""
+    root, tally, start = exact.root, exact.tally, exact.start
+    for b in range(start.shape[0]):
+        start[b] = -1
+    filled = 0
+    for c in range(count):
+        r = find_root(root, ids[c, BODY1])
+        if tally[r] < 0:
+            if start[r] < 0:
+                start[r] = filled
+                filled -= tally[r]
+            order[start[r]] = c
+            start[r] += 1
+
+
 @jit_stage
-def gather_island(rows, ids, count, c, exact):
+def gather_island(rows, ids, c, exact, order):
     """If contact c is the first of an island marked by ``mark_unlike_islands`` not gathered yet: the island's
-    contacts (c and those after it of the same root) copied into ``exact.rows`` and ``exact.ids``, where each came
+    contacts (listed in ``order`` by ``order_marked``) copied into ``exact.rows`` and ``exact.ids``, where each came
     from into ``exact.listed``, the island marked gathered; returns how many (0 for any other contact)."""
     r = find_root(exact.root, ids[c, BODY1])
-    if exact.tally[r] >= 0:
+    k = -exact.tally[r]
+    if k <= 0:
         return 0
     exact.tally[r] = 0
-    k = 0
-    for d in range(c, count):
-        if find_root(exact.root, ids[d, BODY1]) == r:
-            for column in range(CONTACT_COLUMNS):
-                exact.rows[k, column] = rows[d, column]
-            for column in range(ID_COLUMNS):
-                exact.ids[k, column] = ids[d, column]
-            exact.listed[k] = d
-            k += 1
+    begin = exact.start[r] - k
+    for j in range(k):
+        d = order[begin + j]
+        for column in range(CONTACT_COLUMNS):
+            exact.rows[j, column] = rows[d, column]
+        for column in range(ID_COLUMNS):
+            exact.ids[j, column] = ids[d, column]
+        exact.listed[j] = d
     return k
 
 

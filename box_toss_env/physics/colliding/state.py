@@ -85,7 +85,9 @@ class Sweep(NamedTuple):
 
 class Contacts(NamedTuple):
     """A substep's contacts (``narrowphase``: ``rows`` of CONTACT_COLUMNS, ``ids`` of ID_COLUMNS), and per-contact
-    work of the penalty (``relax``: whether a contact's island is deep, the list of those contacts)."""
+    work of the penalty (``relax``: whether a contact's island is deep, the list of those contacts; before the
+    penalty's sweeps list them, and in the velocity solve, ``listed`` orders the islands solved exactly:
+    ``solve.order_marked``)."""
 
     rows: np.ndarray  # (capacity, CONTACT_COLUMNS)
     ids: np.ndarray  # (capacity, ID_COLUMNS) int64
@@ -154,6 +156,7 @@ class ExactWork(NamedTuple):
     rows: np.ndarray  # (DIRECT_LIMIT, CONTACT_COLUMNS): one island's contacts, gathered
     ids: np.ndarray  # (DIRECT_LIMIT, ID_COLUMNS) int64
     listed: np.ndarray  # (DIRECT_LIMIT,) int64: where each gathered contact came from
+    start: np.ndarray  # (n,) int64: per marked island root, where its contacts end in ``Contacts.listed``
 
 
 class GroupWork(NamedTuple):
@@ -383,6 +386,7 @@ def make_exact_work(n):
         np.zeros((DIRECT_LIMIT, CONTACT_COLUMNS)),
         np.zeros((DIRECT_LIMIT, ID_COLUMNS), np.int64),
         np.zeros(DIRECT_LIMIT, np.int64),
+        np.zeros(n, np.int64),
     )
 
 
