@@ -8,6 +8,7 @@
     python -m agents.pretrained export runs/pretrained/BoxToss-v0 ...   # run folders -> models/, evaluated, carded
     python -m agents.pretrained export RUN ... --write-docs             # and the docs' figures (figures.yml, README)
     python -m agents.pretrained check                                   # every file against models/SHA256SUMS
+    python -m agents.pretrained rescore [ENV_ID ...] [--write-docs]     # evaluated again on this engine
 
 A folder ``models/<algo>-<env id>/`` holds what huggingface_sb3 uploads for a model (``<algo>-<env id>.zip``, the
 SB3 model; ``vec_normalize.pkl``, the observation statistics; ``config.yml``, the run's algorithm, hyperparameters,
@@ -195,6 +196,18 @@ def export(run_dir: Path, models: Path = MODELS) -> Path:
     return folder
 
 
+def rescore(folder: Path, models: Path = MODELS) -> dict[str, Any]:
+    """The committed agent of ``folder`` evaluated again as ``export`` evaluates it (after an engine change that moves
+    its episodes), its ``results.json``, model card and the checksums rewritten; its training figures kept."""
+    config = load_yaml(folder / "config.yml")
+    results = json.loads((folder / "results.json").read_text())
+    results.update(evaluate_agent(load_agent(config["env_id"], config["algo"], models)))
+    write_atomic(folder / "results.json", json.dumps(results, indent=2) + "\n")
+    write_model_card(folder, config, results)
+    write_checksums(models)
+    return results
+
+
 def headline_figures(models: Path = MODELS) -> list[dict[str, Any]]:
     """The ``pretrained`` group of the headline figures: each model's success and interval, in the order the ids
     are registered."""
@@ -230,11 +243,18 @@ def main(argv: list[str] | None = None) -> None:
     )
     check_parser = commands.add_parser("check", help="every model's files against models/SHA256SUMS")
     check_parser.add_argument("--models", type=Path, default=MODELS)
+    rescore_parser = commands.add_parser("rescore", help="evaluate models/ again: results, model cards, checksums")
+    rescore_parser.add_argument("env_ids", nargs="*", metavar="ENV_ID", help="the agents of these ids (default: all)")
+    rescore_parser.add_argument("--models", type=Path, default=MODELS)
+    rescore_parser.add_argument("--write-docs", action="store_true", help="also rewrite the agents' figures")
     args = parser.parse_args(argv)
     if args.command == "check":
         for folder in sorted(p for p in args.models.iterdir() if p.is_dir()):
             check_folder(folder, args.models)
             print(f"{folder.name}: ok")
+        return
+    if args.command == "rescore":
+        rescore_all(parser, args)
         return
     for run in args.runs:
         if not (run / "config.yml").exists() or not (run / "model.zip").exists():
@@ -244,6 +264,23 @@ def main(argv: list[str] | None = None) -> None:
         results = json.loads((folder / "results.json").read_text())
         low, high = results["success_interval"]
         print(f"{folder}: success {results['success_rate']:.1%} ({low:.1%}-{high:.1%}) on {results['n']:,}")
+    if args.write_docs:
+        figures.update("pretrained", headline_figures(args.models))
+
+
+def rescore_all(parser, args) -> None:
+    """``rescore`` for the agents of ``args.env_ids`` (every folder of ``args.models`` if none), each checked first."""
+    folders = sorted(p for p in args.models.iterdir() if p.is_dir() and (p / "config.yml").exists())
+    chosen = [p for p in folders if not args.env_ids or load_yaml(p / "config.yml")["env_id"] in args.env_ids]
+    found = {load_yaml(p / "config.yml")["env_id"] for p in chosen}
+    if missing := [env_id for env_id in args.env_ids if env_id not in found]:
+        have = ", ".join(sorted(load_yaml(p / "config.yml")["env_id"] for p in folders))
+        parser.error(f"no trained agent of {', '.join(missing)} in {args.models} (there: {have})")
+    for folder in chosen:
+        check_folder(folder, args.models)
+    for folder in chosen:
+        results = rescore(folder, args.models)
+        print(f"{folder.name}: success {results['success_rate']:.1%} on {results['n_eval_episodes']:,}")
     if args.write_docs:
         figures.update("pretrained", headline_figures(args.models))
 

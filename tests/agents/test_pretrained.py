@@ -100,3 +100,24 @@ def test_export_makes_a_folder_from_a_run_and_its_card_from_the_evaluation(tmp_p
     check_folder(folder, tmp_path / "models")
     (row,) = headline_figures(tmp_path / "models")
     assert row["env_id"] == "BoxToss-v0" and row["train_time"] == "90 s"
+
+
+def test_rescore_evaluates_a_committed_agent_again_and_keeps_its_training_figures(tmp_path, capsys):
+    """``python -m agents.pretrained rescore`` (after an engine change): the same scores on an unchanged engine,
+    the card and checksums rewritten, the training's figures kept; an id without an agent is refused first."""
+    from agents.pretrained import main
+
+    models = tmp_path / "models"
+    shutil.copytree(MODELS, models)
+    folder = models / "ppo-BoxToss-v0"
+    before = json.loads((folder / "results.json").read_text())
+    written = (models / CHECKSUMS).stat().st_mtime_ns
+    with pytest.raises(SystemExit):
+        main(["rescore", "BoxToss-v0", "BoxToss-Goal-v0", "--models", str(models)])
+    assert "no trained agent of BoxToss-Goal-v0" in capsys.readouterr().err
+    assert (models / CHECKSUMS).stat().st_mtime_ns == written  # refused before anything is written
+    main(["rescore", "BoxToss-v0", "--models", str(models)])
+    after = json.loads((folder / "results.json").read_text())
+    assert after == before  # the same model, engine and targets: the same figures
+    assert f"**{after['success_rate']:.1%}**" in (folder / "README.md").read_text()
+    check_folder(folder, models)  # the checksums follow the new card
