@@ -14,9 +14,10 @@ Box against box (``box_box_contacts``), separating axes with clipping, as Box2D'
          s_f = n_f . (x_B - x_A) - |n_f . u_B| hx_B - |n_f . w_B| hy_B - h_f
      (u_B, w_B: B's axes). The boxes are apart by at least max_f s_f; the same for B's faces. Two
      rectangles overlap exactly when every one of these four axes shows overlap.
-  2. reference face: the face with the largest separation (A's unless B's is larger by a small
-     tolerance, so the choice does not flicker); n = its normal. Incident face: the face of the other
-     box whose normal is most anti-parallel to n.
+  2. reference face: the face with the largest separation, with hysteresis: the box whose face it was in
+     the last substep keeps it unless the other's is larger by a small tolerance (a new pair: A's unless
+     B's is), so the choice does not flicker (``previous_reference``); n = its normal. Incident face: the
+     face of the other box whose normal is most anti-parallel to n.
   3. clipping: the incident face's segment is clipped to the reference face's extent along it; each of
      the (at most two) clipped end points within ``margin`` of the reference face is a contact point,
      body 1 being the incident box and body 2 the reference box.
@@ -176,8 +177,9 @@ def clipped_contacts(ref, inc, face, reference_b, pose, trig, half, margin, code
 
 
 @jit_stage
-def box_box_contacts(i, j, pose, trig, half, margin, code, contacts, ids, count):
-    """Contact points of boxes i and j (i < j) within ``margin`` (steps 1 to 3 above); returns the count."""
+def box_box_contacts(i, j, pose, trig, half, margin, code, contacts, ids, count, previous):
+    """Contact points of boxes i and j (i < j) within ``margin`` (steps 1 to 3 above); returns the count.
+    ``previous``: the last substep's contact keys (increasing) and their count, for the reference's hysteresis."""
     dx = pose[j, 0] - pose[i, 0]
     dy = pose[j, 1] - pose[i, 1]
     face_i, sep_i = deepest_face(
@@ -190,10 +192,33 @@ def box_box_contacts(i, j, pose, trig, half, margin, code, contacts, ids, count)
     )
     if sep_j > margin:
         return count
-    smallest = min(min(half[i, 0], half[i, 1]), min(half[j, 0], half[j, 1]))
-    if sep_j > sep_i + REFERENCE_TOLERANCE * smallest:
+    tolerance = REFERENCE_TOLERANCE * min(min(half[i, 0], half[i, 1]), min(half[j, 0], half[j, 1]))
+    if previous_reference(previous, code) == 1:  # j's face held: it stays until i's beats it
+        use_j = sep_i <= sep_j + tolerance
+    else:
+        use_j = sep_j > sep_i + tolerance
+    if use_j:
         return clipped_contacts(j, i, face_j, 1, pose, trig, half, margin, code, contacts, ids, count)
     return clipped_contacts(i, j, face_i, 0, pose, trig, half, margin, code, contacts, ids, count)
+
+
+@jit_stage(inline="always")
+def previous_reference(previous, code):
+    """Which box of pair ``code`` gave the reference face of its contacts in the last substep (0: the first, 1: the
+    second; the key's bit, ``clipped_contacts``), found by binary search in ``previous`` (keys increasing, their
+    count); -1 if the pair kept no contact."""
+    keys, n_keys = previous
+    first = code * FEATURES
+    low, high = 0, n_keys
+    while low < high:
+        middle = (low + high) // 2
+        if keys[middle] < first:
+            low = middle + 1
+        else:
+            high = middle
+    if low < n_keys and keys[low] < first + FEATURES:
+        return (keys[low] - first) // (FEATURES // 2)
+    return -1
 
 
 @jit_stage
@@ -211,11 +236,12 @@ def floor_contacts(i, pose, trig, half, margin, code, contacts, ids, count):
 
 
 @jit_stage
-def find_contacts(bodies, sweep, pair_keys, n_pairs, include, contacts):
+def find_contacts(bodies, sweep, pair_keys, n_pairs, include, contacts, previous):
     """Every contact of the scene within reach: box i with ``include`` set against the floor within its
     ``sweep.floor_reach``, and the boxes of each of the first ``n_pairs`` pairs of ``pair_keys`` (keys i n + j,
     i < j, increasing, ``broadphase``) within reach_i + reach_j, in the order (box 0 and the floor, box 0 and box
-    1, ..., box 1 and the floor, ...), so the keys increase; into ``contacts`` (``state.Contacts``). Returns the
+    1, ..., box 1 and the floor, ...), so the keys increase; into ``contacts`` (``state.Contacts``). ``previous``:
+    the last substep's keys and their count (the reference faces' hysteresis, ``box_box_contacts``). Returns the
     number of contacts, or -1 if the arrays are too small (they are sized so that they never are)."""
     pose, half = bodies.pose, bodies.half
     trig, reach, floor_reach = sweep.trig, sweep.reach, sweep.floor_reach
@@ -228,7 +254,8 @@ def find_contacts(bodies, sweep, pair_keys, n_pairs, include, contacts):
             count = floor_contacts(i, pose, trig, half, floor_reach[i], i * (n + 1), rows, ids, count)
         while p < n_pairs and pair_keys[p] // n == i:
             j = pair_keys[p] - i * n
-            count = box_box_contacts(i, j, pose, trig, half, reach[i] + reach[j], i * (n + 1) + j + 1, rows, ids, count)
+            code = i * (n + 1) + j + 1
+            count = box_box_contacts(i, j, pose, trig, half, reach[i] + reach[j], code, rows, ids, count, previous)
             p += 1
         if count < 0:
             return -1

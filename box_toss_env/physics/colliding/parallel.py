@@ -402,7 +402,7 @@ def parallel_candidate_pairs(pose, bound, reach, include, moving, axis, order, l
 
 # -- narrowphase -------------------------------------------------------------------------------------
 @jit_stage(parallel=True)
-def contacts_by_body(pose, half, trig, reach, floor_reach, pair_keys, include, spare, first, found):
+def contacts_by_body(pose, half, trig, reach, floor_reach, pair_keys, include, spare, first, found, previous):
     """``narrowphase.find_contacts``' contacts of each box i at once (against the floor, then its pairs with larger
     boxes, ``first[i]:first[i + 1]`` of ``pair_keys``) into rows of its own of ``spare`` (rows, ids; from 4 i + 2
     first[i]: four a box, two a pair), how many into ``found[i]`` (negative: no room)."""
@@ -415,7 +415,8 @@ def contacts_by_body(pose, half, trig, reach, floor_reach, pair_keys, include, s
             count = floor_contacts(i, pose, trig, half, floor_reach[i], i * (n + 1), rows, ids, count)
         for p in range(first[i], first[i + 1]):
             j = pair_keys[p] - i * n
-            count = box_box_contacts(i, j, pose, trig, half, reach[i] + reach[j], i * (n + 1) + j + 1, rows, ids, count)
+            code = i * (n + 1) + j + 1
+            count = box_box_contacts(i, j, pose, trig, half, reach[i] + reach[j], code, rows, ids, count, previous)
         found[i] = count - slot if count >= 0 else -1
 
 
@@ -449,14 +450,16 @@ def pack_contacts(spare_rows, spare_ids, rows, ids, first, found, filled):
 
 
 @jit_stage
-def parallel_find_contacts(bodies, sweep, pair_keys, n_pairs, include, contacts):
+def parallel_find_contacts(bodies, sweep, pair_keys, n_pairs, include, contacts, previous):
     """``narrowphase.find_contacts`` (same arguments, the same contacts in the same order) with each box's contacts
     found at once (``contacts_by_body``) and packed in box order (``pack_contacts``); returns how many."""
     spare, first, found, filled = contacts.spare, sweep.spread.first, sweep.spread.found, sweep.spread.filled
     first_pairs(pair_keys, n_pairs, first)
     trig, reach, floor_reach = sweep.trig, sweep.reach, sweep.floor_reach
     spare_arrays = (spare.rows, spare.ids)
-    contacts_by_body(bodies.pose, bodies.half, trig, reach, floor_reach, pair_keys, include, spare_arrays, first, found)
+    contacts_by_body(
+        bodies.pose, bodies.half, trig, reach, floor_reach, pair_keys, include, spare_arrays, first, found, previous
+    )
     count = 0
     for i in range(found.shape[0]):
         if found[i] < 0:

@@ -87,7 +87,7 @@ def contact_reach(bodies, sweep, include, h, context):
 
 
 @jit_stage(inline="always")
-def find_substep_contacts(context, bodies, sweep, contacts, include, h, pairs):
+def find_substep_contacts(context, bodies, sweep, contacts, include, h, pairs, previous):
     """Find contacts: broadphase and narrowphase, the contacts within what the included bodies can travel in the substep
     (``contact_reach``), among the step's candidate pairs (``pairs``: how many, and whether they are this
     substep's own search already, ``groups.step_pairs``; else ``broadphase.substep_pairs``,
@@ -101,9 +101,9 @@ def find_substep_contacts(context, bodies, sweep, contacts, include, h, pairs):
         n_pairs = substep_pairs(bodies.pose, sweep, n_pairs, include)
         keys = sweep.substep_pairs
     if bodies.pose.shape[0] >= PARALLEL_BODIES:
-        count = parallel_find_contacts(bodies, sweep, keys, n_pairs, include, contacts)
+        count = parallel_find_contacts(bodies, sweep, keys, n_pairs, include, contacts, previous)
     else:
-        count = find_contacts(bodies, sweep, keys, n_pairs, include, contacts)
+        count = find_contacts(bodies, sweep, keys, n_pairs, include, contacts, previous)
     if count >= PARALLEL_CONTACTS:
         partition_contacts(contacts.ids, count, sweep.order, sweep.spread.block, contacts.partition)
     return count
@@ -281,7 +281,7 @@ def substep(context, bodies, sweep, contacts, stats, scratch, include, h, t, pai
     this substep's own search, ``groups.step_pairs``)."""
     gravity, threshold, vel, work, exact = context.gravity, context.threshold, bodies.vel, scratch.work, scratch.exact
     # find contacts
-    count = find_substep_contacts(context, bodies, sweep, contacts, include, h, pairs)
+    count = find_substep_contacts(context, bodies, sweep, contacts, include, h, pairs, (warm_from[0], warm_from[2]))
     if count >= PARALLEL_CONTACTS:
         prepare_on_threads(contacts.rows, contacts.ids, count, bodies.params, bodies.inv_mass, bodies.inv_inertia)
     else:
