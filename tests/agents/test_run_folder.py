@@ -396,3 +396,23 @@ def test_a_resume_puts_back_the_best_model_of_its_checkpoint(tiny_run, tmp_path)
         "; removed best_model.zip and best_vecnormalize.pkl (saved after 96 steps)"
     )
     assert not (run_dir / "best_model.zip").exists() and not (run_dir / "best_vecnormalize.pkl").exists()
+
+
+def test_an_off_policy_run_keeps_the_replay_buffers_of_its_two_newest_checkpoints(tmp_path):
+    """A replay buffer is written with every checkpoint (2.3 GB for SAC on pixels): the newest two are kept, an
+    older checkpoint keeps its model, and a resume from it says its buffer starts empty."""
+    sac = ["--algo", "sac", "--set", "learning_starts=16", "buffer_size=512", "train_freq=1", "gradient_steps=1"]
+    tiny = ["n_envs=4", "eval_freq=0", "checkpoint_freq=64", "policy_kwargs.net_arch=[8]", "batch_size=8"]
+    command = train_tiny(tmp_path, "sac", 256)
+    command = [*command[: command.index("--set")], *sac, "n_timesteps=256", *tiny]
+    run(*command)
+    folder = tmp_path / "sac" / "checkpoints"
+    assert sorted(p.name for p in folder.glob("sac_replay_buffer_*")) == [
+        "sac_replay_buffer_192_steps.pkl",
+        "sac_replay_buffer_256_steps.pkl",
+    ]
+    assert {p.name for p in folder.glob("sac_*_steps.zip")} >= {"sac_64_steps.zip", "sac_128_steps.zip"}
+    for newer in ("192", "256"):  # damaged: the newest intact checkpoint is one without a buffer
+        (folder / f"sac_{newer}_steps.zip").write_bytes(b"cut")
+    done = run("agents.train", "--resume", str(tmp_path / "sac"), "--from-steps", "128", "--no-progress", "--no-eval")
+    assert "no replay buffer kept with it" in done.stdout, done.stdout
