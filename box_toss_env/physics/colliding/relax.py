@@ -78,16 +78,7 @@ def pseudo_impulses(contacts, count, bodies, pseudo, exact, deep_island, context
     rows, ids = contacts.rows, contacts.ids
     inv_mass, inv_inertia = bodies.inv_mass, bodies.inv_inertia
     if exact_pays(ids, count, inv_mass, context.use_friction):
-        delassus_matrix(rows, ids, count, inv_mass, inv_inertia, exact.w)
-        for c in range(count):
-            exact.free[c] = -rows[c, TARGET]
-            exact.active[c] = exact.free[c] < 0.0
-        if normal_lcp(exact.w, exact.free, exact.x, exact.active, count, exact.factor, exact.index, exact.y):
-            x = exact.x
-            for c in range(count):
-                rows[c, PSEUDO_IMPULSE] = x[c]
-                if x[c] != 0.0:
-                    apply_impulse(c, x[c] * rows[c, NX], x[c] * rows[c, NY], rows, ids, pseudo, inv_mass, inv_inertia)
+        if exact_pseudo_impulses(rows, ids, count, bodies, pseudo, exact):
             return
     exact_islands(contacts, count, bodies, pseudo, exact, deep_island)
     if count >= PARALLEL_CONTACTS:
@@ -120,8 +111,7 @@ def exact_islands(contacts, count, bodies, pseudo, exact, deep_island):
     contacts taken out of the deep ones the sweeps then visit (no other island's contact touches its bodies).
     Returns the number of islands so solved."""
     rows, ids = contacts.rows, contacts.ids
-    inv_mass, inv_inertia = bodies.inv_mass, bodies.inv_inertia
-    if not mark_unlike_islands(ids, count, inv_mass, exact, contacts.listed):  # listed: free until the sweeps
+    if not mark_unlike_islands(ids, count, bodies.inv_mass, exact, contacts.listed):  # listed: free until the sweeps
         return 0
     solved = 0
     for c in range(count):  # an island's first contact gathers it
@@ -130,29 +120,32 @@ def exact_islands(contacts, count, bodies, pseudo, exact, deep_island):
         k = gather_island(rows, ids, c, exact, contacts.listed)
         if k == 0:
             continue
-        island_rows, island_ids = exact.rows, exact.ids
-        delassus_matrix(island_rows, island_ids, k, inv_mass, inv_inertia, exact.w)
-        for j in range(k):
-            exact.free[j] = -island_rows[j, TARGET]
-            exact.active[j] = exact.free[j] < 0.0
-        if normal_lcp(exact.w, exact.free, exact.x, exact.active, k, exact.factor, exact.index, exact.y):
+        if exact_pseudo_impulses(exact.rows, exact.ids, k, bodies, pseudo, exact):
             for j in range(k):
-                x = exact.x[j]
-                rows[exact.listed[j], PSEUDO_IMPULSE] = x
+                rows[exact.listed[j], PSEUDO_IMPULSE] = exact.rows[j, PSEUDO_IMPULSE]
                 deep_island[exact.listed[j]] = False
-                if x != 0.0:
-                    apply_impulse(
-                        j,
-                        x * island_rows[j, NX],
-                        x * island_rows[j, NY],
-                        island_rows,
-                        island_ids,
-                        pseudo,
-                        inv_mass,
-                        inv_inertia,
-                    )
             solved += 1
     return solved
+
+
+@jit_stage(inline="always")
+def exact_pseudo_impulses(rows, ids, count, bodies, pseudo, exact):
+    """The pseudo-impulses of ``count`` contacts solved exactly together (``normal_lcp`` on their W, targets in
+    column TARGET: x >= 0, W x - target >= 0, complementary), kept in column PSEUDO_IMPULSE and applied to
+    ``pseudo``; returns False (nothing changed) if the solve failed."""
+    inv_mass, inv_inertia = bodies.inv_mass, bodies.inv_inertia
+    delassus_matrix(rows, ids, count, inv_mass, inv_inertia, exact.w)
+    for c in range(count):
+        exact.free[c] = -rows[c, TARGET]
+        exact.active[c] = exact.free[c] < 0.0
+    if not normal_lcp(exact.w, exact.free, exact.x, exact.active, count, exact.factor, exact.index, exact.y):
+        return False
+    x = exact.x
+    for c in range(count):
+        rows[c, PSEUDO_IMPULSE] = x[c]
+        if x[c] != 0.0:
+            apply_impulse(c, x[c] * rows[c, NX], x[c] * rows[c, NY], rows, ids, pseudo, inv_mass, inv_inertia)
+    return True
 
 
 @jit_stage(inline="always")
