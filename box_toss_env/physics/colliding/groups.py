@@ -35,9 +35,10 @@ from .substeps import point_speed, substep_count, substeps
 def step_pairs(context, bodies, sweep, sleep, n_sub):
     """The step's candidate pairs among the awake bodies, into ``sweep.pairs``. A step of one substep: the substep's own
     search (its find contacts stage's geometry, reaches over dt and pairs, ``step.contact_reach``), which it then uses
-    as they are. A step of n_sub > 1 substeps: each body reaching what it travels in the step dt (``body_reach``) plus
-    what the fastest body travels (a struck body moves further than its own speed says): every pair a substep of the
-    step can find (``broadphase.substep_pairs``), and the chains that join bodies into sets (``plan_substeps``). Returns
+    as they are. A step of n_sub > 1 substeps: each body reaching what it travels in the step dt plus one and a half
+    times what the fastest body travels (``geometry_and_reach``; a struck body moves further than its own speed
+    says): every pair a substep of the step can find (``broadphase.substep_pairs``), and the chains that join bodies
+    into sets (``plan_substeps``). Returns
     how many, or -1 if ``sweep.pairs`` is too short (the caller grows it and calls again). From PARALLEL_BODIES
     bodies up the search runs on threads (``parallel.parallel_candidate_pairs``: the same pairs)."""
     pose, reach, awake = bodies.pose, sweep.reach, sleep.awake

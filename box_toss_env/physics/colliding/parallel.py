@@ -484,18 +484,25 @@ def geometry_on_threads(pose, half, include, trig, bound, vel, radius, h, gravit
 
 @jit_stage
 def geometry_and_reach(bodies, include, h, context, sweep):
-    """Each included body's geometry (``narrowphase.update_geometry``) and reach over h (``substeps.body_reach``,
-    returned: the largest): on threads from PARALLEL_BODIES bodies up (the same values)."""
+    """Each included body's geometry (``narrowphase.update_geometry``) and reach over h: what it travels
+    (``substeps.body_reach``) plus half what the fastest body travels, which is returned. A struck box moves further
+    than its own speed says: two boxes are searched for contacts within what both travel plus what the fastest does
+    (before, a box lying 4 mm from another and struck within the substep turned into it unseen, 8 mm deep in a
+    dropped pile of 100). On threads from PARALLEL_BODIES bodies up (the same values)."""
     pose, vel, radius, trig, bound, reach = bodies.pose, bodies.vel, bodies.radius, sweep.trig, sweep.bound, sweep.reach
     if pose.shape[0] < PARALLEL_BODIES:
         update_geometry(pose, bodies.half, include, trig, bound)
-        return body_reach(vel, radius, include, h, context.gravity, context.tolerance, reach)
-    gravity, tolerance = context.gravity, context.tolerance
-    geometry_on_threads(pose, bodies.half, include, trig, bound, vel, radius, h, gravity, tolerance, reach)
-    fastest = 0.0
+        fastest = body_reach(vel, radius, include, h, context.gravity, context.tolerance, reach)
+    else:
+        gravity, tolerance = context.gravity, context.tolerance
+        geometry_on_threads(pose, bodies.half, include, trig, bound, vel, radius, h, gravity, tolerance, reach)
+        fastest = 0.0
+        for b in range(pose.shape[0]):
+            if include[b]:
+                fastest = max(fastest, reach[b])
     for b in range(pose.shape[0]):
         if include[b]:
-            fastest = max(fastest, reach[b])
+            reach[b] += 0.5 * fastest  # a pair: the fastest's travel beyond their own
     return fastest
 
 

@@ -68,16 +68,14 @@ def apply_impulse(c, px, py, contacts, ids, vel, inv_mass, inv_inertia):
 @jit_stage(inline="always")
 def restitution_step(c, rows, ids, vel, inv_mass, inv_inertia, threshold):
     """One contact of the restitution polish: an impact (approaching faster than ``threshold``, with an impulse)
-    to u_rel . n >= -e u0, its normal impulse >= 0; a floor contact to its speculative target less the threshold,
-    its impulse only growing; any other contact untouched. Returns (|change|, impulse after), (0, 0) if untouched."""
+    to u_rel . n >= -e u0, its normal impulse >= 0; any other contact, with the floor or between boxes, to its
+    speculative target less the threshold, its impulse only growing. Returns (|change|, impulse after)."""
     if is_impact(rows[c, APPROACH], threshold) and rows[c, IMPULSE] > 0.0:
         target = newton_target(rows[c, RESTITUTION], rows[c, APPROACH])
         least = 0.0
-    elif ids[c, BODY2] < 0:  # the floor's other contacts: an impact may not drive a corner into the
-        target = rows[c, TARGET] - threshold  # floor faster than the threshold, nor release it
+    else:  # every other contact: an impact may not drive a corner into the floor or into another box faster
+        target = rows[c, TARGET] - threshold  # than the threshold, nor release it
         least = rows[c, IMPULSE]
-    else:
-        return 0.0, 0.0
     nx, ny = rows[c, NX], rows[c, NY]
     ux, uy = relative_velocity(c, rows, ids, vel)
     before = rows[c, IMPULSE]

@@ -14,8 +14,9 @@ from .prepare import restitution_step
 def apply_restitution(contacts, count, bodies, threshold):
     """Stage 5's polish, after the impacts were solved with every contact and friction: contact by contact,
     u_rel . n >= -e u0 for the contacts that approached faster than the threshold and took an impulse (the
-    normal impulse stays >= 0; a single contact gets the closed form to rounding); the floor's other contacts
-    join with their speculative target less the threshold, their impulse only growing. Returns how many
+    normal impulse stays >= 0; a single contact gets the closed form to rounding); every other contact joins with
+    its speculative target less the threshold, its impulse only growing (with the floor's alone, a box spun by an
+    impact at one corner turned into the box it lay on: 6.6 mm deep in a dropped pile of 16). Returns how many
     contacts are impacts. From PARALLEL_CONTACTS contacts up block by block, on threads
     (``parallel.partitioned_restitution``)."""
     if count >= PARALLEL_CONTACTS:

@@ -78,9 +78,9 @@ from .warm_start import warm_start
 # -- find contacts -----------------------------------------------------------------------------------
 @jit_stage(inline="always")
 def contact_reach(bodies, sweep, include, h, context):
-    """Each included body's bounding box and how far it can travel in the substep (``body_reach``); against
-    the floor a body reaches its own distance plus the fastest body's (a struck box moves further than its
-    own speed says)."""
+    """Each included body's bounding box and how far it can reach in the substep (``geometry_and_reach``: its own
+    travel plus half the fastest body's); against the floor a body reaches a whole fastest body's travel further
+    (a struck box moves further than its own speed says)."""
     fastest = geometry_and_reach(bodies, include, h, context, sweep)  # on threads for many bodies
     for b in range(bodies.pose.shape[0]):
         sweep.floor_reach[b] = sweep.reach[b] + fastest
