@@ -38,9 +38,9 @@ def step_pairs(context, bodies, sweep, sleep, n_sub):
     as they are. A step of n_sub > 1 substeps: each body reaching what it travels in the step dt plus one and a half
     times what the fastest body travels (``geometry_and_reach``; a struck body moves further than its own speed
     says): every pair a substep of the step can find (``broadphase.substep_pairs``), and the chains that join bodies
-    into sets (``plan_substeps``). Returns
-    how many, or -1 if ``sweep.pairs`` is too short (the caller grows it and calls again). From PARALLEL_BODIES
-    bodies up the search runs on threads (``parallel.parallel_candidate_pairs``: the same pairs)."""
+    into sets (``plan_substeps``). Returns how many, or -1 if ``sweep.pairs`` is too short (the caller grows it and
+    calls again). From PARALLEL_BODIES bodies up the search runs on threads (``parallel.parallel_candidate_pairs``:
+    the same pairs)."""
     pose, reach, awake = bodies.pose, sweep.reach, sleep.awake
     fastest = geometry_and_reach(bodies, awake, context.dt, context, sweep)  # on threads for many bodies
     for b in range(pose.shape[0]):
