@@ -270,11 +270,12 @@ def main(argv: list[str] | None = None) -> None:
 
 def rescore_all(parser, args) -> None:
     """``rescore`` for the agents of ``args.env_ids`` (every folder of ``args.models`` if none), each checked first."""
-    folders = sorted(p for p in args.models.iterdir() if p.is_dir() and (p / "config.yml").exists())
-    chosen = [p for p in folders if not args.env_ids or load_yaml(p / "config.yml")["env_id"] in args.env_ids]
-    found = {load_yaml(p / "config.yml")["env_id"] for p in chosen}
-    if missing := [env_id for env_id in args.env_ids if env_id not in found]:
-        have = ", ".join(sorted(load_yaml(p / "config.yml")["env_id"] for p in folders))
+    env_of = {
+        p: load_yaml(p / "config.yml")["env_id"] for p in sorted(args.models.iterdir()) if (p / "config.yml").exists()
+    }
+    chosen = [p for p, env_id in env_of.items() if not args.env_ids or env_id in args.env_ids]
+    if missing := [env_id for env_id in args.env_ids if env_id not in env_of.values()]:
+        have = ", ".join(sorted(env_of.values()))
         parser.error(f"no trained agent of {', '.join(missing)} in {args.models} (there: {have})")
     for folder in chosen:
         check_folder(folder, args.models)
