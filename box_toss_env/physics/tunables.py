@@ -154,6 +154,11 @@ FRICTION_ITERATIONS = 8
 RESTITUTION_ITERATIONS = 16
 """[-] sweeps of the colliding restitution polish at most."""
 
+HOLD_ROUNDS = 64
+"""[-] rounds at most over the contacts the restitution polish left approaching faster than its targets
+(``restitution.hold_targets``), each stepping only those. Fewer: a contact the sweeps left short may still close its
+gap by up to its shortfall times the substep."""
+
 # -- relax: the penalty ------------------------------------------------------------------------------------------
 PENALTY_TRIGGER = 2.0
 """[slops] the penalty starts once a contact is this many ``Scene.penetration_slop`` deep, then removes what lies

@@ -20,9 +20,20 @@ def test_a_pile_drop_gives_its_cost_its_deepest_penetration_and_when_it_slept():
     assert cost > 0.0 and 0.0 <= deepest < 1e-3 and 0.0 < asleep <= 2.0
 
 
+def test_layers_drop_the_engine_benchmarks_wide_pile(capsys):
+    pile_drops.main(["--sizes", "6", "--seeds", "1", "--duration", "0.3", "--layers", "2"])
+    out = capsys.readouterr().out
+    assert "2 rows wide" in out and "--layers 2" in out
+
+
 @pytest.mark.parametrize(
     ("argv", "named"),
-    [(["--seeds", "0"], "--seeds"), (["--duration", "0"], "--duration"), (["--sizes", "0,16"], "--sizes")],
+    [
+        (["--seeds", "0"], "--seeds"),
+        (["--duration", "0"], "--duration"),
+        (["--sizes", "0,16"], "--sizes"),
+        (["--layers", "0"], "--layers"),
+    ],
 )
 def test_bad_options_are_refused_naming_them(argv, named, capsys):
     with pytest.raises(SystemExit):

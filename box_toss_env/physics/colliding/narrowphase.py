@@ -20,7 +20,8 @@ Box against box (``box_box_contacts``), separating axes with clipping, as Box2D'
      face of the other box whose normal is most anti-parallel to n.
   3. clipping: the incident face's segment is clipped to the reference face's extent along it; each of
      the (at most two) clipped end points within ``margin`` of the reference face is a contact point,
-     body 1 being the incident box and body 2 the reference box.
+     body 1 being the incident box and body 2 the reference box. An incident face wholly beside the
+     reference face (clipping keeps nothing) gives one contact corner against corner (``corner_contact``).
 A contact is found while the gap is within ``margin`` (speculative contacts: the solver lets a gap
 close but not pass). Each contact gets a key (the pair, the reference and incident faces, the clipped
 end) so the next step can start from its impulse (warm starting).
@@ -151,12 +152,14 @@ def clipped_contacts(ref, inc, face, reference_b, pose, trig, half, margin, code
     p2x, p2y = pose[inc, 0] + ox, pose[inc, 1] + oy
     d1 = tx * (p1x - ax) + ty * (p1y - ay)
     d2 = tx * (p2x - ax) + ty * (p2y - ay)
-    # clip the segment p1 p2 to 0 <= d <= length
+    base = code * FEATURES + ((reference_b * 4 + face) * 4 + incident) * 2
+    # clip the segment p1 p2 to 0 <= d <= length; beside the face altogether: corner against corner
     if (d1 < 0.0 and d2 < 0.0) or (d1 > length and d2 > length):
-        return count
+        cx, cy = (ax, ay) if d1 < 0.0 else (bx, by)
+        end = 0 if (d1 > d2) == (d1 < 0.0) else 1  # the incident end nearer the face's span
+        return corner_contact(inc, ref, (cx, cy), (p1x, p1y, p2x, p2y), pose, margin, base + end, contacts, ids, count)
     q1x, q1y = clipped_end(d1, d2, length, p1x, p1y, p2x, p2y)
     q2x, q2y = clipped_end(d2, d1, length, p2x, p2y, p1x, p1y)
-    base = code * FEATURES + ((reference_b * 4 + face) * 4 + incident) * 2
     for end in range(2):
         qx, qy = (q1x, q1y) if end == 0 else (q2x, q2y)
         gap = nx * (qx - ax) + ny * (qy - ay)
@@ -174,6 +177,35 @@ def clipped_contacts(ref, inc, face, reference_b, pose, trig, half, margin, code
                 gap,
             )
     return count
+
+
+@jit_stage
+def corner_contact(inc, ref, corner, segment, pose, margin, key, contacts, ids, count):
+    """The contact of an incident face that lies wholly beside the reference face (past one of its ends: clipping keeps
+    nothing): between the reference face's corner c there and the point q of the incident segment nearest to it,
+    along n = (q - c) / |q - c|, gap |q - c|, if within ``margin`` (Box2D's vertex-vertex contact). Without it a
+    corner passing just beside another box's corner had no contact and went 1.6 mm into it within one substep
+    (the dropped pile of 1,000, seed 1, two corners 0.8 mm apart across and 1.05 mm along the face)."""
+    cx, cy = corner
+    p1x, p1y, p2x, p2y = segment
+    ex, ey = p2x - p1x, p2y - p1y
+    s = min(max(((cx - p1x) * ex + (cy - p1y) * ey) / (ex * ex + ey * ey), 0.0), 1.0)
+    qx, qy = p1x + s * ex, p1y + s * ey
+    gap = math.sqrt((qx - cx) ** 2 + (qy - cy) ** 2)
+    if gap > margin or gap == 0.0:
+        return count
+    return add_contact(
+        contacts,
+        ids,
+        count,
+        inc,
+        ref,
+        key,
+        ((qx - cx) / gap, (qy - cy) / gap),
+        (qx - pose[inc, 0], qy - pose[inc, 1]),
+        (qx - pose[ref, 0], qy - pose[ref, 1]),
+        gap,
+    )
 
 
 @jit_stage

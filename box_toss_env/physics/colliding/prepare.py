@@ -66,16 +66,21 @@ def apply_impulse(c, px, py, contacts, ids, vel, inv_mass, inv_inertia):
 
 
 @jit_stage(inline="always")
-def restitution_step(c, rows, ids, vel, inv_mass, inv_inertia, threshold):
-    """One contact of the restitution polish: an impact (approaching faster than ``threshold``, with an impulse)
-    to u_rel . n >= -e u0, its normal impulse >= 0; any other contact, with the floor or between boxes, to its
-    speculative target less the threshold, its impulse only growing. Returns (|change|, impulse after)."""
+def polish_target(c, rows, threshold):
+    """Contact c's target in the restitution polish and the least impulse it may keep: an impact (approaching faster
+    than ``threshold``, with an impulse) u_rel . n >= -e u0, its impulse >= 0; any other contact, with the floor or
+    between boxes, its speculative target less the threshold, its impulse only growing (an impact may not drive a
+    corner into the floor or into another box faster than the threshold, nor release it)."""
     if is_impact(rows[c, APPROACH], threshold) and rows[c, IMPULSE] > 0.0:
-        target = newton_target(rows[c, RESTITUTION], rows[c, APPROACH])
-        least = 0.0
-    else:  # every other contact: an impact may not drive a corner into the floor or into another box faster
-        target = rows[c, TARGET] - threshold  # than the threshold, nor release it
-        least = rows[c, IMPULSE]
+        return newton_target(rows[c, RESTITUTION], rows[c, APPROACH]), 0.0
+    return rows[c, TARGET] - threshold, rows[c, IMPULSE]
+
+
+@jit_stage(inline="always")
+def restitution_step(c, rows, ids, vel, inv_mass, inv_inertia, threshold):
+    """One contact of the restitution polish: its normal impulse that meets its target, no less than its least
+    (``polish_target``). Returns (|change|, impulse after)."""
+    target, least = polish_target(c, rows, threshold)
     nx, ny = rows[c, NX], rows[c, NY]
     ux, uy = relative_velocity(c, rows, ids, vel)
     before = rows[c, IMPULSE]

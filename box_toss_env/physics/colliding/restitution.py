@@ -1,13 +1,14 @@
 """The restitution stage of the colliding solver (``stages.COLLIDING_SUBSTEP``): the impacts' targets
-u_rel . n >= -e u0 polished contact by contact after the joint solve (``apply_restitution``).
+u_rel . n >= -e u0 polished contact by contact after the joint solve (``apply_restitution``), and the contacts
+its sweeps left short of their targets held (``hold_targets``).
 """
 
 from ..compile.compilation import jit_stage
 from ..contact_law import is_impact
-from ..tunables import EXACT_CONVERGED, RESTITUTION_ITERATIONS
-from .narrowphase import APPROACH, IMPULSE
+from ..tunables import EXACT_CONVERGED, HOLD_ROUNDS, RESTITUTION_ITERATIONS
+from .narrowphase import APPROACH, IMPULSE, NX, NY
 from .parallel import PARALLEL_CONTACTS, partitioned_restitution
-from .prepare import restitution_step
+from .prepare import polish_target, relative_velocity, restitution_step
 
 
 @jit_stage
@@ -18,9 +19,12 @@ def apply_restitution(contacts, count, bodies, threshold):
     its speculative target less the threshold, its impulse only growing (with the floor's alone, a box spun by an
     impact at one corner turned into the box it lay on: 6.6 mm deep in a dropped pile of 16). Returns how many
     contacts are impacts. From PARALLEL_CONTACTS contacts up block by block, on threads
-    (``parallel.partitioned_restitution``)."""
+    (``parallel.partitioned_restitution``). Then the contacts its sweeps left short (``hold_targets``)."""
     if count >= PARALLEL_CONTACTS:
-        return partitioned_restitution(contacts, count, bodies, threshold)
+        impacts = partitioned_restitution(contacts, count, bodies, threshold)
+        if impacts > 0:
+            hold_targets(contacts, count, bodies, threshold)
+        return impacts
     rows, ids = contacts.rows, contacts.ids
     vel, inv_mass, inv_inertia = bodies.vel, bodies.inv_mass, bodies.inv_inertia
     impacts = 0
@@ -38,4 +42,29 @@ def apply_restitution(contacts, count, bodies, threshold):
             total += after
         if change <= EXACT_CONVERGED * total:
             break
+    hold_targets(contacts, count, bodies, threshold)
     return impacts
+
+
+@jit_stage
+def hold_targets(contacts, count, bodies, threshold):
+    """After the polish's sweeps: each contact still approaching faster than its polish target by more than the
+    threshold (``polish_target``: the sweeps ended before they converged) takes the polish's step again, contact by
+    contact, only those, round after round until none does (at most HOLD_ROUNDS rounds). A corner left approaching
+    at u_rel . n below its target closes its gap by the difference times h: in a dropped pile of 1,000, the polish's
+    16 sweeps left a box's corner 1.4 m/s into the box below, 3.8 mm deep in one substep of 1/256 s. A round that
+    finds none costs one pass over the contacts; the rounds visit only the contacts short of their targets. Returns
+    how many rounds stepped a contact."""
+    rows, ids = contacts.rows, contacts.ids
+    vel, inv_mass, inv_inertia = bodies.vel, bodies.inv_mass, bodies.inv_inertia
+    for rounds in range(HOLD_ROUNDS):
+        held = 0
+        for c in range(count):
+            target, _ = polish_target(c, rows, threshold)
+            ux, uy = relative_velocity(c, rows, ids, vel)
+            if ux * rows[c, NX] + uy * rows[c, NY] < target - threshold:
+                restitution_step(c, rows, ids, vel, inv_mass, inv_inertia, threshold)
+                held += 1
+        if held == 0:
+            return rounds
+    return HOLD_ROUNDS

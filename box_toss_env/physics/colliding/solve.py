@@ -19,14 +19,15 @@ from .sweeps import friction_sweep, gauss_seidel
 
 
 @jit_stage
-def solve_velocities(contacts, count, bodies, exact, context):
+def solve_velocities(contacts, count, bodies, exact, context, seeded=False):
     """Solve contacts: the contact impulses of the first ``count`` contacts. Up to JOINT_LIMIT contacts with friction,
     normal and friction impulses are solved together, exactly (``joint_contact_solve``); up to DIRECT_LIMIT contacts
     where boxes of unlike masses meet (``exact_pays``; or if the joint solve does not settle), the normal impulses
     are solved exactly together (``alternate``); otherwise, or if the exact solve fails, projected Gauss-Seidel
     (``gauss_seidel``, with the scene's ``solver_tolerance`` and ``solver_iterations``; from PARALLEL_CONTACTS
     contacts up block by block, on threads: ``parallel.partitioned_gauss_seidel``), each island of unlike masses of
-    at most DIRECT_LIMIT contacts solved exactly first (``solve_unlike_islands``).
+    at most DIRECT_LIMIT contacts solved exactly first (``solve_unlike_islands``). With ``seeded`` (the restitution
+    solve), the contact-order sweeps start from the bodies set in ``exact.moved[0]`` (``sweeps.gauss_seidel``).
     ``exact``: ``state.ExactWork``; ``context``: ``state.StepContext``."""
     if count == 0:
         return
@@ -55,6 +56,7 @@ def solve_velocities(contacts, count, bodies, exact, context):
         context.sweeps,
         context.sweep_tolerance,
         exact.moved,
+        seeded,
     )
 
 

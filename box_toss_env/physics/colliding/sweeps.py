@@ -56,7 +56,7 @@ def normal_step(c, column, contacts, ids, vel, inv_mass, inv_inertia):
 
 
 @jit_stage
-def gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, iterations, tolerance, moved):
+def gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction, iterations, tolerance, moved, seeded):
     """Projected Gauss-Seidel over the contacts (Box2D's sequential impulses), at most ``iterations`` sweeps,
     stopping once a sweep changes the impulses by less than ``tolerance`` of their sum and none of them by more
     than SINGLE_CHANGE ``tolerance`` times their mean: friction clamped to mu times the normal impulse, then the
@@ -68,7 +68,9 @@ def gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction,
     After the first sweep, a sweep visits only the contacts of bodies that ``moved``: took an impulse larger than
     ``tolerance`` times the mean in the sweep before or in this one so far. Any other contact was solved against
     velocities that have changed by less since, so it would change by less too: where a box topples off a pile,
-    the sweeps it needs visit its neighbourhood, not every contact of the pile. ``moved``: (2, bodies) work."""
+    the sweeps it needs visit its neighbourhood, not every contact of the pile. ``moved``: (2, bodies) work. With
+    ``seeded`` the first sweep too visits only the contacts of the bodies set in ``moved[0]`` (the restitution
+    solve: the contacts were solved just before, and only the impacts' targets have changed since)."""
     total = 0.0
     for c in range(count):
         total += contacts[c, IMPULSE]
@@ -82,7 +84,7 @@ def gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction,
         for c in range(count):
             b1 = ids[c, BODY1]
             b2 = ids[c, BODY2]
-            if sweep > 0 and not (
+            if (sweep > 0 or seeded) and not (
                 before_sweep[b1] or this_sweep[b1] or (b2 >= 0 and (before_sweep[b2] or this_sweep[b2]))
             ):
                 total += contacts[c, IMPULSE]
