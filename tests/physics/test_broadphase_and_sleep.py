@@ -120,6 +120,19 @@ def test_a_resting_box_falls_asleep_and_wakes_when_struck():
     assert np.all(asleep == asleep[0]) and np.all(asleep[:, 3:] == 0.0)
 
 
+def test_a_box_whose_bounds_overlap_a_sleeping_one_but_not_within_reach_does_not_wake_it():
+    # without gravity, a box placed at rest on the floor sleeps from the start; another, turned 45 degrees, glides
+    # at 1 m/s towards the corner of its top and stops being simulated 8 cm from it, where its bounds have
+    # overlapped the sleeping box's for the last 12 mm: the bounds alone woke the sleeping box
+    # (islands.wake_touched; its own separation is now the test)
+    lying = Box(length=0.4, width=0.2, mass=2.0, position=(0.0, 0.1))
+    gliding = Box(length=0.4, width=0.2, mass=2.0, position=(1.4, 0.4), angle=math.pi / 4, velocity=(-1.0, 0.0))
+    scene = Scene(boxes=(lying, gliding), boxes_collide=True, gravity=0.0, friction=0.5, penalty_stiffness=1e5)
+    result = simulate(scene.replace(dt=1 / 256), duration=1.0)
+    assert result.n_steps[0] == 0 and result.rest_time[0] == 0.0  # asleep throughout
+    np.testing.assert_allclose(result.final_state[1], [0.4, 0.4, math.pi / 4, -1.0, 0.0, 0.0], atol=1e-12)
+
+
 def test_sleeping_is_per_island():
     # a stack that rests at once, and far from it a box still sliding: the stack sleeps alone, the slider later
     stack = scenes.stack(n=3).boxes

@@ -88,10 +88,12 @@ def load_warm_start(warm, n, impulses, dt):
 @jit_stage
 def wake(context, bodies, sweep, sleep):
     """Wake: the sleeping islands an awake body can reach in the coming step (``islands.wake_touched``, at each
-    awake body's reach over dt). Returns how many bodies are awake."""
+    awake body's reach over dt, and the fastest's beyond it). Returns how many bodies are awake."""
     update_geometry(bodies.pose, bodies.half, sleep.awake, sweep.trig, sweep.bound)
-    body_reach(bodies.vel, bodies.radius, sleep.awake, context.dt, context.gravity, context.tolerance, sweep.reach)
-    wake_touched(bodies.pose, sweep, sleep)
+    fastest = body_reach(
+        bodies.vel, bodies.radius, sleep.awake, context.dt, context.gravity, context.tolerance, sweep.reach
+    )
+    wake_touched(bodies.pose, bodies.half, sweep, sleep, fastest)
     return count_awake(sleep.awake)
 
 

@@ -97,6 +97,21 @@ def deepest_face(dx, dy, cos_a, sin_a, hx_a, hy_a, cos_b, sin_b, hx_b, hy_b):
 
 
 @jit_stage
+def separation(i, j, pose, trig, half):
+    """How far boxes i and j are apart at least: the larger of the two boxes' largest face separations (step 1
+    above; negative: they overlap, as deep as the least overlap of the four axes)."""
+    dx = pose[j, 0] - pose[i, 0]
+    dy = pose[j, 1] - pose[i, 1]
+    _, sep_i = deepest_face(
+        dx, dy, trig[i, 0], trig[i, 1], half[i, 0], half[i, 1], trig[j, 0], trig[j, 1], half[j, 0], half[j, 1]
+    )
+    _, sep_j = deepest_face(
+        -dx, -dy, trig[j, 0], trig[j, 1], half[j, 0], half[j, 1], trig[i, 0], trig[i, 1], half[i, 0], half[i, 1]
+    )
+    return max(sep_i, sep_j)
+
+
+@jit_stage
 def add_contact(contacts, ids, count, body1, body2, key, normal, lever1, lever2, gap):
     """Append one contact point of body1 against body2 (normal n, lever arms r1, r2 from the bodies' centres to the
     point, gap); returns the new count, or -1 if the arrays are full (they are sized so that they never are)."""
