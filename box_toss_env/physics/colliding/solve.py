@@ -27,7 +27,8 @@ def solve_velocities(contacts, count, bodies, exact, context, seeded=False):
     (``gauss_seidel``, with the scene's ``solver_tolerance`` and ``solver_iterations``; from PARALLEL_CONTACTS
     contacts up block by block, on threads: ``parallel.partitioned_gauss_seidel``), each island of unlike masses of
     at most DIRECT_LIMIT contacts solved exactly first (``solve_unlike_islands``). With ``seeded`` (the restitution
-    solve), the contact-order sweeps start from the bodies set in ``exact.moved[0]`` (``sweeps.gauss_seidel``).
+    solve), the contact-order sweeps start from the bodies set in ``exact.moved[0]`` (``sweeps.gauss_seidel``; the
+    block sweeps of PARALLEL_CONTACTS contacts and more start from every contact, as before).
     ``exact``: ``state.ExactWork``; ``context``: ``state.StepContext``."""
     if count == 0:
         return

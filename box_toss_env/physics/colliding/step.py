@@ -24,8 +24,9 @@ substeps at every body's reach over the step (``groups.step_pairs``), each subst
 (``broadphase.substep_pairs``). Impacts between boxes are resolved in the substep where the gap closes (not located
 in time as the floor-only solver locates a box's impacts with the floor). The restitution stage solves the impacts
 again with the solve contacts stage's solve, together with every other contact and with friction (the simultaneous
-impulse LCP: a box struck while lying on the floor is held by the floor and tips as friction says), then polishes
-them contact by contact (``apply_restitution``); the energy limit then keeps the bodies that took an impulse from
+impulse LCP: a box struck while lying on the floor is held by the floor and tips as friction says; its sweeps start
+from the impacted bodies, ``seed_impacts``), then polishes them contact by contact and steps again the contacts the
+polish left short (``apply_restitution``); the energy limit then keeps the bodies that took an impulse from
 gaining kinetic + potential energy (with several contacts, friction or warm starting the impulses alone could add
 energy; one factor on all their velocities keeps every contact satisfied and reverses no slip).
 """
