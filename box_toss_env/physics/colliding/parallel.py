@@ -32,7 +32,6 @@ import numpy as np
 from numba import prange
 
 from ..compile.compilation import jit_stage
-from ..contact_law import is_impact
 from ..robust.contact_solver import penalty_correction_share
 from ..tunables import EXACT_CONVERGED, RESTITUTION_ITERATIONS, SINGLE_CHANGE
 from .broadphase import candidate_pairs, interval_end, pair_overlaps, sort_intervals
@@ -57,7 +56,7 @@ from .narrowphase import (
     floor_contacts,
     update_geometry,
 )
-from .prepare import body_kinetic_energy, prepare_contact, relative_velocity, restitution_step
+from .prepare import body_kinetic_energy, is_impact_contact, prepare_contact, relative_velocity, restitution_step
 from .substeps import body_reach, travel
 from .sweeps import friction_step, normal_step
 
@@ -318,7 +317,7 @@ def partitioned_restitution(contacts, count, bodies, threshold):
     order, start, partial = partition.order, partition.start, partition.partial
     impacts = 0
     for c in range(count):
-        if is_impact(rows[c, APPROACH], threshold) and rows[c, IMPULSE] > 0.0:
+        if is_impact_contact(c, rows, threshold):
             impacts += 1
     if impacts == 0:
         return 0

@@ -66,12 +66,19 @@ def apply_impulse(c, px, py, contacts, ids, vel, inv_mass, inv_inertia):
 
 
 @jit_stage(inline="always")
+def is_impact_contact(c, rows, threshold):
+    """Whether contact c is an impact: it approached faster than ``threshold`` before the substep
+    (``contact_law.is_impact``) and took an impulse."""
+    return is_impact(rows[c, APPROACH], threshold) and rows[c, IMPULSE] > 0.0
+
+
+@jit_stage(inline="always")
 def polish_target(c, rows, threshold):
     """Contact c's target in the restitution polish and the least impulse it may keep: an impact (approaching faster
     than ``threshold``, with an impulse) u_rel . n >= -e u0, its impulse >= 0; any other contact, with the floor or
     between boxes, its speculative target less the threshold, its impulse only growing (an impact may not drive a
     corner into the floor or into another box faster than the threshold, nor release it)."""
-    if is_impact(rows[c, APPROACH], threshold) and rows[c, IMPULSE] > 0.0:
+    if is_impact_contact(c, rows, threshold):
         return newton_target(rows[c, RESTITUTION], rows[c, APPROACH]), 0.0
     return rows[c, TARGET] - threshold, rows[c, IMPULSE]
 

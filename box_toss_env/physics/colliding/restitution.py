@@ -4,11 +4,10 @@ its sweeps left short of their targets held (``hold_targets``).
 """
 
 from ..compile.compilation import jit_stage
-from ..contact_law import is_impact
 from ..tunables import EXACT_CONVERGED, HOLD_ROUNDS, RESTITUTION_ITERATIONS
-from .narrowphase import APPROACH, IMPULSE, NX, NY
+from .narrowphase import NX, NY
 from .parallel import PARALLEL_CONTACTS, partitioned_restitution
-from .prepare import polish_target, relative_velocity, restitution_step
+from .prepare import is_impact_contact, polish_target, relative_velocity, restitution_step
 
 
 @jit_stage
@@ -29,7 +28,7 @@ def apply_restitution(contacts, count, bodies, threshold):
     vel, inv_mass, inv_inertia = bodies.vel, bodies.inv_mass, bodies.inv_inertia
     impacts = 0
     for c in range(count):
-        if is_impact(rows[c, APPROACH], threshold) and rows[c, IMPULSE] > 0.0:
+        if is_impact_contact(c, rows, threshold):
             impacts += 1
     if impacts == 0:
         return 0
@@ -53,11 +52,10 @@ def hold_targets(contacts, count, bodies, threshold):
     contact, only those, round after round until none does (at most HOLD_ROUNDS rounds). A corner left approaching
     at u_rel . n below its target closes its gap by the difference times h: in a dropped pile of 1,000, the polish's
     16 sweeps left a box's corner 1.4 m/s into the box below, 3.8 mm deep in one substep of 1/256 s. A round that
-    finds none costs one pass over the contacts; the rounds visit only the contacts short of their targets. Returns
-    how many rounds stepped a contact."""
+    finds none costs one pass over the contacts; the rounds visit only the contacts short of their targets."""
     rows, ids = contacts.rows, contacts.ids
     vel, inv_mass, inv_inertia = bodies.vel, bodies.inv_mass, bodies.inv_inertia
-    for rounds in range(HOLD_ROUNDS):
+    for _ in range(HOLD_ROUNDS):
         held = 0
         for c in range(count):
             target, _ = polish_target(c, rows, threshold)
@@ -66,5 +64,4 @@ def hold_targets(contacts, count, bodies, threshold):
                 restitution_step(c, rows, ids, vel, inv_mass, inv_inertia, threshold)
                 held += 1
         if held == 0:
-            return rounds
-    return HOLD_ROUNDS
+            return
