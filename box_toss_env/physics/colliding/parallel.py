@@ -33,7 +33,7 @@ from numba import prange
 
 from ..compile.compilation import jit_stage
 from ..robust.contact_solver import penalty_correction_share
-from ..tunables import EXACT_CONVERGED, RESTITUTION_ITERATIONS, SINGLE_CHANGE
+from ..tunables import EXACT_CONVERGED, HOLD_ROUNDS, RESTITUTION_ITERATIONS, SINGLE_CHANGE
 from .broadphase import candidate_pairs, interval_end, pair_overlaps, sort_intervals
 from .narrowphase import (
     APPROACH,
@@ -56,7 +56,14 @@ from .narrowphase import (
     floor_contacts,
     update_geometry,
 )
-from .prepare import body_kinetic_energy, is_impact_contact, prepare_contact, relative_velocity, restitution_step
+from .prepare import (
+    body_kinetic_energy,
+    is_impact_contact,
+    prepare_contact,
+    relative_velocity,
+    restitution_step,
+    short_of_target,
+)
 from .substeps import body_reach, travel
 from .sweeps import friction_step, normal_step
 
@@ -229,16 +236,23 @@ def velocity_blocks(rows, ids, order, start, vel, inv_mass, inv_inertia, use_fri
 
 
 @jit_stage
-def partitioned_gauss_seidel(contacts, count, bodies, use_friction, iterations, tolerance, moved):
-    """``sweeps.gauss_seidel`` (its stop rule, its sweeps after the first over the contacts of bodies that moved)
-    block by block (module docstring): at most ``iterations`` sweeps; ``moved``: (2, bodies) work."""
+def partitioned_gauss_seidel(contacts, count, bodies, use_friction, iterations, tolerance, moved, seeded):
+    """``sweeps.gauss_seidel`` (its stop rule, its sweeps after the first over the contacts of bodies that moved;
+    with ``seeded`` the first too, from the bodies set in ``moved[0]``) block by block (module docstring): at most
+    ``iterations`` sweeps; ``moved``: (2, bodies) work. A seeded solve counts its sweeps from 1, so that its first
+    reads the seed as the sweep before's (``velocity_step``)."""
     rows, ids, partition = contacts.rows, contacts.ids, contacts.partition
     order, start, partial = partition.order, partition.start, partition.partial
     vel, inv_mass, inv_inertia = bodies.vel, bodies.inv_mass, bodies.inv_inertia
     total = 0.0
     for c in range(count):
         total += rows[c, IMPULSE]
-    for sweep in range(iterations):
+    first = 0
+    if seeded:
+        for b in range(moved.shape[1]):
+            moved[1, b] = moved[0, b]
+        first = 1
+    for sweep in range(first, first + iterations):
         quiet = tolerance * total / count
         moved[(sweep + 1) % 2, :] = False
         velocity_blocks(rows, ids, order, start, vel, inv_mass, inv_inertia, use_friction, sweep, moved, quiet, partial)
@@ -328,6 +342,61 @@ def partitioned_restitution(contacts, count, bodies, threshold):
         if change <= EXACT_CONVERGED * total:
             break
     return impacts
+
+
+@jit_stage(inline="always")
+def hold_block(k, rows, ids, order, start, vel, inv_mass, inv_inertia, threshold, hold_round, moved):
+    """``restitution.hold_targets``' round ``hold_round`` over block k's contacts in order, after the first only those
+    of a body stepped since it was last tried (``moved``, as ``velocity_step``'s: any other has the relative velocity
+    it was found not short with); returns how many it stepped."""
+    held = 0
+    before, now = hold_round % 2, (hold_round + 1) % 2
+    for position in range(start[k], start[k + 1]):
+        c = order[position]
+        b1 = ids[c, BODY1]
+        b2 = ids[c, BODY2]
+        if hold_round > 0 and not (
+            moved[before, b1] or moved[now, b1] or (b2 >= 0 and (moved[before, b2] or moved[now, b2]))
+        ):
+            continue
+        if short_of_target(c, rows, ids, vel, threshold):
+            restitution_step(c, rows, ids, vel, inv_mass, inv_inertia, threshold)
+            moved[now, b1] = True
+            if b2 >= 0:
+                moved[now, b2] = True
+            held += 1
+    return held
+
+
+@jit_stage(parallel=True)
+def hold_blocks(rows, ids, order, start, vel, inv_mass, inv_inertia, threshold, moved, partial):
+    """The hold's first round: ``hold_block`` over the blocks at once, then the boundary; counts into ``partial``."""
+    for k in prange(BLOCKS):
+        partial[k, 0] = hold_block(k, rows, ids, order, start, vel, inv_mass, inv_inertia, threshold, 0, moved)
+    partial[BLOCKS, 0] = hold_block(BLOCKS, rows, ids, order, start, vel, inv_mass, inv_inertia, threshold, 0, moved)
+
+
+@jit_stage
+def partitioned_hold(contacts, bodies, threshold, moved):
+    """``restitution.hold_targets`` block by block: a first round over every contact on threads (``hold_blocks``),
+    then rounds over the contacts of the bodies the round before stepped, on this thread in the same order (a few
+    contacts each: a parallel region per round cost more than it saved), until one steps none (at most HOLD_ROUNDS).
+    ``moved``: (2, bodies) work."""
+    rows, ids, partition = contacts.rows, contacts.ids, contacts.partition
+    order, start, partial = partition.order, partition.start, partition.partial
+    vel, inv_mass, inv_inertia = bodies.vel, bodies.inv_mass, bodies.inv_inertia
+    moved[1, :] = False
+    hold_blocks(rows, ids, order, start, vel, inv_mass, inv_inertia, threshold, moved, partial)
+    held = 0
+    for k in range(BLOCKS + 1):
+        held += int(partial[k, 0])
+    for hold_round in range(1, HOLD_ROUNDS):
+        if held == 0:
+            return
+        moved[(hold_round + 1) % 2, :] = False
+        held = 0
+        for k in range(BLOCKS + 1):
+            held += hold_block(k, rows, ids, order, start, vel, inv_mass, inv_inertia, threshold, hold_round, moved)
 
 
 # -- broadphase --------------------------------------------------------------------------------------

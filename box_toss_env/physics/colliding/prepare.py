@@ -84,6 +84,15 @@ def polish_target(c, rows, threshold):
 
 
 @jit_stage(inline="always")
+def short_of_target(c, rows, ids, vel, threshold):
+    """Whether contact c approaches faster than its polish target (``polish_target``) by more than ``threshold``:
+    what ``restitution.hold_targets`` steps again."""
+    target, _ = polish_target(c, rows, threshold)
+    ux, uy = relative_velocity(c, rows, ids, vel)
+    return ux * rows[c, NX] + uy * rows[c, NY] < target - threshold
+
+
+@jit_stage(inline="always")
 def restitution_step(c, rows, ids, vel, inv_mass, inv_inertia, threshold):
     """One contact of the restitution polish: its normal impulse that meets its target, no less than its least
     (``polish_target``). Returns (|change|, impulse after)."""

@@ -5,13 +5,12 @@ its sweeps left short of their targets held (``hold_targets``).
 
 from ..compile.compilation import jit_stage
 from ..tunables import EXACT_CONVERGED, HOLD_ROUNDS, RESTITUTION_ITERATIONS
-from .narrowphase import NX, NY
-from .parallel import PARALLEL_CONTACTS, partitioned_restitution
-from .prepare import is_impact_contact, polish_target, relative_velocity, restitution_step
+from .parallel import PARALLEL_CONTACTS, partitioned_hold, partitioned_restitution
+from .prepare import is_impact_contact, restitution_step, short_of_target
 
 
 @jit_stage
-def apply_restitution(contacts, count, bodies, threshold):
+def apply_restitution(contacts, count, bodies, threshold, moved):
     """Stage 5's polish, after the impacts were solved with every contact and friction: contact by contact,
     u_rel . n >= -e u0 for the contacts that approached faster than the threshold and took an impulse (the
     normal impulse stays >= 0; a single contact gets the closed form to rounding); every other contact joins with
@@ -22,7 +21,7 @@ def apply_restitution(contacts, count, bodies, threshold):
     if count >= PARALLEL_CONTACTS:
         impacts = partitioned_restitution(contacts, count, bodies, threshold)
         if impacts > 0:
-            hold_targets(contacts, count, bodies, threshold)
+            hold_targets(contacts, count, bodies, threshold, moved)
         return impacts
     rows, ids = contacts.rows, contacts.ids
     vel, inv_mass, inv_inertia = bodies.vel, bodies.inv_mass, bodies.inv_inertia
@@ -36,31 +35,33 @@ def apply_restitution(contacts, count, bodies, threshold):
         change = 0.0
         total = 0.0
         for c in range(count):
-            moved, after = restitution_step(c, rows, ids, vel, inv_mass, inv_inertia, threshold)
-            change += moved
+            dp, after = restitution_step(c, rows, ids, vel, inv_mass, inv_inertia, threshold)
+            change += dp
             total += after
         if change <= EXACT_CONVERGED * total:
             break
-    hold_targets(contacts, count, bodies, threshold)
+    hold_targets(contacts, count, bodies, threshold, moved)
     return impacts
 
 
 @jit_stage
-def hold_targets(contacts, count, bodies, threshold):
+def hold_targets(contacts, count, bodies, threshold, moved):
     """After the polish's sweeps: each contact still approaching faster than its polish target by more than the
     threshold (``polish_target``: the sweeps ended before they converged) takes the polish's step again, contact by
     contact, only those, round after round until none does (at most HOLD_ROUNDS rounds). A corner left approaching
     at u_rel . n below its target closes its gap by the difference times h: in a dropped pile of 1,000, the polish's
     16 sweeps left a box's corner 1.4 m/s into the box below, 3.8 mm deep in one substep of 1/256 s. A round that
-    finds none costs one pass over the contacts; the rounds visit only the contacts short of their targets."""
+    finds none costs one pass over the contacts; the rounds visit only the contacts short of their targets. From
+    PARALLEL_CONTACTS contacts up block by block, on threads (``parallel.partitioned_hold``)."""
     rows, ids = contacts.rows, contacts.ids
     vel, inv_mass, inv_inertia = bodies.vel, bodies.inv_mass, bodies.inv_inertia
+    if count >= PARALLEL_CONTACTS:
+        partitioned_hold(contacts, bodies, threshold, moved)
+        return
     for _ in range(HOLD_ROUNDS):
         held = 0
         for c in range(count):
-            target, _ = polish_target(c, rows, threshold)
-            ux, uy = relative_velocity(c, rows, ids, vel)
-            if ux * rows[c, NX] + uy * rows[c, NY] < target - threshold:
+            if short_of_target(c, rows, ids, vel, threshold):
                 restitution_step(c, rows, ids, vel, inv_mass, inv_inertia, threshold)
                 held += 1
         if held == 0:

@@ -27,15 +27,14 @@ def solve_velocities(contacts, count, bodies, exact, context, seeded=False):
     (``gauss_seidel``, with the scene's ``solver_tolerance`` and ``solver_iterations``; from PARALLEL_CONTACTS
     contacts up block by block, on threads: ``parallel.partitioned_gauss_seidel``), each island of unlike masses of
     at most DIRECT_LIMIT contacts solved exactly first (``solve_unlike_islands``). With ``seeded`` (the restitution
-    solve), the contact-order sweeps start from the bodies set in ``exact.moved[0]`` (``sweeps.gauss_seidel``; the
-    block sweeps of PARALLEL_CONTACTS contacts and more start from every contact, as before).
+    solve), the sweeps start from the bodies set in ``exact.moved[0]`` (``sweeps.gauss_seidel``).
     ``exact``: ``state.ExactWork``; ``context``: ``state.StepContext``."""
     if count == 0:
         return
     if count >= PARALLEL_CONTACTS:
         solve_unlike_islands(contacts, count, bodies, exact, context.use_friction)
         partitioned_gauss_seidel(
-            contacts, count, bodies, context.use_friction, context.sweeps, context.sweep_tolerance, exact.moved
+            contacts, count, bodies, context.use_friction, context.sweeps, context.sweep_tolerance, exact.moved, seeded
         )
         return
     use_friction = context.use_friction

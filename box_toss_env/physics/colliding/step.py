@@ -323,7 +323,7 @@ def substep(context, bodies, sweep, contacts, stats, scratch, include, h, t, pai
     if impacts > 0:
         seed_impacts(contacts, count, threshold, exact.moved[0])
         solve_velocities(contacts, count, bodies, exact, context, True)
-        apply_restitution(contacts, count, bodies, threshold)
+        apply_restitution(contacts, count, bodies, threshold, exact.moved)
     # energy limit: no energy gained by the bodies that took an impulse
     mark_touched(contacts, count, impacts, threshold, work)
     limit_energy(contacts, count, bodies, stats, work, h, t, context)
