@@ -25,6 +25,7 @@ SECTION_PAGES = {
     "agents": METHODOLOGY / "main-command.md",  # python -m agents.main --full --readme
     "variant-gifs": DOCS / "environment.md",  # python -m agents.variant_gifs --write-docs
     "tune": DOCS / "hyperparameter-search.md",  # python -m agents.tune ... --readme
+    "thread-scaling": DOCS / "engine_scale.md",  # python -m benchmarks.thread_scaling --write-docs
     "engine-benchmark": METHODOLOGY / "engine-benchmark.md",  # python -m benchmarks.engine --readme
     "throughput": DOCS / "throughput.md",  # python -m benchmarks.throughput --readme
     "throughput-pixels": DOCS / "throughput.md",  # python -m benchmarks.throughput --pixels-only --readme

@@ -1,8 +1,8 @@
 """What a second thread buys a large scene whose boxes collide: wall time of the same run on 1 and on N threads
 (``simulate``'s and ``Simulator``'s ``threads``), and whether the results are the same bit for bit. Prints one
-table; writes nothing.
+table; ``--write-docs`` also puts it in docs/engine_scale.md (its ``thread-scaling`` section).
 
-    python -m benchmarks.thread_scaling [--cases NAMES] [--threads N] [--repeats R] [--seconds S]
+    python -m benchmarks.thread_scaling [--cases NAMES] [--threads N] [--repeats R] [--seconds S] [--write-docs]
 
 Cases (``CASES``), each at the scene's defaults as ``benchmarks.scene_suite`` builds it:
 
@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from agents.doc_sections import DOCS, replace_section
 from benchmarks.scene_suite import (
     BOX2D_HZ,
     LARGE_PYRAMID_STEPS,
@@ -44,6 +45,8 @@ from benchmarks.suite_runs import NEVER_SLEEP, sleep_default
 from box_toss_env.physics import Scene, Simulator, layout, make_settings, warm_start_memory
 
 REPEATS = 3
+DOCS_PAGE = DOCS / "engine_scale.md"
+MARKER = "thread-scaling"
 
 
 @dataclass(frozen=True)
@@ -146,6 +149,7 @@ def parse(argv) -> argparse.Namespace:
     parser.add_argument("--threads", type=int, default=min(2, most), help=f"threads against 1, in [2, {most}]")
     parser.add_argument("--repeats", type=int, default=REPEATS, help="interleaved repeats, in [1, 100]")
     parser.add_argument("--seconds", type=float, help="simulated seconds timed (default: each case's own)")
+    parser.add_argument("--write-docs", action="store_true", help="put the table in docs/engine_scale.md")
     args = parser.parse_args(argv)
     unknown = [name for name in args.cases if name not in CASES]
     if unknown:
@@ -156,18 +160,32 @@ def parse(argv) -> argparse.Namespace:
         parser.error(f"--repeats must be in [1, 100], got {args.repeats}")
     if args.seconds is not None and not 0.0 < args.seconds <= 3600.0:
         parser.error(f"--seconds must be in (0, 3600], got {args.seconds}")
+    if args.write_docs and (args.seconds is not None or args.cases != list(CASES)):
+        parser.error("--write-docs writes the whole table: it takes no --cases nor --seconds")
     return args
+
+
+def docs_section(text: str, threads: int, repeats: int, load: float) -> str:
+    """The page's section: how the table was made, then the table."""
+    return (
+        f"`python -m benchmarks.thread_scaling`: wall time on 1 and on {threads} threads, {repeats} interleaved "
+        f"repeats, their medians; {os.cpu_count()} cores, load {load:.2f} at the start.\n\n{text}"
+    )
 
 
 def main(argv=None) -> None:
     args = parse(argv)
+    load = os.getloadavg()[0]
     rows = []
     for name in args.cases:
         start = CASES[name](args.seconds)
         times, loads, identical = measure(start, (1, args.threads), args.repeats)
         rows.append((name, start.scene.n_bodies * start.steps, times, loads, identical))
         print(f"{name}: done, load {os.getloadavg()[0]:.2f}", flush=True)
-    print(table(rows, args.threads))
+    text = table(rows, args.threads)
+    print(text)
+    if args.write_docs:
+        replace_section(MARKER, docs_section(text, args.threads, args.repeats, load), readme=DOCS_PAGE)
 
 
 if __name__ == "__main__":
