@@ -140,7 +140,7 @@ class Simulator:
         if not self.flags.parallel:
             return 1
         if self.threads is None and self.flags.boxes_collide:
-            return 1  # told, a second thread pays where its core is free (docs/engine_scale.md#threads)
+            return 1  # unless told: a second thread pays only where its core is free (docs/engine_scale.md#threads)
         return self.threads if self.threads is not None else numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]  # numba sets its config at import
 
     @property

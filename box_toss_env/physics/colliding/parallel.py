@@ -16,9 +16,10 @@ Two kinds of stage, by what they change:
   other goes to the boundary. A sweep then visits the blocks' contacts, each block in contact order, the blocks at
   once (no two share a body, so any split of the blocks over threads gives the same velocities), then the boundary's
   contacts in contact order. That order is the same on any number of threads, one included: the velocity sweeps
-  (``partitioned_gauss_seidel``), the penalty's (``partitioned_penalty_sweeps``) and the restitution polish
-  (``partitioned_restitution``) run so from PARALLEL_CONTACTS contacts up, in place of the contact-order sweeps
-  (``sweeps.gauss_seidel``, ``relax.penalty_sweeps``, ``restitution.apply_restitution``), which smaller scenes keep.
+  (``partitioned_gauss_seidel``), the penalty's (``partitioned_penalty_sweeps``), the restitution polish
+  (``partitioned_restitution``) and its hold (``partitioned_hold``) run so from PARALLEL_CONTACTS contacts up, in
+  place of the contact-order sweeps (``sweeps.gauss_seidel``, ``relax.penalty_sweeps``,
+  ``restitution.apply_restitution``, ``restitution.hold_targets``), which smaller scenes keep.
   Each block adds up its own changes and impulses (a sweep's stop rule), and the sums are added block by block, so
   they too are the same on any number of threads. A sweep is one parallel region (graph colouring, Box2D v3's way,
   needs one per colour: a dozen per sweep, each waiting for the slowest thread, which costs on a loaded machine),

@@ -17,7 +17,8 @@ def apply_restitution(contacts, count, bodies, threshold, moved):
     its speculative target less the threshold, its impulse only growing (with the floor's alone, a box spun by an
     impact at one corner turned into the box it lay on: 6.6 mm deep in a dropped pile of 16). Returns how many
     contacts are impacts. From PARALLEL_CONTACTS contacts up block by block, on threads
-    (``parallel.partitioned_restitution``). Then the contacts its sweeps left short (``hold_targets``)."""
+    (``parallel.partitioned_restitution``). Then the contacts its sweeps left short (``hold_targets``; ``moved``:
+    (2, bodies) work)."""
     if count >= PARALLEL_CONTACTS:
         impacts = partitioned_restitution(contacts, count, bodies, threshold)
         if impacts > 0:
@@ -52,7 +53,8 @@ def hold_targets(contacts, count, bodies, threshold, moved):
     at u_rel . n below its target closes its gap by the difference times h: in a dropped pile of 1,000, the polish's
     16 sweeps left a box's corner 1.4 m/s into the box below, 3.8 mm deep in one substep of 1/256 s. A round that
     finds none costs one pass over the contacts; the rounds visit only the contacts short of their targets. From
-    PARALLEL_CONTACTS contacts up block by block, on threads (``parallel.partitioned_hold``)."""
+    PARALLEL_CONTACTS contacts up block by block, on threads, in ``moved`` ((2, bodies) work) the bodies each round
+    stepped (``parallel.partitioned_hold``)."""
     rows, ids = contacts.rows, contacts.ids
     vel, inv_mass, inv_inertia = bodies.vel, bodies.inv_mass, bodies.inv_inertia
     if count >= PARALLEL_CONTACTS:
