@@ -66,7 +66,7 @@ from .prepare import (
     short_of_target,
 )
 from .substeps import body_reach, travel
-from .sweeps import friction_step, normal_step
+from .sweeps import friction_step, mark_moved, normal_step, touches_moved
 
 PARALLEL_BODIES = 256
 """[bodies] from this many up, the broadphase's sweep and the narrowphase run on threads (same results)."""
@@ -187,38 +187,35 @@ def add_blocks(partial):
 
 # -- Gauss-Seidel of the velocities ------------------------------------------------------------------
 @jit_stage(inline="always")
-def velocity_step(c, rows, ids, vel, inv_mass, inv_inertia, use_friction, sweep, moved, quiet):
+def velocity_step(c, rows, ids, vel, inv_mass, inv_inertia, use_friction, sweep, before, now, quiet):
     """``sweeps.gauss_seidel``'s step on contact c in sweep ``sweep`` (its friction, then its normal impulse; after
-    the first sweep only if a body of it moved: ``moved[sweep % 2]`` in the sweep before, ``moved[(sweep + 1) % 2]``
-    in this one so far). Returns (its change, its largest change)."""
+    the first sweep only if a body of it moved: in ``before``, the sweep before, or in ``now``, this one so far,
+    ``sweeps.touches_moved``). Returns (its change, its largest change)."""
     b1 = ids[c, BODY1]
     b2 = ids[c, BODY2]
-    before, now = sweep % 2, (sweep + 1) % 2
     change, largest = 0.0, 0.0
-    if sweep == 0 or moved[before, b1] or moved[now, b1] or (b2 >= 0 and (moved[before, b2] or moved[now, b2])):
+    if sweep == 0 or touches_moved(before, now, b1, b2):
         if use_friction and rows[c, FRICTION] > 0.0:
             dq = abs(friction_step(c, rows, ids, vel, inv_mass, inv_inertia))
             change, largest = dq, dq
             if dq > quiet:
-                moved[now, b1] = True
-                if b2 >= 0:
-                    moved[now, b2] = True
+                mark_moved(now, b1, b2)
         dp = abs(normal_step(c, IMPULSE, rows, ids, vel, inv_mass, inv_inertia))
         change, largest = change + dp, max(largest, dp)
         if dp > quiet:
-            moved[now, b1] = True
-            if b2 >= 0:
-                moved[now, b2] = True
+            mark_moved(now, b1, b2)
     return change, largest
 
 
 @jit_stage(inline="always")
 def velocity_block(k, rows, ids, order, start, vel, inv_mass, inv_inertia, use_friction, sweep, moved, quiet):
-    """``velocity_step`` over block k's contacts in order; returns its sums (change, impulses, largest change)."""
+    """``velocity_step`` over block k's contacts in order (``moved[sweep % 2]`` the sweep before's bodies,
+    ``moved[(sweep + 1) % 2]`` this one's); returns its sums (change, impulses, largest change)."""
+    before, now = moved[sweep % 2], moved[(sweep + 1) % 2]
     change, total, largest = 0.0, 0.0, 0.0
     for position in range(start[k], start[k + 1]):
         c = order[position]
-        dc, dl = velocity_step(c, rows, ids, vel, inv_mass, inv_inertia, use_friction, sweep, moved, quiet)
+        dc, dl = velocity_step(c, rows, ids, vel, inv_mass, inv_inertia, use_friction, sweep, before, now, quiet)
         change, total, largest = change + dc, total + rows[c, IMPULSE], max(largest, dl)
     return change, total, largest
 
@@ -348,23 +345,19 @@ def partitioned_restitution(contacts, count, bodies, threshold):
 @jit_stage(inline="always")
 def hold_block(k, rows, ids, order, start, vel, inv_mass, inv_inertia, threshold, hold_round, moved):
     """``restitution.hold_targets``' round ``hold_round`` over block k's contacts in order, after the first only those
-    of a body stepped since it was last tried (``moved``, as ``velocity_step``'s: any other has the relative velocity
+    of a body stepped since it was last tried (``moved``, as ``velocity_block``'s: any other has the relative velocity
     it was found not short with); returns how many it stepped."""
+    before, now = moved[hold_round % 2], moved[(hold_round + 1) % 2]
     held = 0
-    before, now = hold_round % 2, (hold_round + 1) % 2
     for position in range(start[k], start[k + 1]):
         c = order[position]
         b1 = ids[c, BODY1]
         b2 = ids[c, BODY2]
-        if hold_round > 0 and not (
-            moved[before, b1] or moved[now, b1] or (b2 >= 0 and (moved[before, b2] or moved[now, b2]))
-        ):
+        if hold_round > 0 and not touches_moved(before, now, b1, b2):
             continue
         if short_of_target(c, rows, ids, vel, threshold):
             restitution_step(c, rows, ids, vel, inv_mass, inv_inertia, threshold)
-            moved[now, b1] = True
-            if b2 >= 0:
-                moved[now, b2] = True
+            mark_moved(now, b1, b2)
             held += 1
     return held
 
@@ -387,10 +380,9 @@ def partitioned_hold(contacts, bodies, threshold, moved):
     order, start, partial = partition.order, partition.start, partition.partial
     vel, inv_mass, inv_inertia = bodies.vel, bodies.inv_mass, bodies.inv_inertia
     moved[1, :] = False
+    partial[:, 1:] = 0.0
     hold_blocks(rows, ids, order, start, vel, inv_mass, inv_inertia, threshold, moved, partial)
-    held = 0
-    for k in range(BLOCKS + 1):
-        held += int(partial[k, 0])
+    held = int(add_blocks(partial)[0])
     for hold_round in range(1, HOLD_ROUNDS):
         if held == 0:
             return

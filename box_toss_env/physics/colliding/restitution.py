@@ -55,11 +55,11 @@ def hold_targets(contacts, count, bodies, threshold, moved):
     finds none costs one pass over the contacts; the rounds visit only the contacts short of their targets. From
     PARALLEL_CONTACTS contacts up block by block, on threads, in ``moved`` ((2, bodies) work) the bodies each round
     stepped (``parallel.partitioned_hold``)."""
-    rows, ids = contacts.rows, contacts.ids
-    vel, inv_mass, inv_inertia = bodies.vel, bodies.inv_mass, bodies.inv_inertia
     if count >= PARALLEL_CONTACTS:
         partitioned_hold(contacts, bodies, threshold, moved)
         return
+    rows, ids = contacts.rows, contacts.ids
+    vel, inv_mass, inv_inertia = bodies.vel, bodies.inv_mass, bodies.inv_inertia
     for _ in range(HOLD_ROUNDS):
         held = 0
         for c in range(count):

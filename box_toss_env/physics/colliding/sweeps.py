@@ -84,9 +84,7 @@ def gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction,
         for c in range(count):
             b1 = ids[c, BODY1]
             b2 = ids[c, BODY2]
-            if (sweep > 0 or seeded) and not (
-                before_sweep[b1] or this_sweep[b1] or (b2 >= 0 and (before_sweep[b2] or this_sweep[b2]))
-            ):
+            if (sweep > 0 or seeded) and not touches_moved(before_sweep, this_sweep, b1, b2):
                 total += contacts[c, IMPULSE]
                 continue
             if use_friction and contacts[c, FRICTION] > 0.0:
@@ -103,6 +101,13 @@ def gauss_seidel(contacts, ids, count, vel, inv_mass, inv_inertia, use_friction,
             total += contacts[c, IMPULSE]
         if change <= tolerance * total and largest * count <= SINGLE_CHANGE * tolerance * total:
             break
+
+
+@jit_stage(inline="always")
+def touches_moved(before, now, b1, b2):
+    """Whether body b1 or b2 (b2 < 0: the floor) is set in ``before`` (the sweep before) or in ``now`` (this one so
+    far): whether a contact of theirs is stepped in a sweep after the first (``gauss_seidel``)."""
+    return before[b1] or now[b1] or (b2 >= 0 and (before[b2] or now[b2]))
 
 
 @jit_stage(inline="always")
