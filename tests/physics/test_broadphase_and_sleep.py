@@ -13,7 +13,8 @@ from physics_checks import advance_in_runs
 from box_toss_env.physics import Box, Scene, Simulator, layout, make_settings, scenes, simulate, warm_start_memory
 from box_toss_env.physics.colliding.alone import bounds_touch, steps_alone
 from box_toss_env.physics.colliding.broadphase import SMALL_SORT, candidate_pairs, sort_keys, sweep_axis
-from box_toss_env.physics.colliding.state import Bodies, Sleep, StepContext
+from box_toss_env.physics.colliding.islands import sleeps_through
+from box_toss_env.physics.colliding.state import Bodies, Sleep, StepContext, initial_capacity
 from box_toss_env.physics.robust.flight import time_to_contact
 
 
@@ -21,6 +22,12 @@ from box_toss_env.physics.robust.flight import time_to_contact
 def compiled_pairs(pose, bound, reach, include, moving, axis, order, low, keys):
     """``candidate_pairs`` as the kernels call it (a stage has no Python wrapper of its own)."""
     return candidate_pairs(pose, bound, reach, include, moving, axis, order, low, keys)
+
+
+@numba.njit
+def compiled_sleeps_through(warm, state, params, dt, stats, end_step):
+    """``sleeps_through`` as the colliding kernel calls it, with the kernel's room for contacts."""
+    return sleeps_through(warm, state, params, dt, initial_capacity(state.shape[0]), stats, end_step)
 
 
 @numba.njit
@@ -363,16 +370,19 @@ def test_a_sleeping_pile_costs_no_step_until_a_body_of_it_is_moved_pushed_change
     assert state11[10, 1] > asleep[top, 1]  # it lies on the pile
 
 
-def test_a_run_on_a_pile_asleep_throughout_leaves_what_the_stepping_run_leaves():
-    """A call on bodies all kept asleep and untouched skips the run's set-up (``islands.sleeps_through``): its
-    state, stats and warm start are those of the recording kernel, which sets everything up and finds nothing
-    awake to step."""
+@pytest.mark.parametrize("until_rest", [True, False])
+def test_a_run_on_a_pile_asleep_throughout_leaves_what_the_stepping_run_leaves(until_rest):
+    """A call on bodies all kept asleep and untouched skips the run's set-up (``islands.sleeps_through``), ended
+    at once (``until_rest``) or at its last step (sleeping, ``simulate``'s default): its state, stats and warm
+    start are those of the recording kernel, which sets everything up and finds nothing awake to step."""
     scene = scenes.pile(100, dt=1 / 60)
     state, params = scene.initial_state(), scene.body_params()
     stats, warm = np.zeros((100, layout.STATS_SIZE)), warm_start_memory(100)
-    settings = make_settings(scene, 600, until_rest=True)
-    Simulator.for_scene(scene, parallel=False).run(state, params, settings, stats, warm_start=warm)
+    Simulator.for_scene(scene, parallel=False).run(
+        state, params, make_settings(scene, 600, until_rest=True), stats, warm_start=warm
+    )
     assert not np.isnan(stats[:, layout.REST_TIME]).any()  # the pile fell asleep
+    settings = make_settings(scene, 600, until_rest=until_rest, sleep=True)
     results = []
     for record in (False, True):
         simulator = Simulator.for_scene(scene, parallel=False, record=record)
@@ -387,6 +397,11 @@ def test_a_run_on_a_pile_asleep_throughout_leaves_what_the_stepping_run_leaves()
     assert np.array_equal(skipped_stats, stepped_stats, equal_nan=True)
     assert np.array_equal(skipped_warm, stepped_warm)
     assert not skipped_stats[:, layout.N_STEPS].any() and np.all(skipped_stats[:, layout.REST_TIME] == 0.0)
+    assert np.all(skipped_stats[:, layout.END_TIME] == (0.0 if until_rest else 600 * scene.dt))
+    probe_stats = np.zeros_like(stats)  # the skip itself, on what the run above was given
+    end_step = 0 if until_rest else 600
+    assert compiled_sleeps_through(warm.copy(), state.copy(), params, scene.dt, probe_stats, end_step)
+    assert np.array_equal(probe_stats, stepped_stats, equal_nan=True)
 
 
 def test_a_column_of_40_boxes_starting_cold_stays_at_rest():

@@ -20,7 +20,8 @@ Sleep carries from run to run in the caller's warm start (``simulate.warm_start_
 (``keep_sleeping``); at the start of the next, every island that was asleep sleeps again, unless the
 caller moved, pushed or changed one of its bodies since (``restore_sleeping``), and the awake bodies' timers go on.
 A pile that fell asleep costs nothing in the next run until something reaches it, as in one long run; a run in
-which every body is kept asleep and untouched skips even the run's set-up (``sleeps_through``).
+which every body is kept asleep and untouched skips even the run's set-up (``sleeps_through``), whether it ends
+once every body sleeps (``until_rest``) or goes on to its last step (sleeping, ``simulate``'s default).
 """
 
 import math
@@ -235,12 +236,13 @@ def restore_sleeping(warm, bodies, sleep):
 
 
 @jit_stage
-def sleeps_through(warm, state, params, dt, capacity, stats):
+def sleeps_through(warm, state, params, dt, capacity, stats, end_step):
     """Whether every body sleeps through this run: ``warm`` kept all of them asleep and none was moved, set
     moving or changed since (``restore_sleeping`` would put every island to sleep again, and nothing is awake to
     step). If so, what the run would leave is written at once, without its set-up: each body's stats (no step,
-    at rest from the start), ``warm`` as ``keep_sleeping`` and the contact rows would leave it (sleep timers 0,
-    at most ``capacity`` contacts, the kernel's room for them), ``state`` untouched."""
+    at rest from the start, the run ended at ``end_step``: 0 with until_rest, else its last step), ``warm`` as
+    ``keep_sleeping`` and the contact rows would leave it (sleep timers 0, at most ``capacity`` contacts, the
+    kernel's room for them), ``state`` untouched."""
     n = state.shape[0]
     if warm.shape[0] == 0 or np.int64(warm[0, 2]) != n or (warm.shape[0] - 1) // layout.WARM_BODY_ROWS < n:
         return False
@@ -254,7 +256,7 @@ def sleeps_through(warm, state, params, dt, capacity, stats):
         row = 1 + layout.WARM_BODY_ROWS * b
         warm[row, 1] = 0.0
         warm[row, 2] = 0.0
-        write_stats(stats, b, math.nan, 0, 0, 0.0, 0.0, 0.0, layout.STATUS_OK, -1, 1)
+        write_stats(stats, b, math.nan, 0, 0, 0.0, 0.0, end_step * dt, layout.STATUS_OK, -1, end_step + 1)
     first = 1 + layout.WARM_BODY_ROWS * n
     count = min(np.int64(warm[0, 0]), warm.shape[0] - first, capacity)
     warm[0, 0] = count

@@ -207,10 +207,11 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
     def run(state, params, settings, stats, trajectory, events, warm):
         _ = DIGEST  # the on-disk cache key includes every engine source (see robust_solver)
         nb = state.shape[0]
+        end_step = 0 if settings[layout.UNTIL_REST] != 0.0 else np.int64(settings[layout.MAX_STEPS])
         if (
-            settings[layout.UNTIL_REST] != 0.0
+            settings[layout.SLEEP] != 0.0
             and not RECORD
-            and sleeps_through(warm, state, params, settings[layout.DT], initial_capacity(nb), stats)
+            and sleeps_through(warm, state, params, settings[layout.DT], initial_capacity(nb), stats, end_step)
         ):
             return  # every body kept asleep and untouched: nothing to set up
         bodies = make_bodies(state, params)
