@@ -18,11 +18,19 @@ alternate within each repeat, their order swapped from one repeat to the next; t
 (``os.getloadavg``, 1 min) is read before each run and printed with the times, since other work on the machine
 takes a thread's core. The speedup is the ratio of the medians. Every run's final state is compared with the
 first's: ``identical`` says whether all were equal bit for bit.
+
+Control. Before each timed run the same thread count runs a plain parallel loop (``control_run``: CONTROL_REGIONS
+parallel regions one after another, each the same arithmetic cut into N equal shares, about as short as the solver's
+regions): on N threads it is nearly N times faster when the host gives the process N whole cores (each region's
+start costs the rest), so its speedup, printed beside the case's, says what the machine gave the threads around the
+case's runs (on a virtual machine the host decides: two runs of the same build a few minutes apart measured 0.88x
+and 1.60x on the pile of 1,000 kept awake).
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import statistics
 import time
@@ -45,6 +53,8 @@ from benchmarks.suite_runs import NEVER_SLEEP, sleep_default
 from box_toss_env.physics import Scene, Simulator, layout, make_settings, warm_start_memory
 
 REPEATS = 3
+CONTROL_REGIONS = 2_000  # parallel regions a control run starts, one after another
+CONTROL_WORK = 5_000  # square roots in each share of a region (some 10 us on one thread)
 DOCS_PAGE = DOCS / "engine_scale.md"
 MARKER = "thread-scaling"
 
@@ -99,6 +109,47 @@ CASES: dict[str, Callable[[float | None], Start]] = {
 }
 
 
+@numba.njit(parallel=True, nogil=True)
+def control_region(out: np.ndarray, work: int) -> None:
+    """One parallel region: ``out.size`` equal shares of ``work`` square roots each, one share per thread."""
+    for share in numba.prange(out.shape[0]):
+        total = 0.0
+        for i in range(work):
+            total += math.sqrt(i + share)
+        out[share] = total
+
+
+@numba.njit(nogil=True)
+def control_regions(out: np.ndarray, regions: int, work: int) -> None:
+    for _ in range(regions):
+        control_region(out, work)
+
+
+def control_run(threads: int, shares: int) -> float:
+    """Wall seconds of CONTROL_REGIONS regions of ``shares`` shares on ``threads`` threads (the same work on any
+    number: on ``shares`` threads ideally ``shares`` times faster than on one)."""
+    before = numba.get_num_threads()
+    numba.set_num_threads(threads)
+    try:
+        out = np.zeros(shares)
+        began = time.perf_counter()
+        control_regions(out, CONTROL_REGIONS, CONTROL_WORK)
+        return time.perf_counter() - began
+    finally:
+        numba.set_num_threads(before)
+
+
+@dataclass
+class Timings:
+    """A case's runs: wall seconds per thread count, the control's (``control_run``) beside each, the loads read
+    before each run, and whether every run ended in the same state bit for bit."""
+
+    times: dict[int, list[float]]
+    control: dict[int, list[float]]
+    loads: list[float]
+    identical: bool
+
+
 def timed_run(start: Start, threads: int) -> tuple[float, float, np.ndarray]:
     """(wall seconds, load average before, final state) of one run of ``start`` on ``threads`` threads."""
     state, warm = start.state.copy(), start.warm.copy()
@@ -108,36 +159,39 @@ def timed_run(start: Start, threads: int) -> tuple[float, float, np.ndarray]:
     return time.perf_counter() - began, load, state
 
 
-def measure(start: Start, counts: tuple[int, ...], repeats: int) -> tuple[dict[int, list[float]], list[float], bool]:
-    """Wall times per thread count over ``repeats`` interleaved repeats, the loads read, and whether every run
-    ended in the same state bit for bit."""
-    times: dict[int, list[float]] = {count: [] for count in counts}
-    loads: list[float] = []
+def measure(start: Start, counts: tuple[int, ...], repeats: int) -> Timings:
+    """Wall times per thread count over ``repeats`` interleaved repeats, each run after a control run on as many
+    threads (``control_run``, ``max(counts)`` shares), the loads read, and whether every run ended in the same
+    state bit for bit."""
+    timings = Timings({count: [] for count in counts}, {count: [] for count in counts}, [], True)
+    control_run(max(counts), max(counts))  # compile the control, untimed
     first: np.ndarray | None = None
-    identical = True
     for repeat in range(repeats):
         for count in counts if repeat % 2 == 0 else counts[::-1]:
+            timings.control[count].append(control_run(count, max(counts)))
             seconds, load, state = timed_run(start, count)
-            times[count].append(seconds)
-            loads.append(load)
+            timings.times[count].append(seconds)
+            timings.loads.append(load)
             if first is None:
                 first = state
-            identical = identical and np.array_equal(first, state)
-    return times, loads, identical
+            timings.identical = timings.identical and np.array_equal(first, state)
+    return timings
 
 
-def table(rows: list[tuple[str, int, dict[int, list[float]], list[float], bool]], threads: int) -> str:
+def table(rows: list[tuple[str, int, Timings]], threads: int) -> str:
     header = (
-        f"| case | bodies x steps | 1 thread, wall [s] | {threads} threads, wall [s] | speedup | load (1 min) "
-        "| identical |\n|---|---:|---:|---:|---:|---:|---|"
+        f"| case | bodies x steps | 1 thread, wall [s] | {threads} threads, wall [s] | speedup | control's speedup "
+        "| load (1 min) | identical |\n|---|---:|---:|---:|---:|---:|---:|---|"
     )
     lines = [header]
-    for name, size, times, loads, identical in rows:
-        one, many = statistics.median(times[1]), statistics.median(times[threads])
-        spread = ", ".join(f"{a:.2f}/{b:.2f}" for a, b in zip(times[1], times[threads], strict=True))
+    for name, size, run in rows:
+        one, many = statistics.median(run.times[1]), statistics.median(run.times[threads])
+        spread = ", ".join(f"{a:.2f}/{b:.2f}" for a, b in zip(run.times[1], run.times[threads], strict=True))
+        control = statistics.median(run.control[1]) / statistics.median(run.control[threads])
+        each = ", ".join(f"{a / b:.2f}" for a, b in zip(run.control[1], run.control[threads], strict=True))
         lines.append(
-            f"| {name} | {size:,} | {one:.2f} | {many:.2f} | {one / many:.2f}x ({spread}) | "
-            f"{min(loads):.2f}-{max(loads):.2f} | {'yes' if identical else 'NO'} |"
+            f"| {name} | {size:,} | {one:.2f} | {many:.2f} | {one / many:.2f}x ({spread}) | {control:.2f}x ({each}) | "
+            f"{min(run.loads):.2f}-{max(run.loads):.2f} | {'yes' if run.identical else 'NO'} |"
         )
     return "\n".join(lines)
 
@@ -169,7 +223,10 @@ def docs_section(text: str, threads: int, repeats: int, load: float) -> str:
     """The page's section: how the table was made, then the table."""
     return (
         f"`python -m benchmarks.thread_scaling`: wall time on 1 and on {threads} threads, {repeats} interleaved "
-        f"repeats, their medians; {os.cpu_count()} cores, load {load:.2f} at the start.\n\n{text}"
+        f"repeats, their medians; {os.cpu_count()} cores, load {load:.2f} at the start. The control's speedup: a plain "
+        f"parallel loop's of short regions, timed before each run (the ratio of the medians, then each repeat's); "
+        f"under {threads}x by its regions' start alone, lower still when the host does not give the process "
+        f"{threads} whole cores.\n\n{text}"
     )
 
 
@@ -179,8 +236,7 @@ def main(argv=None) -> None:
     rows = []
     for name in args.cases:
         start = CASES[name](args.seconds)
-        times, loads, identical = measure(start, (1, args.threads), args.repeats)
-        rows.append((name, start.scene.n_bodies * start.steps, times, loads, identical))
+        rows.append((name, start.scene.n_bodies * start.steps, measure(start, (1, args.threads), args.repeats)))
         print(f"{name}: done, load {os.getloadavg()[0]:.2f}", flush=True)
     text = table(rows, args.threads)
     print(text)
