@@ -40,11 +40,12 @@ def test_the_control_does_the_same_work_on_any_number_of_threads():
     """The control's regions split one sum into equal shares, one a thread: the shares' results do not depend on the
     thread count (what differs is only how long they take, which the benchmark reports)."""
     out_one, out_two = np.zeros(2), np.zeros(2)
+    before = numba.get_num_threads()
     numba.set_num_threads(1)
     try:
         thread_scaling.control_region(out_one, 1000)
     finally:
-        numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+        numba.set_num_threads(before)
     thread_scaling.control_region(out_two, 1000)
     expected = [sum(math.sqrt(i + share) for i in range(1000)) for share in range(2)]
     np.testing.assert_allclose(out_one, expected, rtol=1e-12)
