@@ -21,7 +21,7 @@ from agents import algorithms, report
 from agents.config import algorithm_kwargs, load_hyperparams
 from agents.envs import read_env_wrapper
 from agents.evaluation import TEST_TARGETS, evaluate_run, make_baseline_run
-from agents.training import read_timing
+from agents.training import quiet_logger, read_timing
 from box_toss_env.envs.ballistic import BallisticThrows
 from box_toss_env.files import atomic_path, write_atomic
 
@@ -88,6 +88,7 @@ def ensure_goal_trained(root: Path, agent: str, seed: int) -> Path:
         env=venv, seed=seed, device="cpu", verbose=0, **algorithm_kwargs(config, algo)
     )
     print(f"{GOAL_ENV}: {GOAL_AGENTS[agent][-1]}, seed {seed}, {int(config['n_timesteps']):,} throws ...", flush=True)
+    model.set_logger(quiet_logger())
     start = time.perf_counter()
     model.learn(int(config["n_timesteps"]))
     wall = time.perf_counter() - start

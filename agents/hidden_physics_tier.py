@@ -225,8 +225,11 @@ def play_model(algo: str, model, obs_rms, settings: TrainSettings, n_episodes: i
 def train_run(algo: str, seed: int, settings: TrainSettings, out: Path = RUNS, n_episodes: int = TEST_EPISODES) -> dict:
     """Train one baseline run, save it under ``out`` (``ALGO_SEED/model.zip`` and ``vecnormalize.pkl``) and score
     it on the test episodes."""
+    from agents.training import quiet_logger
+
     env = training_env(algo, settings, seed)
     model = make_model(algo, env, settings, seed)
+    model.set_logger(quiet_logger())
     wall, cpu = time.perf_counter(), time.process_time()
     model.learn(settings.timesteps)
     wall, cpu = time.perf_counter() - wall, time.process_time() - cpu

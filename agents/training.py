@@ -310,6 +310,13 @@ def restore_best(run_dir: Path, algo: str, steps: int) -> str:
     return f"; removed {' and '.join(removed)} (saved after {steps} steps)" if removed else ""
 
 
+def quiet_logger() -> Logger:
+    """An SB3 logger that writes nothing and makes no folder, for a training run that logs nowhere. SB3's own for a
+    model with ``verbose=0`` and no tensorboard folder still makes an empty folder ``SB3-<date and time>`` in the
+    temp directory at every ``learn``."""
+    return Logger(folder=None, output_formats=[])
+
+
 def read_timing(run_dir: Path) -> dict[str, Any] | None:
     """A run's timing.json (None before its training first started; a DamagedFileError naming it if damaged)."""
     path = Path(run_dir) / "timing.json"

@@ -4,6 +4,7 @@ test starts (trainings, Zoo, Ray, probes):
 - the compiled engine: an env's first throws on a cold cache would otherwise run the kernel's interpreted copy
   while a worker compiles it (``box_toss_env.physics.compile.background_compile``), which
   ``tests/physics/test_background_compile.py`` turns on where it tests exactly that;
+- SB3's logs of the tests' own models in one folder of the session, removed at its end;
 - one OpenMP (torch) and one OpenBLAS thread a process: the tests' networks are small, and on a busy 2-core
   machine torch's spinning second thread made a 300-throw TD3 run in Zoo take 60 s of CPU instead of 9 s
   (212 s instead of 35 s of wall time, at load 9-10). What the tests assert does not depend on it.
@@ -15,14 +16,22 @@ second core while the first tests run, and the tests load them from numba's cach
 it is compiling waits for it: ``compilation.compile_lock``). ``BOX_TOSS_ENV_TEST_COMPILE_AHEAD=0`` turns it off.
 """
 
+import atexit
 import os
+import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 os.environ.setdefault("BOX_TOSS_ENV_START_INTERPRETED", "0")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+# SB3's default logger (a model that logs nowhere) makes a folder SB3-<date and time> in the temp directory at each
+# learn; the tests' models put theirs in one folder of the session, removed at its end (the commands set a logger)
+_SB3_LOGS = tempfile.mkdtemp(prefix="box-toss-tests-sb3-")
+os.environ.setdefault("SB3_LOGDIR", _SB3_LOGS)
+atexit.register(shutil.rmtree, _SB3_LOGS, ignore_errors=True)
 
 ROOT = Path(__file__).resolve().parents[1]
 COMPILE_AHEAD_MIN_TESTS = 300

@@ -3,6 +3,7 @@ first throw), a blind planner and random do worse, a tiny training run of each b
 test episodes and lands in the results file, and the table reports the gap."""
 
 import json
+import tempfile
 
 import numpy as np
 import pytest
@@ -24,9 +25,14 @@ def test_the_ceiling_succeeds_at_the_first_throw_and_the_blind_planner_does_not(
 
 
 @pytest.mark.parametrize("algo", hidden_physics.ALGOS)
-def test_a_tiny_run_trains_is_scored_and_saved(algo, tmp_path):
+def test_a_tiny_run_trains_is_scored_and_saved(algo, tmp_path, monkeypatch):
     settings = hidden_physics.TrainSettings(timesteps=128, n_envs=4, n_steps=32, batch_size=64, n_epochs=1)
+    temp = tmp_path / "temp"  # the temp directory, where SB3's default logger makes a folder at each learn
+    temp.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(temp))
+    monkeypatch.delenv("SB3_LOGDIR", raising=False)
     row = hidden_physics.train_run(algo, 0, settings, out=tmp_path, n_episodes=16)
+    assert not list(temp.glob("SB3-*"))  # it logs nowhere, and leaves no folder there
     assert (tmp_path / f"{algo}_0" / "model.zip").exists() and (tmp_path / f"{algo}_0" / "vecnormalize.pkl").exists()
     assert 0.0 <= row["success_rate"] <= 1.0 and 1.0 <= row["mean_throws"] <= 5.0 and row["timesteps"] == 128
     results = hidden_physics.load_results(tmp_path / "results.json")
