@@ -29,9 +29,9 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 # SB3's default logger (a model that logs nowhere) makes a folder SB3-<date and time> in the temp directory at each
 # learn; the tests' models put theirs in one folder of the session, removed at its end (the commands set a logger)
-_SB3_LOGS = tempfile.mkdtemp(prefix="box-toss-tests-sb3-")
-os.environ.setdefault("SB3_LOGDIR", _SB3_LOGS)
-atexit.register(shutil.rmtree, _SB3_LOGS, ignore_errors=True)
+if "SB3_LOGDIR" not in os.environ:
+    os.environ["SB3_LOGDIR"] = tempfile.mkdtemp(prefix="box-toss-tests-sb3-")
+    atexit.register(shutil.rmtree, os.environ["SB3_LOGDIR"], ignore_errors=True)
 
 ROOT = Path(__file__).resolve().parents[1]
 COMPILE_AHEAD_MIN_TESTS = 300
