@@ -14,6 +14,7 @@ from box_toss_env.physics.colliding.narrowphase import (
     FRICTION_IMPULSE,
     ID_COLUMNS,
     IMPULSE,
+    NORMAL_MASS,
     NX,
     NY,
     R1X,
@@ -27,6 +28,7 @@ from box_toss_env.physics.colliding.normal_lcp import delassus_matrix, normal_lc
 from box_toss_env.physics.colliding.parallel import make_partition
 from box_toss_env.physics.colliding.prepare import apply_impulse, relative_velocity
 from box_toss_env.physics.colliding.solve import solve_jointly as joint_solve
+from box_toss_env.physics.colliding.solve import warm_start_holds as holds
 from box_toss_env.physics.colliding.state import Bodies, Contacts, make_exact_work
 from box_toss_env.physics.colliding.sweeps import friction_sweep
 from box_toss_env.physics.tunables import DIRECT_LIMIT
@@ -154,3 +156,39 @@ def test_the_joint_solve_settles_on_nearly_every_contact_set_and_agrees_with_the
         # the velocities after the impulses (unique where the impulses may not be: redundant floor contacts)
         np.testing.assert_allclose(joint[3], alternation[3], atol=1e-6)
     assert settled >= 36
+
+
+@numba.njit(cache=False)
+def warm_start_holds(contacts, ids, count, vel, use_friction):
+    return holds(contacts, ids, count, vel, use_friction)
+
+
+def with_normal_masses(contacts, ids, count, vel, inv_mass, inv_inertia):
+    """The contact set with each contact's normal mass 1 / (n . K n) filled in (``contact_set`` leaves it 0)."""
+    for c in range(count):
+        b1, b2 = ids[c, BODY1], ids[c, BODY2]
+        nx, ny = contacts[c, NX], contacts[c, NY]
+        rn1 = contacts[c, R1X] * ny - contacts[c, R1Y] * nx
+        k_n = inv_mass[b1] + rn1 * rn1 * inv_inertia[b1]
+        if b2 >= 0:
+            rn2 = contacts[c, R2X] * ny - contacts[c, R2Y] * nx
+            k_n += inv_mass[b2] + rn2 * rn2 * inv_inertia[b2]
+        contacts[c, NORMAL_MASS] = 1.0 / k_n
+    return contacts, ids, count, vel, inv_mass, inv_inertia
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_the_warm_start_check_passes_a_solved_set_and_nothing_short_of_it(seed):
+    # ``solve.warm_start_holds`` lets the exact solves skip a contact set whose impulses already solve it: it must
+    # pass the joint solve's solution and fail the random impulses before it and the solution with a loaded body nudged
+    contacts, ids, count, vel, inv_mass, inv_inertia = with_normal_masses(*contact_set(np.random.default_rng(seed)))
+    assert not warm_start_holds(contacts, ids, count, vel, True)
+    solved, _ = solve_jointly(contacts, ids, count, vel, inv_mass, inv_inertia)
+    if not solved:
+        pytest.skip("the states did not settle: the caller solves by alternation")
+    if contacts[:count, IMPULSE].sum() == 0.0:
+        pytest.skip("every contact separates: nothing for the check to weigh (it returns False)")
+    assert warm_start_holds(contacts, ids, count, vel, True)
+    nudged = vel.copy()  # the body of the most loaded contact moved along y by a micrometre a second
+    nudged[ids[np.argmax(contacts[:count, IMPULSE]), BODY1], 1] -= 1e-6 * (1.0 + np.abs(vel).max())
+    assert not warm_start_holds(contacts, ids, count, nudged, True)

@@ -1,5 +1,6 @@
 """The solve contacts stage of the colliding solver (``stages.COLLIDING_SUBSTEP``): the contact impulses, by the
-cheapest method that is exact for the contact set (``solve_velocities``): normal and friction together up to
+cheapest method that is exact for the contact set (``solve_velocities``): none where the warm start already solves a
+small set (``warm_start_holds``), normal and friction together up to
 JOINT_LIMIT contacts (``solve_jointly``, ``joint_contact_solve``), the normals exactly with friction sweeps up
 to DIRECT_LIMIT where boxes of unlike masses meet (``exact_pays``, ``normal_lcp``, ``sweeps``), projected
 Gauss-Seidel otherwise (``sweeps.gauss_seidel``), after solving exactly each island of unlike masses small enough
@@ -7,11 +8,31 @@ Gauss-Seidel otherwise (``sweeps.gauss_seidel``), after solving exactly each isl
 """
 
 from ..compile.compilation import jit_stage
-from ..contact_law import tangent
-from ..tunables import DIRECT_LIMIT, EXACT_CONVERGED, EXACT_MASS_RATIO, JOINT_LIMIT, VELOCITY_ITERATIONS
+from ..contact_law import friction_bound, tangent
+from ..tunables import (
+    DIRECT_LIMIT,
+    EXACT_CONVERGED,
+    EXACT_MASS_RATIO,
+    JOINT_LIMIT,
+    VELOCITY_ITERATIONS,
+    WARM_START_RESIDUAL,
+)
 from .islands import find_root, join_islands
 from .joint_contact_solve import full_delassus, joint_impulses
-from .narrowphase import BODY1, BODY2, CONTACT_COLUMNS, FRICTION_IMPULSE, ID_COLUMNS, IMPULSE, NX, NY, TARGET
+from .narrowphase import (
+    BODY1,
+    BODY2,
+    CONTACT_COLUMNS,
+    FRICTION,
+    FRICTION_IMPULSE,
+    ID_COLUMNS,
+    IMPULSE,
+    NORMAL_MASS,
+    NX,
+    NY,
+    TANGENT_MASS,
+    TARGET,
+)
 from .normal_lcp import delassus_matrix, normal_lcp
 from .parallel import PARALLEL_CONTACTS, partitioned_gauss_seidel
 from .prepare import apply_impulse, relative_velocity
@@ -20,14 +41,15 @@ from .sweeps import friction_sweep, gauss_seidel
 
 @jit_stage
 def solve_velocities(contacts, count, bodies, exact, context, seeded=False):
-    """Solve contacts: the contact impulses of the first ``count`` contacts. Up to JOINT_LIMIT contacts with friction,
-    normal and friction impulses are solved together, exactly (``joint_contact_solve``); up to DIRECT_LIMIT contacts
-    where boxes of unlike masses meet (``exact_pays``; or if the joint solve does not settle), the normal impulses
-    are solved exactly together (``alternate``); otherwise, or if the exact solve fails, projected Gauss-Seidel
-    (``gauss_seidel``, with the scene's ``solver_tolerance`` and ``solver_iterations``; from PARALLEL_CONTACTS
-    contacts up block by block, on threads: ``parallel.partitioned_gauss_seidel``), each island of unlike masses of
-    at most DIRECT_LIMIT contacts solved exactly first (``solve_unlike_islands``). With ``seeded`` (the restitution
-    solve), the sweeps start from the bodies set in ``exact.moved[0]`` (``sweeps.gauss_seidel``).
+    """Solve contacts: the contact impulses of the first ``count`` contacts. Up to DIRECT_LIMIT contacts whose warm
+    start already solves them (``warm_start_holds``: a stack at rest, kept awake), nothing more. Up to JOINT_LIMIT
+    contacts with friction, normal and friction impulses are solved together, exactly (``joint_contact_solve``); up
+    to DIRECT_LIMIT contacts where boxes of unlike masses meet (``exact_pays``; or if the joint solve does not
+    settle), the normal impulses are solved exactly together (``alternate``); otherwise, or if the exact solve fails,
+    projected Gauss-Seidel (``gauss_seidel``, with the scene's ``solver_tolerance`` and ``solver_iterations``; from
+    PARALLEL_CONTACTS contacts up block by block, on threads: ``parallel.partitioned_gauss_seidel``), each island of
+    unlike masses of at most DIRECT_LIMIT contacts solved exactly first (``solve_unlike_islands``). With ``seeded``
+    (the restitution solve), the sweeps start from the bodies set in ``exact.moved[0]`` (``sweeps.gauss_seidel``).
     ``exact``: ``state.ExactWork``; ``context``: ``state.StepContext``."""
     if count == 0:
         return
@@ -38,6 +60,12 @@ def solve_velocities(contacts, count, bodies, exact, context, seeded=False):
         )
         return
     use_friction = context.use_friction
+    if (
+        not seeded
+        and count <= DIRECT_LIMIT
+        and warm_start_holds(contacts.rows, contacts.ids, count, bodies.vel, use_friction)
+    ):
+        return
     if use_friction and count <= JOINT_LIMIT and solve_jointly(contacts, count, bodies, exact):
         return
     if exact_pays(contacts.ids, count, bodies.inv_mass, use_friction):
@@ -58,6 +86,37 @@ def solve_velocities(contacts, count, bodies, exact, context, seeded=False):
         exact.moved,
         seeded,
     )
+
+
+@jit_stage
+def warm_start_holds(rows, ids, count, vel, use_friction):
+    """Whether the warm-started impulses already solve the contact LCP, so the exact solves have nothing to do: a
+    step of Gauss-Seidel from here would change the impulses by no more than WARM_START_RESIDUAL of their sum, summed
+    over every contact: with r = u_rel . n - target, |r| m_n where p > 0 and max(-r, 0) m_n where p = 0; with the slip
+    s = u_rel . t, |s| m_t where friction sticks (|q| < mu p), and only a slip the friction would resist further,
+    max(s, 0) m_t at q = mu p and max(-s, 0) m_t at q = -mu p, where it slides. These are the LCP's conditions
+    (p >= 0, r >= 0, p r = 0, and Coulomb's), so the exact solve would return these impulses to that share."""
+    total = 0.0
+    residual = 0.0
+    for c in range(count):
+        p = rows[c, IMPULSE]
+        total += p
+        ux, uy = relative_velocity(c, rows, ids, vel)
+        nx, ny = rows[c, NX], rows[c, NY]
+        r = ux * nx + uy * ny - rows[c, TARGET]
+        residual += (abs(r) if p > 0.0 else max(-r, 0.0)) * rows[c, NORMAL_MASS]
+        if use_friction and rows[c, FRICTION] > 0.0:
+            bound = friction_bound(rows[c, FRICTION], p)
+            if bound > 0.0:
+                tx, ty = tangent(nx, ny)
+                slip = ux * tx + uy * ty
+                q = rows[c, FRICTION_IMPULSE]
+                if q >= bound:
+                    slip = max(slip, 0.0)
+                elif q <= -bound:
+                    slip = min(slip, 0.0)
+                residual += abs(slip) * rows[c, TANGENT_MASS]
+    return total > 0.0 and residual <= WARM_START_RESIDUAL * total
 
 
 @jit_stage(inline="always")
