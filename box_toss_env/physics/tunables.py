@@ -115,10 +115,10 @@ the impulses by less than this. Also the most exact ``Scene.solver_tolerance`` a
 WARM_START_RESIDUAL = 1e-11
 """[share of the impulses' sum] a set of contacts small enough for the exact solves (at most DIRECT_LIMIT) skips
 them where its warm-started impulses already solve it: a Gauss-Seidel step from there would change the impulses by
-less than this share of their sum (``solve.warm_start_holds``). A stack kept awake reaches that from its second
-substep on: a 1000:1 stack kept awake cost 186 -> 74 us per body per simulated second. Larger: the skipped solves'
-small errors add up (at 1e-9 a row of boxes struck by another lost 1.3e-9 of its momentum through the energy limit,
-at 1e-11 1e-12); smaller than the exact solves' own rounding (1e-12 here): never skips."""
+less than this share of their sum (``solve.warm_start_holds``). A 1000:1 stack kept awake then cost 0.97 times
+Box2D v3's, 1.7 times before (``benchmarks.engine_scale``). Larger: the skipped solves' small errors add up (at 1e-9
+a row of boxes struck by another lost 1.3e-9 of its momentum, at 1e-11 1e-12); at 1e-12 the exact solves' own
+results miss it and it never skips."""
 
 REGULARISATION = 1e-12
 """[share of the diagonal] added to the diagonal of the exact solves' systems, for redundant contacts (a box flat on

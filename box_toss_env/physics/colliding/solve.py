@@ -1,10 +1,10 @@
 """The solve contacts stage of the colliding solver (``stages.COLLIDING_SUBSTEP``): the contact impulses, by the
 cheapest method that is exact for the contact set (``solve_velocities``): none where the warm start already solves a
-small set (``warm_start_holds``), normal and friction together up to
-JOINT_LIMIT contacts (``solve_jointly``, ``joint_contact_solve``), the normals exactly with friction sweeps up
-to DIRECT_LIMIT where boxes of unlike masses meet (``exact_pays``, ``normal_lcp``, ``sweeps``), projected
-Gauss-Seidel otherwise (``sweeps.gauss_seidel``), after solving exactly each island of unlike masses small enough
-(``solve_unlike_islands``): the choice is made island by island, not by the count of the whole scene.
+small set (``warm_start_holds``), normal and friction together up to JOINT_LIMIT contacts (``solve_jointly``,
+``joint_contact_solve``), the normals exactly with friction sweeps up to DIRECT_LIMIT where boxes of unlike masses
+meet (``exact_pays``, ``normal_lcp``, ``sweeps``), projected Gauss-Seidel otherwise (``sweeps.gauss_seidel``), after
+solving exactly each island of unlike masses small enough (``solve_unlike_islands``): the choice is made island by
+island, not by the count of the whole scene.
 """
 
 from ..compile.compilation import jit_stage
@@ -95,7 +95,7 @@ def warm_start_holds(rows, ids, count, vel, use_friction):
     over every contact: with r = u_rel . n - target, |r| m_n where p > 0 and max(-r, 0) m_n where p = 0; with the slip
     s = u_rel . t, |s| m_t where friction sticks (|q| < mu p), and only a slip the friction would resist further,
     max(s, 0) m_t at q = mu p and max(-s, 0) m_t at q = -mu p, where it slides. These are the LCP's conditions
-    (p >= 0, r >= 0, p r = 0, and Coulomb's), so the exact solve would return these impulses to that share."""
+    (p >= 0, r >= 0, p r = 0, and Coulomb's), met by these velocities to that share."""
     total = 0.0
     residual = 0.0
     for c in range(count):
