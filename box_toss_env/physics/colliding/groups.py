@@ -61,6 +61,13 @@ def step_substeps(context, bodies, sleep):
     return substeps(bodies.vel, bodies.radius, sleep.everyone, context.smallest_half, context.dt, context.gravity)
 
 
+@jit_stage(inline="always")
+def may_split(n_sub, n_awake):
+    """Whether a step of n_sub substeps over n_awake bodies could save SPLIT_SAVING body-substeps by groups: at most
+    n_sub - 1 for each body but one (two boxes never)."""
+    return (n_awake - 1) * (n_sub - 1) >= SPLIT_SAVING
+
+
 @jit_stage
 def plan_substeps(context, bodies, sweep, sleep, groups, n_sub, n_awake, n_pairs):
     """How a step of n_sub substeps (``step_substeps``) takes them, (n_sub, group): all awake bodies one count
@@ -75,8 +82,8 @@ def plan_substeps(context, bodies, sweep, sleep, groups, n_sub, n_awake, n_pairs
         context.gravity,
         context.smallest_half,
     )
-    if (n_awake - 1) * (n_sub - 1) < SPLIT_SAVING:
-        return n_sub, -1  # no split saves SPLIT_SAVING: at most n_sub - 1 for each body but one (two boxes never)
+    if not may_split(n_sub, n_awake):
+        return n_sub, -1
     if one_count(vel, radius, sleep.awake, smallest_half, dt, gravity):
         return n_sub, -1  # no group can need fewer substeps than another
     group_of, keys, n = groups.group_of, sweep.pairs, vel.shape[0]

@@ -25,6 +25,23 @@ from .solve import exact_pays, gather_island, mark_unlike_islands
 from .sweeps import normal_step
 
 
+@jit_stage(inline="always")
+def penalty_trigger(context):
+    """[m] the penetration from which the penalty starts: PENALTY_TRIGGER slops past the contact tolerance, and
+    never less than PENALTY_FLOOR (rounding) at the scene's size."""
+    floor = PENALTY_FLOOR / CONTACT_TOLERANCE * context.tolerance
+    return max(PENALTY_TRIGGER * context.slop + context.tolerance, floor)
+
+
+@jit_stage(inline="always")
+def deepest_penetration(rows, count):
+    """[m] the deepest penetration -gap among the first ``count`` contacts (0 if none is deeper)."""
+    deepest = 0.0
+    for c in range(count):
+        deepest = max(deepest, -rows[c, GAP])
+    return deepest
+
+
 @jit_stage
 def correct_penetrations(contacts, count, bodies, work, exact, h, context):
     """Stage 2, island by island (bodies joined by box-box contacts): in the islands holding a contact deeper
@@ -37,11 +54,8 @@ def correct_penetrations(contacts, count, bodies, work, exact, h, context):
     energy of the moved bodies. Returns the deepest penetration (0 if none)."""
     rows, ids = contacts.rows, contacts.ids
     slop = context.slop
-    floor = PENALTY_FLOOR / CONTACT_TOLERANCE * context.tolerance  # PENALTY_FLOOR at the scene's size
-    trigger = max(PENALTY_TRIGGER * slop + context.tolerance, floor)
-    deepest = 0.0
-    for c in range(count):
-        deepest = max(deepest, -rows[c, GAP])
+    trigger = penalty_trigger(context)
+    deepest = deepest_penetration(rows, count)
     if deepest <= trigger:
         return deepest
     n = bodies.pose.shape[0]
