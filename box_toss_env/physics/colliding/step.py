@@ -307,7 +307,7 @@ def substep(context, bodies, sweep, contacts, stats, scratch, include, h, t, pai
     note_penetration(contacts, count, stats.max_penetration)
     # relax: split-impulse correction of penetrations deeper than the slop (tested here: a stage's call passes
     # each array of its structures as separate values, about 300 for this one, which in a substep of two boxes
-    # costs more than the test; with the sleep stage inlined and the split test below, OnBox throws 7% faster)
+    # costs more than the test; with the sleep stage inlined and the split test below, OnBox throws 5-7% faster)
     if context.use_penalty and deepest_penetration(contacts.rows, count) > penalty_trigger(context):
         correct_penetrations(contacts, count, bodies, work, exact, h, context)
     approach_speeds(contacts, count, bodies, work.kinetic_before)
