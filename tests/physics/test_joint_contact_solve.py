@@ -75,7 +75,7 @@ def solve_by_alternation(contacts, ids, count, vel, inv_mass, inv_inertia, round
 def contact_set(rng: np.random.Generator):
     """A box (body 0) resting on another (body 1) that lies on the floor, both moving: two contacts between them
     along the base's top, two or three of the base on the floor, random lever arms, friction, velocities, targets
-    and warm-start impulses."""
+    and warm-start impulses, and each contact's effective masses."""
     rows = []
     for _ in range(2):  # box on base: n from the base into the box (up), r1 on the box, r2 on the base
         x = rng.uniform(-0.3, 0.3)
@@ -96,13 +96,19 @@ def contact_set(rng: np.random.Generator):
     mass = rng.uniform(0.5, 5.0, 2)
     inv_mass = 1.0 / mass
     inv_inertia = 1.0 / (mass * (0.4**2 + 0.2**2) / 3.0)
-    for c in range(count):
+    for c in range(count):  # effective masses 1 / (n . K n), 1 / (t . K t), as ``prepare.prepare_contact``'s
         b1, b2 = ids[c, BODY1], ids[c, BODY2]
-        rt1 = contacts[c, R1X] * contacts[c, NX] + contacts[c, R1Y] * contacts[c, NY]
+        nx, ny = contacts[c, NX], contacts[c, NY]
+        rn1 = contacts[c, R1X] * ny - contacts[c, R1Y] * nx
+        rt1 = contacts[c, R1X] * nx + contacts[c, R1Y] * ny
+        k_n = inv_mass[b1] + rn1 * rn1 * inv_inertia[b1]
         k_t = inv_mass[b1] + rt1 * rt1 * inv_inertia[b1]
         if b2 >= 0:
-            rt2 = contacts[c, R2X] * contacts[c, NX] + contacts[c, R2Y] * contacts[c, NY]
+            rn2 = contacts[c, R2X] * ny - contacts[c, R2Y] * nx
+            rt2 = contacts[c, R2X] * nx + contacts[c, R2Y] * ny
+            k_n += inv_mass[b2] + rn2 * rn2 * inv_inertia[b2]
             k_t += inv_mass[b2] + rt2 * rt2 * inv_inertia[b2]
+        contacts[c, NORMAL_MASS] = 1.0 / k_n
         contacts[c, TANGENT_MASS] = 1.0 / k_t
     vel = np.column_stack([rng.normal(0.0, 0.5, 2), rng.normal(-0.5, 0.5, 2), rng.normal(0.0, 2.0, 2)])
     return contacts, ids, count, vel, inv_mass, inv_inertia
@@ -163,25 +169,11 @@ def warm_start_holds(contacts, ids, count, vel, use_friction):
     return holds(contacts, ids, count, vel, use_friction)
 
 
-def with_normal_masses(contacts, ids, count, vel, inv_mass, inv_inertia):
-    """The contact set with each contact's normal mass 1 / (n . K n) filled in (``contact_set`` leaves it 0)."""
-    for c in range(count):
-        b1, b2 = ids[c, BODY1], ids[c, BODY2]
-        nx, ny = contacts[c, NX], contacts[c, NY]
-        rn1 = contacts[c, R1X] * ny - contacts[c, R1Y] * nx
-        k_n = inv_mass[b1] + rn1 * rn1 * inv_inertia[b1]
-        if b2 >= 0:
-            rn2 = contacts[c, R2X] * ny - contacts[c, R2Y] * nx
-            k_n += inv_mass[b2] + rn2 * rn2 * inv_inertia[b2]
-        contacts[c, NORMAL_MASS] = 1.0 / k_n
-    return contacts, ids, count, vel, inv_mass, inv_inertia
-
-
 @pytest.mark.parametrize("seed", range(40))
 def test_the_warm_start_check_passes_a_solved_set_and_nothing_short_of_it(seed):
     # ``solve.warm_start_holds`` lets the exact solves skip a contact set whose impulses already solve it: it must
     # pass the joint solve's solution and fail the random impulses before it and the solution with a loaded body nudged
-    contacts, ids, count, vel, inv_mass, inv_inertia = with_normal_masses(*contact_set(np.random.default_rng(seed)))
+    contacts, ids, count, vel, inv_mass, inv_inertia = contact_set(np.random.default_rng(seed))
     assert not warm_start_holds(contacts, ids, count, vel, True)
     solved, _ = solve_jointly(contacts, ids, count, vel, inv_mass, inv_inertia)
     if not solved:
