@@ -72,6 +72,11 @@ NEAR_ITERATIONS = 1_000
 ends the flight's jump earlier and steps the rest."""
 
 # -- broadphase --------------------------------------------------------------------------------------------------
+PAIR_MARGIN = 0.1
+"""[share of the scene's smallest half extent] the step's pair search pads each body's reach by this and keeps what it
+found while every awake body stays within its padded box (``groups.step_pairs``): a resting pile searches once, not
+at every step. Larger: fewer searches, more kept pairs to test (the same pairs either way)."""
+
 ROUNDING = 1e-9
 """[m per m of coordinate + 1 m] the sort-and-sweep intervals are padded by this before the exact overlap test, so
 no pair the exact test keeps is missed to rounding. Larger: more pairs tested exactly (slower, same result)."""

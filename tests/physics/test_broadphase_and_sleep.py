@@ -13,8 +13,16 @@ from physics_checks import advance_in_runs
 from box_toss_env.physics import Box, Scene, Simulator, layout, make_settings, scenes, simulate, warm_start_memory
 from box_toss_env.physics.colliding.alone import bounds_touch, steps_alone
 from box_toss_env.physics.colliding.broadphase import SMALL_SORT, candidate_pairs, sort_keys, sweep_axis
+from box_toss_env.physics.colliding.groups import kept_pairs, search_holds, search_padded
 from box_toss_env.physics.colliding.islands import sleeps_through
-from box_toss_env.physics.colliding.state import Bodies, Sleep, StepContext, initial_capacity
+from box_toss_env.physics.colliding.state import (
+    Bodies,
+    Sleep,
+    StepContext,
+    grown_sweep,
+    initial_capacity,
+    make_sweep,
+)
 from box_toss_env.physics.robust.flight import time_to_contact
 
 
@@ -22,6 +30,22 @@ from box_toss_env.physics.robust.flight import time_to_contact
 def compiled_pairs(pose, bound, reach, include, moving, axis, order, low, keys):
     """``candidate_pairs`` as the kernels call it (a stage has no Python wrapper of its own)."""
     return candidate_pairs(pose, bound, reach, include, moving, axis, order, low, keys)
+
+
+@numba.njit
+def compiled_kept_search(searched_at, now, bound, reach, awake_then, awake_now, margin):
+    """The step's pair search as ``groups.step_pairs`` keeps it: searched at the poses ``searched_at`` (bodies awake
+    ``awake_then``), then at the poses ``now``: whether the kept search holds, and the pairs it gives."""
+    n = now.shape[0]
+    sweep = make_sweep(n)
+    sweep.bound[:] = bound
+    sweep.reach[:] = reach
+    sweep.order[:] = np.arange(n)
+    while search_padded(searched_at, sweep, awake_then, margin) < 0:  # room for the pairs, as the kernel grows it
+        sweep = grown_sweep(sweep)
+    holds = search_holds(now, bound, reach, awake_now, sweep.kept)
+    found = kept_pairs(now, sweep, awake_now, sweep.kept.found[0])
+    return holds, sweep.pairs[:found].copy()
 
 
 @numba.njit
@@ -85,6 +109,35 @@ def test_sort_and_sweep_finds_the_pairs_of_the_all_pairs_test(seed):
         count = compiled_pairs(pose, bound, reach, include, moving, axis, order, np.zeros(n), keys)
         assert keys[:count].tolist() == all_pairs(pose, bound, reach, include, moving)
     assert compiled_pairs(pose, bound, reach, include, moving, 0, order, np.zeros(n), keys[:0]) in (-1, 0)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_kept_pair_search_gives_the_pairs_of_a_new_search_while_every_body_stays_in_its_padded_box(seed):
+    # groups.step_pairs searches with every reach padded by a margin and keeps the pairs while every awake body stays
+    # within its padded box: the kept pairs filtered by the exact test are those of the all-pairs test at the new poses
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(2, 200))
+    pose = np.column_stack([rng.uniform(0, 5, n), rng.uniform(0, 2, n), rng.uniform(-3, 3, n)])
+    half = rng.uniform(0.05, 0.3, (n, 2))
+    c, s = np.abs(np.cos(pose[:, 2])), np.abs(np.sin(pose[:, 2]))
+    bound = np.column_stack([c * half[:, 0] + s * half[:, 1], s * half[:, 0] + c * half[:, 1]])
+    reach = rng.uniform(0, 0.01, n)
+    awake = rng.random(n) < 0.8
+    awake[:2] = True, False
+    margin = 0.02
+    moved = pose.copy()
+    moved[:, :2] += rng.uniform(-0.99, 0.99, (n, 2)) * margin  # each within the margin: the search holds
+    holds, pairs = compiled_kept_search(pose, moved, bound, reach, awake, awake, margin)
+    assert holds and pairs.tolist() == all_pairs(moved, bound, reach, awake, awake)
+    fewer = awake & (rng.random(n) < 0.5)  # bodies fell asleep: it still holds, without their pairs
+    holds, pairs = compiled_kept_search(pose, moved, bound, reach, awake, fewer, margin)
+    assert holds and pairs.tolist() == all_pairs(moved, bound, reach, fewer, fewer)
+    far = moved.copy()
+    far[0, 0] += 2 * margin  # an awake body left its padded box
+    assert not compiled_kept_search(pose, far, bound, reach, awake, awake, margin)[0]
+    woken = awake.copy()
+    woken[1] = True  # a body asleep at the search woke
+    assert not compiled_kept_search(pose, moved, bound, reach, awake, woken, margin)[0]
 
 
 @pytest.mark.parametrize("count", [0, 1, 2, SMALL_SORT, SMALL_SORT + 1, 1_000])

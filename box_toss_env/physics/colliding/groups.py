@@ -24,8 +24,8 @@ the next step's warm start and, through it, the next run's.
 import math
 
 from ..compile.compilation import jit_stage
-from ..tunables import SOLVE_SHARE, SPLIT_SAVING
-from .broadphase import candidate_pairs
+from ..tunables import PAIR_MARGIN, ROUNDING, SOLVE_SHARE, SPLIT_SAVING
+from .broadphase import candidate_pairs, pair_overlaps, sort_intervals
 from .islands import find_root
 from .parallel import PARALLEL_BODIES, geometry_and_reach, parallel_candidate_pairs
 from .substeps import point_speed, substep_count, substeps
@@ -39,8 +39,15 @@ def step_pairs(context, bodies, sweep, sleep, n_sub):
     times what the fastest body travels (``geometry_and_reach``; a struck body moves further than its own speed
     says): every pair a substep of the step can find (``broadphase.substep_pairs``), and the chains that join bodies
     into sets (``plan_substeps``). Returns how many, or -1 if ``sweep.pairs`` is too short (the caller grows it and
-    calls again). From PARALLEL_BODIES bodies up the search runs on threads (``parallel.parallel_candidate_pairs``:
-    the same pairs)."""
+    calls again).
+
+    The pairs are those of the last search kept (``sweep.kept``) that pass the exact test at this step's bounds and
+    reaches (``kept_pairs``), while that search still holds them all (``search_holds``): it was made with every reach
+    padded by PAIR_MARGIN of the smallest half extent, and every awake body has stayed within its padded box since
+    (no body woke); else a new padded search is kept first (``search_padded``). The same pairs as a search at this
+    step's reaches, in the same order: two boxes whose boxes at this step's reaches overlap lie within their padded
+    boxes, which overlapped at the search. A resting pile searches once, not at every step. The sweep order is left
+    sorted at this step's reaches, as the search left it (it places the contacts in blocks, ``parallel``)."""
     pose, reach, awake = bodies.pose, sweep.reach, sleep.awake
     fastest = geometry_and_reach(bodies, awake, context.dt, context, sweep)  # on threads for many bodies
     for b in range(pose.shape[0]):
@@ -48,11 +55,72 @@ def step_pairs(context, bodies, sweep, sleep, n_sub):
             sweep.floor_reach[b] = reach[b] + fastest
         else:
             reach[b] += fastest
+    kept = sweep.kept
+    if not search_holds(pose, sweep.bound, reach, awake, kept):
+        if search_padded(pose, sweep, awake, PAIR_MARGIN * context.smallest_half) < 0:
+            return -1
+    sort_intervals(pose, sweep.bound, reach, sweep.axis, sweep.order, sweep.low)  # the sweep order at these reaches
+    return kept_pairs(pose, sweep, awake, kept.found[0])
+
+
+@jit_stage
+def search_padded(pose, sweep, awake, margin):
+    """A pair search among the awake bodies with each reach padded by ``margin`` (on threads from PARALLEL_BODIES
+    bodies up: ``parallel.parallel_candidate_pairs``, the same pairs), kept in ``sweep.kept`` with each body's centre,
+    padded box and whether it is awake; returns how many pairs (kept in ``sweep.kept.found``), or -1 if they do not
+    fit."""
+    kept, bound, reach = sweep.kept, sweep.bound, sweep.reach
+    for b in range(pose.shape[0]):
+        kept.reach[b] = reach[b] + margin
+        kept.centre[b, 0] = pose[b, 0]
+        kept.centre[b, 1] = pose[b, 1]
+        kept.half[b, 0] = bound[b, 0] + kept.reach[b]
+        kept.half[b, 1] = bound[b, 1] + kept.reach[b]
+        kept.awake[b] = awake[b]
     if pose.shape[0] >= PARALLEL_BODIES:
-        return parallel_candidate_pairs(
-            pose, sweep.bound, reach, awake, awake, sweep.axis, sweep.order, sweep.low, sweep.pairs, sweep.spread
+        count = parallel_candidate_pairs(
+            pose, bound, kept.reach, awake, awake, sweep.axis, sweep.order, sweep.low, kept.pairs, sweep.spread
         )
-    return candidate_pairs(pose, sweep.bound, reach, awake, awake, sweep.axis, sweep.order, sweep.low, sweep.pairs)
+    else:
+        count = candidate_pairs(pose, bound, kept.reach, awake, awake, sweep.axis, sweep.order, sweep.low, kept.pairs)
+    kept.found[0] = count
+    return count
+
+
+@jit_stage
+def search_holds(pose, bound, reach, awake, kept):
+    """Whether the kept search holds every pair a search at these reaches finds: there is one, no body awake now was
+    asleep at it, and every awake body's box at its reach lies within its padded box (less a rounding margin)."""
+    if kept.found[0] < 0:
+        return False
+    for b in range(pose.shape[0]):
+        if not awake[b]:
+            continue
+        if not kept.awake[b]:
+            return False
+        for axis in range(2):
+            pad = ROUNDING * (1.0 + abs(pose[b, axis]))
+            if abs(pose[b, axis] - kept.centre[b, axis]) + bound[b, axis] + reach[b] + pad > kept.half[b, axis]:
+                return False
+    return True
+
+
+@jit_stage
+def kept_pairs(pose, sweep, awake, count):
+    """Of the kept search's ``count`` pairs, those of two awake bodies that pass the exact test at this step's bounds
+    and reaches (``broadphase.pair_overlaps``), into ``sweep.pairs`` in the same increasing order; returns how many,
+    or -1 if they do not fit."""
+    n, kept, out = pose.shape[0], sweep.kept.pairs, sweep.pairs
+    found = 0
+    for p in range(count):
+        a = kept[p] // n
+        b = kept[p] - a * n
+        if awake[a] and awake[b] and pair_overlaps(pose, sweep.bound, sweep.reach, a, b):
+            if found >= out.shape[0]:
+                return -1
+            out[found] = kept[p]
+            found += 1
+    return found
 
 
 @jit_stage

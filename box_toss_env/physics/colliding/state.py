@@ -66,10 +66,23 @@ class Bodies(NamedTuple):
     radius: np.ndarray  # (n,) [m]
 
 
+class KeptSearch(NamedTuple):
+    """The step's last pair search at padded reaches (``groups.step_pairs``): each body's centre then, the half size of
+    its padded box (bounding box + reach + PAIR_MARGIN), its padded reach and whether it was awake; the pairs it found
+    and how many (``found[0]``, -1 until the first search of a run)."""
+
+    centre: np.ndarray  # (n, 2) [m]
+    half: np.ndarray  # (n, 2) [m]
+    reach: np.ndarray  # (n,) [m]
+    awake: np.ndarray  # (n,) bool
+    pairs: np.ndarray  # (capacity,) int64
+    found: np.ndarray  # (1,) int64
+
+
 class Sweep(NamedTuple):
     """The broadphase (``broadphase``): each box's cos and sin, the half size of its bounding box, its reach (what it
     can travel) against boxes and against the floor, the sweep's axis, interval starts and order, the step's
-    candidate pairs (keys i n + j) and a substep's share of them."""
+    candidate pairs (keys i n + j) and a substep's share of them, and the last search kept (``KeptSearch``)."""
 
     trig: np.ndarray  # (n, 2)
     bound: np.ndarray  # (n, 2) [m]
@@ -81,6 +94,7 @@ class Sweep(NamedTuple):
     pairs: np.ndarray  # (capacity,) int64
     substep_pairs: np.ndarray  # (capacity,) int64
     spread: Spread  # the threads' work (``parallel``)
+    kept: KeptSearch
 
 
 class Contacts(NamedTuple):
@@ -264,6 +278,20 @@ def make_sweep(n):
         np.zeros(pairs, np.int64),
         np.zeros(pairs, np.int64),
         make_spread(n),
+        make_kept_search(n, pairs),
+    )
+
+
+@jit_stage(inline="always")  # into its callers, which run with numba's runtime
+def make_kept_search(n, pairs):
+    """A ``KeptSearch`` for n bodies and room for ``pairs`` pairs, holding no search."""
+    return KeptSearch(
+        np.zeros((n, 2)),
+        np.zeros((n, 2)),
+        np.zeros(n),
+        np.zeros(n, np.bool_),
+        np.zeros(pairs, np.int64),
+        np.full(1, -1, np.int64),
     )
 
 
@@ -281,6 +309,7 @@ def with_axis(sweep, axis):
         sweep.pairs,
         sweep.substep_pairs,
         sweep.spread,
+        sweep.kept,
     )
 
 
@@ -299,6 +328,7 @@ def grown_sweep(sweep):
         np.zeros(pairs, np.int64),
         np.zeros(pairs, np.int64),
         sweep.spread,
+        make_kept_search(sweep.reach.shape[0], pairs),
     )
 
 
