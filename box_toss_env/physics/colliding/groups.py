@@ -46,8 +46,10 @@ def step_pairs(context, bodies, sweep, sleep, n_sub):
     padded by PAIR_MARGIN of the smallest half extent, and every awake body has stayed within its padded box since
     (no body woke); else a new padded search is kept first (``search_padded``). The same pairs as a search at this
     step's reaches, in the same order: two boxes whose boxes at this step's reaches overlap lie within their padded
-    boxes, which overlapped at the search. A resting pile searches once, not at every step. The sweep order is left
-    sorted at this step's reaches, as the search left it (it places the contacts in blocks, ``parallel``)."""
+    boxes, which overlapped at the search. A resting pile searches once, not at every step. The step's sweep order is
+    sorted at this step's reaches, as a search at them leaves it (it places the contacts in blocks, ``parallel``); the
+    padded search sorts its own copy (sorted by the padded reaches, boxes whose order is a rounding apart moved the
+    blocks and the large pyramid's last digits)."""
     pose, reach, awake = bodies.pose, sweep.reach, sleep.awake
     fastest = geometry_and_reach(bodies, awake, context.dt, context, sweep)  # on threads for many bodies
     for b in range(pose.shape[0]):
@@ -77,12 +79,13 @@ def search_padded(pose, sweep, awake, margin):
         kept.half[b, 0] = bound[b, 0] + kept.reach[b]
         kept.half[b, 1] = bound[b, 1] + kept.reach[b]
         kept.awake[b] = awake[b]
+        kept.order[b] = sweep.order[b]  # nearly sorted already; the step's order is left as it was
     if pose.shape[0] >= PARALLEL_BODIES:
         count = parallel_candidate_pairs(
-            pose, bound, kept.reach, awake, awake, sweep.axis, sweep.order, sweep.low, kept.pairs, sweep.spread
+            pose, bound, kept.reach, awake, awake, sweep.axis, kept.order, sweep.low, kept.pairs, sweep.spread
         )
     else:
-        count = candidate_pairs(pose, bound, kept.reach, awake, awake, sweep.axis, sweep.order, sweep.low, kept.pairs)
+        count = candidate_pairs(pose, bound, kept.reach, awake, awake, sweep.axis, kept.order, sweep.low, kept.pairs)
     kept.found[0] = count
     return count
 

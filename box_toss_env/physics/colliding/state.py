@@ -68,13 +68,15 @@ class Bodies(NamedTuple):
 
 class KeptSearch(NamedTuple):
     """The step's last pair search at padded reaches (``groups.step_pairs``): each body's centre then, the half size of
-    its padded box (bounding box + reach + PAIR_MARGIN), its padded reach and whether it was awake; the pairs it found
-    and how many (``found[0]``, -1 until the first search of a run)."""
+    its padded box (bounding box + reach + PAIR_MARGIN), its padded reach and whether it was awake; its own sweep
+    order (the step's, ``Sweep.order``, stays sorted at the step's reaches alone); the pairs it found and how many
+    (``found[0]``, -1 until the first search of a run)."""
 
     centre: np.ndarray  # (n, 2) [m]
     half: np.ndarray  # (n, 2) [m]
     reach: np.ndarray  # (n,) [m]
     awake: np.ndarray  # (n,) bool
+    order: np.ndarray  # (n,) int64
     pairs: np.ndarray  # (capacity,) int64
     found: np.ndarray  # (1,) int64
 
@@ -290,6 +292,7 @@ def make_kept_search(n, pairs):
         np.zeros((n, 2)),
         np.zeros(n),
         np.zeros(n, np.bool_),
+        np.zeros(n, np.int64),
         np.zeros(pairs, np.int64),
         np.full(1, -1, np.int64),
     )
