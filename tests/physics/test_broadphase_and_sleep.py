@@ -14,14 +14,17 @@ from box_toss_env.physics import Box, Scene, Simulator, layout, make_settings, s
 from box_toss_env.physics.colliding.alone import bounds_touch, steps_alone
 from box_toss_env.physics.colliding.broadphase import SMALL_SORT, candidate_pairs, sort_keys, sweep_axis
 from box_toss_env.physics.colliding.groups import kept_pairs, search_holds, search_padded
-from box_toss_env.physics.colliding.islands import sleeps_through
+from box_toss_env.physics.colliding.islands import sleeps_through, wake_touched
+from box_toss_env.physics.colliding.narrowphase import separation, update_geometry
 from box_toss_env.physics.colliding.state import (
     Bodies,
     Sleep,
     StepContext,
     grown_sweep,
     initial_capacity,
+    make_sleep,
     make_sweep,
+    with_axis,
 )
 from box_toss_env.physics.robust.flight import time_to_contact
 
@@ -52,6 +55,25 @@ def compiled_kept_search(searched_at, now, bound, reach, awake_then, awake_now, 
 def compiled_sleeps_through(warm, state, params, dt, stats, end_step):
     """``sleeps_through`` as the colliding kernel calls it, with the kernel's room for contacts."""
     return sleeps_through(warm, state, params, dt, initial_capacity(state.shape[0]), stats, end_step)
+
+
+@numba.njit
+def compiled_wake(pose, half, reach, awake, island, axis, struck):
+    """``islands.wake_touched`` on bodies awake as ``awake``, the sleeping ones in islands ``island``: the bodies awake
+    after it, and for the all-pairs check each pair's separation."""
+    n = pose.shape[0]
+    sweep, sleep = with_axis(make_sweep(n), axis), make_sleep(n)
+    sweep.reach[:] = reach
+    sweep.order[:] = np.arange(n)
+    sleep.awake[:] = awake
+    sleep.island[:] = island
+    update_geometry(pose, half, sleep.everyone, sweep.trig, sweep.bound)
+    wake_touched(pose, half, sweep, sleep, struck)
+    apart = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            apart[i, j] = separation(min(i, j), max(i, j), pose, sweep.trig, half) if i != j else 0.0
+    return sleep.awake.copy(), sweep.bound.copy(), apart
 
 
 @numba.njit
@@ -138,6 +160,39 @@ def test_a_kept_pair_search_gives_the_pairs_of_a_new_search_while_every_body_sta
     woken = awake.copy()
     woken[1] = True  # a body asleep at the search woke
     assert not compiled_kept_search(pose, moved, bound, reach, awake, woken, margin)[0]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_waking_gives_the_islands_every_pair_reaches_whether_few_or_many_bodies_are_awake(seed):
+    # islands.wake_touched sweeps from every box when half or more are awake and from the awake ones alone (looking
+    # back along the sweep too) when fewer are: the islands woken are the closure of "an awake body reaches it"
+    # over every pair either way
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(50, 150))
+    pose = np.column_stack([rng.uniform(0, 20, n), rng.uniform(0, 1, n), rng.uniform(-3, 3, n)])
+    half = rng.uniform(0.01, 0.15, (n, 2))  # long and short boxes: the look back must reach past short ones
+    reach = rng.uniform(0, 0.02, n)
+    cell = np.floor(pose[:, 0] / 0.5) + 10 * np.floor(pose[:, 1] / 0.5)  # islands of the boxes of a cell
+    island = np.array([np.flatnonzero(cell == c)[0] for c in cell])  # each labelled by its smallest body
+    awake = rng.random(n) < (0.05 if seed % 2 else 0.7)
+    awake[0] = True
+    island[awake] = -1
+    woken, bound, apart = compiled_wake(pose, half, reach, awake, island, int(rng.integers(0, 2)), 0.01)
+    expected = awake.copy()
+    while True:
+        reached = {
+            island[j]
+            for i in np.flatnonzero(expected)
+            for j in np.flatnonzero(~expected)
+            if abs(pose[j, 0] - pose[i, 0]) <= bound[i, 0] + bound[j, 0] + reach[i] + reach[j]
+            and abs(pose[j, 1] - pose[i, 1]) <= bound[i, 1] + bound[j, 1] + reach[i] + reach[j]
+            and apart[i, j] <= reach[i] + reach[j] + 0.01
+        }
+        if not reached:
+            break
+        expected |= np.isin(island, list(reached)) & ~expected
+    assert woken.tolist() == expected.tolist()
+    assert awake.sum() < expected.sum() < n  # some islands woke, not all
 
 
 @pytest.mark.parametrize("count", [0, 1, 2, SMALL_SORT, SMALL_SORT + 1, 1_000])

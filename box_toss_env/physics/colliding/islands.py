@@ -117,10 +117,15 @@ def wake_touched(pose, half, sweep, sleep, struck):
     whatever the order they are found in. The pairs are tested as the sweep meets them, none stored (so the search
     never runs out of room). Returns the number of bodies woken. With the bounding boxes alone, a tilted box whose
     bounds overlapped a sleeping neighbour 26 mm away woke it at every step it was awake: two islands side by side
-    in a pile of 5,000 woke each other in turn and never slept."""
-    awake, island, bound, reach, axis, order, low = (
+    in a pile of 5,000 woke each other in turn and never slept.
+
+    Fewer than half the bodies awake (a box thrown into a sleeping pile), the sweep looks from the awake bodies
+    alone: forward to every box whose interval starts within the awake one's, and back to every box whose interval
+    starts within the longest interval W before it (an interval that reaches the awake one's start begins at most W
+    before it). Those are all the pairs of an awake and a sleeping box that the sweep from every box meets, so the
+    same islands wake; the sleeping boxes cost the sort's pass, not a sweep of their own neighbours."""
+    awake, bound, reach, axis, order, low = (
         sleep.awake,
-        sleep.island,
         sweep.bound,
         sweep.reach,
         sweep.axis,
@@ -129,43 +134,63 @@ def wake_touched(pose, half, sweep, sleep, struck):
     )
     n = pose.shape[0]
     sort_intervals(pose, bound, reach, axis, order, low)
+    n_awake, width = 0, 0.0
+    for b in range(n):
+        n_awake += awake[b]
+        width = max(width, interval_end(pose, bound, reach, axis, b) - low[b])
     total = 0
     while True:
         woken = 0
         for p in range(n):
             i = order[p]
+            if 2 * n_awake < n and not awake[i]:
+                continue  # few awake: the awake bodies look both ways
             high = interval_end(pose, bound, reach, axis, i)
             for q in range(p + 1, n):
                 j = order[q]
                 if low[j] > high:
                     break
-                if awake[i] == awake[j]:
-                    continue
-                a, b = min(i, j), max(i, j)
-                if pair_overlaps(pose, bound, reach, a, b) and separation(a, b, pose, sweep.trig, half) <= (
-                    reach[a] + reach[b] + struck
-                ):
-                    woken += wake_island(island[j] if awake[i] else island[i], sleep)
+                if awake[i] != awake[j]:
+                    woken += wake_reached(i, j, pose, half, sweep, sleep, struck)
+            if 2 * n_awake < n:
+                for q in range(p - 1, -1, -1):
+                    j = order[q]
+                    if low[j] < low[i] - width:
+                        break
+                    if not awake[j]:
+                        woken += wake_reached(i, j, pose, half, sweep, sleep, struck)
         if woken == 0:
             return total
         total += woken
+        n_awake += woken
+
+
+@jit_stage(inline="always")
+def wake_reached(i, j, pose, half, sweep, sleep, struck):
+    """Wake the island of whichever of bodies i and j sleeps if the other, awake, reaches it (``wake_touched``'s
+    test); returns how many woke."""
+    a, b = min(i, j), max(i, j)
+    reach = sweep.reach
+    if pair_overlaps(pose, sweep.bound, reach, a, b) and separation(a, b, pose, sweep.trig, half) <= (
+        reach[a] + reach[b] + struck
+    ):
+        return wake_island(sleep.island[j] if sleep.awake[i] else sleep.island[i], sleep)
+    return 0
 
 
 @jit_stage
 def sleep_placed(bodies, sweep, sleep, context):
     """Put to sleep, each in an island of its own, the bodies placed at rest: zero velocity, lying on a face
     on the floor (``kernel_support.is_lying_still``) and in no candidate pair with another box within the
-    contact tolerance (the broadphase's test). Returns how many, or -1 if ``sweep.pairs`` is too short (the caller
+    contact tolerance (the broadphase's test, pairs with a body that is otherwise ready; none ready, no search, the
+    sweep order sorted as a search sorts it). Returns how many, or -1 if ``sweep.pairs`` is too short (the caller
     grows it and calls again)."""
     pose, vel, half, reach, keys = bodies.pose, bodies.vel, bodies.half, sweep.reach, sweep.pairs
     awake, island, rest_time, ready, everyone = sleep.awake, sleep.island, sleep.rest_time, sleep.ready, sleep.everyone
     n = pose.shape[0]
+    n_ready = 0
     for b in range(n):
         reach[b] = context.tolerance
-    n_pairs = candidate_pairs(pose, sweep.bound, reach, everyone, everyone, sweep.axis, sweep.order, sweep.low, keys)
-    if n_pairs < 0:
-        return -1
-    for b in range(n):
         ready[b] = (
             awake[b]
             and vel[b, 0] == 0.0
@@ -173,6 +198,13 @@ def sleep_placed(bodies, sweep, sleep, context):
             and vel[b, 2] == 0.0
             and is_lying_still(pose[b, 1], pose[b, 2], 0.0, 0.0, 0.0, half[b, 0], half[b, 1], context.sleep_speed)
         )
+        n_ready += ready[b]
+    if n_ready == 0:
+        sort_intervals(pose, sweep.bound, reach, sweep.axis, sweep.order, sweep.low)
+        return 0
+    n_pairs = candidate_pairs(pose, sweep.bound, reach, everyone, ready, sweep.axis, sweep.order, sweep.low, keys)
+    if n_pairs < 0:
+        return -1
     for p in range(n_pairs):
         i = keys[p] // n
         ready[i] = False
