@@ -12,8 +12,8 @@ from physics_checks import advance_in_runs
 
 from box_toss_env.physics import Box, Scene, Simulator, layout, make_settings, scenes, simulate, warm_start_memory
 from box_toss_env.physics.colliding.alone import bounds_touch, steps_alone
-from box_toss_env.physics.colliding.broadphase import SMALL_SORT, candidate_pairs, sort_keys, sweep_axis
-from box_toss_env.physics.colliding.groups import kept_pairs, search_holds, search_padded
+from box_toss_env.physics.colliding.broadphase import SMALL_SORT, candidate_pairs, kept_pairs, sort_keys, sweep_axis
+from box_toss_env.physics.colliding.groups import search_holds, search_padded
 from box_toss_env.physics.colliding.islands import sleeps_through, wake_touched
 from box_toss_env.physics.colliding.narrowphase import separation, update_geometry
 from box_toss_env.physics.colliding.state import (
@@ -47,7 +47,7 @@ def compiled_kept_search(searched_at, now, bound, reach, awake_then, awake_now, 
     while search_padded(searched_at, sweep, awake_then, margin) < 0:  # room for the pairs, as the kernel grows it
         sweep = grown_sweep(sweep)
     holds = search_holds(now, bound, reach, awake_now, sweep.kept)
-    found = kept_pairs(now, sweep, awake_now, sweep.kept.found[0])
+    found = kept_pairs(now, bound, reach, awake_now, sweep.kept.pairs, sweep.kept.found[0], sweep.pairs)
     return holds, sweep.pairs[:found].copy()
 
 

@@ -161,18 +161,28 @@ def substep_pairs(pose, sweep, n_pairs, include):
     """A substep's candidate pairs: of the step's (``sweep.pairs[:n_pairs]``, found at every body's reach over the
     whole step, ``groups.step_pairs``), those whose two boxes have ``include`` set and pass the exact test of the
     module docstring with the substep's bounds and reaches (``sweep.bound``, ``sweep.reach``), into
-    ``sweep.substep_pairs`` in the same increasing order; returns how many. These are the pairs a search at the
-    substep's reach finds (``candidate_pairs``), since the step's reach holds what a body travels in the step."""
-    bound, reach, keys, kept = sweep.bound, sweep.reach, sweep.pairs, sweep.substep_pairs
+    ``sweep.substep_pairs`` in the same increasing order (``kept_pairs``); returns how many. These are the pairs a
+    search at the substep's reach finds (``candidate_pairs``), since the step's reach holds what a body travels in the
+    step."""
+    return kept_pairs(pose, sweep.bound, sweep.reach, include, sweep.pairs, n_pairs, sweep.substep_pairs)
+
+
+@jit_stage(inline="always")
+def kept_pairs(pose, bound, reach, include, keys, count, out):
+    """Of the pairs ``keys[:count]``, those whose two boxes have ``include`` set and pass the exact test of the module
+    docstring at ``bound`` and ``reach`` (``pair_overlaps``), into ``out`` in the same order; returns how many, or -1
+    if ``out`` is too short."""
     n = pose.shape[0]
-    count = 0
-    for p in range(n_pairs):
+    found = 0
+    for p in range(count):
         a = keys[p] // n
         b = keys[p] - a * n
         if include[a] and include[b] and pair_overlaps(pose, bound, reach, a, b):
-            kept[count] = keys[p]
-            count += 1
-    return count
+            if found >= out.shape[0]:
+                return -1
+            out[found] = keys[p]
+            found += 1
+    return found
 
 
 @jit_stage

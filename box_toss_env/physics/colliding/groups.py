@@ -25,7 +25,7 @@ import math
 
 from ..compile.compilation import jit_stage
 from ..tunables import PAIR_MARGIN, ROUNDING, SOLVE_SHARE, SPLIT_SAVING
-from .broadphase import candidate_pairs, pair_overlaps, sort_intervals
+from .broadphase import candidate_pairs, kept_pairs, sort_intervals
 from .islands import find_root
 from .parallel import PARALLEL_BODIES, geometry_and_reach, parallel_candidate_pairs
 from .substeps import point_speed, substep_count, substeps
@@ -42,9 +42,9 @@ def step_pairs(context, bodies, sweep, sleep, n_sub):
     calls again).
 
     The pairs are those of the last search kept (``sweep.kept``) that pass the exact test at this step's bounds and
-    reaches (``kept_pairs``), while that search still holds them all (``search_holds``): it was made with every reach
-    padded by PAIR_MARGIN of the smallest half extent, and every awake body has stayed within its padded box since
-    (no body woke); else a new padded search is kept first (``search_padded``). The same pairs as a search at this
+    reaches (``broadphase.kept_pairs``), while that search still holds them all (``search_holds``): it was made with
+    every reach padded by PAIR_MARGIN of the smallest half extent, and every awake body has stayed within its padded box
+    since (no body woke); else a new padded search is kept first (``search_padded``). The same pairs as a search at this
     step's reaches, in the same order: two boxes whose boxes at this step's reaches overlap lie within their padded
     boxes, which overlapped at the search. A resting pile searches once, not at every step. The step's sweep order is
     sorted at this step's reaches, as a search at them leaves it (it places the contacts in blocks, ``parallel``); the
@@ -62,7 +62,7 @@ def step_pairs(context, bodies, sweep, sleep, n_sub):
         if search_padded(pose, sweep, awake, PAIR_MARGIN * context.smallest_half) < 0:
             return -1
     sort_intervals(pose, sweep.bound, reach, sweep.axis, sweep.order, sweep.low)  # the sweep order at these reaches
-    return kept_pairs(pose, sweep, awake, kept.found[0])
+    return kept_pairs(pose, sweep.bound, reach, awake, kept.pairs, kept.found[0], sweep.pairs)
 
 
 @jit_stage
@@ -106,24 +106,6 @@ def search_holds(pose, bound, reach, awake, kept):
             if abs(pose[b, axis] - kept.centre[b, axis]) + bound[b, axis] + reach[b] + pad > kept.half[b, axis]:
                 return False
     return True
-
-
-@jit_stage
-def kept_pairs(pose, sweep, awake, count):
-    """Of the kept search's ``count`` pairs, those of two awake bodies that pass the exact test at this step's bounds
-    and reaches (``broadphase.pair_overlaps``), into ``sweep.pairs`` in the same increasing order; returns how many,
-    or -1 if they do not fit."""
-    n, kept, out = pose.shape[0], sweep.kept.pairs, sweep.pairs
-    found = 0
-    for p in range(count):
-        a = kept[p] // n
-        b = kept[p] - a * n
-        if awake[a] and awake[b] and pair_overlaps(pose, sweep.bound, sweep.reach, a, b):
-            if found >= out.shape[0]:
-                return -1
-            out[found] = kept[p]
-            found += 1
-    return found
 
 
 @jit_stage

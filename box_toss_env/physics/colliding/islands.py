@@ -141,10 +141,11 @@ def wake_touched(pose, half, sweep, sleep, struck):
     total = 0
     while True:
         woken = 0
+        few = 2 * n_awake < n  # few awake: the awake bodies look both ways
         for p in range(n):
             i = order[p]
-            if 2 * n_awake < n and not awake[i]:
-                continue  # few awake: the awake bodies look both ways
+            if few and not awake[i]:
+                continue
             high = interval_end(pose, bound, reach, axis, i)
             for q in range(p + 1, n):
                 j = order[q]
@@ -152,7 +153,7 @@ def wake_touched(pose, half, sweep, sleep, struck):
                     break
                 if awake[i] != awake[j]:
                     woken += wake_reached(i, j, pose, half, sweep, sleep, struck)
-            if 2 * n_awake < n:
+            if few:
                 for q in range(p - 1, -1, -1):
                     j = order[q]
                     if low[j] < low[i] - width:
