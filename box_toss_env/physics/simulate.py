@@ -192,7 +192,10 @@ class Simulator:
             ensure_compiled(self.kernel, args)
             self._ready = True
         if self.flags.boxes_collide:  # one scene, stepped together: its large stages on numba's threads
-            run_on_threads(self.kernel, args, self.shares)
+            if self.flags.parallel:
+                run_on_threads(self.kernel, args, self.shares)
+            else:  # no parallel regions: numba's thread count means nothing to it
+                self.kernel(*args)
             return
         shares = min(self.shares, state.shape[0])
         if shares <= 1 or self.flags.record:  # a recording's (T, n, 6) trajectory does not split into contiguous shares
@@ -230,8 +233,12 @@ def check_warm_start(warm_start) -> np.ndarray:
 
 def run_on_threads(kernel, args: tuple, threads: int) -> None:
     """``kernel(*args)`` with numba's thread count (``numba.set_num_threads``, this thread's own) at ``threads``,
-    and back to what it was after."""
+    and back to what it was after; set only where it differs (the two sets cost about 2 us, several times that
+    on cold caches: more than a small scene's whole run at rest)."""
     before = numba.get_num_threads()
+    if before == threads:
+        kernel(*args)
+        return
     numba.set_num_threads(threads)
     try:
         kernel(*args)
