@@ -56,3 +56,24 @@ def test_a_large_pyramid_stands_when_its_sweeps_go_block_by_block():
     assert warm[0, 0] >= PARALLEL_CONTACTS
     assert np.abs(state[:, :3] - scene.initial_state()[:, :3]).max() < 1e-6
     assert stats[:, layout.MAX_PENETRATION].max() < 1e-4
+
+
+@TWO
+def test_a_run_leaves_the_callers_thread_count_as_it_found_it():
+    """A run sets numba's thread count (the calling thread's own) only for itself: to its ``threads`` where that
+    differs, and back after; a kernel without parallel regions leaves it alone. The results do not depend on it."""
+    scene = scenes.pile(4)
+    results = []
+    before = numba.get_num_threads()
+    try:
+        for count in (1, 2):
+            numba.set_num_threads(count)
+            for parallel, threads in ((True, 1), (True, 2), (False, None)):
+                state, stats = scene.initial_state(), np.zeros((scene.n_bodies, layout.STATS_SIZE))
+                simulator = Simulator.for_scene(scene, parallel=parallel, threads=threads)
+                simulator.run(state, scene.body_params(), make_settings(scene, 64, until_rest=False), stats)
+                assert numba.get_num_threads() == count
+                results.append(state)
+    finally:
+        numba.set_num_threads(before)
+    assert all(np.array_equal(state, results[0]) for state in results)
