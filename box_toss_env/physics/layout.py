@@ -26,10 +26,12 @@ PARAM_SIZE = 7  # [m], [m], [kg], [kg m^2], [-], [-], [N/m]
     SOLVER_TOLERANCE,
     SOLVER_ITERATIONS,
     SLEEP,
-) = range(11)
-SETTINGS_SIZE = 11  # [s], [m/s^2], [-], [0/1], [m/s], [m/s], [s], [m], [-], [-], [0/1]
+    QUIET_STEPS,
+) = range(12)
+SETTINGS_SIZE = 12  # [s], [m/s^2], [-], [0/1], [m/s], [m/s], [s], [m], [-], [-], [0/1], [0/1]
 # UNTIL_REST: the run ends once every body sleeps; SLEEP: islands at rest sleep (colliding scenes; with UNTIL_REST,
-# always), the run going on to MAX_STEPS
+# always), the run going on to MAX_STEPS; QUIET_STEPS: a quiet colliding scene takes several grid steps as one
+# (``colliding.quiet``)
 
 # per-body statistics (n_bodies, STATS_SIZE) written by every kernel
 (FIRST_CONTACT_TIME, N_IMPACTS, N_STEPS, MAX_PENETRATION, REST_TIME, END_TIME, STATUS, FAIL_STEP, N_RECORDED) = range(9)
@@ -42,8 +44,9 @@ STATUS_OK, STATUS_NONFINITE = 0, 1
 
 # the colliding robust solver's warm start kept between runs (rows, WARM_START_SIZE), ``warm_start_memory``:
 # row 0 (contact count, substep length [s], body count k), then per body b < k WARM_BODY_ROWS rows: (its island's
-# label while it sleeps, else -1; its sleep timer [s]; 0), its pose at the end of the run (x, y, angle) and its
-# PARAM_SIZE parameters three a row, then per contact (key, normal impulse [N s], friction impulse [N s])
+# label while it sleeps, else -1; its sleep timer [s]; the grid steps run so far modulo QUIET_STRIDE), its pose at
+# the end of the run (x, y, angle) and its PARAM_SIZE parameters three a row, then per contact (key, normal impulse
+# [N s], friction impulse [N s])
 WARM_START_SIZE = 3
 WARM_BODY_ROWS = 2 + -(-PARAM_SIZE // WARM_START_SIZE)  # rows per body
 

@@ -73,7 +73,9 @@ class Scene:
     defaults, 1e-9 and 16, run the 16 sweeps nearly always: a settled pile of 100 moves 0.1 um in 10 s. A
     looser tolerance costs less and creeps more: at 1e-4 with 32 sweeps, awake piles cost about 0.6x and the
     pyramid's top box drifts less in 2 s, but a settled pile of 100 creeps 4.7 mm in 10 s awake (asleep, as
-    ``simulate`` lets it by default, it does not move); docs/engine_scale.md measures both.
+    ``simulate`` lets it by default, it does not move); docs/engine_scale.md measures both. ``quiet_steps`` (colliding
+    scenes): where every awake box is slower than ``sleep_speed`` at every point, the scene takes 4 grid steps as one
+    (``colliding.quiet``: a resting pile kept awake costs about a quarter, as still); False steps every grid step.
 
     ``boxes_collide``: False (default), every box meets only the floor and the boxes are independent
     (a batch of them runs on threads); True, the boxes of the scene also collide with one another and
@@ -97,6 +99,7 @@ class Scene:
     penetration_slop: float = 0.0  # [m]
     solver_tolerance: float = 1e-9  # [-] share of the impulses' sum
     solver_iterations: int = 16
+    quiet_steps: bool = True
     boxes_collide: bool = False
 
     def __post_init__(self):
@@ -127,7 +130,7 @@ class Scene:
             "solver_iterations",
             check_integer("solver_iterations", self.solver_iterations, int(iterations.low), int(iterations.high)),
         )
-        for name in ("use_impulses", "use_penalty", "boxes_collide"):
+        for name in ("use_impulses", "use_penalty", "quiet_steps", "boxes_collide"):
             set_(self, name, check_bool(name, getattr(self, name)))
         check_choice("solver", self.solver, SOLVERS)
         if self.solver == "robust" and not self.use_impulses:

@@ -305,6 +305,7 @@ def make_settings(scene: Scene, max_steps: int, until_rest: bool, sleep: bool = 
     settings[layout.SOLVER_TOLERANCE] = scene.solver_tolerance
     settings[layout.SOLVER_ITERATIONS] = scene.solver_iterations
     settings[layout.SLEEP] = 1.0 if sleep or until_rest else 0.0
+    settings[layout.QUIET_STEPS] = 1.0 if scene.quiet_steps else 0.0
     return settings
 
 

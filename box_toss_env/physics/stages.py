@@ -34,6 +34,11 @@ STAGES = {
             "while few bodies are awake and no two can meet, whole steps of each awake body alone against the floor "
             "(the floor-only solver's script)",
         ),
+        Stage(
+            "quiet",
+            "every awake body slower than the sleep speed at every point: 4 grid steps taken as one step (a resting "
+            "scene kept awake costs about a quarter, as still)",
+        ),
         Stage("groups", "bodies that cannot meet within the step take substep counts of their own"),
         Stage(
             "flight",
@@ -82,7 +87,7 @@ STAGES = {
 }
 """Every stage of the robust solvers by name."""
 
-COLLIDING_STEP = ("wake", "alone", "groups", "substeps", "sleep")
+COLLIDING_STEP = ("wake", "alone", "quiet", "groups", "substeps", "sleep")
 """A grid step of the colliding solver (``colliding.kernel.advance_steps``, ``colliding.step.advance_step``)."""
 
 COLLIDING_SUBSTEP = (

@@ -27,6 +27,7 @@ from box_toss_env.physics.colliding.state import (
     with_axis,
 )
 from box_toss_env.physics.robust.flight import time_to_contact
+from box_toss_env.physics.tunables import QUIET_STRIDE
 
 
 @numba.njit
@@ -391,7 +392,8 @@ def test_a_box_resting_on_another_gets_no_whole_steps_alone_and_one_clear_of_it_
 
 @pytest.mark.parametrize("n", [10, 100])  # the exact solves, and Gauss-Seidel (more than 64 contacts)
 def test_a_pile_run_in_chunks_with_its_warm_start_is_the_pile_run_at_once(n):
-    scene = scenes.pile(n, dt=1 / 120, sleep_time=1e6)
+    # chunks of 15 steps: every grid step a step (quiet steps keep to chunks of their stride: test_quiet_steps)
+    scene = scenes.pile(n, dt=1 / 120, sleep_time=1e6, quiet_steps=False)
     once, _ = advance_in_runs(scene, 1, 120, warm_start=True)
     assert np.array_equal(advance_in_runs(scene, 8, 15, warm_start=True)[0], once)
     # without it each run starts its contacts from zero: the pile settles anew (measured 0.63 mm a run at 100)
@@ -428,15 +430,18 @@ def settle_in_runs(scene, runs: int, steps: int, warm_start: bool) -> tuple[np.n
 @pytest.mark.parametrize("n", [10, 30])
 def test_a_pile_settling_in_chunks_with_its_warm_start_sleeps_as_in_one_run(n):
     """Sleep carries in the warm start: islands asleep at the end of a call sleep in the next, the awake
-    bodies' sleep timers go on, so chunks of 30 steps are one run of 480 bit for bit, steps integrated
-    included; without it each call wakes the pile and steps it until it falls asleep again."""
+    bodies' sleep timers go on, so chunks of 32 steps (a multiple of the quiet steps' stride, ``colliding.quiet``)
+    are one run of 480 bit for bit, steps integrated included; without it each call wakes the pile and steps it
+    until it falls asleep again."""
     scene = scenes.pile(n, dt=1 / 120)
     once, stepped = settle_in_runs(scene, 1, 480, warm_start=True)
     assert 0 < stepped < 480  # the pile fell asleep within the run
-    chunked, stepped_in_chunks = settle_in_runs(scene, 16, 30, warm_start=True)
+    assert 32 % QUIET_STRIDE == 0
+    chunked, stepped_in_chunks = settle_in_runs(scene, 15, 32, warm_start=True)
     assert np.array_equal(chunked, once) and stepped_in_chunks == stepped
-    cold, stepped_cold = settle_in_runs(scene, 16, 30, warm_start=False)
-    assert stepped_cold > stepped + 12 * 10  # re-stepped at every call: sleep_time (12 steps) and more
+    cold, stepped_cold = settle_in_runs(scene, 15, 32, warm_start=False)
+    # re-stepped at every call: sleep_time (12 grid steps, quiet steps of QUIET_STRIDE once the pile is still) and more
+    assert stepped_cold > stepped + 10 * (12 // QUIET_STRIDE)
     assert not np.array_equal(cold, once)
 
 

@@ -106,6 +106,7 @@ def test_bad_scene_values_name_the_parameter_and_range(field, value, message):
         ("penalty_stiffness", 1e5 + 0j),
         ("use_impulses", "yes"),
         ("use_penalty", 1),
+        ("quiet_steps", 1),
         ("solver", 1),
         ("solver_iterations", 16.0),
         ("solver_iterations", True),

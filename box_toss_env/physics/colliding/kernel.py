@@ -1,21 +1,22 @@
 """The colliding robust kernel: it builds the step state once (``state``), runs the grid steps (``advance_steps``,
-``stages.COLLIDING_STEP``: wake, alone, the substeps of ``step`` over all awake bodies or group by group, sleep), sizing
-the arrays between steps, and writes the results back. A step's substeps never stop half-way: before each step its
-candidate pairs are found at every body's reach over the whole step (``groups.step_pairs``, the pair array grown until
-they fit) and the contact rows are grown to hold every contact those pairs and the floor can give (two a pair, four a
-body); the substeps search only among those pairs."""
+``stages.COLLIDING_STEP``: wake, alone, quiet, the substeps of ``step`` over all awake bodies or group by group, sleep),
+sizing the arrays between steps, and writes the results back. A step's substeps never stop half-way: before each step
+its candidate pairs are found at every body's reach over the whole step (``groups.step_pairs``, the pair array grown
+until they fit) and the contact rows are grown to hold every contact those pairs and the floor can give (two a pair,
+four a body); the substeps search only among those pairs."""
 
 import numpy as np
 
 from .. import layout
 from ..compile.compilation import jit_kernel, jit_stage
 from ..kernel_support import is_finite_state, write_stats
-from ..tunables import ALONE_LIMIT
+from ..tunables import ALONE_LIMIT, QUIET_STRIDE
 from .alone import advance_alone, count_awake, steps_alone
 from .broadphase import sweep_axis
 from .groups import step_pairs, step_substeps
-from .islands import keep_sleeping, restore_sleeping, sleep_placed, sleeps_through, wake_touched
+from .islands import keep_sleeping, restore_sleeping, sleep_placed, sleeps_through, wake_touched, warm_phase
 from .narrowphase import update_geometry
+from .quiet import masses_alike, quiet_context, quiet_stride
 from .state import (
     grown_sweep,
     initial_capacity,
@@ -98,15 +99,17 @@ def wake(context, bodies, sweep, sleep):
 
 
 @jit_stage
-def advance_steps(context, bodies, sweep, contacts, impulses, sleep, stats, scratch, progress):
+def advance_steps(context, bodies, sweep, contacts, impulses, sleep, stats, scratch, progress, quiet):
     """The grid steps while a body is awake, from ``progress`` (the step reached, the bodies awake, the impulses kept
     in ``contacts``: their count and substep length), each: alone (each awake body alone against the floor while no
     two can meet, ``alone``), or the step's candidate pairs (``groups.step_pairs``) and, if the arrays hold them,
-    the substeps and sleep (``step.advance_step``); then wake for the next step. Where the arrays cannot
-    hold a step's pairs or its contacts, it returns before the step (nothing of it done) for the kernel to grow them
-    and call again. Returns (progress, status, failing step, rows needed: 0 done, -1 more pairs, else contacts)."""
+    the substeps and sleep (``step.advance_step``), QUIET_STRIDE grid steps as one where the scene is quiet
+    (``quiet``: the grid steps of the runs before and whether the scene allows it, ``quiet.quiet_stride``); then wake
+    for the next step. Where the arrays cannot hold a step's pairs or its contacts, it returns before the step
+    (nothing of it done) for the kernel to grow them and call again. Returns (progress, status, failing step, rows
+    needed: 0 done, -1 more pairs, else contacts)."""
     n, n_awake, n_previous, h_previous = progress
-    nb = bodies.pose.shape[0]
+    nb, quiet_step = bodies.pose.shape[0], quiet_context(context)
     while n < context.max_steps and n_awake > 0:
         # alone: whole steps of each awake body against the floor alone while no two boxes can meet
         k = steps_alone(bodies, sleep, context, context.max_steps - n) if n_awake <= ALONE_LIMIT else 0
@@ -117,13 +120,18 @@ def advance_steps(context, bodies, sweep, contacts, impulses, sleep, stats, scra
                 return (n, n_awake, n_previous, h_previous), layout.STATUS_NONFINITE, n, 0
             n_awake -= slept
         else:
-            n_sub = step_substeps(context, bodies, sleep)
-            n_pairs = step_pairs(context, bodies, sweep, sleep, n_sub)
+            # quiet: QUIET_STRIDE grid steps as one where every awake body is nearly still (``quiet``)
+            stride = quiet_stride(context, bodies, sleep.awake, n, quiet)
+            step_context = quiet_step if stride > 1 else context
+            if stride > 1 and n_awake < nb:  # wake again at the longer step's reach
+                n_awake = wake(step_context, bodies, sweep, sleep)
+            n_sub = step_substeps(step_context, bodies, sleep)
+            n_pairs = step_pairs(step_context, bodies, sweep, sleep, n_sub)
             rows = 4 * nb + 2 * n_pairs  # two contacts a pair, four a body against the floor
             if n_pairs < 0 or rows > contacts.rows.shape[0]:
                 return (n, n_awake, n_previous, h_previous), layout.STATUS_OK, -1, -1 if n_pairs < 0 else rows
             finite, n_awake, (n_previous, h_previous) = advance_step(
-                context,
+                step_context,
                 bodies,
                 sweep,
                 contacts,
@@ -131,12 +139,12 @@ def advance_steps(context, bodies, sweep, contacts, impulses, sleep, stats, scra
                 sleep,
                 stats,
                 scratch,
-                n,
+                (n, stride),
                 (n_sub, n_pairs),
                 n_awake,
                 (n_previous, h_previous),
             )
-            n += 1
+            n += stride
             if not finite:
                 return (n, n_awake, n_previous, h_previous), layout.STATUS_NONFINITE, n, 0
         if 0 < n_awake < nb and n < context.max_steps:  # wake, for the next step
@@ -151,14 +159,15 @@ def advance_steps(context, bodies, sweep, contacts, impulses, sleep, stats, scra
 
 # -- after the steps ---------------------------------------------------------------------------------
 @jit_stage
-def store_warm_start(warm, impulses, previous, bodies, sleep):
-    """Into ``warm`` for the next call (``load_warm_start``'s layout; nothing if it is empty): each body's sleep
-    (``islands.keep_sleeping``), then the last substep's impulses by contact key (``previous``: their count and
-    substep length), as many as it has rows for (the keys are sorted, so a prefix is a warm start too)."""
+def store_warm_start(warm, impulses, previous, bodies, sleep, phase):
+    """Into ``warm`` for the next call (``load_warm_start``'s layout; nothing if it is empty): each body's sleep and
+    the grid steps run modulo QUIET_STRIDE (``phase``, ``islands.keep_sleeping``), then the last substep's impulses by
+    contact key (``previous``: their count and substep length), as many as it has rows for (the keys are sorted, so a
+    prefix is a warm start too)."""
     if warm.shape[0] == 0:
         return
     n_previous, h_previous = previous
-    first = 1 + layout.WARM_BODY_ROWS * keep_sleeping(warm, bodies, sleep)
+    first = 1 + layout.WARM_BODY_ROWS * keep_sleeping(warm, bodies, sleep, phase)
     count = min(n_previous, warm.shape[0] - first)
     warm[0, 0] = count
     warm[0, 1] = h_previous
@@ -219,20 +228,22 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
         (contacts, impulses), sleep = make_contacts(initial_capacity(nb)), make_sleep(nb)
         tally = make_stats(nb, trajectory, events)
         n_previous, h_previous = load_warm_start(warm, nb, impulses, context.dt)  # from the last call
+        phase = warm_phase(warm, nb)
         if RECORD:
             record_states(trajectory, 0, bodies.pose, bodies.vel)
         sweep, n_awake = start_steps(context, bodies, make_sweep(nb), sleep, warm)
         scratch, progress, need = make_scratch(nb), (0, n_awake, n_previous, h_previous), -1
+        quiet = (phase, settings[layout.QUIET_STEPS] != 0.0 and masses_alike(params))
         while need != 0:  # the steps, the arrays grown between two where a step needs more room
             progress, status, fail_step, need = advance_steps(
-                context, bodies, sweep, contacts, impulses, sleep, tally, scratch, progress
+                context, bodies, sweep, contacts, impulses, sleep, tally, scratch, progress, quiet
             )
             if need < 0:
                 sweep = grown_sweep(sweep)
             elif need > 0:
                 contacts, impulses = room_for_contacts(contacts, impulses, need, progress[2])
         n, _, n_previous, h_previous = progress
-        store_warm_start(warm, impulses, (n_previous, h_previous), bodies, sleep)
+        store_warm_start(warm, impulses, (n_previous, h_previous), bodies, sleep, (phase + n) % QUIET_STRIDE)
         write_back(state, stats, bodies, tally, sleep.rest_time, (n, context.dt, status, fail_step))
 
     return run

@@ -336,18 +336,18 @@ def substep(context, bodies, sweep, contacts, stats, scratch, include, h, t, pai
 
 # -- the substeps of a grid step ---------------------------------------------------------------------
 @jit_stage(inline="always")  # into advance_step
-def advance_substeps(state, n, plan, pairs, previous):
-    """The substeps of grid step n. With one count (``group`` < 0): n_sub substeps over every awake body, the
-    first warm-started from ``previous`` (the last substep's impulses kept in ``impulses.keys``,
+def advance_substeps(state, start, plan, pairs, previous):
+    """The substeps of the grid step from time ``start``. With one count (``group`` < 0): n_sub substeps over every
+    awake body, the first warm-started from ``previous`` (the last substep's impulses kept in ``impulses.keys``,
     ``impulses.impulses``: their count and substep length), each next one from the one before. Group by group
     (``groups``), from group ``group`` (its smallest body): each group's count is its own (``substeps`` over its
     bodies); its first substep is warm-started from ``previous``, the next from its own (``impulses.group_keys``,
     ``group_impulses``); its last impulses are appended to the step's kept rows (``keep_group``) and its box-box
-    contacts joined in ``sleep.parent`` (the islands to sleep), and at the end all of them are put in key order for
-    the next step (``sort_kept``). ``state``: (context, bodies, sweep, contacts, impulses, sleep, stats, scratch);
-    ``plan``: (n_sub, group); ``pairs``: the step's candidate pairs (how many, and whether they are its one
-    substep's, found by ``groups.step_pairs``). Returns (the last substep's contacts, impulses kept for the next
-    step, their substep length)."""
+    contacts joined in ``sleep.parent`` (the islands to sleep), and at the end all of them are put in key order for the
+    next step (``sort_kept``). ``state``: (context, bodies, sweep, contacts, impulses, sleep, stats, scratch); ``plan``:
+    (n_sub, group); ``pairs``: the step's candidate pairs (how many, and whether they are its one substep's, found by
+    ``groups.step_pairs``). Returns (the last substep's contacts, impulses kept for the next step, their substep
+    length)."""
     context, bodies, sweep, contacts, impulses, sleep, stats, scratch = state
     n_sub, group = plan
     n_pairs, searched = pairs
@@ -378,7 +378,7 @@ def advance_substeps(state, n, plan, pairs, previous):
                 scratch,
                 include,
                 h,
-                n * context.dt + sub * h,
+                start + sub * h,
                 (n_pairs, searched),
                 warm_from,
                 own,
@@ -395,12 +395,15 @@ def advance_substeps(state, n, plan, pairs, previous):
 
 # -- a grid step -------------------------------------------------------------------------------------
 @jit_stage(inline="always")  # into kernel.advance_steps (a call a grid step cost OnBox throws 3-6%)
-def advance_step(context, bodies, sweep, contacts, impulses, sleep, stats, scratch, n, plan, n_awake, previous):
-    """Grid step n after the wake and the alone stage (``kernel.advance_steps``): the substeps over every awake
-    body with one count, or group by group (``groups.plan_substeps``), among the step's candidate pairs (``plan``:
-    the step's substep count, ``groups.step_substeps``, and its candidate pairs, ``groups.step_pairs``);
-    then the step counted and recorded, and sleep. ``previous``: the impulses kept in ``impulses`` (their count and
-    substep length). Returns (whether every body is still finite, how many bodies are awake, the impulses kept)."""
+def advance_step(context, bodies, sweep, contacts, impulses, sleep, stats, scratch, grid, plan, n_awake, previous):
+    """The step from grid step n over ``stride`` grid steps (``grid``: both; 1, or QUIET_STRIDE for a quiet
+    step, ``quiet``, whose ``context.dt`` is their length) after the wake and the alone stage
+    (``kernel.advance_steps``): the substeps over every awake body with one count, or group by group
+    (``groups.plan_substeps``), among the step's candidate pairs (``plan``: the step's substep count,
+    ``groups.step_substeps``, and its candidate pairs, ``groups.step_pairs``); then the step counted and recorded, and
+    sleep. ``previous``: the impulses kept in ``impulses`` (their count and substep length). Returns (whether every
+    body is still finite, how many bodies are awake, the impulses kept)."""
+    n, stride = grid
     n_sub, n_pairs = plan
     searched = n_sub == 1  # the step's pairs are its one substep's (``groups.step_pairs``)
     group = -1
@@ -410,13 +413,14 @@ def advance_step(context, bodies, sweep, contacts, impulses, sleep, stats, scrat
     scratch.alone.alone[:] = False
     step_state = (context, bodies, sweep, contacts, impulses, sleep, stats, scratch)
     # substeps: over every awake body with one count, or group by group, each with its own
-    count, n_previous, h_previous = advance_substeps(step_state, n, (n_sub, group), (n_pairs, searched), previous)
-    if not end_step(bodies, sleep.awake, stats, n + 1, context.record):
+    start = n * (context.dt / stride)
+    count, n_previous, h_previous = advance_substeps(step_state, start, (n_sub, group), (n_pairs, searched), previous)
+    if not end_step(bodies, sleep.awake, stats, n + stride, context.record):
         return False, n_awake, (n_previous, h_previous)
     if context.sleeping:  # sleep
         if group < 0:
             join_islands(contacts.ids, count, sleep.parent)
-        n_awake -= sleep_islands(bodies, sleep, stats, context, n + 1)
+        n_awake -= sleep_islands(bodies, sleep, stats, context, (n + stride, (n + stride) * (context.dt / stride)))
     return True, n_awake, (n_previous, h_previous)
 
 
@@ -441,10 +445,11 @@ def end_step(bodies, awake, stats, n, record):
 
 
 @jit_stage(inline="always")
-def sleep_islands(bodies, sleep, stats, context, n):
+def sleep_islands(bodies, sleep, stats, context, end):
     """Sleep: the islands (``sleep.parent``, joined by the last substep's box-box contacts) whose bodies have all been
     supported and slower than ``sleep_speed`` at every point for ``sleep_time`` fall asleep
-    (``islands.fall_asleep``) after step n; returns how many bodies did."""
+    (``islands.fall_asleep``) at the end of the step (``end``: its grid step and time); returns how many bodies did."""
+    n, t = end
     pose, vel, awake, still_for = bodies.pose, bodies.vel, sleep.awake, sleep.still_for
     for b in range(pose.shape[0]):
         if awake[b]:
@@ -455,7 +460,7 @@ def sleep_islands(bodies, sleep, stats, context, n):
     if slept > 0:
         for b in range(pose.shape[0]):
             if not awake[b] and math.isnan(sleep.rest_time[b]):
-                sleep.rest_time[b] = n * context.dt
+                sleep.rest_time[b] = t
                 if context.record:
                     store_state(stats.trajectory, n, b, pose[b, 0], pose[b, 1], pose[b, 2], 0.0, 0.0, 0.0)
     return slept
