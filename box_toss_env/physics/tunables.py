@@ -59,7 +59,8 @@ QUIET_STRIDE = 4
 """[-] grid steps a quiet scene takes as one step (``colliding.quiet``): every awake body slower than the scene's
 ``sleep_speed`` at every point and one substep of the longer step within the no-tunnelling bound. 1: every grid step
 is a step. Larger: a resting scene kept awake costs less (the pile of 16 at 4: 13 instead of 51 us per body per
-simulated second, bit for bit as still), runs in chunks are bit for bit the run at once only in multiples of it."""
+simulated second, as still; at 8 it jittered, 5e-9 m/s), and runs in chunks are the run at once, bit for bit, only in
+chunks of a multiple of it."""
 
 QUIET_MASS_RATIO = 100.0
 """[-] quiet steps only in scenes whose heaviest box is at most this many times the lightest: past it the exact
