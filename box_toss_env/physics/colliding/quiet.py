@@ -75,8 +75,8 @@ def masses_alike(params):
 @jit_stage
 def quiet_stride(context, bodies, awake, n, phase):
     """How many grid steps the step from grid step n takes: QUIET_STRIDE where the scene is quiet (module doc;
-    ``phase``: the grid steps of the runs before this one, and whether the scene's masses allow quiet steps,
-    ``masses_alike``), else 1."""
+    ``phase``: the grid steps of the runs before this one, and whether the scene allows quiet steps: its
+    ``quiet_steps`` and ``masses_alike``), else 1."""
     steps_before, alike = phase
     if QUIET_STRIDE <= 1 or not alike or context.record or n + QUIET_STRIDE > context.max_steps:
         return 1
