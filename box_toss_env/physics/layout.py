@@ -44,9 +44,8 @@ STATUS_OK, STATUS_NONFINITE = 0, 1
 
 # the colliding robust solver's warm start kept between runs (rows, WARM_START_SIZE), ``warm_start_memory``:
 # row 0 (contact count, substep length [s], body count k), then per body b < k WARM_BODY_ROWS rows: (its island's
-# label while it sleeps, else -1; its sleep timer [s]; the grid steps run so far modulo QUIET_STRIDE), its pose at
-# the end of the run (x, y, angle) and its PARAM_SIZE parameters three a row, then per contact (key, normal impulse
-# [N s], friction impulse [N s])
+# label while it sleeps, else -1; its sleep timer [s]; 0), its pose at the end of the run (x, y, angle) and its
+# PARAM_SIZE parameters three a row, then per contact (key, normal impulse [N s], friction impulse [N s])
 WARM_START_SIZE = 3
 WARM_BODY_ROWS = 2 + -(-PARAM_SIZE // WARM_START_SIZE)  # rows per body
 

@@ -77,6 +77,6 @@ def test_runs_in_chunks_of_the_quiet_stride_are_the_run_at_once():
     scene = scenes.pile(10, dt=1 / 120, sleep_time=1e6)
     chunk = 4 * QUIET_STRIDE
     once, stats_once = advance_in_runs(scene, 1, 30 * chunk)
-    chunked, stats_chunked = advance_in_runs(scene, 30, chunk)
+    chunked, _ = advance_in_runs(scene, 30, chunk)
     assert np.array_equal(chunked, once)
     assert stats_once[:, layout.N_STEPS].max() < 30 * chunk  # the settled pile stepped quietly

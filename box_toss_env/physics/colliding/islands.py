@@ -31,7 +31,6 @@ import numpy as np
 from .. import layout
 from ..compile.compilation import jit_stage
 from ..kernel_support import is_lying_still, write_stats
-from ..tunables import QUIET_STRIDE
 from .broadphase import candidate_pairs, interval_end, pair_overlaps, sort_intervals
 from .narrowphase import BODY1, BODY2, GAP, separation
 
@@ -269,15 +268,6 @@ def restore_sleeping(warm, bodies, sleep):
     return slept
 
 
-@jit_stage(inline="always")
-def warm_phase(warm, n):
-    """The grid steps the runs before this one ran, modulo QUIET_STRIDE, as ``keep_sleeping`` kept them for a scene of
-    n bodies (0 if none were kept for one: ``quiet``)."""
-    if warm.shape[0] <= 1 or n == 0 or np.int64(warm[0, 2]) != n:
-        return 0
-    return np.int64(warm[1, 2]) % QUIET_STRIDE
-
-
 @jit_stage
 def sleeps_through(warm, state, params, dt, capacity, stats, end_step):
     """Whether every body sleeps through this run: ``warm`` kept all of them asleep and none was moved, set
@@ -295,11 +285,10 @@ def sleeps_through(warm, state, params, dt, capacity, stats, end_step):
             return False
         if not as_kept(warm, row, state, params, b):
             return False
-    phase = (warm_phase(warm, n) + end_step) % QUIET_STRIDE
     for b in range(n):
         row = 1 + layout.WARM_BODY_ROWS * b
         warm[row, 1] = 0.0
-        warm[row, 2] = phase
+        warm[row, 2] = 0.0
         write_stats(stats, b, math.nan, 0, 0, 0.0, 0.0, end_step * dt, layout.STATUS_OK, -1, end_step + 1)
     first = 1 + layout.WARM_BODY_ROWS * n
     count = min(np.int64(warm[0, 0]), warm.shape[0] - first, capacity)
@@ -310,12 +299,11 @@ def sleeps_through(warm, state, params, dt, capacity, stats, end_step):
 
 
 @jit_stage
-def keep_sleeping(warm, bodies, sleep, phase):
-    """Each body's island label (its island's root while it sleeps, -1 awake), sleep timer, the grid steps run so far
-    modulo QUIET_STRIDE (``phase``, the same in every body's row: ``quiet``), pose and parameters into ``warm``'s body
-    rows for the next run (``restore_sleeping``), as many bodies as there are rows for (a prefix: an island's label is
-    its smallest body, so a kept sleeping body's label is kept too); returns how many bodies were kept (0 if ``warm``
-    is empty)."""
+def keep_sleeping(warm, bodies, sleep):
+    """Each body's island label (its island's root while it sleeps, -1 awake), sleep timer, pose and parameters into
+    ``warm``'s body rows for the next run (``restore_sleeping``), as many bodies as there are rows for (a
+    prefix: an island's label is its smallest body, so a kept sleeping body's label is kept too); returns how
+    many bodies were kept (0 if ``warm`` is empty)."""
     if warm.shape[0] == 0:
         return 0
     pose, params, awake, island, still_for = bodies.pose, bodies.params, sleep.awake, sleep.island, sleep.still_for
@@ -325,7 +313,7 @@ def keep_sleeping(warm, bodies, sleep, phase):
         row = 1 + layout.WARM_BODY_ROWS * b
         warm[row, 0] = -1.0 if awake[b] else island[b]
         warm[row, 1] = still_for[b]
-        warm[row, 2] = phase
+        warm[row, 2] = 0.0
         warm[row + 1, 0], warm[row + 1, 1], warm[row + 1, 2] = pose[b, 0], pose[b, 1], pose[b, 2]
         for k in range(params.shape[1]):
             warm[row + 2 + k // layout.WARM_START_SIZE, k % layout.WARM_START_SIZE] = params[b, k]

@@ -14,9 +14,9 @@ from ..tunables import ALONE_LIMIT, QUIET_STRIDE
 from .alone import advance_alone, count_awake, steps_alone
 from .broadphase import sweep_axis
 from .groups import step_pairs, step_substeps
-from .islands import keep_sleeping, restore_sleeping, sleep_placed, sleeps_through, wake_touched, warm_phase
+from .islands import keep_sleeping, restore_sleeping, sleep_placed, sleeps_through, wake_touched
 from .narrowphase import update_geometry
-from .quiet import masses_alike, quiet_context, quiet_stride
+from .quiet import masses_alike, quiet_stride
 from .state import (
     grown_sweep,
     initial_capacity,
@@ -104,12 +104,12 @@ def advance_steps(context, bodies, sweep, contacts, impulses, sleep, stats, scra
     in ``contacts``: their count and substep length), each: alone (each awake body alone against the floor while no
     two can meet, ``alone``), or the step's candidate pairs (``groups.step_pairs``) and, if the arrays hold them,
     the substeps and sleep (``step.advance_step``), QUIET_STRIDE grid steps as one where the scene is quiet
-    (``quiet``: the grid steps of the runs before and whether the scene allows it, ``quiet.quiet_stride``); then wake
+    (``quiet``: the quiet step's context and whether the scene allows it, ``quiet.quiet_stride``); then wake
     for the next step. Where the arrays cannot hold a step's pairs or its contacts, it returns before the step
     (nothing of it done) for the kernel to grow them and call again. Returns (progress, status, failing step, rows
     needed: 0 done, -1 more pairs, else contacts)."""
     n, n_awake, n_previous, h_previous = progress
-    nb, quiet_step = bodies.pose.shape[0], quiet_context(context)
+    nb, (quiet_step, allowed) = bodies.pose.shape[0], quiet
     while n < context.max_steps and n_awake > 0:
         # alone: whole steps of each awake body against the floor alone while no two boxes can meet
         k = steps_alone(bodies, sleep, context, context.max_steps - n) if n_awake <= ALONE_LIMIT else 0
@@ -121,7 +121,7 @@ def advance_steps(context, bodies, sweep, contacts, impulses, sleep, stats, scra
             n_awake -= slept
         else:
             # quiet: QUIET_STRIDE grid steps as one where every awake body is nearly still (``quiet``)
-            stride = quiet_stride(context, bodies, sleep.awake, n, quiet)
+            stride = quiet_stride(context, bodies, sleep.awake, n, allowed)
             step_context = quiet_step if stride > 1 else context
             if stride > 1 and n_awake < nb:  # wake again at the longer step's reach
                 n_awake = wake(step_context, bodies, sweep, sleep)
@@ -159,15 +159,14 @@ def advance_steps(context, bodies, sweep, contacts, impulses, sleep, stats, scra
 
 # -- after the steps ---------------------------------------------------------------------------------
 @jit_stage
-def store_warm_start(warm, impulses, previous, bodies, sleep, phase):
-    """Into ``warm`` for the next call (``load_warm_start``'s layout; nothing if it is empty): each body's sleep and
-    the grid steps run modulo QUIET_STRIDE (``phase``, ``islands.keep_sleeping``), then the last substep's impulses by
-    contact key (``previous``: their count and substep length), as many as it has rows for (the keys are sorted, so a
-    prefix is a warm start too)."""
+def store_warm_start(warm, impulses, previous, bodies, sleep):
+    """Into ``warm`` for the next call (``load_warm_start``'s layout; nothing if it is empty): each body's sleep
+    (``islands.keep_sleeping``), then the last substep's impulses by contact key (``previous``: their count and
+    substep length), as many as it has rows for (the keys are sorted, so a prefix is a warm start too)."""
     if warm.shape[0] == 0:
         return
     n_previous, h_previous = previous
-    first = 1 + layout.WARM_BODY_ROWS * keep_sleeping(warm, bodies, sleep, phase)
+    first = 1 + layout.WARM_BODY_ROWS * keep_sleeping(warm, bodies, sleep)
     count = min(n_previous, warm.shape[0] - first)
     warm[0, 0] = count
     warm[0, 1] = h_previous
@@ -228,12 +227,12 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
         (contacts, impulses), sleep = make_contacts(initial_capacity(nb)), make_sleep(nb)
         tally = make_stats(nb, trajectory, events)
         n_previous, h_previous = load_warm_start(warm, nb, impulses, context.dt)  # from the last call
-        phase = warm_phase(warm, nb)
         if RECORD:
             record_states(trajectory, 0, bodies.pose, bodies.vel)
         sweep, n_awake = start_steps(context, bodies, make_sweep(nb), sleep, warm)
         scratch, progress, need = make_scratch(nb), (0, n_awake, n_previous, h_previous), -1
-        quiet = (phase, settings[layout.QUIET_STEPS] != 0.0 and masses_alike(params))
+        quiet_step = step_context(settings, bodies.half, bodies.radius, PENALTY, FRICTION_ON, RECORD, QUIET_STRIDE)
+        quiet = (quiet_step, settings[layout.QUIET_STEPS] != 0.0 and masses_alike(params))
         while need != 0:  # the steps, the arrays grown between two where a step needs more room
             progress, status, fail_step, need = advance_steps(
                 context, bodies, sweep, contacts, impulses, sleep, tally, scratch, progress, quiet
@@ -243,7 +242,7 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
             elif need > 0:
                 contacts, impulses = room_for_contacts(contacts, impulses, need, progress[2])
         n, _, n_previous, h_previous = progress
-        store_warm_start(warm, impulses, (n_previous, h_previous), bodies, sleep, (phase + n) % QUIET_STRIDE)
+        store_warm_start(warm, impulses, (n_previous, h_previous), bodies, sleep)
         write_back(state, stats, bodies, tally, sleep.rest_time, (n, context.dt, status, fail_step))
 
     return run

@@ -17,8 +17,8 @@ A step of k = QUIET_STRIDE grid steps is taken at grid step n when
 - one substep of k dt keeps the no-tunnelling bound (``substeps.substep_count``: |g| k dt counts in the point speed,
   so boxes of a millimetre never take it);
 - no trajectory is recorded (it has a row a grid step), and the k steps end within the run;
-- the run's steps so far, with those of the runs before it carried in the warm start (``phase``), are a multiple of
-  k, so a run in chunks of a multiple of k steps is the run at once, bit for bit;
+- n is a multiple of k, so a run in chunks of a multiple of k steps is the run at once, bit for bit (a quiet step
+  never spans two runs);
 - the scene's heaviest box is at most QUIET_MASS_RATIO times its lightest (``masses_alike``), and its
   ``quiet_steps`` is on (``Scene``, the default).
 
@@ -31,34 +31,7 @@ import math
 from .. import layout
 from ..compile.compilation import jit_stage
 from ..tunables import QUIET_MASS_RATIO, QUIET_STRIDE
-from .state import StepContext
 from .substeps import substeps
-
-
-@jit_stage(inline="always")
-def quiet_context(context):
-    """The step context of a quiet step: the grid step and the Gauss-Seidel sweeps at most times QUIET_STRIDE (the
-    sweeps the grid steps it stands for had: at 16 a quiet step, the settling pile of 100 kept awake crept for
-    seconds, 1.3 mm in its fourth second, still 17 um in its ninth; at 1/256 s it lay still to rounding, and at 64
-    sweeps a quiet step it moves 0.1-0.2 um a second), every other setting as it is."""
-    return StepContext(
-        context.dt * QUIET_STRIDE,
-        context.gravity,
-        context.max_steps,
-        context.until_rest,
-        context.sleeping,
-        context.threshold,
-        context.sleep_speed,
-        context.sleep_time,
-        context.slop,
-        context.sweep_tolerance,
-        context.sweeps * QUIET_STRIDE,
-        context.tolerance,
-        context.smallest_half,
-        context.use_penalty,
-        context.use_friction,
-        context.record,
-    )
 
 
 @jit_stage
@@ -73,14 +46,12 @@ def masses_alike(params):
 
 
 @jit_stage
-def quiet_stride(context, bodies, awake, n, phase):
+def quiet_stride(context, bodies, awake, n, allowed):
     """How many grid steps the step from grid step n takes: QUIET_STRIDE where the scene is quiet (module doc;
-    ``phase``: the grid steps of the runs before this one, and whether the scene allows quiet steps: its
-    ``quiet_steps`` and ``masses_alike``), else 1."""
-    steps_before, alike = phase
-    if QUIET_STRIDE <= 1 or not alike or context.record or n + QUIET_STRIDE > context.max_steps:
+    ``allowed``: the scene's ``quiet_steps`` and ``masses_alike``), else 1."""
+    if QUIET_STRIDE <= 1 or not allowed or context.record or n + QUIET_STRIDE > context.max_steps:
         return 1
-    if (steps_before + n) % QUIET_STRIDE != 0:
+    if n % QUIET_STRIDE != 0:
         return 1
     vel, radius = bodies.vel, bodies.radius
     for b in range(vel.shape[0]):
