@@ -11,6 +11,7 @@ import numba
 import numpy as np
 
 from . import layout
+from .colliding.parallel import reaches_threads
 from .compile import background_compile
 from .compile.compilation import ensure_compiled
 from .kernels import KernelFlags, make_kernel
@@ -91,13 +92,13 @@ class Simulator:
     ``run`` takes the state (n, 6) and the body parameters (n, 7) (see ``layout``) and advances
     the state in place; it allocates nothing per step. With ``flags.parallel`` the run uses ``threads`` threads
     (in [1, numba.config.NUMBA_NUM_THREADS], default: all of them, the cores available, and one where boxes
-    collide: ``python -m benchmarks.thread_scaling`` measures what a second buys there), and its results do not
-    depend on how many: without box-box contact the bodies are split into that many contiguous shares run at once
-    (the kernel releases the GIL, so the shares run on a thread pool, and each body's result does not depend on the
-    split); a scene whose boxes collide is one call whose large stages run on that many of numba's threads
-    (``colliding.parallel``: from hundreds of boxes up), bit for bit as on one. One body and a batch run the
-    same compiled kernel (``kernels``); its first run compiles it or loads it from numba's cache
-    (``compilation.ensure_compiled``). With ``start_interpreted`` (the envs), a kernel that is not in the
+    collide: ``python -m benchmarks.thread_scaling`` measures what a second buys there; without it, one whatever
+    numba's thread count), and its results do not depend on how many: without box-box contact the bodies are split
+    into that many contiguous shares run at once (the kernel releases the GIL, so the shares run on a thread pool,
+    and each body's result does not depend on the split); a scene whose boxes collide is one call whose large stages
+    run on that many of numba's threads (``colliding.parallel``: from hundreds of boxes up), bit for bit as on one.
+    One body and a batch run the same compiled kernel (``kernels``); its first run compiles it or loads it from
+    numba's cache (``compilation.ensure_compiled``). With ``start_interpreted`` (the envs), a kernel that is not in the
     cache yet is compiled by a worker process while runs of up to ``MAX_INTERPRETED_BODIES`` bodies use its
     interpreted copy, which gives the same results (``background_compile``).
     """
@@ -194,7 +195,9 @@ class Simulator:
         if self.flags.boxes_collide:  # one scene, stepped together: its large stages on numba's threads
             if self.flags.parallel:
                 run_on_threads(self.kernel, args, self.shares)
-            else:  # no parallel regions: numba's thread count means nothing to it
+            elif reaches_threads(state.shape[0]):  # off threads: one, whatever numba's count is
+                run_on_threads(self.kernel, args, 1)
+            else:  # too few boxes for a stage on threads: numba's thread count means nothing to the run
                 self.kernel(*args)
             return
         shares = min(self.shares, state.shape[0])

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from box_toss_env.physics import Simulator, layout, make_settings, scenes, simulate, warm_start_memory
-from box_toss_env.physics.colliding.parallel import PARALLEL_BODIES, PARALLEL_CONTACTS
+from box_toss_env.physics.colliding.parallel import PARALLEL_BODIES, PARALLEL_CONTACTS, reaches_threads
 
 TWO = pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="numba has one thread here")
 
@@ -77,3 +77,27 @@ def test_a_run_leaves_the_callers_thread_count_as_it_found_it():
     finally:
         numba.set_num_threads(before)
     assert all(np.array_equal(state, results[0]) for state in results)
+
+
+@TWO
+@pytest.mark.parametrize("count", [1, 2])
+def test_a_run_off_threads_is_one_thread_whatever_numbas_count(count):
+    """``parallel=False`` runs on the calling thread alone: a scene with boxes enough to reach a stage on threads
+    (``reaches_threads``) runs with numba's thread count at 1 (read from inside the call), and the caller's count is
+    back after; a scene too small for one leaves the count alone."""
+    seen = []
+    before = numba.get_num_threads()
+    try:
+        numba.set_num_threads(count)
+        for n, expected in ((31, 1), (PARALLEL_BODIES, 1), (30, count)):
+            assert reaches_threads(n) == (n != 30)
+            scene = scenes.pile(n)
+            simulator = Simulator.for_scene(scene, parallel=False)
+            simulator.kernel = lambda *args: seen.append(numba.get_num_threads())  # noqa: ARG005
+            simulator._ready = True  # the recording stand-in needs no compiling
+            state, stats = scene.initial_state(), np.zeros((n, layout.STATS_SIZE))
+            simulator.run(state, scene.body_params(), make_settings(scene, 1, until_rest=False), stats)
+            assert seen[-1] == expected
+            assert numba.get_num_threads() == count
+    finally:
+        numba.set_num_threads(before)

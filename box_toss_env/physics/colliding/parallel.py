@@ -75,6 +75,14 @@ PARALLEL_CONTACTS = 1024
 """[contacts] from this many up, a substep's sweeps go block by block (``partition_contacts``): on threads, and in
 that order on one thread too. Fewer keep the contact order of the sweeps (the exact solves take up to 64)."""
 
+
+def reaches_threads(n_bodies: int) -> bool:
+    """Whether a run of ``n_bodies`` colliding bodies can reach a stage on threads: it has PARALLEL_BODIES bodies
+    or more, or it may hold PARALLEL_CONTACTS contacts, of which n bodies have at most n (n - 1) + 4 n (two a pair
+    of boxes, four a box on the floor): from 31 bodies up."""
+    return n_bodies >= PARALLEL_BODIES or n_bodies * (n_bodies - 1) + 4 * n_bodies >= PARALLEL_CONTACTS
+
+
 BLOCKS = 4
 """[-] blocks of bodies along the sweep axis, whatever the number of threads (it sets the sweeps' order): more
 blocks spread over more threads, and put more contacts on the boundary, swept one after another."""
