@@ -24,10 +24,11 @@ import numba
 import numpy as np
 
 from . import layout
+from .colliding.parallel import reaches_threads
 from .compile import background_compile
 from .compile.compilation import ensure_compiled, jit_kernel
 from .kernels import KernelFlags, make_kernel, source_digest
-from .simulate import Simulator, check_threads, thread_pool
+from .simulate import Simulator, check_threads, run_on_threads, thread_pool
 from .validation import check_integer
 
 MAX_GROUP_SIZE = 64
@@ -182,17 +183,24 @@ class GroupedSimulator:
             ensure_compiled(self.kernel, arrays.share(first, groups))
             self._ready = True
         shares = min(self.shares, groups - first)
+        kernel = self._on_one_thread if reaches_threads(size) else self.kernel
         if shares <= 1:
-            self.kernel(*arrays.share(first, groups))
+            kernel(*arrays.share(first, groups))
             return
         edges = [first + (groups - first) * k // shares for k in range(shares + 1)]
         pool = thread_pool(shares - 1)
-        futures = [pool.submit(self.kernel, *arrays.share(a, b)) for a, b in zip(edges[:-2], edges[1:-1], strict=True)]
+        futures = [pool.submit(kernel, *arrays.share(a, b)) for a, b in zip(edges[:-2], edges[1:-1], strict=True)]
         try:
-            self.kernel(*arrays.share(edges[-2], groups))
+            kernel(*arrays.share(edges[-2], groups))
         finally:
             for future in futures:
                 future.result()
+
+    def _on_one_thread(self, *args) -> None:
+        """The kernel with numba's thread count at 1 for the call (``run_on_threads``): a group of 31 bodies or more
+        can reach a stage on threads (``colliding.parallel.reaches_threads``), and the run's threads are its shares
+        of groups, one each."""
+        run_on_threads(self.kernel, args, 1)
 
     def _run_interpreted(self, arrays: GroupArrays, groups: int) -> int:
         """Run groups 0, 1, ... with the kernel's interpreted copy, in calls of whole groups of up to

@@ -1,13 +1,15 @@
 """A large scene whose boxes collide runs its large stages on threads (``colliding.parallel``): the same results
 bit for bit on one thread and on two, in every stage that runs on threads (the broadphase's sweep, the
-narrowphase, and the sweeps of the velocities, the penalty and the restitution block by block)."""
+narrowphase, and the sweeps of the velocities, the penalty and the restitution block by block); a run off threads
+(``parallel=False``, or one share of a grouped run) runs them on its own thread alone."""
 
 import numba
 import numpy as np
 import pytest
 
-from box_toss_env.physics import Simulator, layout, make_settings, scenes, simulate, warm_start_memory
+from box_toss_env.physics import KernelFlags, Simulator, layout, make_settings, scenes, simulate, warm_start_memory
 from box_toss_env.physics.colliding.parallel import PARALLEL_BODIES, PARALLEL_CONTACTS, reaches_threads
+from box_toss_env.physics.grouped import GroupedSimulator
 
 TWO = pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="numba has one thread here")
 
@@ -99,5 +101,31 @@ def test_a_run_off_threads_is_one_thread_whatever_numbas_count(count):
             simulator.run(state, scene.body_params(), make_settings(scene, 1, until_rest=False), stats)
             assert seen[-1] == expected
             assert numba.get_num_threads() == count
+    finally:
+        numba.set_num_threads(before)
+
+
+@TWO
+def test_a_grouped_run_gives_each_share_of_large_groups_one_thread():
+    """``GroupedSimulator``'s threads are its shares of groups: each share's call of a group large enough to reach
+    a stage on threads runs with numba's thread count at 1 (read from inside the call), on one share and on two;
+    smaller groups leave the count alone."""
+    seen: list[int] = []
+    before = numba.get_num_threads()
+    try:
+        numba.set_num_threads(2)
+        for size, expected in ((31, 1), (30, 2)):
+            for threads in (1, 2):
+                seen.clear()
+                simulator = GroupedSimulator(KernelFlags(boxes_collide=True, parallel=True), size, threads=threads)
+                simulator.kernel = lambda *args: seen.append(numba.get_num_threads())  # noqa: ARG005
+                simulator._ready = True  # the recording stand-in needs no compiling
+                scene = scenes.pile(size)
+                state = np.concatenate([scene.initial_state()] * 2)
+                params = np.concatenate([scene.body_params()] * 2)
+                stats = np.zeros((2 * size, layout.STATS_SIZE))
+                simulator.run(state, params, make_settings(scene, 1, until_rest=False), stats)
+                assert seen == [expected] * threads
+                assert numba.get_num_threads() == 2
     finally:
         numba.set_num_threads(before)
