@@ -193,10 +193,8 @@ class Simulator:
             ensure_compiled(self.kernel, args)
             self._ready = True
         if self.flags.boxes_collide:  # one scene, stepped together: its large stages on numba's threads
-            if self.flags.parallel:
+            if reaches_threads(state.shape[0]):  # on ``shares`` of them (1 off threads), whatever numba's count is
                 run_on_threads(self.kernel, args, self.shares)
-            elif reaches_threads(state.shape[0]):  # off threads: one, whatever numba's count is
-                run_on_threads(self.kernel, args, 1)
             else:  # too few boxes for a stage on threads: numba's thread count means nothing to the run
                 self.kernel(*args)
             return

@@ -63,7 +63,8 @@ def test_a_large_pyramid_stands_when_its_sweeps_go_block_by_block():
 @TWO
 def test_a_run_leaves_the_callers_thread_count_as_it_found_it():
     """A run sets numba's thread count (the calling thread's own) only for itself: to its ``threads`` where that
-    differs, and back after; a kernel without parallel regions leaves it alone. The results do not depend on it."""
+    differs, and back after; a scene too small for a stage on threads leaves it alone. The results do not depend
+    on it."""
     scene = scenes.pile(4)
     results = []
     before = numba.get_num_threads()
@@ -85,16 +86,16 @@ def test_a_run_leaves_the_callers_thread_count_as_it_found_it():
 @pytest.mark.parametrize("count", [1, 2])
 def test_a_run_off_threads_is_one_thread_whatever_numbas_count(count):
     """``parallel=False`` runs on the calling thread alone: a scene with boxes enough to reach a stage on threads
-    (``reaches_threads``) runs with numba's thread count at 1 (read from inside the call), and the caller's count is
-    back after; a scene too small for one leaves the count alone."""
+    (``reaches_threads``) runs with numba's thread count at 1 (read from inside the call), one told ``threads=2`` at
+    2, and the caller's count is back after; a scene too small for one leaves the count alone."""
     seen = []
     before = numba.get_num_threads()
     try:
         numba.set_num_threads(count)
-        for n, expected in ((31, 1), (PARALLEL_BODIES, 1), (30, count)):
+        for n, threads, expected in ((31, None, 1), (PARALLEL_BODIES, None, 1), (30, None, count), (31, 2, 2)):
             assert reaches_threads(n) == (n != 30)
             scene = scenes.pile(n)
-            simulator = Simulator.for_scene(scene, parallel=False)
+            simulator = Simulator.for_scene(scene, parallel=threads is not None, threads=threads)
             simulator.kernel = lambda *args: seen.append(numba.get_num_threads())  # noqa: ARG005
             simulator._ready = True  # the recording stand-in needs no compiling
             state, stats = scene.initial_state(), np.zeros((n, layout.STATS_SIZE))
