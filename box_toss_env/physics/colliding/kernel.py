@@ -10,13 +10,13 @@ import numpy as np
 from .. import layout
 from ..compile.compilation import jit_kernel, jit_stage
 from ..kernel_support import is_finite_state, write_stats
-from ..tunables import ALONE_LIMIT, QUIET_STRIDE
+from ..tunables import ALONE_LIMIT
 from .alone import advance_alone, count_awake, steps_alone
 from .broadphase import sweep_axis
 from .groups import step_pairs, step_substeps
 from .islands import keep_sleeping, restore_sleeping, sleep_placed, sleeps_through, wake_touched
 from .narrowphase import update_geometry
-from .quiet import masses_alike, quiet_stride
+from .quiet import masses_alike, quiet_context, quiet_stride
 from .state import (
     grown_sweep,
     initial_capacity,
@@ -104,12 +104,12 @@ def advance_steps(context, bodies, sweep, contacts, impulses, sleep, stats, scra
     in ``contacts``: their count and substep length), each: alone (each awake body alone against the floor while no
     two can meet, ``alone``), or the step's candidate pairs (``groups.step_pairs``) and, if the arrays hold them,
     the substeps and sleep (``step.advance_step``), QUIET_STRIDE grid steps as one where the scene is quiet
-    (``quiet``: the quiet step's context and whether the scene allows it, ``quiet.quiet_stride``); then wake
-    for the next step. Where the arrays cannot hold a step's pairs or its contacts, it returns before the step
+    (``quiet``: whether the scene allows it, ``quiet.quiet_stride``; the step's context ``quiet.quiet_context``);
+    then wake for the next step. Where the arrays cannot hold a step's pairs or its contacts, it returns before the step
     (nothing of it done) for the kernel to grow them and call again. Returns (progress, status, failing step, rows
     needed: 0 done, -1 more pairs, else contacts)."""
     n, n_awake, n_previous, h_previous = progress
-    nb, (quiet_step, allowed) = bodies.pose.shape[0], quiet
+    nb, quiet_step = bodies.pose.shape[0], quiet_context(context)
     while n < context.max_steps and n_awake > 0:
         # alone: whole steps of each awake body against the floor alone while no two boxes can meet
         k = steps_alone(bodies, sleep, context, context.max_steps - n) if n_awake <= ALONE_LIMIT else 0
@@ -121,7 +121,7 @@ def advance_steps(context, bodies, sweep, contacts, impulses, sleep, stats, scra
             n_awake -= slept
         else:
             # quiet: QUIET_STRIDE grid steps as one where every awake body is nearly still (``quiet``)
-            stride = quiet_stride(context, bodies, sleep.awake, n, allowed)
+            stride = quiet_stride(context, bodies, sleep.awake, n, quiet)
             step_context = quiet_step if stride > 1 else context
             if stride > 1 and n_awake < nb:  # wake again at the longer step's reach
                 n_awake = wake(step_context, bodies, sweep, sleep)
@@ -231,8 +231,7 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
             record_states(trajectory, 0, bodies.pose, bodies.vel)
         sweep, n_awake = start_steps(context, bodies, make_sweep(nb), sleep, warm)
         scratch, progress, need = make_scratch(nb), (0, n_awake, n_previous, h_previous), -1
-        quiet_step = step_context(settings, bodies.half, bodies.radius, PENALTY, FRICTION_ON, RECORD, QUIET_STRIDE)
-        quiet = (quiet_step, settings[layout.QUIET_STEPS] != 0.0 and masses_alike(params))
+        quiet = settings[layout.QUIET_STEPS] != 0.0 and masses_alike(params)
         while need != 0:  # the steps, the arrays grown between two where a step needs more room
             progress, status, fail_step, need = advance_steps(
                 context, bodies, sweep, contacts, impulses, sleep, tally, scratch, progress, quiet

@@ -31,7 +31,36 @@ import math
 from .. import layout
 from ..compile.compilation import jit_stage
 from ..tunables import QUIET_MASS_RATIO, QUIET_STRIDE
+from .state import StepContext
 from .substeps import substeps
+
+
+@jit_stage(inline="always")
+def quiet_context(context):
+    """The step context of a quiet step: the grid step and the Gauss-Seidel sweeps at most times QUIET_STRIDE (the
+    sweeps of the grid steps it stands for: at 16 a quiet step, the settling pile of 100 kept awake crept for
+    seconds, 1.3 mm in its fourth second, still 17 um in its ninth; at 1/256 s it lay still to rounding, and at 64
+    sweeps a quiet step it moves 0.1-0.2 um a second), every other setting as it is. Built where the steps use it
+    (``kernel.advance_steps``): built once a call by the kernel and passed in with the steps' other arguments, it made
+    a throw of ``BoxToss-OnBox-v0`` cost the engine 95 us instead of 68, the same results."""
+    return StepContext(
+        context.dt * QUIET_STRIDE,
+        context.gravity,
+        context.max_steps,
+        context.until_rest,
+        context.sleeping,
+        context.threshold,
+        context.sleep_speed,
+        context.sleep_time,
+        context.slop,
+        context.sweep_tolerance,
+        context.sweeps * QUIET_STRIDE,
+        context.tolerance,
+        context.smallest_half,
+        context.use_penalty,
+        context.use_friction,
+        context.record,
+    )
 
 
 @jit_stage

@@ -220,15 +220,11 @@ class Scratch(NamedTuple):
 
 
 @jit_stage(inline="always")  # into the kernel (array reductions need numba's runtime)
-def step_context(settings, half, radius, use_penalty, use_friction, record, stride=1):
-    """``StepContext`` from the settings array and the scene's boxes; with ``stride`` > 1 a quiet step's
-    (``quiet``): its step ``stride`` grid steps long, and ``stride`` times the sweeps at most (the sweeps of the grid
-    steps it stands for: at 16 a quiet step, the settling pile of 100 kept awake crept for seconds, 1.3 mm in its
-    fourth second, still 17 um in its ninth; at 1/256 s it lay still to rounding, and at 64 sweeps a quiet step it
-    moves 0.1-0.2 um a second)."""
+def step_context(settings, half, radius, use_penalty, use_friction, record):
+    """``StepContext`` from the settings array and the scene's boxes."""
     dt, gravity, max_steps, until_rest, threshold, sleep_speed, sleep_time, slop = read_settings(settings)
     return StepContext(
-        dt * stride,
+        dt,
         gravity,
         max_steps,
         until_rest,
@@ -238,7 +234,7 @@ def step_context(settings, half, radius, use_penalty, use_friction, record, stri
         sleep_time,
         slop,
         settings[layout.SOLVER_TOLERANCE],
-        np.int64(settings[layout.SOLVER_ITERATIONS]) * stride,
+        np.int64(settings[layout.SOLVER_ITERATIONS]),
         CONTACT_TOLERANCE * (1.0 + radius.max()),
         half.min(),
         use_penalty,
