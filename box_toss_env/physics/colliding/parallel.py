@@ -21,9 +21,13 @@ Two kinds of stage, by what they change:
   place of the contact-order sweeps (``sweeps.gauss_seidel``, ``relax.penalty_sweeps``,
   ``restitution.apply_restitution``, ``restitution.hold_targets``), which smaller scenes keep.
   Each block adds up its own changes and impulses (a sweep's stop rule), and the sums are added block by block, so
-  they too are the same on any number of threads. A sweep is one parallel region (graph colouring, Box2D v3's way,
-  needs one per colour: a dozen per sweep, each waiting for the slowest thread, which costs on a loaded machine),
-  and only the contacts that cross a cut change their place in the order.
+  they too are the same on any number of threads. The passes that write to each contact's bodies go block by block
+  the same way: the warm start's impulses (``partitioned_warm_start``: found for runs of contacts at once, applied
+  block by block), each body's deepest penetration (``partitioned_penetrations``) and whether it took an impulse
+  (``partitioned_touched``); run in contact order on one thread, they held the second waiting. A sweep is one
+  parallel region (graph colouring, Box2D v3's way, needs one per colour: a dozen per sweep, each waiting for the
+  slowest thread, which costs on a loaded machine), and only the contacts that cross a cut change their place in
+  the order.
 """
 
 from typing import NamedTuple
@@ -58,12 +62,15 @@ from .narrowphase import (
     update_geometry,
 )
 from .prepare import (
+    apply_contact_impulses,
     body_kinetic_energy,
     is_impact_contact,
+    note_depth,
     prepare_contact,
     relative_velocity,
     restitution_step,
     short_of_target,
+    touch_bodies,
 )
 from .substeps import body_reach, travel
 from .sweeps import friction_step, mark_moved, normal_step, touches_moved
@@ -191,6 +198,117 @@ def add_blocks(partial):
         total += partial[k, 1]
         largest = max(largest, partial[k, 2])
     return change, total, largest
+
+
+# -- per-body stages, block by block -----------------------------------------------------------------
+@jit_stage(inline="always")
+def depth_block(k, rows, ids, order, start, max_penetration):
+    """``prepare.note_depth`` over block k's contacts; returns the deepest penetration among them (0 if none)."""
+    deepest = 0.0
+    for position in range(start[k], start[k + 1]):
+        deepest = max(deepest, note_depth(order[position], rows, ids, max_penetration))
+    return deepest
+
+
+@jit_stage(parallel=True)
+def depth_blocks(rows, ids, order, start, max_penetration, partial):
+    """``depth_block`` over the blocks at once, then over the boundary; each one's deepest into ``partial[:, 2]``."""
+    for k in prange(BLOCKS):
+        partial[k, 2] = depth_block(k, rows, ids, order, start, max_penetration)
+    partial[BLOCKS, 2] = depth_block(BLOCKS, rows, ids, order, start, max_penetration)
+
+
+@jit_stage
+def partitioned_penetrations(contacts, max_penetration):
+    """``step.note_penetration`` block by block (the same values: a maximum in any order): each body's deepest
+    penetration so far; returns the deepest of the substep's contacts (0 if none)."""
+    partition = contacts.partition
+    depth_blocks(contacts.rows, contacts.ids, partition.order, partition.start, max_penetration, partition.partial)
+    deepest = 0.0
+    for k in range(BLOCKS + 1):
+        deepest = max(deepest, partition.partial[k, 2])
+    return deepest
+
+
+@jit_stage(inline="always")
+def touched_block(k, rows, ids, order, start, impacts, threshold, touched, impacted):
+    """``prepare.touch_bodies`` over block k's contacts."""
+    for position in range(start[k], start[k + 1]):
+        touch_bodies(order[position], rows, ids, impacts, threshold, touched, impacted)
+
+
+@jit_stage(parallel=True)
+def partitioned_touched(rows, ids, partition, impacts, threshold, touched, impacted):
+    """``step.mark_touched`` block by block (the same values): every body cleared at once, then ``touched_block`` over
+    the blocks at once, then over the boundary."""
+    order, start = partition.order, partition.start
+    for b in prange(touched.shape[0]):
+        touched[b] = False
+        impacted[b] = 0
+    for k in prange(BLOCKS):
+        touched_block(k, rows, ids, order, start, impacts, threshold, touched, impacted)
+    touched_block(BLOCKS, rows, ids, order, start, impacts, threshold, touched, impacted)
+
+
+@jit_stage(inline="always")
+def first_key_at_least(keys, n, key):
+    """The first position among the increasing ``keys[:n]`` whose key is ``key`` or more (n if none)."""
+    low, high = 0, n
+    while low < high:
+        middle = (low + high) // 2
+        if keys[middle] < key:
+            low = middle + 1
+        else:
+            high = middle
+    return low
+
+
+@jit_stage(parallel=True)
+def warm_impulses_on_threads(rows, ids, count, keys, impulses, n_previous, ratio):
+    """``warm_start.warm_start``'s impulses (not yet applied), BLOCKS runs of consecutive contacts at once: each
+    run finds where its first key lies among the last substep's (``first_key_at_least``), then pairs the two
+    increasing lists of keys in one pass, as the serial warm start does."""
+    for k in prange(BLOCKS):
+        begin, end = k * count // BLOCKS, (k + 1) * count // BLOCKS
+        at = first_key_at_least(keys, n_previous, ids[begin, KEY]) if begin < end else 0
+        for c in range(begin, end):
+            rows[c, IMPULSE] = 0.0
+            rows[c, FRICTION_IMPULSE] = 0.0
+            while at < n_previous and keys[at] < ids[c, KEY]:
+                at += 1
+            if at < n_previous and keys[at] == ids[c, KEY]:
+                rows[c, IMPULSE] = ratio * impulses[at, 0]
+                rows[c, FRICTION_IMPULSE] = ratio * impulses[at, 1]
+
+
+@jit_stage(inline="always")
+def warm_block(k, rows, ids, order, start, vel, inv_mass, inv_inertia):
+    """``prepare.apply_contact_impulses`` over block k's contacts that start from an impulse."""
+    for position in range(start[k], start[k + 1]):
+        c = order[position]
+        if rows[c, IMPULSE] != 0.0 or rows[c, FRICTION_IMPULSE] != 0.0:
+            apply_contact_impulses(c, rows, ids, vel, inv_mass, inv_inertia)
+
+
+@jit_stage(parallel=True)
+def warm_blocks(rows, ids, order, start, vel, inv_mass, inv_inertia):
+    """``warm_block`` over the blocks at once, then over the boundary."""
+    for k in prange(BLOCKS):
+        warm_block(k, rows, ids, order, start, vel, inv_mass, inv_inertia)
+    warm_block(BLOCKS, rows, ids, order, start, vel, inv_mass, inv_inertia)
+
+
+@jit_stage
+def partitioned_warm_start(contacts, count, warm_from, bodies, ratio):
+    """``warm_start.warm_start`` (warm: ``warm_from``, the last substep's keys, impulses and their count; the
+    impulses scaled by ``ratio``) with the impulses found for runs of contacts at once
+    (``warm_impulses_on_threads``) and applied block by block (``warm_blocks``): the same impulses, added to each
+    body's velocity in the blocks' order rather than the contacts' (a rounding apart)."""
+    keys, impulses, n_previous = warm_from
+    rows, ids, partition = contacts.rows, contacts.ids, contacts.partition
+    warm_impulses_on_threads(rows, ids, count, keys, impulses, n_previous, ratio)
+    vel, inv_mass, inv_inertia = bodies.vel, bodies.inv_mass, bodies.inv_inertia
+    warm_blocks(rows, ids, partition.order, partition.start, vel, inv_mass, inv_inertia)
 
 
 # -- Gauss-Seidel of the velocities ------------------------------------------------------------------

@@ -17,12 +17,22 @@ a box-floor contact takes the box's own).
 
 from .. import layout
 from ..compile.compilation import jit_stage
-from ..contact_law import floor_friction, is_impact, mixed_friction, mixed_restitution, mixed_stiffness, newton_target
+from ..contact_law import (
+    floor_friction,
+    is_impact,
+    mixed_friction,
+    mixed_restitution,
+    mixed_stiffness,
+    newton_target,
+    tangent,
+)
 from .narrowphase import (
     APPROACH,
     BODY1,
     BODY2,
     FRICTION,
+    FRICTION_IMPULSE,
+    GAP,
     IMPULSE,
     NORMAL_MASS,
     NX,
@@ -63,6 +73,44 @@ def apply_impulse(c, px, py, contacts, ids, vel, inv_mass, inv_inertia):
         vel[b2, 0] -= px * inv_mass[b2]
         vel[b2, 1] -= py * inv_mass[b2]
         vel[b2, 2] -= (contacts[c, R2X] * py - contacts[c, R2Y] * px) * inv_inertia[b2]
+
+
+@jit_stage(inline="always")
+def apply_contact_impulses(c, rows, ids, vel, inv_mass, inv_inertia):
+    """Contact c's normal and friction impulses (p, q: its IMPULSE, FRICTION_IMPULSE) applied to its bodies as the
+    one impulse p n + q t, t = (-n_y, n_x)."""
+    p, q = rows[c, IMPULSE], rows[c, FRICTION_IMPULSE]
+    nx, ny = rows[c, NX], rows[c, NY]
+    tx, ty = tangent(nx, ny)
+    apply_impulse(c, p * nx + q * tx, p * ny + q * ty, rows, ids, vel, inv_mass, inv_inertia)
+
+
+@jit_stage(inline="always")
+def note_depth(c, rows, ids, max_penetration):
+    """Contact c's penetration -gap, kept as the deepest each of its bodies has had if deeper; returns it."""
+    depth = -rows[c, GAP]
+    b1 = ids[c, BODY1]
+    b2 = ids[c, BODY2]
+    max_penetration[b1] = max(max_penetration[b1], depth)
+    if b2 >= 0:
+        max_penetration[b2] = max(max_penetration[b2], depth)
+    return depth
+
+
+@jit_stage(inline="always")
+def touch_bodies(c, rows, ids, impacts, threshold, touched, impacted):
+    """If contact c took an impulse, its bodies are touched, and, when the substep has ``impacts`` and c approached
+    faster than ``threshold``, impacted once more."""
+    if rows[c, IMPULSE] > 0.0:
+        b1 = ids[c, BODY1]
+        b2 = ids[c, BODY2]
+        touched[b1] = True
+        if b2 >= 0:
+            touched[b2] = True
+        if impacts > 0 and is_impact(rows[c, APPROACH], threshold):
+            impacted[b1] += 1
+            if b2 >= 0:
+                impacted[b2] += 1
 
 
 @jit_stage(inline="always")

@@ -35,7 +35,7 @@ import math
 
 from .. import layout
 from ..compile.compilation import jit_stage
-from ..contact_law import is_impact, newton_target
+from ..contact_law import newton_target
 from ..kernel_support import is_finite_state, record_event, store_state
 from ..robust.energy_limit import energy_limit_scale
 from .broadphase import substep_pairs
@@ -63,13 +63,22 @@ from .parallel import (
     gravity_on_threads,
     parallel_find_contacts,
     partition_contacts,
+    partitioned_penetrations,
+    partitioned_touched,
     positions_on_threads,
     prepare_on_threads,
     store_on_threads,
     targets_on_threads,
 )
-from .prepare import body_kinetic_energy, is_impact_contact, prepare_contacts, relative_velocity
-from .relax import correct_penetrations, deepest_penetration, penalty_trigger
+from .prepare import (
+    body_kinetic_energy,
+    is_impact_contact,
+    note_depth,
+    prepare_contacts,
+    relative_velocity,
+    touch_bodies,
+)
+from .relax import correct_penetrations, penalty_trigger
 from .restitution import apply_restitution
 from .solve import solve_velocities
 from .substeps import substeps
@@ -112,15 +121,14 @@ def find_substep_contacts(context, bodies, sweep, contacts, include, h, pairs, p
 
 @jit_stage(inline="always")
 def note_penetration(contacts, count, max_penetration):
-    """The deepest penetration each body has had (-gap of its contacts), for the stats."""
-    rows, ids = contacts.rows, contacts.ids
+    """The deepest penetration each body has had (-gap of its contacts), for the stats; returns the deepest of the
+    substep's contacts (0 if none). On threads from PARALLEL_CONTACTS contacts up (the same values)."""
+    if count >= PARALLEL_CONTACTS:
+        return partitioned_penetrations(contacts, max_penetration)
+    deepest = 0.0
     for c in range(count):
-        depth = -rows[c, GAP]
-        b1 = ids[c, BODY1]
-        b2 = ids[c, BODY2]
-        max_penetration[b1] = max(max_penetration[b1], depth)
-        if b2 >= 0:
-            max_penetration[b2] = max(max_penetration[b2], depth)
+        deepest = max(deepest, note_depth(c, contacts.rows, contacts.ids, max_penetration))
+    return deepest
 
 
 # -- before the solve: energies, approach speeds; integrate velocities --------------------------
@@ -210,22 +218,17 @@ def seed_impacts(contacts, count, threshold, seed):
 # -- energy limit ------------------------------------------------------------------------------------
 @jit_stage(inline="always")
 def mark_touched(contacts, count, impacts, threshold, work):
-    """Which bodies took an impulse in the substep, and at how many impacts each."""
+    """Which bodies took an impulse in the substep, and at how many impacts each (``prepare.touch_bodies``); on
+    threads from PARALLEL_CONTACTS contacts up (the same values)."""
     rows, ids, touched, impacted = contacts.rows, contacts.ids, work.touched, work.impacted
+    if count >= PARALLEL_CONTACTS:
+        partitioned_touched(rows, ids, contacts.partition, impacts, threshold, touched, impacted)
+        return
     for b in range(touched.shape[0]):
         touched[b] = False
         impacted[b] = 0
     for c in range(count):
-        if rows[c, IMPULSE] > 0.0:
-            b1 = ids[c, BODY1]
-            b2 = ids[c, BODY2]
-            touched[b1] = True
-            if b2 >= 0:
-                touched[b2] = True
-            if impacts > 0 and is_impact(rows[c, APPROACH], threshold):
-                impacted[b1] += 1
-                if b2 >= 0:
-                    impacted[b2] += 1
+        touch_bodies(c, rows, ids, impacts, threshold, touched, impacted)
 
 
 @jit_stage(inline="always")  # into limit_energy
@@ -304,11 +307,11 @@ def substep(context, bodies, sweep, contacts, stats, scratch, include, h, t, pai
         prepare_on_threads(contacts.rows, contacts.ids, count, bodies.params, bodies.inv_mass, bodies.inv_inertia)
     else:
         prepare_contacts(contacts, count, bodies)
-    note_penetration(contacts, count, stats.max_penetration)
+    deepest = note_penetration(contacts, count, stats.max_penetration)
     # relax: split-impulse correction of penetrations deeper than the slop (tested here: a stage's call passes
     # each array of its structures as separate values, about 300 for this one, which in a substep of two boxes
     # costs more than the test; with the sleep stage inlined and the split test below, OnBox throws 5-7% faster)
-    if context.use_penalty and deepest_penetration(contacts.rows, count) > penalty_trigger(context):
+    if context.use_penalty and deepest > penalty_trigger(context):
         correct_penetrations(contacts, count, bodies, work, exact, h, context)
     approach_speeds(contacts, count, bodies, work.kinetic_before)
     # integrate velocities

@@ -9,7 +9,8 @@ from ..compile.compilation import jit_stage
 from ..contact_law import clamp_friction, friction_bound, tangent
 from ..tunables import LEVER_SPREAD, SUPPORT_SLOPE
 from .narrowphase import BODY1, BODY2, FRICTION, FRICTION_IMPULSE, GAP, IMPULSE, KEY, NX, NY, R1X, R2X
-from .prepare import apply_impulse
+from .parallel import PARALLEL_CONTACTS, partitioned_warm_start
+from .prepare import apply_contact_impulses, apply_impulse
 from .solve import exact_pays
 
 
@@ -115,9 +116,10 @@ def lever_shares(x, begin, end, centre, share):
 def warm_start(contacts, count, warm_from, bodies, h, context):
     """Start each contact from the impulses its key had in the last substep (``warm_from``: keys, impulses, their
     count and substep length h', scaled by h / h'), applied to the velocities; new contacts start from zero. Both
-    lists of keys increase (``find_contacts``' order), so one pass over them together pairs them. A cold start
-    (none kept) of contacts the sweeps solve (``solve.exact_pays`` false), under a gravity that pulls down, starts
-    from ``resting_loads``' guess instead."""
+    lists of keys increase (``find_contacts``' order), so one pass over them together pairs them; from
+    PARALLEL_CONTACTS contacts up on threads (``parallel.partitioned_warm_start``). A cold start (none kept) of
+    contacts the sweeps solve (``solve.exact_pays`` false), under a gravity that pulls down, starts from
+    ``resting_loads``' guess instead."""
     previous_keys, previous_impulses, n_previous, h_previous = warm_from
     if (
         n_previous == 0
@@ -126,9 +128,12 @@ def warm_start(contacts, count, warm_from, bodies, h, context):
     ):
         resting_loads(contacts, count, bodies, h, context.gravity)
         return
+    ratio = h / h_previous
+    if count >= PARALLEL_CONTACTS:
+        partitioned_warm_start(contacts, count, (previous_keys, previous_impulses, n_previous), bodies, ratio)
+        return
     rows, ids = contacts.rows, contacts.ids
     vel, inv_mass, inv_inertia = bodies.vel, bodies.inv_mass, bodies.inv_inertia
-    ratio = h / h_previous
     at = 0
     for c in range(count):
         rows[c, IMPULSE] = 0.0
@@ -136,10 +141,6 @@ def warm_start(contacts, count, warm_from, bodies, h, context):
         while at < n_previous and previous_keys[at] < ids[c, KEY]:
             at += 1
         if at < n_previous and previous_keys[at] == ids[c, KEY]:
-            p = ratio * previous_impulses[at, 0]
-            q = ratio * previous_impulses[at, 1]
-            rows[c, IMPULSE] = p
-            rows[c, FRICTION_IMPULSE] = q
-            nx, ny = rows[c, NX], rows[c, NY]
-            tx, ty = tangent(nx, ny)
-            apply_impulse(c, p * nx + q * tx, p * ny + q * ty, rows, ids, vel, inv_mass, inv_inertia)
+            rows[c, IMPULSE] = ratio * previous_impulses[at, 0]
+            rows[c, FRICTION_IMPULSE] = ratio * previous_impulses[at, 1]
+            apply_contact_impulses(c, rows, ids, vel, inv_mass, inv_inertia)
