@@ -250,19 +250,26 @@ def box_box_contacts(i, j, pose, trig, half, margin, code, contacts, ids, count,
 
 
 @jit_stage(inline="always")
+def first_key_at_least(keys, n, key):
+    """The first position among the increasing ``keys[:n]`` whose key is ``key`` or more (n if none): binary search."""
+    low, high = 0, n
+    while low < high:
+        middle = (low + high) // 2
+        if keys[middle] < key:
+            low = middle + 1
+        else:
+            high = middle
+    return low
+
+
+@jit_stage(inline="always")
 def previous_reference(previous, code):
     """Which box of pair ``code`` gave the reference face of its contacts in the last substep (0: the first, 1: the
     second; the key's bit, ``clipped_contacts``), found by binary search in ``previous`` (keys increasing, their
     count); -1 if the pair kept no contact."""
     keys, n_keys = previous
     first = code * FEATURES
-    low, high = 0, n_keys
-    while low < high:
-        middle = (low + high) // 2
-        if keys[middle] < first:
-            low = middle + 1
-        else:
-            high = middle
+    low = first_key_at_least(keys, n_keys, first)
     if low < n_keys and keys[low] < first + FEATURES:
         return (keys[low] - first) // (FEATURES // 2)
     return -1

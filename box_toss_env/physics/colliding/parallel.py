@@ -58,6 +58,7 @@ from .narrowphase import (
     TARGET,
     box_box_contacts,
     box_geometry,
+    first_key_at_least,
     floor_contacts,
     update_geometry,
 )
@@ -70,6 +71,7 @@ from .prepare import (
     relative_velocity,
     restitution_step,
     short_of_target,
+    take_kept_impulses,
     touch_bodies,
 )
 from .substeps import body_reach, travel
@@ -250,35 +252,16 @@ def partitioned_touched(rows, ids, partition, impacts, threshold, touched, impac
     touched_block(BLOCKS, rows, ids, order, start, impacts, threshold, touched, impacted)
 
 
-@jit_stage(inline="always")
-def first_key_at_least(keys, n, key):
-    """The first position among the increasing ``keys[:n]`` whose key is ``key`` or more (n if none)."""
-    low, high = 0, n
-    while low < high:
-        middle = (low + high) // 2
-        if keys[middle] < key:
-            low = middle + 1
-        else:
-            high = middle
-    return low
-
-
 @jit_stage(parallel=True)
 def warm_impulses_on_threads(rows, ids, count, keys, impulses, n_previous, ratio):
     """``warm_start.warm_start``'s impulses (not yet applied), BLOCKS runs of consecutive contacts at once: each
     run finds where its first key lies among the last substep's (``first_key_at_least``), then pairs the two
-    increasing lists of keys in one pass, as the serial warm start does."""
+    increasing lists of keys in one pass (``prepare.take_kept_impulses``), as the serial warm start does."""
     for k in prange(BLOCKS):
         begin, end = k * count // BLOCKS, (k + 1) * count // BLOCKS
         at = first_key_at_least(keys, n_previous, ids[begin, KEY]) if begin < end else 0
         for c in range(begin, end):
-            rows[c, IMPULSE] = 0.0
-            rows[c, FRICTION_IMPULSE] = 0.0
-            while at < n_previous and keys[at] < ids[c, KEY]:
-                at += 1
-            if at < n_previous and keys[at] == ids[c, KEY]:
-                rows[c, IMPULSE] = ratio * impulses[at, 0]
-                rows[c, FRICTION_IMPULSE] = ratio * impulses[at, 1]
+            at, _ = take_kept_impulses(c, rows, ids, (keys, impulses, n_previous), at, ratio)
 
 
 @jit_stage(inline="always")

@@ -34,6 +34,7 @@ from .narrowphase import (
     FRICTION_IMPULSE,
     GAP,
     IMPULSE,
+    KEY,
     NORMAL_MASS,
     NX,
     NY,
@@ -83,6 +84,23 @@ def apply_contact_impulses(c, rows, ids, vel, inv_mass, inv_inertia):
     nx, ny = rows[c, NX], rows[c, NY]
     tx, ty = tangent(nx, ny)
     apply_impulse(c, p * nx + q * tx, p * ny + q * ty, rows, ids, vel, inv_mass, inv_inertia)
+
+
+@jit_stage(inline="always")
+def take_kept_impulses(c, rows, ids, kept, at, ratio):
+    """Contact c's impulses from those the last substep kept (``kept``: their keys, increasing, impulses and count),
+    searched from position ``at`` on: ``ratio`` times its key's, or zero where its key was not kept. The contacts'
+    keys increase too, so one pass over both lists pairs them. Returns (the position reached, whether it was kept)."""
+    keys, impulses, n_kept = kept
+    rows[c, IMPULSE] = 0.0
+    rows[c, FRICTION_IMPULSE] = 0.0
+    while at < n_kept and keys[at] < ids[c, KEY]:
+        at += 1
+    found = at < n_kept and keys[at] == ids[c, KEY]
+    if found:
+        rows[c, IMPULSE] = ratio * impulses[at, 0]
+        rows[c, FRICTION_IMPULSE] = ratio * impulses[at, 1]
+    return at, found
 
 
 @jit_stage(inline="always")

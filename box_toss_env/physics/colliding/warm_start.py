@@ -8,9 +8,9 @@ import numpy as np
 from ..compile.compilation import jit_stage
 from ..contact_law import clamp_friction, friction_bound, tangent
 from ..tunables import LEVER_SPREAD, SUPPORT_SLOPE
-from .narrowphase import BODY1, BODY2, FRICTION, FRICTION_IMPULSE, GAP, IMPULSE, KEY, NX, NY, R1X, R2X
+from .narrowphase import BODY1, BODY2, FRICTION, FRICTION_IMPULSE, GAP, IMPULSE, NX, NY, R1X, R2X
 from .parallel import PARALLEL_CONTACTS, partitioned_warm_start
-from .prepare import apply_contact_impulses, apply_impulse
+from .prepare import apply_contact_impulses, apply_impulse, take_kept_impulses
 from .solve import exact_pays
 
 
@@ -136,11 +136,6 @@ def warm_start(contacts, count, warm_from, bodies, h, context):
     vel, inv_mass, inv_inertia = bodies.vel, bodies.inv_mass, bodies.inv_inertia
     at = 0
     for c in range(count):
-        rows[c, IMPULSE] = 0.0
-        rows[c, FRICTION_IMPULSE] = 0.0
-        while at < n_previous and previous_keys[at] < ids[c, KEY]:
-            at += 1
-        if at < n_previous and previous_keys[at] == ids[c, KEY]:
-            rows[c, IMPULSE] = ratio * previous_impulses[at, 0]
-            rows[c, FRICTION_IMPULSE] = ratio * previous_impulses[at, 1]
+        at, kept = take_kept_impulses(c, rows, ids, (previous_keys, previous_impulses, n_previous), at, ratio)
+        if kept:
             apply_contact_impulses(c, rows, ids, vel, inv_mass, inv_inertia)
