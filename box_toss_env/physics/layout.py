@@ -27,11 +27,13 @@ PARAM_SIZE = 7  # [m], [m], [kg], [kg m^2], [-], [-], [N/m]
     SOLVER_ITERATIONS,
     SLEEP,
     QUIET_STEPS,
-) = range(12)
-SETTINGS_SIZE = 12  # [s], [m/s^2], [-], [0/1], [m/s], [m/s], [s], [m], [-], [-], [0/1], [0/1]
+    THREADS,
+) = range(13)
+SETTINGS_SIZE = 13  # [s], [m/s^2], [-], [0/1], [m/s], [m/s], [s], [m], [-], [-], [0/1], [0/1], [-]
 # UNTIL_REST: the run ends once every body sleeps; SLEEP: islands at rest sleep (colliding scenes; with UNTIL_REST,
 # always), the run going on to MAX_STEPS; QUIET_STEPS: a quiet colliding scene takes several grid steps as one
-# (``colliding.quiet``)
+# (``colliding.quiet``); THREADS: numba's thread count for a colliding run's stages on threads, set by the kernel
+# for the run once it has bodies to step (``colliding.threads``), 0: numba's count as it is
 
 # per-body statistics (n_bodies, STATS_SIZE) written by every kernel
 (FIRST_CONTACT_TIME, N_IMPACTS, N_STEPS, MAX_PENETRATION, REST_TIME, END_TIME, STATUS, FAIL_STEP, N_RECORDED) = range(9)

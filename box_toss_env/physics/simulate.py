@@ -96,7 +96,8 @@ class Simulator:
     numba's thread count), and its results do not depend on how many: without box-box contact the bodies are split
     into that many contiguous shares run at once (the kernel releases the GIL, so the shares run on a thread pool,
     and each body's result does not depend on the split); a scene whose boxes collide is one call whose large stages
-    run on that many of numba's threads (``colliding.parallel``: from hundreds of boxes up), bit for bit as on one.
+    run on that many of numba's threads (``colliding.parallel``: from hundreds of boxes up; the kernel sets numba's
+    count for the call, ``colliding.threads``), bit for bit as on one.
     One body and a batch run the same compiled kernel (``kernels``); its first run compiles it or loads it from
     numba's cache (``compilation.ensure_compiled``). With ``start_interpreted`` (the envs), a kernel that is not in the
     cache yet is compiled by a worker process while runs of up to ``MAX_INTERPRETED_BODIES`` bodies use its
@@ -110,6 +111,7 @@ class Simulator:
         self._no_trajectory = np.zeros((0, 0, layout.STATE_SIZE))
         self._no_events = np.zeros((0, 0, layout.EVENT_SIZE))
         self._no_warm_start = np.zeros((0, layout.WARM_START_SIZE))
+        self._settings = np.zeros(layout.SETTINGS_SIZE)  # a colliding run's settings with its thread count
         self._ready = False  # compiled or loaded for the arrays of the first run
         self._start = (
             background_compile.InterpretedStart(self.kernel, background_compile.kernel_recipe(flags))
@@ -182,6 +184,8 @@ class Simulator:
             )
         if self.carries_warm_start:
             warm = self._no_warm_start if warm_start is None else check_warm_start(warm_start)
+            if reaches_threads(state.shape[0]):  # the kernel sets numba's thread count for the run (``threads``)
+                settings = self._with_threads(settings)
             args: tuple = (state, params, settings, stats, trajectory, events, warm)
         else:
             args = (state, params, settings, stats, trajectory, events)
@@ -193,16 +197,20 @@ class Simulator:
             ensure_compiled(self.kernel, args)
             self._ready = True
         if self.flags.boxes_collide:  # one scene, stepped together: its large stages on numba's threads
-            if reaches_threads(state.shape[0]):  # on ``shares`` of them (1 off threads), whatever numba's count is
-                run_on_threads(self.kernel, args, self.shares)
-            else:  # too few boxes for a stage on threads: numba's thread count means nothing to the run
-                self.kernel(*args)
+            self.kernel(*args)
             return
         shares = min(self.shares, state.shape[0])
         if shares <= 1 or self.flags.record:  # a recording's (T, n, 6) trajectory does not split into contiguous shares
             self.kernel(*args)
         else:
             run_in_shares(self.kernel, shares, state, params, settings, stats, trajectory, events)
+
+    def _with_threads(self, settings: np.ndarray) -> np.ndarray:
+        """``settings`` with THREADS at ``shares`` (a copy: the caller's array is left as it is): a colliding
+        scene's large stages run on ``shares`` of numba's threads (1: off threads), whatever numba's count is."""
+        self._settings[:] = settings
+        self._settings[layout.THREADS] = self.shares
+        return self._settings
 
 
 def warm_start_memory(n_bodies: int) -> np.ndarray:
@@ -307,6 +315,7 @@ def make_settings(scene: Scene, max_steps: int, until_rest: bool, sleep: bool = 
     settings[layout.SOLVER_ITERATIONS] = scene.solver_iterations
     settings[layout.SLEEP] = 1.0 if sleep or until_rest else 0.0
     settings[layout.QUIET_STEPS] = 1.0 if scene.quiet_steps else 0.0
+    settings[layout.THREADS] = 0.0  # numba's count as it is (``Simulator.run`` gives a colliding run its own)
     return settings
 
 

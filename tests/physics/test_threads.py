@@ -9,6 +9,8 @@ import pytest
 
 from box_toss_env.physics import KernelFlags, Simulator, layout, make_settings, scenes, simulate, warm_start_memory
 from box_toss_env.physics.colliding.parallel import PARALLEL_BODIES, PARALLEL_CONTACTS, reaches_threads
+from box_toss_env.physics.colliding.threads import restore_threads, use_threads
+from box_toss_env.physics.compile.background_compile import interpreted_copy
 from box_toss_env.physics.grouped import GroupedSimulator
 
 TWO = pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="numba has one thread here")
@@ -61,11 +63,14 @@ def test_a_large_pyramid_stands_when_its_sweeps_go_block_by_block():
 
 
 @TWO
-def test_a_run_leaves_the_callers_thread_count_as_it_found_it():
+@pytest.mark.parametrize("n", [4, 40])
+def test_a_run_leaves_the_callers_thread_count_as_it_found_it(n):
     """A run sets numba's thread count (the calling thread's own) only for itself: to its ``threads`` where that
-    differs, and back after; a scene too small for a stage on threads leaves it alone. The results do not depend
+    differs, and back after (a scene with boxes enough to reach a stage on threads: the kernel sets it,
+    ``colliding.threads``); a scene too small for a stage on threads leaves it alone. The results do not depend
     on it."""
-    scene = scenes.pile(4)
+    scene = scenes.pile(n)
+    assert reaches_threads(n) == (n == 40)
     results = []
     before = numba.get_num_threads()
     try:
@@ -83,25 +88,57 @@ def test_a_run_leaves_the_callers_thread_count_as_it_found_it():
 
 
 @TWO
-@pytest.mark.parametrize("count", [1, 2])
-def test_a_run_off_threads_is_one_thread_whatever_numbas_count(count):
+def test_a_run_off_threads_is_given_one_thread_in_its_settings():
     """``parallel=False`` runs on the calling thread alone: a scene with boxes enough to reach a stage on threads
-    (``reaches_threads``) runs with numba's thread count at 1 (read from inside the call), one told ``threads=2`` at
-    2, and the caller's count is back after; a scene too small for one leaves the count alone."""
+    (``reaches_threads``) goes to the kernel with THREADS at 1 (the count the kernel sets for the run), one told
+    ``threads=2`` at 2, a scene too small for one at 0 (numba's count as it is); the caller's settings are left as
+    they were."""
     seen = []
+    for n, threads, expected in ((31, None, 1), (PARALLEL_BODIES, None, 1), (30, None, 0), (31, 2, 2)):
+        assert reaches_threads(n) == (n != 30)
+        scene = scenes.pile(n)
+        simulator = Simulator.for_scene(scene, parallel=threads is not None, threads=threads)
+        simulator.kernel = lambda state, params, settings, *rest: seen.append(settings[layout.THREADS])  # noqa: ARG005
+        simulator._ready = True  # the recording stand-in needs no compiling
+        state, stats = scene.initial_state(), np.zeros((n, layout.STATS_SIZE))
+        settings = make_settings(scene, 1, until_rest=False)
+        given = settings.copy()
+        simulator.run(state, scene.body_params(), settings, stats)
+        assert seen[-1] == expected
+        assert np.array_equal(settings, given)
+
+
+@numba.njit
+def _use_and_note(settings, seen):
+    """``use_threads`` then ``restore_threads`` as the kernel calls them, numba's count noted in between."""
+    before = use_threads(settings)
+    seen[0] = numba.get_num_threads()
+    restore_threads(settings, before)
+    return before
+
+
+@TWO
+@pytest.mark.parametrize("compiled", [True, False], ids=["compiled", "interpreted"])
+def test_the_kernel_sets_numbas_thread_count_for_the_run_and_back(compiled):
+    """``colliding.threads``: numba's count at the settings' THREADS between the two stages (0: as it was), and back
+    after; compiled (the kernel's calls into numba's threading layer by symbol) and in the kernel's interpreted
+    copy (numba's Python functions)."""
+    use, restore = interpreted_copy(use_threads), interpreted_copy(restore_threads)
     before = numba.get_num_threads()
     try:
-        numba.set_num_threads(count)
-        for n, threads, expected in ((31, None, 1), (PARALLEL_BODIES, None, 1), (30, None, count), (31, 2, 2)):
-            assert reaches_threads(n) == (n != 30)
-            scene = scenes.pile(n)
-            simulator = Simulator.for_scene(scene, parallel=threads is not None, threads=threads)
-            simulator.kernel = lambda *args: seen.append(numba.get_num_threads())  # noqa: ARG005
-            simulator._ready = True  # the recording stand-in needs no compiling
-            state, stats = scene.initial_state(), np.zeros((n, layout.STATS_SIZE))
-            simulator.run(state, scene.body_params(), make_settings(scene, 1, until_rest=False), stats)
-            assert seen[-1] == expected
-            assert numba.get_num_threads() == count
+        numba.set_num_threads(2)
+        settings = np.zeros(layout.SETTINGS_SIZE)
+        for wanted, during in ((1, 1), (2, 2), (0, 2)):
+            settings[layout.THREADS] = wanted
+            seen = np.zeros(1, np.int64)
+            if compiled:
+                was = _use_and_note(settings, seen)
+            else:
+                was = use(settings)
+                seen[0] = numba.get_num_threads()
+                restore(settings, was)
+            assert was == 2 and seen[0] == during
+            assert numba.get_num_threads() == 2
     finally:
         numba.set_num_threads(before)
 

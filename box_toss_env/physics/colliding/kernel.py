@@ -32,6 +32,7 @@ from .state import (
 )
 from .step import advance_step, record_states
 from .substeps import body_reach
+from .threads import restore_threads, use_threads
 
 
 # -- before the steps --------------------------------------------------------------------------------
@@ -222,6 +223,7 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
             and sleeps_through(warm, state, params, settings[layout.DT], initial_capacity(nb), stats, end_step)
         ):
             return  # every body kept asleep and untouched: nothing to set up
+        threads_before = use_threads(settings)  # numba's count at the run's (``threads``)
         bodies = make_bodies(state, params)
         context = step_context(settings, bodies.half, bodies.radius, PENALTY, FRICTION_ON, RECORD)
         (contacts, impulses), sleep = make_contacts(initial_capacity(nb)), make_sleep(nb)
@@ -243,5 +245,6 @@ def make_colliding_robust_kernel(use_penalty: bool, use_friction: bool, record: 
         n, _, n_previous, h_previous = progress
         store_warm_start(warm, impulses, (n_previous, h_previous), bodies, sleep)
         write_back(state, stats, bodies, tally, sleep.rest_time, (n, context.dt, status, fail_step))
+        restore_threads(settings, threads_before)
 
     return run

@@ -1,6 +1,6 @@
 """Threads for large scenes whose boxes collide: the stages of a substep that dominate a scene of hundreds or
-thousands of boxes, run over numba's thread pool (``numba.set_num_threads``, set by ``Simulator`` from its
-``threads``), with results that do not depend on the number of threads, bit for bit.
+thousands of boxes, run over numba's thread pool (its count for the run set by the kernel, ``threads``, from
+``Simulator``'s ``threads``), with results that do not depend on the number of threads, bit for bit.
 
 Two kinds of stage, by what they change:
 
