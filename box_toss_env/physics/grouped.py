@@ -28,7 +28,7 @@ from .colliding.parallel import reaches_threads
 from .compile import background_compile
 from .compile.compilation import ensure_compiled, jit_kernel
 from .kernels import KernelFlags, make_kernel, source_digest
-from .simulate import Simulator, check_threads, run_on_threads, thread_pool
+from .simulate import Simulator, check_threads, thread_pool, with_threads
 from .validation import check_integer
 
 MAX_GROUP_SIZE = 64
@@ -172,6 +172,8 @@ class GroupedSimulator:
             raise ValueError(f"state must hold whole groups of group_size={size} bodies, got {state.shape[0]} rows")
         groups = state.shape[0] // size
         warm = self._no_warm_start if warm_start is None else check_group_warm_starts(warm_start, groups)
+        if reaches_threads(size):  # a group can reach a stage on threads: one thread each, the shares are the threads
+            settings = with_threads(settings, 1)
         arrays = GroupArrays(state, params, settings, stats, size, warm)
         first = 0  # the first group the compiled kernel runs
         self.interpreted = False
@@ -183,24 +185,17 @@ class GroupedSimulator:
             ensure_compiled(self.kernel, arrays.share(first, groups))
             self._ready = True
         shares = min(self.shares, groups - first)
-        kernel = self._on_one_thread if reaches_threads(size) else self.kernel
         if shares <= 1:
-            kernel(*arrays.share(first, groups))
+            self.kernel(*arrays.share(first, groups))
             return
         edges = [first + (groups - first) * k // shares for k in range(shares + 1)]
         pool = thread_pool(shares - 1)
-        futures = [pool.submit(kernel, *arrays.share(a, b)) for a, b in zip(edges[:-2], edges[1:-1], strict=True)]
+        futures = [pool.submit(self.kernel, *arrays.share(a, b)) for a, b in zip(edges[:-2], edges[1:-1], strict=True)]
         try:
-            kernel(*arrays.share(edges[-2], groups))
+            self.kernel(*arrays.share(edges[-2], groups))
         finally:
             for future in futures:
                 future.result()
-
-    def _on_one_thread(self, *args) -> None:
-        """The kernel with numba's thread count at 1 for the call (``run_on_threads``): a group of 31 bodies or more
-        can reach a stage on threads (``colliding.parallel.reaches_threads``), and the run's threads are its shares
-        of groups, one each."""
-        run_on_threads(self.kernel, args, 1)
 
     def _run_interpreted(self, arrays: GroupArrays, groups: int) -> int:
         """Run groups 0, 1, ... with the kernel's interpreted copy, in calls of whole groups of up to

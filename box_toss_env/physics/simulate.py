@@ -111,7 +111,6 @@ class Simulator:
         self._no_trajectory = np.zeros((0, 0, layout.STATE_SIZE))
         self._no_events = np.zeros((0, 0, layout.EVENT_SIZE))
         self._no_warm_start = np.zeros((0, layout.WARM_START_SIZE))
-        self._settings = np.zeros(layout.SETTINGS_SIZE)  # a colliding run's settings with its thread count
         self._ready = False  # compiled or loaded for the arrays of the first run
         self._start = (
             background_compile.InterpretedStart(self.kernel, background_compile.kernel_recipe(flags))
@@ -185,7 +184,7 @@ class Simulator:
         if self.carries_warm_start:
             warm = self._no_warm_start if warm_start is None else check_warm_start(warm_start)
             if reaches_threads(state.shape[0]):  # the kernel sets numba's thread count for the run (``threads``)
-                settings = self._with_threads(settings)
+                settings = with_threads(settings, self.shares)
             args: tuple = (state, params, settings, stats, trajectory, events, warm)
         else:
             args = (state, params, settings, stats, trajectory, events)
@@ -204,13 +203,6 @@ class Simulator:
             self.kernel(*args)
         else:
             run_in_shares(self.kernel, shares, state, params, settings, stats, trajectory, events)
-
-    def _with_threads(self, settings: np.ndarray) -> np.ndarray:
-        """``settings`` with THREADS at ``shares`` (a copy: the caller's array is left as it is): a colliding
-        scene's large stages run on ``shares`` of numba's threads (1: off threads), whatever numba's count is."""
-        self._settings[:] = settings
-        self._settings[layout.THREADS] = self.shares
-        return self._settings
 
 
 def warm_start_memory(n_bodies: int) -> np.ndarray:
@@ -240,19 +232,14 @@ def check_warm_start(warm_start) -> np.ndarray:
     return warm_start
 
 
-def run_on_threads(kernel, args: tuple, threads: int) -> None:
-    """``kernel(*args)`` with numba's thread count (``numba.set_num_threads``, this thread's own) at ``threads``,
-    and back to what it was after; set only where it differs (the two sets cost about 2 us, several times that
-    on cold caches: more than a small scene's whole run at rest)."""
-    before = numba.get_num_threads()
-    if before == threads:
-        kernel(*args)
-        return
-    numba.set_num_threads(threads)
-    try:
-        kernel(*args)
-    finally:
-        numba.set_num_threads(before)
+def with_threads(settings: np.ndarray, threads: int) -> np.ndarray:
+    """A copy of ``settings`` with THREADS at ``threads``: the colliding kernel runs its large stages on that many of
+    numba's threads (1: off threads), whatever numba's count is, and sets the count back after
+    (``colliding.threads``). A copy, not the caller's array, nor one kept here: calls from several threads at once
+    each read their own."""
+    settings = np.array(settings, dtype=np.float64)
+    settings[layout.THREADS] = threads
+    return settings
 
 
 def run_in_shares(kernel, shares: int, state, params, settings, stats, trajectory, events) -> None:

@@ -145,25 +145,39 @@ def test_the_kernel_sets_numbas_thread_count_for_the_run_and_back(compiled):
 
 @TWO
 def test_a_grouped_run_gives_each_share_of_large_groups_one_thread():
-    """``GroupedSimulator``'s threads are its shares of groups: each share's call of a group large enough to reach
-    a stage on threads runs with numba's thread count at 1 (read from inside the call), on one share and on two;
-    smaller groups leave the count alone."""
-    seen: list[int] = []
+    """``GroupedSimulator``'s threads are its shares of groups: each share's call of groups large enough to reach
+    a stage on threads goes to the kernel with THREADS at 1 (the count the colliding kernel sets for each group's
+    run), on one share and on two; smaller groups at 0 (numba's count as it is); the caller's settings are left as
+    they were. With the real kernel, a run of groups of 31 leaves numba's count as it found it, with the results
+    of one share."""
+    seen: list[float] = []
+    for size, expected in ((31, 1.0), (30, 0.0)):
+        scene = scenes.pile(size)
+        state = np.concatenate([scene.initial_state()] * 2)
+        params = np.concatenate([scene.body_params()] * 2)
+        for threads in (1, 2):
+            seen.clear()
+            simulator = GroupedSimulator(KernelFlags(boxes_collide=True, parallel=True), size, threads=threads)
+            simulator.kernel = lambda state, params, settings, *rest: seen.append(settings[layout.THREADS])  # noqa: ARG005
+            simulator._ready = True  # the recording stand-in needs no compiling
+            settings = make_settings(scene, 1, until_rest=False)
+            given = settings.copy()
+            simulator.run(state.copy(), params, settings, np.zeros((2 * size, layout.STATS_SIZE)))
+            assert seen == [expected] * threads
+            assert np.array_equal(settings, given)
+    scene = scenes.pile(31)
+    ends = []
     before = numba.get_num_threads()
     try:
         numba.set_num_threads(2)
-        for size, expected in ((31, 1), (30, 2)):
-            for threads in (1, 2):
-                seen.clear()
-                simulator = GroupedSimulator(KernelFlags(boxes_collide=True, parallel=True), size, threads=threads)
-                simulator.kernel = lambda *args: seen.append(numba.get_num_threads())  # noqa: ARG005
-                simulator._ready = True  # the recording stand-in needs no compiling
-                scene = scenes.pile(size)
-                state = np.concatenate([scene.initial_state()] * 2)
-                params = np.concatenate([scene.body_params()] * 2)
-                stats = np.zeros((2 * size, layout.STATS_SIZE))
-                simulator.run(state, params, make_settings(scene, 1, until_rest=False), stats)
-                assert seen == [expected] * threads
-                assert numba.get_num_threads() == 2
+        for threads in (1, 2):
+            state = np.concatenate([scene.initial_state()] * 2)
+            params = np.concatenate([scene.body_params()] * 2)
+            simulator = GroupedSimulator(KernelFlags(boxes_collide=True, parallel=True), 31, threads=threads)
+            stats = np.zeros((62, layout.STATS_SIZE))
+            simulator.run(state, params, make_settings(scene, 32, until_rest=False), stats)
+            assert numba.get_num_threads() == 2
+            ends.append(state)
     finally:
         numba.set_num_threads(before)
+    assert np.array_equal(ends[0], ends[1])
