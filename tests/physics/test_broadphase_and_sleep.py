@@ -517,6 +517,33 @@ def test_a_run_on_a_pile_asleep_throughout_leaves_what_the_stepping_run_leaves(u
     assert np.array_equal(probe_stats, stepped_stats, equal_nan=True)
 
 
+@pytest.mark.parametrize("change", ["moved", "set moving", "turned", "made heavier", "label lost"])
+@pytest.mark.parametrize("body", [0, 50, 99])
+def test_a_run_does_not_sleep_through_a_body_changed_since(change, body):
+    """``islands.sleeps_through`` checks every body at once (no branch a comparison): any one body moved by a
+    rounding, set moving, turned, given another mass, or whose kept island label is damaged (NaN), first, middle
+    or last, and the call is not skipped (the kernel then sets up and steps, and writes every body's stats)."""
+    scene = scenes.pile(100, dt=1 / 60)
+    state, params = scene.initial_state(), scene.body_params()
+    stats, warm = np.zeros((100, layout.STATS_SIZE)), warm_start_memory(100)
+    Simulator.for_scene(scene, parallel=False).run(
+        state, params, make_settings(scene, 600, until_rest=True), stats, warm_start=warm
+    )
+    assert compiled_sleeps_through(warm.copy(), state.copy(), params, scene.dt, np.zeros_like(stats), 0)
+    state, params, warm = state.copy(), params.copy(), warm.copy()
+    if change == "moved":
+        state[body, 0] = np.nextafter(state[body, 0], np.inf)
+    elif change == "set moving":
+        state[body, 4] = 1e-9
+    elif change == "turned":
+        state[body, 2] += 1e-12
+    elif change == "made heavier":
+        params[body, layout.MASS] *= 1.0 + 1e-12
+    else:
+        warm[1 + layout.WARM_BODY_ROWS * body, 0] = np.nan
+    assert not compiled_sleeps_through(warm, state, params, scene.dt, np.zeros_like(stats), 0)
+
+
 def test_a_column_of_40_boxes_starting_cold_stays_at_rest():
     """Over 64 contacts a cold start begins from the resting loads (``warm_start.resting_loads``): each
     contact carries the weight above it, so a column of 40 boxes built exactly on one another stays at rest in
