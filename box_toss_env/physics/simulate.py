@@ -181,10 +181,10 @@ class Simulator:
                 "warm_start is for scenes whose boxes collide (Simulator.carries_warm_start); "
                 f"this kernel is {self.flags}"
             )
+        if self.flags.boxes_collide and reaches_threads(state.shape[0]):  # the kernel sets numba's count (``threads``)
+            settings = with_threads(settings, self.shares)
         if self.carries_warm_start:
             warm = self._no_warm_start if warm_start is None else check_warm_start(warm_start)
-            if reaches_threads(state.shape[0]):  # the kernel sets numba's thread count for the run (``threads``)
-                settings = with_threads(settings, self.shares)
             args: tuple = (state, params, settings, stats, trajectory, events, warm)
         else:
             args = (state, params, settings, stats, trajectory, events)
