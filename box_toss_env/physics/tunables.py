@@ -42,9 +42,10 @@ TOUCH_TOLERANCE = 1e-3
 
 # -- substeps: no tunnelling -------------------------------------------------------------------------------------
 TUNNEL_FRACTION = 0.5
-"""[share of the scene's smallest half extent] the most any point of a colliding box moves in one substep (so two
-boxes move by at most this share relative to one another). Smaller: more substeps for fast boxes (cost grows as
-1 / this); larger than 1: a thin box can pass through another within a substep."""
+"""[share of the scene's smallest half extent] the most any point of a colliding box moves in one substep relative
+to what it can touch in the grid step (the floor, a box within reach: ``colliding.substeps.contact_speeds``).
+Smaller: more substeps for fast boxes (cost grows as 1 / this); larger than 1: a thin box can pass through another
+within a substep."""
 
 MAX_ROTATION_PER_STEP = 0.05
 """[rad] the most a box turns in one substep (both solvers; the floor-only contact step splits at it). Smaller:
@@ -52,7 +53,7 @@ more substeps for spinning boxes, contacts of a turning box tracked more closely
 
 MAX_SUBSTEPS = 256
 """[-] substeps of one grid step of the colliding solver at most: the no-tunnelling bound holds up to a relative
-speed of MAX_SUBSTEPS TUNNEL_FRACTION min(hx, hy) / dt (3,300 m/s for 10 cm boxes at dt = 1/256 s); beyond it
+speed of MAX_SUBSTEPS TUNNEL_FRACTION min(hx, hy) / dt (1,600 m/s for boxes 10 cm thick at dt = 1/256 s); beyond it
 only the speculative contacts stop boxes."""
 
 QUIET_STRIDE = 4

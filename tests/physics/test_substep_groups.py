@@ -13,25 +13,26 @@ SIZE = dict(length=0.4, width=0.2, mass=1.0)
 
 
 def pair_and_far_boxes(far: bool) -> Scene:
-    """A box dropped 3 cm onto a box on the floor (bodies 0 and 1, a substep or two a step), and with ``far`` a box
-    thrown at 58 m/s (body 2, 39 substeps a step) and one sliding at 15 m/s on the floor (body 3, 11), both moving
-    away from the pair, 20 m and more from it: apart, the pair's substeps save more than ``SPLIT_SAVING``."""
+    """A box dropped 3 cm onto a box on the floor (bodies 0 and 1, a substep or two a step), and with ``far`` two
+    boxes sliding on the floor, at 100 m/s (body 2, 34 substeps a step: its speed against the floor) and at 15 m/s
+    (body 3, 5), both moving away from the pair, 20 m and more from it: apart, the pair's substeps save more than
+    ``SPLIT_SAVING``."""
     boxes = [Box(**SIZE, position=(0.0, 0.1)), Box(**SIZE, position=(0.05, 0.35), angle=0.1)]
     if far:
-        boxes.append(Box(**SIZE, position=(20.0, 3.0), velocity=(50.0, 30.0), spin=5.0))
-        boxes.append(Box(**SIZE, position=(30.0, 0.1), velocity=(15.0, 0.0)))
+        boxes.append(Box(**SIZE, position=(20.0, 0.1), velocity=(100.0, 0.0)))
+        boxes.append(Box(**SIZE, position=(-30.0, 0.1), velocity=(-15.0, 0.0)))
     return Scene(boxes=tuple(boxes), dt=1 / 60, restitution=0.3, friction=0.5, boxes_collide=True)
 
 
 def test_a_pile_far_from_fast_boxes_takes_its_own_substeps_bit_for_bit():
-    """With one substep count for every awake body, the pair would take the thrown box's 39 and end
+    """With one substep count for every awake body, the pair would take the fastest box's 34 and end
     elsewhere (by rounding at least); with its own it ends exactly as without the far boxes."""
     with_far, far_stats = advance_in_runs(pair_and_far_boxes(far=True), 1, 36)
     alone, alone_stats = advance_in_runs(pair_and_far_boxes(far=False), 1, 36)
     assert with_far[:2].tobytes() == alone.tobytes()
     np.testing.assert_array_equal(far_stats[:2, layout.N_IMPACTS], alone_stats[:, layout.N_IMPACTS])
     assert alone_stats[1, layout.N_IMPACTS] > 0  # the dropped box struck the lower one
-    assert with_far[2, 0] > 45.0 and with_far[3, 0] > 35.0  # the far boxes flew and slid on, away from the pair
+    assert with_far[2, 0] > 70.0 and with_far[3, 0] < -35.0  # the far boxes slid on, away from the pair
 
 
 def test_groups_run_in_chunks_with_their_warm_start_as_in_one_run():
@@ -73,7 +74,7 @@ def sliding_pair_and_far_boxes(far: bool) -> Scene:
 
 def test_a_pile_beside_fast_boxes_falls_asleep_as_alone():
     """Sleep joins each group's islands (``islands.join_contacts`` group by group): the pair falls asleep at the
-    step it does without the far boxes, in the same state, while they fly and slide on."""
+    step it does without the far boxes, in the same state, while they slide on."""
     results = {}
     for far in (True, False):
         scene = sliding_pair_and_far_boxes(far)
@@ -85,4 +86,4 @@ def test_a_pile_beside_fast_boxes_falls_asleep_as_alone():
     assert np.isfinite(alone_stats[:, layout.REST_TIME]).all() and alone_stats[0, layout.N_STEPS] < 150
     np.testing.assert_array_equal(far_stats[:2, layout.REST_TIME], alone_stats[:, layout.REST_TIME])
     assert with_far[:2].tobytes() == alone.tobytes()
-    assert np.isnan(far_stats[2, layout.REST_TIME])  # the thrown box still flies
+    assert np.isnan(far_stats[2, layout.REST_TIME])  # the fast box still slides

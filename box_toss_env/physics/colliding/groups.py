@@ -28,7 +28,7 @@ from ..tunables import PAIR_MARGIN, ROUNDING, SOLVE_SHARE, SPLIT_SAVING
 from .broadphase import candidate_pairs, kept_pairs, sort_intervals
 from .islands import find_root
 from .parallel import PARALLEL_BODIES, geometry_and_reach, parallel_candidate_pairs
-from .substeps import point_speed, substep_count, substeps
+from .substeps import contact_speeds, substep_count, substeps
 
 
 @jit_stage
@@ -122,22 +122,25 @@ def may_split(n_sub, n_awake):
 
 
 @jit_stage
-def plan_substeps(context, bodies, sweep, sleep, groups, n_sub, n_awake, n_pairs):
-    """How a step of n_sub substeps (``step_substeps``) takes them, (n_sub, group): all awake bodies one count
-    (group -1), or group by group from the first (n_sub 0: each group counts its own, and ``sleep.parent`` is reset
-    for the groups to join their islands in): the sets of bodies joined by chains of the step's ``n_pairs``
-    candidate pairs (``step_pairs``) that need the same count make a group (``group_by_substeps``), where that
-    pays."""
-    vel, radius, dt, gravity, smallest_half = (
+def plan_substeps(context, bodies, sweep, sleep, groups, n_pairs, n_awake):
+    """How a step of more than one substep by ``step_substeps``'s bound takes them, (n_sub, group), once its
+    ``n_pairs`` candidate pairs are known (``step_pairs``): each awake body's speed against what it can touch and
+    turn rate (``substeps.contact_speeds``, into ``groups.speed_turn``) set the counts. All awake bodies one count
+    (group -1, n_sub that of the fastest), or group by group from the first (n_sub 0: each group counts its own,
+    ``group_count``, and ``sleep.parent`` is reset for the groups to join their islands in): the sets of bodies
+    joined by chains of the pairs that need the same count make a group (``group_by_substeps``), where that pays."""
+    vel, awake, speed_turn, dt, smallest_half = (
         bodies.vel,
-        bodies.radius,
+        sleep.awake,
+        groups.speed_turn,
         context.dt,
-        context.gravity,
         context.smallest_half,
     )
+    fastest, turn = contact_speeds(bodies, sweep, awake, n_pairs, dt, context.gravity, speed_turn)
+    n_sub = substep_count(fastest, turn, smallest_half, dt)
     if not may_split(n_sub, n_awake):
         return n_sub, -1
-    if one_count(vel, radius, sleep.awake, smallest_half, dt, gravity):
+    if one_count(speed_turn, awake, smallest_half, dt):
         return n_sub, -1  # no group can need fewer substeps than another
     group_of, keys, n = groups.group_of, sweep.pairs, vel.shape[0]
     for b in range(n):
@@ -148,7 +151,7 @@ def plan_substeps(context, bodies, sweep, sleep, groups, n_sub, n_awake, n_pairs
         r2 = find_root(group_of, keys[p] - i * n)
         if r1 != r2:
             group_of[max(r1, r2)] = min(r1, r2)
-    if group_by_substeps(bodies, sleep.awake, context, groups) == 1:
+    if group_by_substeps(awake, context, groups) == 1:
         return n_sub, -1
     for b in range(n):
         sleep.parent[b] = b
@@ -156,13 +159,13 @@ def plan_substeps(context, bodies, sweep, sleep, groups, n_sub, n_awake, n_pairs
 
 
 @jit_stage
-def one_count(vel, radius, awake, smallest_half, dt, gravity):
-    """Whether every awake body alone needs the same substep count, so every group would: the slowest point speed
-    and turn rate need the count the fastest need (``substep_count`` grows with both)."""
+def one_count(speed_turn, awake, smallest_half, dt):
+    """Whether every awake body alone needs the same substep count, so every group would: the slowest speed and turn
+    rate (``speed_turn``, ``contact_speeds``) need the count the fastest need (``substep_count`` grows with both)."""
     low_speed, low_turn, high_speed, high_turn = math.inf, math.inf, 0.0, 0.0
-    for b in range(vel.shape[0]):
+    for b in range(awake.shape[0]):
         if awake[b]:
-            speed, turn = point_speed(vel, radius, b, dt, gravity), abs(vel[b, 2])
+            speed, turn = speed_turn[b, 0], speed_turn[b, 1]
             low_speed, low_turn = min(low_speed, speed), min(low_turn, turn)
             high_speed, high_turn = max(high_speed, speed), max(high_turn, turn)
     return substep_count(low_speed, low_turn, smallest_half, dt) == substep_count(
@@ -171,20 +174,15 @@ def one_count(vel, radius, awake, smallest_half, dt, gravity):
 
 
 @jit_stage
-def group_by_substeps(bodies, awake, context, groups):
+def group_by_substeps(awake, context, groups):
     """Join the sets of ``groups.group_of`` (a union-find forest over the awake bodies) that need the same substep
-    count (``substep_count`` of each set's fastest point and turn) into one group, named by its smallest body, into
-    ``group_of`` (-1 asleep); returns how many groups, or 1 where they would not pay: if they save fewer than
-    SPLIT_SAVING body-substeps in the step (each body's substeps fewer than the fastest group's, summed), or fewer
-    than 1 / SOLVE_SHARE of the passes over every body that their substeps add (each group's substeps pass over
-    every body, as the one count's do)."""
-    vel, radius, dt, gravity, smallest_half = (
-        bodies.vel,
-        bodies.radius,
-        context.dt,
-        context.gravity,
-        context.smallest_half,
-    )
+    count (``substep_count`` of each set's fastest speed and turn, from each body's in ``groups.speed_turn``, the
+    set's kept in its root's row) into one group, named by its smallest body (its count: ``group_count``), into
+    ``group_of`` (-1 asleep); returns how many groups, or 1 where
+    they would not pay: if they save fewer than SPLIT_SAVING body-substeps in the step (each body's substeps fewer
+    than the fastest group's, summed), or fewer than 1 / SOLVE_SHARE of the passes over every body that their
+    substeps add (each group's substeps pass over every body, as the one count's do)."""
+    dt, smallest_half = context.dt, context.smallest_half
     group_of, speed_turn, label, label_of_count = (
         groups.group_of,
         groups.speed_turn,
@@ -192,15 +190,12 @@ def group_by_substeps(bodies, awake, context, groups):
         groups.label_of_count,
     )
     n = group_of.shape[0]
-    for b in range(n):
-        speed_turn[b, 0] = 0.0
-        speed_turn[b, 1] = 0.0
-    for b in range(n):  # a root is its set's smallest body: named before its other bodies
+    for b in range(n):  # a root is its set's smallest body: its row is its own when its other bodies come to it
         if awake[b]:
             group_of[b] = find_root(group_of, b)
             r = group_of[b]
-            speed_turn[r, 0] = max(speed_turn[r, 0], point_speed(vel, radius, b, dt, gravity))
-            speed_turn[r, 1] = max(speed_turn[r, 1], abs(vel[b, 2]))
+            speed_turn[r, 0] = max(speed_turn[r, 0], speed_turn[b, 0])
+            speed_turn[r, 1] = max(speed_turn[r, 1], speed_turn[b, 1])
     label_of_count[:] = -1
     groups_count, most, passes = 0, 0, 0
     for b in range(n):
@@ -230,6 +225,12 @@ def next_group(group_of, after):
         if group_of[b] == b:
             return b
     return group_of.shape[0]
+
+
+@jit_stage
+def group_count(groups, group):
+    """The substep count of ``group`` (its smallest body), as ``group_by_substeps`` named it."""
+    return groups.label[group, 1]
 
 
 @jit_stage

@@ -39,7 +39,7 @@ from .prepare import apply_impulse, relative_velocity
 from .sweeps import friction_sweep, gauss_seidel
 
 
-@jit_stage
+@jit_stage(inline="always")
 def solve_velocities(contacts, count, bodies, exact, context, seeded=False):
     """Solve contacts: the contact impulses of the first ``count`` contacts. Up to DIRECT_LIMIT contacts whose warm
     start already solves them (``warm_start_holds``: a stack at rest, kept awake), nothing more. Up to JOINT_LIMIT

@@ -177,7 +177,8 @@ class ExactWork(NamedTuple):
 
 class GroupWork(NamedTuple):
     """The groups of a step (``groups``): each body's group (-1 asleep), the mask of the group stepped, and the
-    grouping's work (per set its fastest point speed and turn, its label and count, per substep count a label)."""
+    grouping's work (per body its speed against what it can touch and turn rate, then per set the fastest of both,
+    its label and count, per substep count a label)."""
 
     group_of: np.ndarray  # (n,) int64
     in_group: np.ndarray  # (n,) bool

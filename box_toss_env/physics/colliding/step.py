@@ -9,14 +9,14 @@ penalty in ``relax``, the warm start, the impulse solves and restitution in ``wa
 in ``state``. The steps allocate nothing and count no references (several times faster for stages handed arrays,
 ``compilation.jit_stage``).
 
-A grid step dt is split into substeps so that no point of any box moves further than TUNNEL_FRACTION / 2 of the
-scene's smallest half extent in one (the point speed bound |v| + |g| h + |omega| R), so two boxes move by at most
-TUNNEL_FRACTION of it relative to one another, and no box turns further than MAX_ROTATION_PER_STEP, up to
-MAX_SUBSTEPS: one count for all the awake bodies (the fastest decides), or one per group of bodies that cannot meet
-within the step (``groups``). No tunnelling: within that bound two boxes cannot pass through one another in a
-substep (they move by less than half the thinnest box, and the speculative contacts stop the gap from closing past
-zero); the floor's speculative contacts hold at any speed. Beyond MAX_SUBSTEPS the substeps are capped and only the
-speculative contacts remain (not guaranteed).
+A grid step dt is split into substeps so that no point of any box moves further than TUNNEL_FRACTION of the
+scene's smallest half extent in one relative to what it can touch (the floor or a box of its candidate pairs, at
+point speeds |v| + |g| h + |omega| R: ``substeps.contact_speeds``), and no box turns further than
+MAX_ROTATION_PER_STEP, up to MAX_SUBSTEPS: one count for all the awake bodies (the fastest decides), or one per
+group of bodies that cannot meet within the step (``groups``). No tunnelling: within that bound two boxes cannot
+pass through one another in a substep (they move by less than half the thinnest box, and the speculative contacts
+stop the gap from closing past zero); the floor's speculative contacts hold at any speed. Beyond MAX_SUBSTEPS the
+substeps are capped and only the speculative contacts remain (not guaranteed).
 
 Contacts come from the sort-and-sweep broadphase (``broadphase.candidate_pairs``), which visits the pairs in the
 order testing every pair did, so the results are those of the all-pairs search: the step's pairs, found before its
@@ -39,7 +39,7 @@ from ..contact_law import newton_target
 from ..kernel_support import is_finite_state, record_event, store_state
 from ..robust.energy_limit import energy_limit_scale
 from .broadphase import substep_pairs
-from .groups import keep_group, may_split, next_group, plan_substeps, sort_kept
+from .groups import group_count, keep_group, next_group, plan_substeps, sort_kept
 from .islands import fall_asleep, join_contacts, join_islands
 from .narrowphase import (
     APPROACH,
@@ -81,7 +81,6 @@ from .prepare import (
 from .relax import correct_penetrations, penalty_trigger
 from .restitution import apply_restitution
 from .solve import solve_velocities
-from .substeps import substeps
 from .warm_start import warm_start
 
 
@@ -343,8 +342,8 @@ def advance_substeps(state, start, plan, pairs, previous):
     """The substeps of the grid step from time ``start``. With one count (``group`` < 0): n_sub substeps over every
     awake body, the first warm-started from ``previous`` (the last substep's impulses kept in ``impulses.keys``,
     ``impulses.impulses``: their count and substep length), each next one from the one before. Group by group
-    (``groups``), from group ``group`` (its smallest body): each group's count is its own (``substeps`` over its
-    bodies); its first substep is warm-started from ``previous``, the next from its own (``impulses.group_keys``,
+    (``groups``), from group ``group`` (its smallest body): each group's count is its own (``groups.group_count``);
+    its first substep is warm-started from ``previous``, the next from its own (``impulses.group_keys``,
     ``group_impulses``); its last impulses are appended to the step's kept rows (``keep_group``) and its box-box
     contacts joined in ``sleep.parent`` (the islands to sleep), and at the end all of them are put in key order for the
     next step (``sort_kept``). ``state``: (context, bodies, sweep, contacts, impulses, sleep, stats, scratch); ``plan``:
@@ -363,7 +362,7 @@ def advance_substeps(state, start, plan, pairs, previous):
         else:
             for b in range(nb):
                 in_group[b] = group_of[b] == group
-            n_sub = substeps(bodies.vel, bodies.radius, in_group, context.smallest_half, context.dt, context.gravity)
+            n_sub = group_count(scratch.groups, group)
             include, own = in_group, (impulses.group_keys, impulses.group_impulses)
         h, n_own = context.dt / n_sub, 0
         for sub in range(n_sub):
@@ -402,7 +401,7 @@ def advance_step(context, bodies, sweep, contacts, impulses, sleep, stats, scrat
     """The step from grid step n over ``stride`` grid steps (``grid``: both; 1, or QUIET_STRIDE for a quiet
     step, ``quiet``, whose ``context.dt`` is their length) after the wake and the alone stage
     (``kernel.advance_steps``): the substeps over every awake body with one count, or group by group
-    (``groups.plan_substeps``), among the step's candidate pairs (``plan``: the step's substep count,
+    (``groups.plan_substeps``), among the step's candidate pairs (``plan``: the step's substep count at most,
     ``groups.step_substeps``, and its candidate pairs, ``groups.step_pairs``); then the step counted and recorded, and
     sleep. ``previous``: the impulses kept in ``impulses`` (their count and substep length). Returns (whether every
     body is still finite, how many bodies are awake, the impulses kept)."""
@@ -410,8 +409,8 @@ def advance_step(context, bodies, sweep, contacts, impulses, sleep, stats, scrat
     n_sub, n_pairs = plan
     searched = n_sub == 1  # the step's pairs are its one substep's (``groups.step_pairs``)
     group = -1
-    if may_split(n_sub, n_awake):  # tested before the call (see the relax stage's test in ``substep``)
-        n_sub, group = plan_substeps(context, bodies, sweep, sleep, scratch.groups, n_sub, n_awake, n_pairs)
+    if n_sub > 1:  # tested before the call (see the relax stage's test in ``substep``)
+        n_sub, group = plan_substeps(context, bodies, sweep, sleep, scratch.groups, n_pairs, n_awake)
     stats.supported[:] = False
     scratch.alone.alone[:] = False
     step_state = (context, bodies, sweep, contacts, impulses, sleep, stats, scratch)
