@@ -178,10 +178,10 @@ def group_by_substeps(awake, context, groups):
     """Join the sets of ``groups.group_of`` (a union-find forest over the awake bodies) that need the same substep
     count (``substep_count`` of each set's fastest speed and turn, from each body's in ``groups.speed_turn``, the
     set's kept in its root's row) into one group, named by its smallest body (its count: ``group_count``), into
-    ``group_of`` (-1 asleep); returns how many groups, or 1 where
-    they would not pay: if they save fewer than SPLIT_SAVING body-substeps in the step (each body's substeps fewer
-    than the fastest group's, summed), or fewer than 1 / SOLVE_SHARE of the passes over every body that their
-    substeps add (each group's substeps pass over every body, as the one count's do)."""
+    ``group_of`` (-1 asleep); returns how many groups, or 1 where they would not pay: if they save fewer than
+    SPLIT_SAVING body-substeps in the step (each body's substeps fewer than the fastest group's, summed), or fewer
+    than 1 / SOLVE_SHARE of the passes over every body that their substeps add (each group's substeps pass over
+    every body, as the one count's do)."""
     dt, smallest_half = context.dt, context.smallest_half
     group_of, speed_turn, label, label_of_count = (
         groups.group_of,

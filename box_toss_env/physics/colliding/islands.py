@@ -10,10 +10,12 @@ looked for, no velocity or position integrated, no impulse solved. It keeps the 
 (the island's root body, ``island``), so that a touch wakes the whole island at once: at the start of
 every grid step, every sleeping body that an awake body can reach within the step (the broadphase's
 test, ``broadphase.candidate_pairs``) wakes with its island, and the test is repeated for the bodies just
-woken. With sleeping off nothing sleeps; with ``until_rest`` the run ends once every body sleeps. A body
-placed at rest (zero velocity, lying on a face on the floor, touching no other box, ``sleep_placed``) sleeps
-from the start, as the resting base of ``BoxToss-OnBox-v0``: stepping it would only find it at rest
-``sleep_time`` later.
+woken. A body woken keeps the still time it slept through (its timer is infinite until it moves faster than
+``sleep_speed`` or goes unsupported): an island woken because a box came within reach, and left untouched, sleeps
+again at the end of the step, not ``sleep_time`` later. With sleeping off nothing sleeps; with ``until_rest`` the
+run ends once every body sleeps. A body placed at rest (zero velocity, lying on a face on the floor, touching no
+other box, ``sleep_placed``) sleeps from the start, as the resting base of ``BoxToss-OnBox-v0``: stepping it would
+only find it at rest ``sleep_time`` later.
 
 Sleep carries from run to run in the caller's warm start (``simulate.warm_start_memory``, rows in
 ``layout``): at the end of a run each body's island label (-1 awake), sleep timer, pose and parameters are kept
@@ -95,14 +97,18 @@ def fall_asleep(sleep, sleep_time, vel):
 
 @jit_stage
 def wake_island(label, sleep):
-    """Wake every sleeping body of island ``label``; returns how many woke."""
+    """Wake every sleeping body of island ``label``; returns how many woke. Each keeps the still time it slept
+    through: its timer is infinite (the step's sleep test sets it to zero once the body moves faster than
+    ``sleep_speed`` or goes unsupported), so an island woken and left untouched sleeps again at the step's end. With
+    the timer at zero instead, the resting base of ``BoxToss-OnBox-v0`` woken by a throw that missed it stayed awake
+    ``sleep_time`` (26 steps at the defaults) after the thrown box had passed."""
     awake, island, still_for, rest_time = sleep.awake, sleep.island, sleep.still_for, sleep.rest_time
     woken = 0
     for b in range(awake.shape[0]):
         if not awake[b] and island[b] == label:
             awake[b] = True
             island[b] = -1
-            still_for[b] = 0.0
+            still_for[b] = math.inf
             rest_time[b] = math.nan
             woken += 1
     return woken
