@@ -112,7 +112,7 @@ def lever_shares(x, begin, end, centre, share):
     share[low] = 1.0 - share[high]
 
 
-@jit_stage
+@jit_stage(inline="always")  # into the substep: a call passes each array of its structures apart (changelog)
 def warm_start(contacts, count, warm_from, bodies, h, context):
     """Start each contact from the impulses its key had in the last substep (``warm_from``: keys, impulses, their
     count and substep length h', scaled by h / h'), applied to the velocities; new contacts start from zero. Both
