@@ -249,6 +249,23 @@ def test_a_box_whose_bounds_overlap_a_sleeping_one_but_not_within_reach_does_not
     np.testing.assert_allclose(result.final_state[1], [0.4, 0.4, math.pi / 4, -1.0, 0.0, 0.0], atol=1e-12)
 
 
+def test_a_box_woken_by_one_passing_within_reach_and_left_untouched_sleeps_again_at_once():
+    """A box flying 2 cm over a sleeping one wakes it (``islands.wake_touched``: within reach) without striking it.
+    The woken box keeps the still time it slept through (``islands.wake_island``): it sleeps again once the flyer is
+    out of reach, after fewer steps than ``sleep_time`` (6 at 1/60 s), which a timer started at zero would need, and
+    it has not moved."""
+    base = Box(length=0.2, width=0.1, mass=1.0, position=(0.0, 0.05))
+    flyer = Box(length=0.2, width=0.1, mass=1.0, position=(-0.4, 0.17), velocity=(6.0, 0.5))
+    scene = Scene(boxes=(base, flyer), dt=1 / 60, restitution=0.3, friction=0.5, boxes_collide=True)
+    state, stats = scene.initial_state(), np.zeros((2, layout.STATS_SIZE))
+    settings = make_settings(scene, 240, until_rest=True)
+    Simulator.for_scene(scene, parallel=False).run(state, scene.body_params(), settings, stats)
+    assert stats[0, layout.N_IMPACTS] == 0 and state[1, 0] > 3.0  # never struck; the flyer flew on past it
+    assert 0 < stats[0, layout.N_STEPS] < scene.sleep_time / scene.dt  # woken, and asleep again before the timer
+    assert not math.isnan(stats[0, layout.REST_TIME])
+    np.testing.assert_allclose(state[0], [0.0, 0.05, 0.0, 0.0, 0.0, 0.0], atol=1e-12)
+
+
 def test_sleeping_is_per_island():
     # a stack that rests at once, and far from it a box still sliding: the stack sleeps alone, the slider later
     stack = scenes.stack(n=3).boxes
